@@ -1,0 +1,174 @@
+//! `pathstream render`: one scene to one image file, with a progress bar and
+//! a one-line summary.
+
+use super::{CliError, Switch};
+use indicatif::{ProgressBar, ProgressStyle};
+use pathstream::render::job::check_size;
+use pathstream::render::output::{write_image, ImageFormat};
+use pathstream::render::progressive::{self, DEFAULT_SPP};
+use pathstream::render::tonemap::Tonemap;
+use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJob, Scene};
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FilterArg {
+    Tent2x2,
+    Box,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BackendArg {
+    Auto,
+    Cpu,
+}
+
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct RenderArgs {
+    /// Built-in scene name (see `pathstream scenes`) or a scene JSON file.
+    #[arg(long, value_name = "NAME|FILE.json")]
+    scene: String,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// Halt at this many samples per pixel (default 64 when no halt is given).
+    #[arg(long, value_name = "N")]
+    spp: Option<u64>,
+    /// Halt after this many milliseconds of rendering.
+    #[arg(long, value_name = "T")]
+    time_ms: Option<u64>,
+    /// Halt when the estimated relative RMS error falls below E (e.g. 0.02).
+    #[arg(long, value_name = "E")]
+    target_error: Option<f64>,
+    /// Most bounces per path; 0 = unbounded (Russian roulette only).
+    #[arg(long, value_name = "D", default_value_t = Quality::default().max_depth)]
+    max_depth: u32,
+    /// Bounces after which Russian roulette may end paths.
+    #[arg(long, value_name = "D", default_value_t = Quality::default().rr_depth)]
+    rr_depth: u32,
+    /// Next-event estimation (shadow rays to the lights).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    nee: Switch,
+    /// Pixel filter.
+    #[arg(long, value_enum, default_value_t = FilterArg::Tent2x2)]
+    filter: FilterArg,
+    /// Largest radiance of one sample; 0 = off (biased; removes fireflies).
+    #[arg(long, value_name = "C", default_value_t = 0.0)]
+    clamp: f32,
+    /// Random seed; the same seed and sample count give the same image.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    seed: u64,
+    /// Where to render.
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    backend: BackendArg,
+    /// Exposure in stops applied before tone mapping (PNG only).
+    #[arg(long, value_name = "EV", default_value_t = 0.0)]
+    exposure: f32,
+    /// Output file: .png (tone-mapped sRGB) or .pfm (linear float).
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+}
+
+impl RenderArgs {
+    fn quality(&self) -> Quality {
+        Quality {
+            max_depth: self.max_depth,
+            rr_depth: self.rr_depth,
+            nee: self.nee == Switch::On,
+            filter: match self.filter {
+                FilterArg::Tent2x2 => Filter::Tent2x2,
+                FilterArg::Box => Filter::Box,
+            },
+            clamp: self.clamp,
+            seed: self.seed,
+            spp: self.spp,
+            time_ms: self.time_ms,
+            target_error: self.target_error,
+        }
+    }
+}
+
+pub fn run(args: RenderArgs) -> Result<(), CliError> {
+    let usage = |e: String| CliError::Usage(e);
+    ImageFormat::from_path(&args.out).map_err(|e| usage(format!("--out: {e}")))?;
+    check_size(args.width, args.height).map_err(|e| usage(format!("--{e}")))?;
+    if !args.exposure.is_finite() {
+        return Err(usage("--exposure: must be a finite number".into()));
+    }
+    let quality = args.quality();
+    quality
+        .validate()
+        .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
+    let scene = Scene::load(&args.scene).map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
+
+    let choice = match args.backend {
+        BackendArg::Auto => BackendChoice::Auto,
+        BackendArg::Cpu => BackendChoice::Cpu,
+    };
+    let mut backend = Backend::choose(choice).map_err(|e| CliError::Failed(e.to_string()))?;
+    tracing::info!(backend = backend.name(), device = %backend.device(), "rendering");
+
+    let job = RenderJob::new(&scene, args.width, args.height, &quality);
+    let mut film = Film::new(args.width, args.height);
+    let bar = progress_bar(&quality);
+    let done = progressive::render(&job, &mut backend, &mut film, &quality, |p| {
+        bar.set_position(p.spp);
+        bar.set_message(format!(
+            "error {}  {:.2} M paths/s",
+            percent(p.error_estimate),
+            p.samples_per_sec / 1e6
+        ));
+    })
+    .map_err(|e| CliError::Failed(e.to_string()))?;
+    bar.finish_and_clear();
+
+    let tonemap = Tonemap {
+        exposure: args.exposure,
+    };
+    write_image(&args.out, film.width(), film.height(), &film.mean(), &tonemap)
+        .map_err(|e| CliError::Failed(e.to_string()))?;
+
+    let rejected = if done.rejected > 0 {
+        format!(", {} samples rejected (NaN/Inf)", done.rejected)
+    } else {
+        String::new()
+    };
+    println!(
+        "{} {}x{}: {} spp in {:.2} s, {:.2} M paths/s, error estimate {}, backend {} ({}){} -> {}",
+        args.scene,
+        args.width,
+        args.height,
+        done.spp,
+        done.elapsed.as_secs_f64(),
+        done.samples_per_sec / 1e6,
+        percent(done.error_estimate),
+        backend.name(),
+        backend.device(),
+        rejected,
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn percent(e: Option<f64>) -> String {
+    e.map_or_else(|| "n/a".to_owned(), |e| format!("{:.2}%", e * 100.0))
+}
+
+/// A bar over samples when the spp halt is known, else a spinner; drawn only
+/// on a terminal.
+fn progress_bar(quality: &Quality) -> ProgressBar {
+    let target = if quality.halts() { quality.spp } else { Some(DEFAULT_SPP) };
+    match target {
+        Some(n) => ProgressBar::new(n).with_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30.cyan/blue} {pos}/{len} spp  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ),
+        None => ProgressBar::new_spinner().with_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} spp  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        ),
+    }
+}

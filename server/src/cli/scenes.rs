@@ -1,0 +1,41 @@
+//! `pathstream scenes`: the built-in scene names, or one scene's JSON.
+
+use super::CliError;
+use pathstream::render::scene::{builtin, BUILTIN_NAMES};
+
+#[derive(clap::Args, Debug)]
+pub struct ScenesArgs {
+    /// Print this built-in scene as scene JSON (a starting point for your own).
+    #[arg(long, value_name = "NAME")]
+    json: Option<String>,
+}
+
+fn describe(name: &str) -> &'static str {
+    match name {
+        "cornell" => "thesis scene 1: smallpt's box, two white diffuse balls, small light",
+        "cornell-glass" => "thesis scene 2: mirror ball, glass ball, mirror back wall, small light",
+        "cornell-quads" => "cornell-glass with the six walls as quads",
+        "smallpt" => "smallpt's scene exactly (radius-1e5 walls, big light, Schlick glass)",
+        "furnace" => "white furnace: closed sphere, albedo 0.5, emission 0.5; radiance 1 everywhere",
+        _ => "",
+    }
+}
+
+pub fn run(args: ScenesArgs) -> Result<(), CliError> {
+    if let Some(name) = args.json {
+        let scene = builtin(&name).ok_or_else(|| {
+            CliError::Usage(format!(
+                "--json: unknown scene '{name}' (known: {})",
+                BUILTIN_NAMES.join(", ")
+            ))
+        })?;
+        let text = serde_json::to_string_pretty(&scene.to_json())
+            .map_err(|e| CliError::Failed(e.to_string()))?;
+        println!("{text}");
+        return Ok(());
+    }
+    for name in BUILTIN_NAMES {
+        println!("{name:<14} {}", describe(name));
+    }
+    Ok(())
+}

@@ -1,0 +1,3 @@
+//! pathstream: a progressive path tracer (`render`) served over HTTP.
+
+pub mod render;

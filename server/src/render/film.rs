@@ -1,0 +1,227 @@
+//! Accumulation: per-pixel f64 sums in two halves (even and odd sample
+//! indices), and the error estimate they give.
+//!
+//! Every pixel holds the same number of samples, indices 0..spp, added in
+//! index order; sums are f64 so a pixel keeps its value to ~1e-12 relative
+//! after 1e8 samples, and the order of additions (hence the image, bit for
+//! bit) does not depend on how samples were split into passes or threads.
+//! Non-finite samples are rejected, counted, and contribute nothing.
+//!
+//! Error estimate: with A and B the means of the even and odd halves (n_a
+//! and n_b samples) and M the mean of all n, E[(A - B)^2] = var (1/n_a +
+//! 1/n_b) and var(M) = var / n, so (A - B)^2 n_a n_b / n^2 estimates M's
+//! squared error without bias (ignoring the renderer's own bias). The film
+//! reports the relative RMS error: sqrt(sum of those) / sqrt(sum of M^2)
+//! over all pixels and channels, the same measure as [`relative_rms_error`]
+//! against a reference.
+
+use crate::render::math::{is_finite3, Vec3A};
+
+/// Sums of one pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelSums {
+    pub even: [f64; 3],
+    pub odd: [f64; 3],
+}
+
+impl PixelSums {
+    /// Adds sample number `sample`; returns false (and adds nothing) when
+    /// it is NaN or infinite.
+    #[inline]
+    pub fn add(&mut self, sample: u64, l: Vec3A) -> bool {
+        if !is_finite3(l) {
+            return false;
+        }
+        let half = if sample & 1 == 0 { &mut self.even } else { &mut self.odd };
+        half[0] += f64::from(l.x);
+        half[1] += f64::from(l.y);
+        half[2] += f64::from(l.z);
+        true
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Film {
+    width: u32,
+    height: u32,
+    pixels: Vec<PixelSums>,
+    spp: u64,
+    rejected: u64,
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![PixelSums::default(); width as usize * height as usize],
+            spp: 0,
+            rejected: 0,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Samples per pixel accumulated so far.
+    pub fn spp(&self) -> u64 {
+        self.spp
+    }
+
+    /// Samples rejected as NaN or infinite.
+    pub fn rejected(&self) -> u64 {
+        self.rejected
+    }
+
+    /// Starts again from sample 0.
+    pub fn clear(&mut self) {
+        self.pixels.fill(PixelSums::default());
+        self.spp = 0;
+        self.rejected = 0;
+    }
+
+    /// All sums, row-major.
+    pub fn pixels(&self) -> &[PixelSums] {
+        &self.pixels
+    }
+
+    /// All sums, row-major, for a backend to add to.
+    pub fn pixels_mut(&mut self) -> &mut [PixelSums] {
+        &mut self.pixels
+    }
+
+    /// Records that every pixel received `count` more samples, of which
+    /// `rejected` (over the whole film) were refused.
+    pub fn commit(&mut self, count: u64, rejected: u64) {
+        self.spp += count;
+        self.rejected += rejected;
+    }
+
+    /// Mean radiance per pixel, row-major, top row first.
+    pub fn mean(&self) -> Vec<[f32; 3]> {
+        let inv = if self.spp == 0 { 0.0 } else { 1.0 / self.spp as f64 };
+        self.pixels
+            .iter()
+            .map(|p| std::array::from_fn(|c| ((p.even[c] + p.odd[c]) * inv) as f32))
+            .collect()
+    }
+
+    /// Estimated relative RMS error of [`Film::mean`]; None below 2 spp.
+    pub fn error_estimate(&self) -> Option<f64> {
+        if self.spp < 2 {
+            return None;
+        }
+        let n = self.spp as f64;
+        let n_even = self.spp.div_ceil(2) as f64;
+        let n_odd = (self.spp / 2) as f64;
+        let scale = n_even * n_odd / (n * n);
+        let (mut err2, mut sig2) = (0.0f64, 0.0f64);
+        for p in &self.pixels {
+            for c in 0..3 {
+                let d = p.even[c] / n_even - p.odd[c] / n_odd;
+                let m = (p.even[c] + p.odd[c]) / n;
+                err2 += d * d * scale;
+                sig2 += m * m;
+            }
+        }
+        Some(relative(err2, sig2))
+    }
+}
+
+fn relative(err2: f64, sig2: f64) -> f64 {
+    if err2 == 0.0 {
+        0.0
+    } else if sig2 == 0.0 {
+        f64::INFINITY
+    } else {
+        (err2 / sig2).sqrt()
+    }
+}
+
+/// Relative RMS error of `image` against `reference`:
+/// sqrt(sum (image - reference)^2) / sqrt(sum reference^2).
+pub fn relative_rms_error(image: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
+    let (mut err2, mut sig2) = (0.0f64, 0.0f64);
+    for (a, r) in image.iter().zip(reference) {
+        for c in 0..3 {
+            let d = f64::from(a[c]) - f64::from(r[c]);
+            err2 += d * d;
+            sig2 += f64::from(r[c]) * f64::from(r[c]);
+        }
+    }
+    relative(err2, sig2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_samples_are_rejected_and_counted() {
+        let mut film = Film::new(2, 1);
+        let bad = [
+            Vec3A::new(f32::NAN, 1.0, 1.0),
+            Vec3A::new(1.0, f32::INFINITY, 1.0),
+            Vec3A::new(1.0, 1.0, f32::NEG_INFINITY),
+        ];
+        let mut rejected = 0;
+        for s in 0..8u64 {
+            let row = film.pixels_mut();
+            for (i, px) in row.iter_mut().enumerate() {
+                let l = if i == 1 && s < 3 { bad[s as usize] } else { Vec3A::splat(2.0) };
+                if !px.add(s, l) {
+                    rejected += 1;
+                }
+            }
+        }
+        film.commit(8, rejected);
+        assert_eq!(film.rejected(), 3);
+        let mean = film.mean();
+        assert_eq!(mean[0], [2.0; 3]);
+        // The rejected samples count as black: 5 of 8 samples were 2.
+        assert!(mean[1].iter().all(|v| (v - 2.0 * 5.0 / 8.0).abs() < 1e-6));
+        assert!(mean.iter().flatten().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn a_constant_pixel_keeps_its_value_over_1e8_samples() {
+        let mut film = Film::new(1, 1);
+        let value = Vec3A::new(0.1, 1.0 / 3.0, 7.77);
+        let count = 100_000_000u64;
+        let px = &mut film.pixels_mut()[0];
+        for s in 0..count {
+            px.add(s, value);
+        }
+        film.commit(count, 0);
+        let mean = film.mean()[0];
+        for (m, v) in mean.iter().zip(value.to_array()) {
+            assert!(((m - v) / v).abs() < 1e-6, "{m} vs {v}");
+        }
+        assert_eq!(film.error_estimate(), Some(0.0));
+    }
+
+    #[test]
+    fn error_estimate_matches_the_known_variance_of_a_noise_film() {
+        // Samples uniform in [0, 2): mean 1, variance 1/3. After n samples
+        // the relative RMS error of the mean is sqrt(1/3/n).
+        let (w, h, n) = (64u32, 64u32, 64u64);
+        let mut film = Film::new(w, h);
+        for (i, px) in film.pixels_mut().iter_mut().enumerate() {
+            for s in 0..n {
+                let mut rng = crate::render::sampler::Sampler::new(9, i as u64, s);
+                px.add(s, Vec3A::new(2.0 * rng.next_f32(), 2.0 * rng.next_f32(), 2.0 * rng.next_f32()));
+            }
+        }
+        film.commit(n, 0);
+        let expected = (1.0 / 3.0 / n as f64).sqrt();
+        let estimate = film.error_estimate().expect("estimate");
+        assert!((estimate / expected - 1.0).abs() < 0.05, "{estimate} vs {expected}");
+        let truth = relative_rms_error(&film.mean(), &vec![[1.0; 3]; (w * h) as usize]);
+        assert!((truth / expected - 1.0).abs() < 0.05, "{truth} vs {expected}");
+    }
+}

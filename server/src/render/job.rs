@@ -1,0 +1,65 @@
+//! Everything one pass of rendering needs, prepared once per change of
+//! scene, camera, size or quality.
+
+use crate::render::camera::CameraRays;
+use crate::render::filter::Filter;
+use crate::render::integrator::{self, PathSettings};
+use crate::render::math::Vec3A;
+use crate::render::quality::Quality;
+use crate::render::scene::Scene;
+use crate::render::world::World;
+
+/// Longest image side accepted.
+pub const MAX_SIDE: u32 = 65_536;
+/// Most pixels in one image (the film holds 48 bytes per pixel).
+pub const MAX_PIXELS: u64 = 4096 * 4096;
+
+/// Checks an image size; the message names the offending dimension.
+pub fn check_size(width: u32, height: u32) -> Result<(), String> {
+    for (name, v) in [("width", width), ("height", height)] {
+        if !(1..=MAX_SIDE).contains(&v) {
+            return Err(format!("{name}: must be between 1 and {MAX_SIDE} (got {v})"));
+        }
+    }
+    let pixels = u64::from(width) * u64::from(height);
+    if pixels > MAX_PIXELS {
+        return Err(format!("width x height: {pixels} pixels is more than the limit of {MAX_PIXELS}"));
+    }
+    Ok(())
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    pub world: World,
+    pub camera: CameraRays,
+    pub settings: PathSettings,
+    pub filter: Filter,
+    pub seed: u64,
+}
+
+impl RenderJob {
+    /// `scene` and `quality` are already validated; width and height >= 1.
+    pub fn new(scene: &Scene, width: u32, height: u32, quality: &Quality) -> Self {
+        Self {
+            world: World::new(scene, scene.camera.position),
+            camera: CameraRays::new(&scene.camera, width, height),
+            settings: quality.path_settings(),
+            filter: quality.filter,
+            seed: quality.seed,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.camera.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.camera.height
+    }
+
+    /// Radiance of sample `sample` of pixel (x, y).
+    #[inline]
+    pub fn sample(&self, x: u32, y: u32, sample: u64) -> Vec3A {
+        integrator::sample_pixel(&self.world, &self.camera, &self.settings, self.filter, self.seed, (x, y), sample)
+    }
+}

@@ -1,0 +1,162 @@
+//! Surface scattering: diffuse (cosine-weighted), mirror, and smooth glass.
+
+use crate::render::fresnel;
+use crate::render::math::{basis, DVec3, Vec3A};
+use crate::render::sampler::Sampler;
+use crate::render::scene::{Fresnel, Material, MaterialKind};
+
+/// How a material scatters, in the hot path's form.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    Diffuse,
+    Mirror,
+    Glass { ior: f32, schlick: bool },
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceMaterial {
+    pub bsdf: Bsdf,
+    pub albedo: Vec3A,
+    pub emission: Vec3A,
+    pub emissive: bool,
+}
+
+fn f32x3(v: DVec3) -> Vec3A {
+    v.as_vec3().into()
+}
+
+impl SurfaceMaterial {
+    pub fn new(m: &Material) -> Self {
+        let bsdf = match m.kind {
+            MaterialKind::Diffuse => Bsdf::Diffuse,
+            MaterialKind::Mirror => Bsdf::Mirror,
+            MaterialKind::Glass { ior, fresnel } => Bsdf::Glass {
+                ior: ior as f32,
+                schlick: fresnel == Fresnel::Schlick,
+            },
+        };
+        Self {
+            bsdf,
+            albedo: f32x3(m.albedo),
+            emission: f32x3(m.emission),
+            emissive: m.is_emissive(),
+        }
+    }
+}
+
+/// A sampled continuation of a path.
+#[derive(Clone, Copy, Debug)]
+pub struct Scattered {
+    pub dir: Vec3A,
+    /// BSDF * cos / pdf.
+    pub weight: Vec3A,
+    /// A delta lobe: next-event estimation cannot reach it.
+    pub specular: bool,
+}
+
+/// Mirror reflection of `d` about unit `n`.
+#[inline]
+pub fn reflect(d: Vec3A, n: Vec3A) -> Vec3A {
+    d - n * (2.0 * d.dot(n))
+}
+
+/// Cosine-weighted direction about unit `n`.
+#[inline]
+pub fn cosine_hemisphere(n: Vec3A, u1: f32, u2: f32) -> Vec3A {
+    let phi = std::f32::consts::TAU * u1;
+    let r = u2.sqrt();
+    let z = (1.0 - u2).max(0.0).sqrt();
+    let (t, b) = basis(n);
+    t * (r * phi.cos()) + b * (r * phi.sin()) + n * z
+}
+
+/// Samples the continuation of a ray travelling along unit `d` that hit a
+/// surface with outward unit normal `n`.
+#[inline]
+pub fn scatter(m: &SurfaceMaterial, d: Vec3A, n: Vec3A, sampler: &mut Sampler) -> Scattered {
+    let entering = d.dot(n) < 0.0;
+    let nl = if entering { n } else { -n };
+    match m.bsdf {
+        Bsdf::Diffuse => {
+            let (u1, u2) = sampler.next_2d();
+            Scattered {
+                dir: cosine_hemisphere(nl, u1, u2),
+                weight: m.albedo,
+                specular: false,
+            }
+        }
+        Bsdf::Mirror => Scattered {
+            dir: reflect(d, nl),
+            weight: m.albedo,
+            specular: true,
+        },
+        Bsdf::Glass { ior, schlick } => {
+            let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
+            let cos_i = (-d.dot(nl)).min(1.0);
+            let split = if schlick {
+                fresnel::schlick(cos_i, n1, n2)
+            } else {
+                fresnel::exact(cos_i, n1, n2)
+            };
+            let dir = if sampler.next_f32() < split.reflectance {
+                reflect(d, nl)
+            } else {
+                let eta = n1 / n2;
+                (d * eta + nl * (eta * cos_i - split.cos_t)).normalize()
+            };
+            Scattered {
+                dir,
+                weight: m.albedo,
+                specular: true,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cosine_hemisphere_has_the_right_mean_cosine() {
+        // E[cos] under p = cos/pi is 2/3.
+        let n = Vec3A::new(0.2, -0.9, 0.3).normalize();
+        let count = 100_000u64;
+        let mut sum = 0.0f64;
+        for i in 0..count {
+            let mut s = Sampler::new(0, i, 0);
+            let (u1, u2) = s.next_2d();
+            let w = cosine_hemisphere(n, u1, u2);
+            let c = w.dot(n);
+            assert!(c >= -1e-6);
+            sum += f64::from(c);
+        }
+        let mean = sum / count as f64;
+        assert!((mean - 2.0 / 3.0).abs() < 3e-3, "mean cosine {mean}");
+    }
+
+    #[test]
+    fn refraction_obeys_snell() {
+        let m = SurfaceMaterial {
+            bsdf: Bsdf::Glass {
+                ior: 1.5,
+                schlick: false,
+            },
+            albedo: Vec3A::ONE,
+            emission: Vec3A::ZERO,
+            emissive: false,
+        };
+        let d = Vec3A::new(0.6, -0.8, 0.0);
+        let n = Vec3A::Y;
+        for i in 0..64 {
+            let mut s = Sampler::new(0, i, 0);
+            let out = scatter(&m, d, n, &mut s);
+            if out.dir.y < 0.0 {
+                let sin_t = out.dir.x;
+                assert!((sin_t * 1.5 - 0.6).abs() < 1e-5, "Snell: {sin_t}");
+            } else {
+                assert!((out.dir - Vec3A::new(0.6, 0.8, 0.0)).length() < 1e-6);
+            }
+        }
+    }
+}

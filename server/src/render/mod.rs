@@ -1,0 +1,37 @@
+//! The renderer. It knows nothing of HTTP: a scene, an image size and quality
+//! settings go in; a film that converges comes out.
+//!
+//! - `scene`: validated scene model, JSON, built-in scenes
+//! - `world`, `shape`, `ray`: the scene as the hot path sees it
+//! - `camera`, `filter`, `sampler`: where camera samples go and their randomness
+//! - `material`, `fresnel`, `light`, `integrator`: the path tracer
+//! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
+//! - `quality`, `job`, `progressive`, `backend`: what to render and where
+
+pub mod backend;
+pub mod camera;
+pub mod film;
+pub mod filter;
+pub mod fresnel;
+pub mod integrator;
+pub mod job;
+pub mod light;
+pub mod material;
+pub mod math;
+pub mod output;
+pub mod progressive;
+pub mod quality;
+pub mod ray;
+pub mod sampler;
+pub mod scene;
+pub mod shape;
+pub mod tonemap;
+pub mod world;
+
+pub use backend::{Backend, BackendChoice, BackendError};
+pub use film::Film;
+pub use filter::Filter;
+pub use job::RenderJob;
+pub use progressive::Progress;
+pub use quality::Quality;
+pub use scene::{Scene, SceneError};

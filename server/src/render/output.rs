@@ -1,0 +1,161 @@
+//! Image files: PNG (tone-mapped sRGB, fast compression) and PFM (linear
+//! little-endian f32 RGB, header `PF\n<w> <h>\n-1.0\n`, rows bottom to top).
+
+use crate::render::tonemap::Tonemap;
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ExtendedColorType, ImageEncoder};
+use std::path::Path;
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("unsupported output format '{0}' (use .png or .pfm)")]
+    Format(String),
+    #[error("PNG encoding failed: {0}")]
+    Png(#[from] image::ImageError),
+    #[error("cannot write {path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("not a PFM file: {0}")]
+    Pfm(String),
+}
+
+/// Output format by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    Png,
+    Pfm,
+}
+
+impl ImageFormat {
+    pub fn from_path(path: &Path) -> Result<Self, OutputError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        match ext.as_str() {
+            "png" => Ok(Self::Png),
+            "pfm" => Ok(Self::Pfm),
+            _ => Err(OutputError::Format(path.display().to_string())),
+        }
+    }
+}
+
+/// Tone-mapped 8-bit sRGB PNG of a linear image (row-major, top row first).
+pub fn encode_png(width: u32, height: u32, rgb: &[[f32; 3]], tonemap: &Tonemap) -> Result<Vec<u8>, OutputError> {
+    let bytes: Vec<u8> = rgb.iter().flat_map(|p| tonemap.apply(*p)).collect();
+    let mut out = Vec::with_capacity(bytes.len() / 2 + 64);
+    PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Adaptive).write_image(
+        &bytes,
+        width,
+        height,
+        ExtendedColorType::Rgb8,
+    )?;
+    Ok(out)
+}
+
+/// Linear PFM of an image (row-major, top row first; PFM stores bottom first).
+pub fn encode_pfm(width: u32, height: u32, rgb: &[[f32; 3]]) -> Vec<u8> {
+    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
+    out.reserve(rgb.len() * 12);
+    for row in rgb.chunks(width as usize).rev() {
+        for v in row.iter().flatten() {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Reads a PFM written by [`encode_pfm`] (little-endian RGB only).
+pub fn decode_pfm(data: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), OutputError> {
+    let bad = |why: &str| OutputError::Pfm(why.to_owned());
+    let mut fields = Vec::new();
+    let mut pos = 0;
+    while fields.len() < 4 {
+        while pos < data.len() && data[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        let start = pos;
+        while pos < data.len() && !data[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err(bad("truncated header"));
+        }
+        fields.push(std::str::from_utf8(&data[start..pos]).map_err(|_| bad("header is not text"))?);
+    }
+    pos += 1; // the single whitespace byte after the scale
+    if fields[0] != "PF" {
+        return Err(bad("only colour PFM (PF) is supported"));
+    }
+    let width: u32 = fields[1].parse().map_err(|_| bad("bad width"))?;
+    let height: u32 = fields[2].parse().map_err(|_| bad("bad height"))?;
+    let scale: f32 = fields[3].parse().map_err(|_| bad("bad scale"))?;
+    if scale >= 0.0 {
+        return Err(bad("only little-endian PFM is supported"));
+    }
+    if width == 0 || height == 0 {
+        return Err(bad("empty image"));
+    }
+    let count = width as usize * height as usize;
+    let body = data.get(pos..).ok_or_else(|| bad("truncated data"))?;
+    if body.len() != count * 12 {
+        return Err(bad("data size does not match the header"));
+    }
+    let pixel = |px: &[u8]| -> [f32; 3] {
+        std::array::from_fn(|c| f32::from_le_bytes([px[4 * c], px[4 * c + 1], px[4 * c + 2], px[4 * c + 3]]))
+    };
+    // Bottom row first on disk: reverse the rows to get the top row first.
+    let rgb = body
+        .chunks_exact(12 * width as usize)
+        .rev()
+        .flat_map(|row| row.chunks_exact(12).map(pixel))
+        .collect();
+    Ok((width, height, rgb))
+}
+
+/// Writes PNG or PFM by the path's extension.
+pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]], tonemap: &Tonemap) -> Result<(), OutputError> {
+    let bytes = match ImageFormat::from_path(path)? {
+        ImageFormat::Png => encode_png(width, height, rgb, tonemap)?,
+        ImageFormat::Pfm => encode_pfm(width, height, rgb),
+    };
+    std::fs::write(path, bytes).map_err(|source| OutputError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pfm_round_trips_and_stores_the_bottom_row_first() {
+        let rgb: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 0.5, -1.0]).collect();
+        let bytes = encode_pfm(2, 3, &rgb);
+        assert!(bytes.starts_with(b"PF\n2 3\n-1.0\n"));
+        let first = f32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes"));
+        assert_eq!(first, 4.0, "bottom-left pixel comes first");
+        let (w, h, back) = decode_pfm(&bytes).expect("decode");
+        assert_eq!((w, h), (2, 3));
+        assert_eq!(back, rgb);
+    }
+
+    #[test]
+    fn png_is_a_valid_image_of_the_right_size() {
+        let rgb = vec![[0.5f32, 0.25, 1.0]; 12];
+        let png = encode_png(4, 3, &rgb, &Tonemap::default()).expect("png");
+        let img = image::load_from_memory(&png).expect("decodes");
+        assert_eq!((img.width(), img.height()), (4, 3));
+    }
+
+    #[test]
+    fn format_follows_the_extension() {
+        assert_eq!(ImageFormat::from_path(Path::new("a.PNG")).ok(), Some(ImageFormat::Png));
+        assert_eq!(ImageFormat::from_path(Path::new("a.pfm")).ok(), Some(ImageFormat::Pfm));
+        assert!(ImageFormat::from_path(Path::new("a.jpg")).is_err());
+    }
+}

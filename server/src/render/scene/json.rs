@@ -1,0 +1,206 @@
+//! The scene JSON v1 wire format, as serde types. Nothing here is validated:
+//! `super::validate` turns these into a [`super::Scene`].
+//!
+//! ```json
+//! {
+//!   "camera": {"position": [50, 52, 295.6], "look_at": [50, 51.957388, 294.6],
+//!              "up": [0, 1, 0], "vfov_deg": 28.797, "near_clip": 140},
+//!   "materials": {
+//!     "white": {"type": "diffuse", "albedo": [0.75, 0.75, 0.75]},
+//!     "glass": {"type": "glass", "ior": 1.5, "fresnel": "exact"},
+//!     "lamp":  {"type": "diffuse", "albedo": [0, 0, 0], "emission": [12, 12, 12]}
+//!   },
+//!   "objects": [
+//!     {"type": "sphere", "center": [73, 16.5, 78], "radius": 16.5, "material": "glass"},
+//!     {"type": "quad", "corner": [1, 0, 0], "edge_u": [0, 0, 170],
+//!      "edge_v": [0, 81.6, 0], "material": "white"},
+//!     {"type": "sphere", "center": [50, 66.6, 81.6], "radius": 7, "material": "lamp"}
+//!   ],
+//!   "light": 2
+//! }
+//! ```
+
+use super::SceneError;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// A whole scene. Parse it with [`SceneJson::from_value`], which reports the
+/// full JSON path of any error, also inside tagged materials and objects.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct SceneJson {
+    pub camera: CameraJson,
+    pub materials: BTreeMap<String, MaterialJson>,
+    pub objects: Vec<ObjectJson>,
+    /// Index of the object that the `light` API verb moves and recolours.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light: Option<usize>,
+}
+
+/// Pinhole camera.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraJson {
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Full vertical field of view in degrees.
+    pub vfov_deg: f64,
+    /// Camera rays start on the plane at this distance along the view axis.
+    #[serde(default)]
+    pub near_clip: f64,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+/// Fresnel model of a glass material.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FresnelJson {
+    #[default]
+    Exact,
+    Schlick,
+}
+
+/// A material, tagged by `type`; `emission` is allowed on every kind.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum MaterialJson {
+    Diffuse(SurfaceJson),
+    Mirror(SurfaceJson),
+    Glass(GlassJson),
+}
+
+/// Fields of `diffuse` and `mirror` materials.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceJson {
+    pub albedo: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission: Option<[f64; 3]>,
+}
+
+/// Fields of `glass` materials.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GlassJson {
+    pub ior: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub albedo: Option<[f64; 3]>,
+    #[serde(default)]
+    pub fresnel: FresnelJson,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission: Option<[f64; 3]>,
+}
+
+/// A shape with its material's name, tagged by `type`.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum ObjectJson {
+    Sphere(SphereJson),
+    Quad(QuadJson),
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SphereJson {
+    pub center: [f64; 3],
+    pub radius: f64,
+    pub material: String,
+}
+
+/// A parallelogram corner + s*edge_u + t*edge_v, s and t in [0, 1]; two-sided.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct QuadJson {
+    pub corner: [f64; 3],
+    pub edge_u: [f64; 3],
+    pub edge_v: [f64; 3],
+    pub material: String,
+}
+
+impl SceneJson {
+    /// Reads a scene from parsed JSON. Tagged materials and objects are
+    /// dispatched here by hand (serde's internally tagged enums buffer their
+    /// content and lose the path of errors inside it).
+    pub fn from_value(value: Value) -> Result<SceneJson, SceneError> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Shell {
+            camera: CameraJson,
+            materials: BTreeMap<String, Value>,
+            objects: Vec<Value>,
+            #[serde(default)]
+            light: Option<usize>,
+        }
+        let shell: Shell = at("", value)?;
+        let materials = shell
+            .materials
+            .into_iter()
+            .map(|(name, v)| {
+                let path = format!("materials.{name}");
+                let m = match tagged(&path, v, &["diffuse", "mirror", "glass"])? {
+                    ("diffuse", rest) => MaterialJson::Diffuse(at(&path, rest)?),
+                    ("mirror", rest) => MaterialJson::Mirror(at(&path, rest)?),
+                    (_, rest) => MaterialJson::Glass(at(&path, rest)?),
+                };
+                Ok((name, m))
+            })
+            .collect::<Result<_, SceneError>>()?;
+        let objects = shell
+            .objects
+            .into_iter()
+            .enumerate()
+            .map(|(i, v)| {
+                let path = format!("objects[{i}]");
+                Ok(match tagged(&path, v, &["sphere", "quad"])? {
+                    ("sphere", rest) => ObjectJson::Sphere(at(&path, rest)?),
+                    (_, rest) => ObjectJson::Quad(at(&path, rest)?),
+                })
+            })
+            .collect::<Result<_, SceneError>>()?;
+        Ok(SceneJson {
+            camera: shell.camera,
+            materials,
+            objects,
+            light: shell.light,
+        })
+    }
+}
+
+/// Deserializes `value`, prefixing error paths with `prefix`.
+fn at<T: DeserializeOwned>(prefix: &str, value: Value) -> Result<T, SceneError> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let inner = e.path().to_string();
+        let path = match (prefix, inner.as_str()) {
+            ("", inner) => inner.to_owned(),
+            (prefix, ".") => prefix.to_owned(),
+            (prefix, inner) if inner.starts_with('[') => format!("{prefix}{inner}"),
+            (prefix, inner) => format!("{prefix}.{inner}"),
+        };
+        SceneError::new(path, e.into_inner().to_string())
+    })
+}
+
+/// Splits the `type` tag off an object; it must be one of `kinds`.
+fn tagged(path: &str, value: Value, kinds: &[&'static str]) -> Result<(&'static str, Value), SceneError> {
+    let Value::Object(mut map) = value else {
+        return Err(SceneError::new(path, "expected an object"));
+    };
+    let kind = match map.remove("type") {
+        Some(Value::String(kind)) => kind,
+        Some(_) => return Err(SceneError::new(format!("{path}.type"), "must be a string")),
+        None => return Err(SceneError::new(path, "missing field `type`")),
+    };
+    let Some(&kind) = kinds.iter().find(|k| **k == kind) else {
+        return Err(SceneError::new(
+            format!("{path}.type"),
+            format!("unknown type '{kind}' (expected one of: {})", kinds.join(", ")),
+        ));
+    };
+    Ok((kind, Value::Object(map)))
+}

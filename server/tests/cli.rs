@@ -1,0 +1,136 @@
+//! The `pathstream` binary: `render` writes images and one summary line;
+//! bad input exits with code 2 and a one-line message naming the problem.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn pathstream(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pathstream"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn render(dir: &Path, file: &str, extra: &[&str]) -> (Output, std::path::PathBuf) {
+    let out = dir.join(file);
+    let mut args = vec!["render", "--scene", "cornell", "--width", "16", "--height", "12"];
+    args.extend_from_slice(extra);
+    let out_str = out.to_str().expect("utf-8 path").to_owned();
+    args.extend_from_slice(&["--out", &out_str]);
+    (pathstream(&args), out)
+}
+
+#[test]
+fn scenes_lists_every_builtin_and_prints_json() {
+    let out = pathstream(&["scenes"]);
+    assert!(out.status.success());
+    let listing = text(&out.stdout);
+    for name in ["cornell", "cornell-glass", "cornell-quads", "smallpt", "furnace"] {
+        assert!(listing.lines().any(|l| l.starts_with(name)), "{name} missing:\n{listing}");
+    }
+    let out = pathstream(&["scenes", "--json", "smallpt"]);
+    assert!(out.status.success());
+    let scene = pathstream::render::Scene::from_json_str(&text(&out.stdout)).expect("valid scene JSON");
+    assert_eq!(scene, pathstream::render::Scene::load("smallpt").expect("smallpt"));
+}
+
+#[test]
+fn render_writes_a_png_and_prints_one_summary_line() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (out, path) = render(dir.path(), "a.png", &["--spp", "8"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let img = image::open(&path).expect("a PNG");
+    assert_eq!((img.width(), img.height()), (16, 12));
+    let summary = text(&out.stdout);
+    assert_eq!(summary.lines().count(), 1, "{summary}");
+    for part in ["cornell 16x12: 8 spp in ", " M paths/s, error estimate ", "%, backend cpu (rayon, "] {
+        assert!(summary.contains(part), "'{part}' missing from: {summary}");
+    }
+}
+
+#[test]
+fn render_writes_a_linear_pfm() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (out, path) = render(dir.path(), "a.pfm", &["--spp", "4", "--nee", "off", "--filter", "box"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let bytes = std::fs::read(path).expect("file");
+    let (w, h, rgb) = pathstream::render::output::decode_pfm(&bytes).expect("PFM");
+    assert_eq!((w, h), (16, 12));
+    // Linear radiance: the light (emission 12) is not clipped to 1.
+    assert!(rgb.iter().flatten().any(|v| *v > 1.0));
+}
+
+#[test]
+fn time_and_error_halts_end_the_render() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (out, _) = render(dir.path(), "t.png", &["--time-ms", "300"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let (out, _) = render(dir.path(), "e.png", &["--target-error", "0.5"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let summary = text(&out.stdout);
+    let pct: f64 = summary
+        .split("error estimate ")
+        .nth(1)
+        .and_then(|s| s.split('%').next())
+        .and_then(|s| s.parse().ok())
+        .expect("error estimate in summary");
+    assert!(pct <= 50.0, "{summary}");
+}
+
+#[test]
+fn bad_input_exits_2_with_a_message_naming_the_problem() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let bad_scene = dir.path().join("bad.json");
+    std::fs::write(&bad_scene, r#"{"camera": {"position": [0,0,1], "look_at": [0,0,0], "vfov_deg": 40},
+        "materials": {"m": {"type": "diffuse", "albedo": [1,1,1]}},
+        "objects": [{"type": "sphere", "center": [0,0,0], "radius": -1, "material": "m"}]}"#)
+    .expect("write");
+    let bad_scene = bad_scene.to_str().expect("utf-8").to_owned();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--width", "0"], "width"),
+        (vec!["--height", "100000"], "height"),
+        (vec!["--width", "-3"], "--width"),
+        (vec!["--clamp", "-1"], "--clamp"),
+        (vec!["--spp", "0"], "--spp"),
+        (vec!["--target-error", "0"], "--target-error"),
+        (vec!["--nee", "maybe"], "--nee"),
+        (vec!["--filter", "gauss"], "--filter"),
+        (vec!["--max-depth", "100001"], "--max-depth"),
+    ];
+    for (extra, needle) in cases {
+        let (out, _) = render(dir.path(), "x.png", &extra);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}");
+        let err = text(&out.stderr);
+        assert!(err.contains(needle), "{extra:?}: '{needle}' not in: {err}");
+    }
+    let scene_cases = [
+        (vec!["render", "--scene", "nope", "--out", "x.png"], "'nope' is neither a built-in scene"),
+        (vec!["render", "--scene", &bad_scene, "--out", "x.png"], "objects[0].radius: must be > 0"),
+        (vec!["render", "--scene", "cornell", "--out", "x.jpg"], "--out: unsupported output format"),
+        (vec!["render", "--scene", "cornell"], "--out"),
+        (vec!["scenes", "--json", "nope"], "unknown scene 'nope'"),
+    ];
+    for (args, needle) in scene_cases {
+        let out = pathstream(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = text(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: '{needle}' not in: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn help_documents_every_render_flag() {
+    let out = pathstream(&["render", "--help"]);
+    let help = text(&out.stdout);
+    for flag in [
+        "--scene", "--width", "--height", "--spp", "--time-ms", "--target-error", "--max-depth", "--rr-depth",
+        "--nee", "--filter", "--clamp", "--seed", "--backend", "--exposure", "--out",
+    ] {
+        assert!(help.contains(flag), "{flag} missing from render --help");
+    }
+}

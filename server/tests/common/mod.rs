@@ -1,0 +1,110 @@
+//! Shared helpers for the renderer's statistical tests: render on a backend,
+//! reduce films to region means with their standard errors, and compare.
+#![allow(dead_code)]
+
+use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene};
+
+/// Renders `spp` samples per pixel of `scene` on `backend`.
+pub fn render_on(backend: &mut Backend, scene: &Scene, w: u32, h: u32, q: &Quality, spp: u64) -> Film {
+    q.validate().expect("valid quality");
+    let job = RenderJob::new(scene, w, h, q);
+    let mut film = Film::new(w, h);
+    backend.render(&job, &mut film, spp).expect("render");
+    film
+}
+
+/// Renders on the CPU backend.
+pub fn render(scene: &Scene, w: u32, h: u32, q: &Quality, spp: u64) -> Film {
+    let mut backend = Backend::choose(BackendChoice::Cpu).expect("cpu backend");
+    render_on(&mut backend, scene, w, h, q, spp)
+}
+
+pub fn scene(name: &str) -> Scene {
+    Scene::load(name).expect("built-in scene")
+}
+
+/// Mean of a block of pixels and the variance of that mean, per channel.
+#[derive(Clone, Copy, Debug)]
+pub struct Region {
+    pub mean: [f64; 3],
+    pub var: [f64; 3],
+}
+
+/// Splits the film into `block` x `block` regions. The variance of each
+/// pixel's mean comes from its even/odd halves, (A - B)^2 nA nB / n^2; pixels
+/// are independent, so a region's is the sum over n_pixels^2.
+pub fn regions(film: &Film, block: u32) -> Vec<Region> {
+    let n = film.spp() as f64;
+    let (na, nb) = (film.spp().div_ceil(2) as f64, (film.spp() / 2) as f64);
+    let (w, h) = (film.width(), film.height());
+    let mut out = Vec::new();
+    for by in (0..h).step_by(block as usize) {
+        for bx in (0..w).step_by(block as usize) {
+            let mut r = Region { mean: [0.0; 3], var: [0.0; 3] };
+            let mut count = 0.0;
+            for y in by..(by + block).min(h) {
+                for x in bx..(bx + block).min(w) {
+                    let p = film.pixels()[(y * w + x) as usize];
+                    for c in 0..3 {
+                        r.mean[c] += (p.even[c] + p.odd[c]) / n;
+                        let d = p.even[c] / na - p.odd[c] / nb;
+                        r.var[c] += d * d * na * nb / (n * n);
+                    }
+                    count += 1.0;
+                }
+            }
+            for c in 0..3 {
+                r.mean[c] /= count;
+                r.var[c] /= count * count;
+            }
+            out.push(r);
+        }
+    }
+    out
+}
+
+/// Asserts that every region of `a` and `b` agrees within `z_max` standard
+/// errors (plus a relative floor `rel` for regions with no noise).
+pub fn assert_agree(a: &Film, b: &Film, block: u32, z_max: f64, rel: f64, what: &str) {
+    let (ra, rb) = (regions(a, block), regions(b, block));
+    assert_eq!(ra.len(), rb.len());
+    let mut worst = 0.0f64;
+    for (i, (x, y)) in ra.iter().zip(&rb).enumerate() {
+        for c in 0..3 {
+            let diff = (x.mean[c] - y.mean[c]).abs();
+            let floor = rel * x.mean[c].abs().max(y.mean[c].abs());
+            let se = (x.var[c] + y.var[c]).sqrt();
+            let z = if diff <= floor { 0.0 } else { (diff - floor) / se };
+            worst = worst.max(z);
+            assert!(
+                z < z_max,
+                "{what}: region {i} channel {c}: {} vs {} ({z:.1} standard errors apart, se {se:.3e})",
+                x.mean[c],
+                y.mean[c]
+            );
+        }
+    }
+    eprintln!("{what}: worst region differs by {worst:.2} standard errors");
+}
+
+/// Asserts that every region's mean is within `z_max` standard errors of `expected`.
+pub fn assert_mean(film: &Film, block: u32, expected: f64, z_max: f64, rel: f64, what: &str) {
+    for (i, r) in regions(film, block).iter().enumerate() {
+        for c in 0..3 {
+            let diff = (r.mean[c] - expected).abs();
+            let floor = rel * expected.abs();
+            let se = r.var[c].sqrt();
+            assert!(
+                diff <= floor || diff - floor < z_max * se,
+                "{what}: region {i} channel {c}: {} vs expected {expected} (se {se:.3e})",
+                r.mean[c]
+            );
+        }
+    }
+}
+
+/// Every pixel mean is finite and nothing was rejected.
+pub fn assert_clean(film: &Film, what: &str) {
+    assert_eq!(film.rejected(), 0, "{what}: rejected samples");
+    assert!(film.mean().iter().flatten().all(|v| v.is_finite()), "{what}: non-finite pixel");
+}
