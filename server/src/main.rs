@@ -20,6 +20,8 @@ enum Command {
     Render(cli::render::RenderArgs),
     /// List the built-in scenes, or print one as scene JSON.
     Scenes(cli::scenes::ScenesArgs),
+    /// Relative RMS error of a PFM image against a reference PFM.
+    Diff(cli::diff::DiffArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +36,7 @@ fn main() -> ExitCode {
     let result = match args.command {
         Command::Render(a) => cli::render::run(a),
         Command::Scenes(a) => cli::scenes::run(a),
+        Command::Diff(a) => cli::diff::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

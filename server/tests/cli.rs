@@ -134,3 +134,20 @@ fn help_documents_every_render_flag() {
         assert!(help.contains(flag), "{flag} missing from render --help");
     }
 }
+
+#[test]
+fn diff_measures_relative_error_against_a_reference() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (a, pa) = render(dir.path(), "a.pfm", &["--spp", "4"]);
+    let (b, pb) = render(dir.path(), "b.pfm", &["--spp", "4", "--seed", "1"]);
+    assert!(a.status.success() && b.status.success());
+    let (pa, pb) = (pa.to_str().expect("utf-8"), pb.to_str().expect("utf-8"));
+    let same = pathstream(&["diff", pa, pa]);
+    assert_eq!(text(&same.stdout).trim(), "relative RMS error 0.0000%");
+    let other = pathstream(&["diff", pa, pb]);
+    assert!(other.status.success());
+    assert!(!text(&other.stdout).contains(" 0.0000%"), "{}", text(&other.stdout));
+    let missing = pathstream(&["diff", pa, "/nonexistent.pfm"]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(text(&missing.stderr).contains("/nonexistent.pfm"));
+}

@@ -42,10 +42,7 @@ pub fn radiance(world: &World, mut ray: Ray, settings: &PathSettings, sampler: &
     let mut specular = true;
     let mut from = Origin::NONE;
     let mut bounces = 0u32;
-    loop {
-        let Some(hit) = world.intersect(&ray, from) else {
-            break;
-        };
+    while let Some(hit) = world.intersect(&ray, from) {
         let m = world.material_of(hit.object);
         if m.emissive && (specular || !settings.nee) {
             l += beta * m.emission;

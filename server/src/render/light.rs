@@ -8,7 +8,7 @@
 //! light. Each emitter consumes exactly two sampler dimensions, whatever
 //! branch it takes, so the CPU and the kernel stay in step.
 
-use crate::render::math::{basis, Vec3A};
+use crate::render::math::{basis, sincos_turns, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::Sampler;
 use crate::render::world::{Geometry, Origin, World};
@@ -70,8 +70,8 @@ fn sample_direction(
             if inside {
                 let z = 1.0 - 2.0 * u1;
                 let rxy = (1.0 - z * z).max(0.0).sqrt();
-                let phi = TAU * u2;
-                let m = Vec3A::new(rxy * phi.cos(), rxy * phi.sin(), z);
+                let (sin, cos) = sincos_turns(u2);
+                let m = Vec3A::new(rxy * cos, rxy * sin, z);
                 let w = s.center + m * s.radius - p;
                 let dist2 = w.length_squared();
                 if !(dist2 > 0.0) {
@@ -88,10 +88,10 @@ fn sample_direction(
                 let a = u1 * one_minus_cos_max;
                 let cos_t = 1.0 - a;
                 let sin_t = (a * (2.0 - a)).max(0.0).sqrt();
-                let phi = TAU * u2;
+                let (sin, cos) = sincos_turns(u2);
                 let axis = to_center / d2.sqrt();
                 let (t, b) = basis(axis);
-                let dir = t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t;
+                let dir = t * (sin_t * cos) + b * (sin_t * sin) + axis * cos_t;
                 Some((dir, TAU * one_minus_cos_max))
             }
         }

@@ -1,7 +1,7 @@
 //! Surface scattering: diffuse (cosine-weighted), mirror, and smooth glass.
 
 use crate::render::fresnel;
-use crate::render::math::{basis, DVec3, Vec3A};
+use crate::render::math::{basis, sincos_turns, DVec3, Vec3A};
 use crate::render::sampler::Sampler;
 use crate::render::scene::{Fresnel, Material, MaterialKind};
 
@@ -63,11 +63,11 @@ pub fn reflect(d: Vec3A, n: Vec3A) -> Vec3A {
 /// Cosine-weighted direction about unit `n`.
 #[inline]
 pub fn cosine_hemisphere(n: Vec3A, u1: f32, u2: f32) -> Vec3A {
-    let phi = std::f32::consts::TAU * u1;
+    let (sin, cos) = sincos_turns(u1);
     let r = u2.sqrt();
     let z = (1.0 - u2).max(0.0).sqrt();
     let (t, b) = basis(n);
-    t * (r * phi.cos()) + b * (r * phi.sin()) + n * z
+    t * (r * cos) + b * (r * sin) + n * z
 }
 
 /// Samples the continuation of a ray travelling along unit `d` that hit a

@@ -75,7 +75,7 @@ fn camera(c: &CameraJson) -> Result<Camera> {
         ));
     }
     let near_clip = finite("camera.near_clip", c.near_clip)?;
-    if near_clip < 0.0 || near_clip > MAX_COORDINATE {
+    if !(0.0..=MAX_COORDINATE).contains(&near_clip) {
         return Err(SceneError::new(
             "camera.near_clip",
             format!("must be >= 0 (got {near_clip})"),
