@@ -20,6 +20,8 @@ enum Command {
     Render(cli::render::RenderArgs),
     /// List the built-in scenes, or print one as scene JSON.
     Scenes(cli::scenes::ScenesArgs),
+    /// List OpenCL platforms and devices, and which one `auto` picks.
+    Devices(cli::devices::DevicesArgs),
     /// Relative RMS error of a PFM image against a reference PFM.
     Diff(cli::diff::DiffArgs),
 }
@@ -37,6 +39,7 @@ fn main() -> ExitCode {
         Command::Render(a) => cli::render::run(a),
         Command::Scenes(a) => cli::scenes::run(a),
         Command::Diff(a) => cli::diff::run(a),
+        Command::Devices(a) => cli::devices::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -16,10 +16,25 @@ pub enum FilterArg {
     Box,
 }
 
+/// `--backend`: where to render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BackendArg {
+    /// An OpenCL GPU if there is one, else rayon on the CPU.
     Auto,
+    /// OpenCL (any device, CPU ones too; see --device).
+    Opencl,
+    /// rayon on the CPU.
     Cpu,
+}
+
+impl BackendArg {
+    pub fn choice(self, device: Option<usize>) -> BackendChoice {
+        match self {
+            BackendArg::Auto => BackendChoice::Auto,
+            BackendArg::Opencl => BackendChoice::OpenCl { device },
+            BackendArg::Cpu => BackendChoice::Cpu,
+        }
+    }
 }
 
 #[derive(clap::Args, Debug)]
@@ -64,6 +79,9 @@ pub struct RenderArgs {
     /// Where to render.
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     backend: BackendArg,
+    /// OpenCL device number (see `pathstream devices`); implies --backend opencl.
+    #[arg(long, value_name = "N")]
+    device: Option<usize>,
     /// Exposure in stops applied before tone mapping (PNG only).
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
@@ -104,11 +122,13 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
     let scene = Scene::load(&args.scene).map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
 
-    let choice = match args.backend {
-        BackendArg::Auto => BackendChoice::Auto,
-        BackendArg::Cpu => BackendChoice::Cpu,
+    let backend_arg = match (args.backend, args.device) {
+        (BackendArg::Cpu, Some(_)) => return Err(usage("--device: only with --backend opencl or auto".into())),
+        (BackendArg::Auto, Some(_)) => BackendArg::Opencl,
+        (b, _) => b,
     };
-    let mut backend = Backend::choose(choice).map_err(|e| CliError::Failed(e.to_string()))?;
+    let mut backend =
+        Backend::choose(backend_arg.choice(args.device)).map_err(|e| CliError::Failed(e.to_string()))?;
     tracing::info!(backend = backend.name(), device = %backend.device(), "rendering");
 
     let job = RenderJob::new(&scene, args.width, args.height, &quality);

@@ -15,10 +15,13 @@ use crate::render::scene::Camera;
 pub struct CameraRays {
     pub width: u32,
     pub height: u32,
-    forward: Vec3A,
-    right: Vec3A,
-    up: Vec3A,
-    near_clip: f32,
+    /// Unit view direction.
+    pub forward: Vec3A,
+    /// Spans the image plane's width at distance 1.
+    pub right: Vec3A,
+    /// Spans the image plane's height at distance 1.
+    pub up: Vec3A,
+    pub near_clip: f32,
     inv_width: f32,
     inv_height: f32,
 }

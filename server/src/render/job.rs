@@ -8,6 +8,7 @@ use crate::render::math::Vec3A;
 use crate::render::quality::Quality;
 use crate::render::scene::Scene;
 use crate::render::world::World;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Longest image side accepted.
 pub const MAX_SIDE: u32 = 65_536;
@@ -30,6 +31,9 @@ pub fn check_size(width: u32, height: u32) -> Result<(), String> {
 
 #[derive(Clone, Debug)]
 pub struct RenderJob {
+    /// Unique per `RenderJob::new` (clones share it): lets a device know
+    /// whether the job it holds buffers for is still the current one.
+    pub id: u64,
     pub world: World,
     pub camera: CameraRays,
     pub settings: PathSettings,
@@ -40,7 +44,9 @@ pub struct RenderJob {
 impl RenderJob {
     /// `scene` and `quality` are already validated; width and height >= 1.
     pub fn new(scene: &Scene, width: u32, height: u32, quality: &Quality) -> Self {
+        static NEXT_ID: AtomicU64 = AtomicU64::new(1);
         Self {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             world: World::new(scene, scene.camera.position),
             camera: CameraRays::new(&scene.camera, width, height),
             settings: quality.path_settings(),

@@ -5,11 +5,25 @@ use crate::render::job::RenderJob;
 use rayon::prelude::*;
 
 #[derive(Debug, Default)]
-pub struct CpuBackend;
+pub struct CpuBackend {
+    /// Why `auto` (or a failing device) left OpenCL, if it did.
+    fallback_reason: Option<String>,
+}
 
 impl CpuBackend {
+    /// The rayon backend standing in for OpenCL, and why.
+    pub fn fallback(reason: String) -> Self {
+        Self {
+            fallback_reason: Some(reason),
+        }
+    }
+
     pub fn device(&self) -> String {
-        format!("rayon, {} threads", rayon::current_num_threads())
+        let threads = rayon::current_num_threads();
+        match &self.fallback_reason {
+            Some(why) => format!("rayon, {threads} threads; {why}"),
+            None => format!("rayon, {threads} threads"),
+        }
     }
 
     /// Adds samples `film.spp() .. film.spp() + count` to every pixel.

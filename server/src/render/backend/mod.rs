@@ -1,28 +1,38 @@
-//! Where rendering runs. One enum, one place that chooses (`Backend::choose`).
+//! Where rendering runs. One enum, one place that chooses ([`Backend::choose`]).
+//!
+//! `auto` takes an OpenCL GPU if there is one, else rayon on the CPU (and
+//! says why). An OpenCL backend chosen by `auto` falls back to rayon, with a
+//! logged warning, if the device fails mid-render; one asked for by name
+//! reports the error instead.
 
 mod cpu;
+pub mod opencl;
 
 pub use cpu::CpuBackend;
+pub use opencl::{OpenClBackend, OpenClError};
 
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
 
-/// What the user asked for (`--backend`).
+/// What the user asked for (`--backend`, `--device`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BackendChoice {
-    /// The best available: an OpenCL GPU once that backend exists, else rayon.
+    /// An OpenCL GPU if there is one, else rayon.
     #[default]
     Auto,
     Cpu,
+    /// OpenCL device N as `pathstream devices` numbers them (None: the first).
+    OpenCl { device: Option<usize> },
 }
 
 impl BackendChoice {
-    pub const NAMES: [&'static str; 2] = ["auto", "cpu"];
+    pub const NAMES: [&'static str; 3] = ["auto", "opencl", "cpu"];
 
-    pub fn parse(s: &str) -> Option<Self> {
+    pub fn parse(s: &str, device: Option<usize>) -> Option<Self> {
         match s {
             "auto" => Some(Self::Auto),
             "cpu" => Some(Self::Cpu),
+            "opencl" => Some(Self::OpenCl { device }),
             _ => None,
         }
     }
@@ -32,19 +42,44 @@ impl BackendChoice {
 pub enum BackendError {
     #[error("{0}")]
     Unavailable(String),
+    #[error(transparent)]
+    OpenCl(#[from] OpenClError),
 }
 
 /// A backend ready to render.
 #[derive(Debug)]
 pub enum Backend {
     Cpu(CpuBackend),
+    OpenCl {
+        backend: Box<OpenClBackend>,
+        /// Chosen by `auto`: fall back to rayon on failure.
+        fallback: bool,
+    },
 }
 
 impl Backend {
     /// The one place that decides where rendering runs.
     pub fn choose(choice: BackendChoice) -> Result<Backend, BackendError> {
         match choice {
-            BackendChoice::Auto | BackendChoice::Cpu => Ok(Backend::Cpu(CpuBackend)),
+            BackendChoice::Cpu => Ok(Backend::Cpu(CpuBackend::default())),
+            BackendChoice::OpenCl { device } => Ok(Backend::OpenCl {
+                backend: Box::new(OpenClBackend::new(device)?),
+                fallback: false,
+            }),
+            BackendChoice::Auto => match OpenClBackend::auto() {
+                Ok(b) => {
+                    tracing::info!(device = %b.device(), "auto: rendering on the OpenCL GPU");
+                    Ok(Backend::OpenCl {
+                        backend: Box::new(b),
+                        fallback: true,
+                    })
+                }
+                Err(e) => {
+                    let why = e.to_string();
+                    tracing::info!(reason = %why, "auto: no OpenCL GPU, rendering with rayon on the CPU");
+                    Ok(Backend::Cpu(CpuBackend::fallback(why)))
+                }
+            },
         }
     }
 
@@ -52,6 +87,7 @@ impl Backend {
     pub fn name(&self) -> &'static str {
         match self {
             Backend::Cpu(_) => "cpu",
+            Backend::OpenCl { .. } => "opencl",
         }
     }
 
@@ -59,16 +95,30 @@ impl Backend {
     pub fn device(&self) -> String {
         match self {
             Backend::Cpu(b) => b.device(),
+            Backend::OpenCl { backend, .. } => backend.device(),
         }
     }
 
-    /// Adds `count` samples per pixel to `film`.
+    /// Adds `count` samples per pixel to `film`. On failure the film is as
+    /// it was before the call.
     pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) -> Result<(), BackendError> {
         match self {
             Backend::Cpu(b) => {
                 b.render(job, film, count);
                 Ok(())
             }
+            Backend::OpenCl { backend, fallback } => match backend.render(job, film, count) {
+                Ok(()) => Ok(()),
+                Err(e) if *fallback => {
+                    let why = format!("OpenCL failed on {}: {e}", backend.info().name.trim());
+                    tracing::warn!("{why}; falling back to rayon on the CPU");
+                    let mut cpu = CpuBackend::fallback(why);
+                    cpu.render(job, film, count);
+                    *self = Backend::Cpu(cpu);
+                    Ok(())
+                }
+                Err(e) => Err(e.into()),
+            },
         }
     }
 }

@@ -12,7 +12,7 @@ pub struct Quad {
     /// Unit normal, edge_u x edge_v normalised.
     pub normal: Vec3A,
     /// (u x v) / |u x v|^2: turns cross products into barycentrics.
-    w: Vec3A,
+    pub w: Vec3A,
     pub area: f32,
 }
 

@@ -28,7 +28,7 @@ pub enum Roots {
 pub struct Sphere {
     pub center: Vec3A,
     pub radius: f32,
-    inv_radius: f32,
+    pub inv_radius: f32,
     /// |c|^2 - r^2, evaluated in f64 before rounding.
     pub k: f32,
 }

@@ -1,0 +1,26 @@
+/* Pinhole camera and pixel filters: camera.rs and filter.rs. */
+
+inline float tent(float u) {
+    float r = 2.0f * u;
+    return r < 1.0f ? sqrt(r) - 1.0f : 1.0f - sqrt(2.0f - r);
+}
+
+/* Offset inside the pixel for sample `sample` (samples 2k, 2k+1 share a
+ * sub-pixel). */
+inline float2 pixel_offset(__global const Params *P, ulong sample, float2 u) {
+    if (USE_BOX_FILTER) {
+        return u;
+    }
+    uint sub = (uint)((sample >> 1) & 3UL);
+    float sx = (float)(sub & 1u);
+    float sy = (float)(sub >> 1);
+    return (float2)((sx + 0.5f + tent(u.x)) * 0.5f, (sy + 0.5f + tent(u.y)) * 0.5f);
+}
+
+inline void camera_ray(__global const Params *P, float x, float y, float3 *origin, float3 *dir) {
+    float3 d = P->forward.xyz
+        + P->right.xyz * (x * (1.0f / (float)P->width) - 0.5f)
+        + P->up.xyz * (0.5f - y * (1.0f / (float)P->height));
+    *origin = d * P->forward.w;
+    *dir = normalize(d);
+}

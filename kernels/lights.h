@@ -1,0 +1,64 @@
+/* Next-event estimation directions: light.rs. Returns 0 when the emitter
+ * contributes nothing; otherwise *dir and *weight (1/pdf in solid angle). */
+inline int sample_light(__global const Object *light_ob, uint light, float3 p, float3 nl, uint at, float2 u,
+                        float3 *dir, float *weight) {
+#if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS
+    if (light_ob->kind == KIND_SPHERE) {
+#endif
+#if HAS_SPHERE_LIGHTS
+        float3 to_center = light_ob->p0.xyz - p;
+        float d2 = dot(to_center, to_center);
+        float r = light_ob->p0.w;
+        float r2 = r * r;
+        int inside = light == at ? dot(nl, to_center) > 0.0f : d2 < r2;
+        if (light == at && !inside) {
+            return 0;
+        }
+        if (inside) {
+            float z = 1.0f - 2.0f * u.x;
+            float rxy = sqrt(fmax(1.0f - z * z, 0.0f));
+            float2 sc = sincos_turns(u.y);
+            float3 m = (float3)(rxy * sc.y, rxy * sc.x, z);
+            float3 w = light_ob->p0.xyz + m * r - p;
+            float dist2 = dot(w, w);
+            if (!(dist2 > 0.0f)) {
+                return 0;
+            }
+            *dir = w / sqrt(dist2);
+            *weight = fabs(dot(m, *dir)) * 4.0f * M_PI_F * r2 / dist2;
+            return 1;
+        }
+        float sin2 = r2 / d2;
+        float cos_max = sqrt(fmax(1.0f - sin2, 0.0f));
+        float one_minus_cos_max = sin2 / (1.0f + cos_max);
+        float a = u.x * one_minus_cos_max;
+        float cos_t = 1.0f - a;
+        float sin_t = sqrt(fmax(a * (2.0f - a), 0.0f));
+        float2 sc = sincos_turns(u.y);
+        float3 axis = to_center / sqrt(d2);
+        float3 t, b;
+        basis(axis, &t, &b);
+        *dir = t * (sin_t * sc.y) + b * (sin_t * sc.x) + axis * cos_t;
+        *weight = 2.0f * M_PI_F * one_minus_cos_max;
+        return 1;
+#endif
+#if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS
+    }
+#endif
+#if HAS_QUAD_LIGHTS
+    if (light == at) {
+        return 0;
+    }
+    float3 w = light_ob->p0.xyz + light_ob->p1.xyz * u.x + light_ob->p2.xyz * u.y - p;
+    float dist2 = dot(w, w);
+    if (!(dist2 > 0.0f)) {
+        return 0;
+    }
+    *dir = w / sqrt(dist2);
+    *weight = fabs(dot(light_ob->p3.xyz, *dir)) * light_ob->p0.w / dist2;
+    return 1;
+#endif
+#if !HAS_QUAD_LIGHTS
+    return 0;
+#endif
+}

@@ -1,0 +1,80 @@
+/* Scattering: material.rs and fresnel.rs. */
+
+/* cos of the transmitted angle, or -1 under total internal reflection. */
+inline float cos_transmitted(float cos_i, float n1, float n2) {
+    float cos2_t = ((n2 - n1) * (n2 + n1) + n1 * n1 * cos_i * cos_i) / (n2 * n2);
+    return cos2_t > 0.0f ? sqrt(cos2_t) : -1.0f;
+}
+
+#if HAS_GLASS && HAS_EXACT
+inline float fresnel_exact(float cos_i, float cos_t, float n1, float n2) {
+    float rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    float rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+    float r = 0.5f * (rs * rs + rp * rp);
+    return isfinite(r) ? fmin(r, 1.0f) : 1.0f;
+}
+#endif
+
+#if HAS_GLASS && HAS_SCHLICK
+inline float fresnel_schlick(float cos_i, float cos_t, float n1, float n2) {
+    float r0 = (n1 - n2) / (n1 + n2);
+    r0 = r0 * r0;
+    float c = n1 <= n2 ? cos_i : cos_t;
+    float m = 1.0f - c;
+    return r0 + (1.0f - r0) * m * m * m * m * m;
+}
+#endif
+
+inline float3 cosine_hemisphere(float3 n, float2 u) {
+    float2 sc = sincos_turns(u.x);
+    float r = sqrt(u.y);
+    float z = sqrt(fmax(1.0f - u.y, 0.0f));
+    float3 t, b;
+    basis(n, &t, &b);
+    return t * (r * sc.y) + b * (r * sc.x) + n * z;
+}
+
+inline float3 reflect_dir(float3 d, float3 n) {
+    return d - n * (2.0f * dot(d, n));
+}
+
+/* Samples the continuation of a ray along unit d that hit a surface with
+ * outward normal n. Returns the new direction; *weight is BSDF cos / pdf,
+ * *specular whether it was a delta lobe. */
+inline float3 scatter(__global const Material *m, float3 d, float3 n, Sampler *s, float3 *weight, int *specular) {
+    int entering = dot(d, n) < 0.0f;
+    float3 nl = entering ? n : -n;
+    *weight = m->albedo.xyz;
+#if HAS_DIFFUSE
+    if (m->kind == MAT_DIFFUSE) {
+        *specular = 0;
+        return cosine_hemisphere(nl, next_2d(s));
+    }
+#endif
+    *specular = 1;
+#if HAS_GLASS
+    if (m->kind == MAT_GLASS) {
+        float ior = m->albedo.w;
+        float n1 = entering ? 1.0f : ior;
+        float n2 = entering ? ior : 1.0f;
+        float cos_i = fmin(-dot(d, nl), 1.0f);
+        float cos_t = cos_transmitted(cos_i, n1, n2);
+        float r = 1.0f;
+        if (cos_t >= 0.0f) {
+#if HAS_SCHLICK && HAS_EXACT
+            r = m->schlick ? fresnel_schlick(cos_i, cos_t, n1, n2) : fresnel_exact(cos_i, cos_t, n1, n2);
+#elif HAS_SCHLICK
+            r = fresnel_schlick(cos_i, cos_t, n1, n2);
+#else
+            r = fresnel_exact(cos_i, cos_t, n1, n2);
+#endif
+        }
+        if (next_f32(s) < r) {
+            return reflect_dir(d, nl);
+        }
+        float eta = n1 / n2;
+        return normalize(d * eta + nl * (eta * cos_i - cos_t));
+    }
+#endif
+    return reflect_dir(d, nl);
+}

@@ -1,0 +1,69 @@
+/* Entry point: one work-item per pixel adds samples first .. first+count-1,
+ * in index order, to the device film. The film keeps each sum as a pair of
+ * floats (hi + lo, compensated with TwoSum) for the even and the odd
+ * samples: 12 floats per pixel, [even hi rgb, even lo rgb, odd hi rgb,
+ * odd lo rgb]. That keeps ~44 bits (the 1e8-sample check) and, since every
+ * pixel's samples are added in order, an image that does not depend on how
+ * samples were split into launches. Non-finite samples are counted in
+ * *rejected and add nothing. */
+
+inline void add_compensated(__global float *hi, __global float *lo, float x) {
+    float h = *hi;
+    float s = h + x;
+    float bp = s - h;
+    float e = (h - (s - bp)) + (x - bp);
+    e += *lo;
+    float nh = s + e;
+    *lo = e - (nh - s);
+    *hi = nh;
+}
+
+__kernel void render(__global const Params *P, __global const Object *objects, __global const Material *materials,
+                     __global const uint *lights, __global float *film, __global uint *rejected, ulong first,
+                     uint count) {
+    uint gid = get_global_id(0);
+    if (gid >= P->width * P->height) {
+        return;
+    }
+    uint x = gid % P->width;
+    uint y = gid / P->width;
+    __global float *px = film + (size_t)gid * 12u;
+    for (uint k = 0; k < count; ++k) {
+        ulong sample = first + (ulong)k;
+        Sampler s = sampler_new(P->seed, (ulong)gid, sample);
+        float2 off = pixel_offset(P, sample, next_2d(&s));
+        float3 o, d;
+        camera_ray(P, (float)x + off.x, (float)y + off.y, &o, &d);
+        float3 l = radiance(P, objects, materials, lights, o, d, &s);
+#ifdef INJECT_NAN_EVERY
+        if (sample % INJECT_NAN_EVERY == 0UL) {
+            l.y = NAN;
+        }
+#endif
+        if (!(isfinite(l.x) && isfinite(l.y) && isfinite(l.z))) {
+            atomic_inc(rejected);
+            continue;
+        }
+        __global float *sums = px + ((sample & 1UL) ? 6 : 0);
+        add_compensated(sums + 0, sums + 3, l.x);
+        add_compensated(sums + 1, sums + 4, l.y);
+        add_compensated(sums + 2, sums + 5, l.z);
+    }
+}
+
+/* Reports sizeof of every shared struct, for the host's layout check. */
+__kernel void layout_sizes(__global uint *out) {
+    out[0] = (uint)sizeof(Object);
+    out[1] = (uint)sizeof(Material);
+    out[2] = (uint)sizeof(Params);
+}
+
+/* Adds `value` to a compensated sum `count` times, as the film does: the
+ * host checks that 1e8 additions keep the value to 1e-6. */
+__kernel void accumulate_constant(__global float *sum, float value, uint count) {
+    sum[0] = 0.0f;
+    sum[1] = 0.0f;
+    for (uint i = 0; i < count; ++i) {
+        add_compensated(sum + 0, sum + 1, value);
+    }
+}

@@ -1,0 +1,78 @@
+/* Types shared with the host. Their Rust twins, with the same names and
+ * layout (sizes asserted on both sides), are in
+ * server/src/render/backend/opencl/layout.rs. */
+
+#define KIND_SPHERE 0u
+#define KIND_QUAD 1u
+
+#define MAT_DIFFUSE 0u
+#define MAT_MIRROR 1u
+#define MAT_GLASS 2u
+
+#define NO_OBJECT 0xFFFFFFFFu
+
+typedef struct {
+    float4 p0;  /* sphere: centre.xyz, radius  | quad: corner.xyz, area */
+    float4 p1;  /* sphere: k = |c|^2 - r^2, 1/r | quad: edge_u.xyz       */
+    float4 p2;  /*                               quad: edge_v.xyz       */
+    float4 p3;  /*                               quad: unit normal.xyz  */
+    float4 p4;  /*                               quad: (u x v)/|u x v|^2 */
+    uint kind;
+    uint material;
+    uint pad0;
+    uint pad1;
+} Object;
+
+typedef struct {
+    float4 albedo;   /* w: index of refraction (glass) */
+    float4 emission;
+    uint kind;
+    uint schlick;
+    uint emissive;
+    uint pad0;
+} Material;
+
+typedef struct {
+    float4 forward;  /* w: near_clip */
+    float4 right;    /* scaled by the image plane's width at distance 1 */
+    float4 up;       /* scaled by its height */
+    ulong seed;
+    uint width;
+    uint height;
+    uint max_depth;
+    uint rr_depth;
+    uint nee;
+    uint filter;     /* 0 = tent2x2, 1 = box */
+    float clamp;
+    uint num_objects;
+    uint num_lights;
+    uint pad0;
+} Params;
+
+/* What the program was specialised for. Without SPECIALISED every feature is
+ * compiled in and counts and switches are read from Params (the generic
+ * program the benchmark compares against). */
+#ifndef SPECIALISED
+#define HAS_SPHERES 1
+#define HAS_QUADS 1
+#define HAS_DIFFUSE 1
+#define HAS_MIRROR 1
+#define HAS_GLASS 1
+#define HAS_SCHLICK 1
+#define HAS_EXACT 1
+#define HAS_SPHERE_LIGHTS 1
+#define HAS_QUAD_LIGHTS 1
+#define OBJECT_COUNT (P->num_objects)
+#define LIGHT_COUNT (P->num_lights)
+#define MAX_DEPTH (P->max_depth)
+#define RR_DEPTH (P->rr_depth)
+#define USE_NEE (P->nee != 0u)
+#define USE_BOX_FILTER (P->filter != 0u)
+#else
+#define OBJECT_COUNT NUM_OBJECTS
+#define LIGHT_COUNT NUM_LIGHTS
+#define MAX_DEPTH MAX_DEPTH_VALUE
+#define RR_DEPTH (P->rr_depth)
+#define USE_NEE NEE
+#define USE_BOX_FILTER BOX_FILTER
+#endif

@@ -1,0 +1,42 @@
+//! `pathstream devices`: OpenCL platforms and devices, and what `auto` picks.
+
+use super::CliError;
+use pathstream::render::backend::opencl::{auto_pick, list_devices};
+
+#[derive(clap::Args, Debug)]
+pub struct DevicesArgs {
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: DevicesArgs) -> Result<(), CliError> {
+    let listed = list_devices();
+    let auto = match &listed {
+        Ok(devices) => match auto_pick(devices) {
+            Some(d) => format!("OpenCL device {} ({})", d.index, d.name.trim()),
+            None => "rayon on the CPU (no OpenCL GPU)".to_owned(),
+        },
+        Err(why) => format!("rayon on the CPU ({why})"),
+    };
+    if args.json {
+        let value = serde_json::json!({
+            "devices": listed.as_ref().ok(),
+            "error": listed.as_ref().err(),
+            "auto": auto,
+        });
+        println!("{value}");
+        return Ok(());
+    }
+    match &listed {
+        Ok(devices) => {
+            println!("OpenCL devices:");
+            for d in devices {
+                println!("  [{}] {}", d.index, d.describe());
+            }
+        }
+        Err(why) => println!("OpenCL: {why}"),
+    }
+    println!("auto picks: {auto}");
+    Ok(())
+}

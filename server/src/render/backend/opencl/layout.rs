@@ -1,0 +1,148 @@
+//! Host twins of the kernel's shared structs (`kernels/types.h`): same field
+//! names, `#[repr(C)]`, 16-byte aligned, sizes asserted here and checked
+//! against the device's own `sizeof` by the `layout_sizes` kernel.
+
+use crate::render::job::RenderJob;
+use crate::render::material::Bsdf;
+use crate::render::math::Vec3A;
+use crate::render::world::Geometry;
+use crate::render::Filter;
+use bytemuck::{Pod, Zeroable};
+
+pub const KIND_SPHERE: u32 = 0;
+pub const KIND_QUAD: u32 = 1;
+pub const MAT_DIFFUSE: u32 = 0;
+pub const MAT_MIRROR: u32 = 1;
+pub const MAT_GLASS: u32 = 2;
+
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Object {
+    pub p0: [f32; 4],
+    pub p1: [f32; 4],
+    pub p2: [f32; 4],
+    pub p3: [f32; 4],
+    pub p4: [f32; 4],
+    pub kind: u32,
+    pub material: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+}
+
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Material {
+    /// w: index of refraction (glass).
+    pub albedo: [f32; 4],
+    pub emission: [f32; 4],
+    pub kind: u32,
+    pub schlick: u32,
+    pub emissive: u32,
+    pub pad0: u32,
+}
+
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Params {
+    /// w: near_clip.
+    pub forward: [f32; 4],
+    pub right: [f32; 4],
+    pub up: [f32; 4],
+    pub seed: u64,
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: u32,
+    pub rr_depth: u32,
+    pub nee: u32,
+    pub filter: u32,
+    pub clamp: f32,
+    pub num_objects: u32,
+    pub num_lights: u32,
+    pub pad0: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<Object>() == 96);
+const _: () = assert!(std::mem::size_of::<Material>() == 48);
+const _: () = assert!(std::mem::size_of::<Params>() == 96);
+
+fn v4(v: Vec3A, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+/// The job's scene and settings in the kernel's layout.
+pub struct Packed {
+    pub params: Params,
+    pub objects: Vec<Object>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<u32>,
+}
+
+pub fn pack(job: &RenderJob) -> Packed {
+    let w = &job.world;
+    let objects = w
+        .objects
+        .iter()
+        .map(|o| match &o.geometry {
+            Geometry::Sphere(s) => Object {
+                p0: v4(s.center, s.radius),
+                p1: [s.k, s.inv_radius, 0.0, 0.0],
+                kind: KIND_SPHERE,
+                material: o.material,
+                ..Object::default()
+            },
+            Geometry::Quad(q) => Object {
+                p0: v4(q.corner, q.area),
+                p1: v4(q.edge_u, 0.0),
+                p2: v4(q.edge_v, 0.0),
+                p3: v4(q.normal, 0.0),
+                p4: v4(q.w, 0.0),
+                kind: KIND_QUAD,
+                material: o.material,
+                ..Object::default()
+            },
+        })
+        .collect();
+    let materials = w
+        .materials
+        .iter()
+        .map(|m| {
+            let (kind, ior, schlick) = match m.bsdf {
+                Bsdf::Diffuse => (MAT_DIFFUSE, 1.0, false),
+                Bsdf::Mirror => (MAT_MIRROR, 1.0, false),
+                Bsdf::Glass { ior, schlick } => (MAT_GLASS, ior, schlick),
+            };
+            Material {
+                albedo: v4(m.albedo, ior),
+                emission: v4(m.emission, 0.0),
+                kind,
+                schlick: u32::from(schlick),
+                emissive: u32::from(m.emissive),
+                pad0: 0,
+            }
+        })
+        .collect();
+    let c = &job.camera;
+    let s = &job.settings;
+    let params = Params {
+        forward: v4(c.forward, c.near_clip),
+        right: v4(c.right, 0.0),
+        up: v4(c.up, 0.0),
+        seed: job.seed,
+        width: c.width,
+        height: c.height,
+        max_depth: s.max_depth,
+        rr_depth: s.rr_depth,
+        nee: u32::from(s.nee),
+        filter: u32::from(job.filter == Filter::Box),
+        clamp: s.clamp,
+        num_objects: w.objects.len() as u32,
+        num_lights: w.lights.len() as u32,
+        pad0: 0,
+    };
+    Packed {
+        params,
+        objects,
+        materials,
+        lights: w.lights.clone(),
+    }
+}

@@ -1,0 +1,366 @@
+//! The OpenCL backend: the kernel in `kernels/`, specialised per scene,
+//! run on any OpenCL 1.2 device. The library is loaded at run time
+//! (`opencl3`'s `dynamic` feature), so the binary runs where there is none.
+//!
+//! The device keeps the scene, the parameters and the film between launches;
+//! a launch adds samples to every pixel in index order with compensated f32
+//! sums (see `kernels/render.cl`), and after each `render` call the film comes
+//! back once and replaces the host's sums. If anything fails the host film is
+//! left as it was: no accumulated sample is lost.
+#![allow(unsafe_code)] // OpenCL enqueue calls are unsafe in opencl3
+
+mod devices;
+mod layout;
+mod program;
+
+pub use devices::{auto_pick, list as list_devices, DeviceInfo};
+pub use program::{Features, ProgramKey, SOURCES};
+
+use crate::render::film::Film;
+use crate::render::job::RenderJob;
+use opencl3::command_queue::CommandQueue;
+use opencl3::context::Context;
+use opencl3::kernel::Kernel;
+use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
+use opencl3::program::Program;
+use opencl3::types::{cl_ulong, cl_uint, CL_BLOCKING};
+use std::collections::HashMap;
+use std::ptr;
+use std::time::{Duration, Instant};
+
+/// A launch should return within about this long, so updates feel immediate.
+pub const LAUNCH_TARGET: Duration = Duration::from_millis(30);
+/// Floats per pixel in the device film: [even hi, even lo, odd hi, odd lo] x rgb.
+const FILM_FLOATS: usize = 12;
+
+#[derive(Debug, thiserror::Error)]
+pub enum OpenClError {
+    #[error("no OpenCL device: {0}")]
+    Unavailable(String),
+    #[error("OpenCL program failed to build for {device}: {log}")]
+    Build { device: String, log: String },
+    #[error("OpenCL {what} failed: {code}")]
+    Call { what: &'static str, code: String },
+}
+
+fn call(what: &'static str) -> impl Fn(opencl3::error_codes::ClError) -> OpenClError {
+    move |e| OpenClError::Call {
+        what,
+        code: e.to_string(),
+    }
+}
+
+/// Device buffers for the job in flight.
+struct JobState {
+    job_id: u64,
+    key: ProgramKey,
+    params: Buffer<layout::Params>,
+    objects: Buffer<layout::Object>,
+    materials: Buffer<layout::Material>,
+    lights: Buffer<u32>,
+    film: Buffer<f32>,
+    rejected: Buffer<u32>,
+    pixels: usize,
+    /// Samples per pixel the device film holds.
+    spp: u64,
+    /// Measured launch time per sample per pixel.
+    per_sample: Option<Duration>,
+    /// Rejections the device counter held at the last read-back.
+    rejected_reported: u64,
+}
+
+pub struct OpenClBackend {
+    info: DeviceInfo,
+    context: Context,
+    queue: CommandQueue,
+    programs: HashMap<ProgramKey, (Program, Kernel)>,
+    state: Option<JobState>,
+    /// Use the one generic program instead of specialised ones (benchmark).
+    pub generic: bool,
+    /// Test hook: make every n-th sample NaN.
+    pub inject_nan_every: Option<u64>,
+}
+
+impl std::fmt::Debug for OpenClBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OpenClBackend").field("device", &self.info.name).finish()
+    }
+}
+
+impl OpenClBackend {
+    /// A backend on device `index` (as `pathstream devices` numbers them), or
+    /// on the device `auto` picks (a GPU) when `index` is None.
+    pub fn new(index: Option<usize>) -> Result<Self, OpenClError> {
+        let devices = list_devices().map_err(OpenClError::Unavailable)?;
+        let info = match index {
+            Some(i) => devices.get(i).cloned().ok_or_else(|| {
+                OpenClError::Unavailable(format!("--device {i}: there are {} OpenCL devices (0..{})", devices.len(), devices.len()))
+            })?,
+            None => devices.first().cloned().ok_or_else(|| OpenClError::Unavailable("no device".into()))?,
+        };
+        Self::on(info)
+    }
+
+    /// A backend on the GPU `auto` picks; Err says why there is none.
+    pub fn auto() -> Result<Self, OpenClError> {
+        let devices = list_devices().map_err(OpenClError::Unavailable)?;
+        let gpu = auto_pick(&devices)
+            .cloned()
+            .ok_or_else(|| OpenClError::Unavailable("no OpenCL GPU (only CPU devices)".into()))?;
+        Self::on(gpu)
+    }
+
+    fn on(info: DeviceInfo) -> Result<Self, OpenClError> {
+        let context = Context::from_device(&info.device).map_err(call("context creation"))?;
+        #[allow(deprecated)] // clCreateCommandQueue: OpenCL 1.2 devices have only this one
+        let queue = CommandQueue::create_default(&context, 0).map_err(call("command queue creation"))?;
+        Ok(Self {
+            info,
+            context,
+            queue,
+            programs: HashMap::new(),
+            state: None,
+            generic: false,
+            inject_nan_every: None,
+        })
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    pub fn device(&self) -> String {
+        self.info.describe()
+    }
+
+    fn key_for(&self, job: &RenderJob) -> ProgramKey {
+        if self.generic {
+            ProgramKey::Generic {
+                inject_nan_every: self.inject_nan_every,
+            }
+        } else {
+            let mut f = Features::of(job);
+            f.inject_nan_every = self.inject_nan_every;
+            ProgramKey::Specialised(f)
+        }
+    }
+
+    /// Builds (or finds in the cache) the program for `key`.
+    pub fn program(&mut self, key: &ProgramKey) -> Result<&Kernel, OpenClError> {
+        if !self.programs.contains_key(key) {
+            let start = Instant::now();
+            let program = program::build(&self.context, &SOURCES, &key.build_options()).map_err(|log| {
+                OpenClError::Build {
+                    device: self.info.name.trim().to_owned(),
+                    log,
+                }
+            })?;
+            let kernel = Kernel::create(&program, "render").map_err(call("kernel creation"))?;
+            if let Ok(log) = program.get_build_log(self.info.device.id()) {
+                if !log.trim().is_empty() {
+                    tracing::debug!(log = %log.trim(), "OpenCL build log");
+                }
+            }
+            tracing::info!(options = %key.build_options(), ms = start.elapsed().as_millis() as u64, "built OpenCL program");
+            self.programs.insert(key.clone(), (program, kernel));
+        }
+        self.programs
+            .get(key)
+            .map(|(_, k)| k)
+            .ok_or_else(|| OpenClError::Unavailable("program cache".into()))
+    }
+
+    /// Builds arbitrary sources (tests: a broken kernel must fail with its log).
+    pub fn build_sources(&self, sources: &[&str], options: &str) -> Result<Program, OpenClError> {
+        program::build(&self.context, sources, options).map_err(|log| OpenClError::Build {
+            device: self.info.name.trim().to_owned(),
+            log,
+        })
+    }
+
+    /// `sizeof` of each shared struct as the device compiler sees it:
+    /// (Object, Material, Params).
+    pub fn device_layout_sizes(&self) -> Result<[u32; 3], OpenClError> {
+        let program = self.build_sources(&SOURCES, "-cl-std=CL1.2")?;
+        let kernel = Kernel::create(&program, "layout_sizes").map_err(call("kernel creation"))?;
+        let mut out = [0u32; 3];
+        unsafe {
+            let buf = self.buffer::<u32>(CL_MEM_READ_WRITE, 3)?;
+            kernel.set_arg(0, &buf.get()).map_err(call("set_arg"))?;
+            let global = [1usize];
+            self.queue
+                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
+                .map_err(call("launch"))?;
+            self.queue
+                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, &mut out, &[])
+                .map_err(call("read"))?;
+        }
+        Ok(out)
+    }
+
+    /// The device's compensated sum of `count` copies of `value` (hi + lo),
+    /// computed with the film's own addition.
+    pub fn accumulate_constant(&self, value: f32, count: u32) -> Result<f64, OpenClError> {
+        let program = self.build_sources(&SOURCES, "-cl-std=CL1.2")?;
+        let kernel = Kernel::create(&program, "accumulate_constant").map_err(call("kernel creation"))?;
+        let mut out = [0f32; 2];
+        unsafe {
+            let buf = self.buffer::<f32>(CL_MEM_READ_WRITE, 2)?;
+            kernel.set_arg(0, &buf.get()).map_err(call("set_arg"))?;
+            kernel.set_arg(1, &value).map_err(call("set_arg"))?;
+            kernel.set_arg(2, &count).map_err(call("set_arg"))?;
+            let global = [1usize];
+            self.queue
+                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
+                .map_err(call("launch"))?;
+            self.queue
+                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, &mut out, &[])
+                .map_err(call("read"))?;
+        }
+        Ok(f64::from(out[0]) + f64::from(out[1]))
+    }
+
+    unsafe fn buffer<T>(&self, flags: u64, count: usize) -> Result<Buffer<T>, OpenClError> {
+        unsafe { Buffer::<T>::create(&self.context, flags, count.max(1), ptr::null_mut()).map_err(call("buffer allocation")) }
+    }
+
+    unsafe fn upload<T>(&self, flags: u64, data: &[T]) -> Result<Buffer<T>, OpenClError> {
+        unsafe {
+            let mut buf = self.buffer::<T>(flags, data.len())?;
+            if !data.is_empty() {
+                self.queue
+                    .enqueue_write_buffer(&mut buf, CL_BLOCKING, 0, data, &[])
+                    .map_err(call("write"))?;
+            }
+            Ok(buf)
+        }
+    }
+
+    /// Makes the device hold `job` and a film equal to the host's.
+    fn prepare(&mut self, job: &RenderJob, film: &Film, key: &ProgramKey) -> Result<(), OpenClError> {
+        let current = self
+            .state
+            .as_ref()
+            .is_some_and(|s| s.job_id == job.id && &s.key == key && s.spp == film.spp() && s.pixels == film.pixels().len());
+        if current {
+            return Ok(());
+        }
+        let packed = layout::pack(job);
+        let mut device_film = vec![0f32; film.pixels().len() * FILM_FLOATS];
+        if film.spp() > 0 {
+            for (px, out) in film.pixels().iter().zip(device_film.chunks_exact_mut(FILM_FLOATS)) {
+                for c in 0..3 {
+                    for (half, base) in [(px.even[c], 0), (px.odd[c], 6)] {
+                        let hi = half as f32;
+                        out[base + c] = hi;
+                        out[base + 3 + c] = (half - f64::from(hi)) as f32;
+                    }
+                }
+            }
+        }
+        let state = unsafe {
+            JobState {
+                job_id: job.id,
+                key: key.clone(),
+                params: self.upload(CL_MEM_READ_ONLY, std::slice::from_ref(&packed.params))?,
+                objects: self.upload(CL_MEM_READ_ONLY, &packed.objects)?,
+                materials: self.upload(CL_MEM_READ_ONLY, &packed.materials)?,
+                lights: self.upload(CL_MEM_READ_ONLY, &packed.lights)?,
+                film: self.upload(CL_MEM_READ_WRITE, &device_film)?,
+                rejected: self.upload(CL_MEM_READ_WRITE, &[0u32])?,
+                pixels: film.pixels().len(),
+                spp: film.spp(),
+                per_sample: self.state.as_ref().filter(|s| s.job_id == job.id).and_then(|s| s.per_sample),
+                rejected_reported: 0,
+            }
+        };
+        self.state = Some(state);
+        Ok(())
+    }
+
+    /// Adds `count` samples per pixel to `film`.
+    pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) -> Result<(), OpenClError> {
+        let key = self.key_for(job);
+        self.program(&key)?;
+        self.prepare(job, film, &key)?;
+        let result = self.launch_all(&key, count, film.pixels().len());
+        if result.is_err() {
+            self.state = None; // the device film may be half updated: start over from the host's
+        }
+        result?;
+        self.read_back(film, count)
+    }
+
+    fn launch_all(&mut self, key: &ProgramKey, count: u64, pixels: usize) -> Result<(), OpenClError> {
+        let mut done = 0u64;
+        while done < count {
+            let per = self.state.as_ref().and_then(|s| s.per_sample);
+            let n = match per {
+                None => 1,
+                Some(p) if p.is_zero() => count - done,
+                Some(p) => ((LAUNCH_TARGET.as_secs_f64() / p.as_secs_f64()) as u64).clamp(1, count - done),
+            }
+            .min(u64::from(u32::MAX));
+            let start = Instant::now();
+            self.launch(key, pixels, n)?;
+            let took = start.elapsed();
+            if let Some(s) = self.state.as_mut() {
+                s.spp += n;
+                s.per_sample = Some(took / n as u32);
+            }
+            done += n;
+        }
+        Ok(())
+    }
+
+    fn launch(&mut self, key: &ProgramKey, pixels: usize, n: u64) -> Result<(), OpenClError> {
+        let state = self.state.as_ref().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
+        let first: cl_ulong = state.spp;
+        let count: cl_uint = n as cl_uint;
+        let kernel = &self
+            .programs
+            .get(key)
+            .ok_or_else(|| OpenClError::Unavailable("program cache".into()))?
+            .1;
+        unsafe {
+            kernel.set_arg(0, &state.params.get()).map_err(call("set_arg"))?;
+            kernel.set_arg(1, &state.objects.get()).map_err(call("set_arg"))?;
+            kernel.set_arg(2, &state.materials.get()).map_err(call("set_arg"))?;
+            kernel.set_arg(3, &state.lights.get()).map_err(call("set_arg"))?;
+            kernel.set_arg(4, &state.film.get()).map_err(call("set_arg"))?;
+            kernel.set_arg(5, &state.rejected.get()).map_err(call("set_arg"))?;
+            kernel.set_arg(6, &first).map_err(call("set_arg"))?;
+            kernel.set_arg(7, &count).map_err(call("set_arg"))?;
+            let global = [pixels];
+            self.queue
+                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
+                .map_err(call("kernel launch"))?;
+        }
+        self.queue.finish().map_err(call("kernel execution"))
+    }
+
+    fn read_back(&mut self, film: &mut Film, count: u64) -> Result<(), OpenClError> {
+        let state = self.state.as_mut().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
+        let mut sums = vec![0f32; state.pixels * FILM_FLOATS];
+        let mut rejected = [0u32];
+        unsafe {
+            self.queue
+                .enqueue_read_buffer(&state.film, CL_BLOCKING, 0, &mut sums, &[])
+                .map_err(call("film read"))?;
+            self.queue
+                .enqueue_read_buffer(&state.rejected, CL_BLOCKING, 0, &mut rejected, &[])
+                .map_err(call("film read"))?;
+        }
+        for (px, s) in film.pixels_mut().iter_mut().zip(sums.chunks_exact(FILM_FLOATS)) {
+            for c in 0..3 {
+                px.even[c] = f64::from(s[c]) + f64::from(s[3 + c]);
+                px.odd[c] = f64::from(s[6 + c]) + f64::from(s[9 + c]);
+            }
+        }
+        // The device counter holds the rejections since the film was uploaded.
+        let total = u64::from(rejected[0]);
+        film.commit(count, total - state.rejected_reported.min(total));
+        state.rejected_reported = total;
+        Ok(())
+    }
+}

@@ -1,0 +1,145 @@
+//! Kernel sources, the scene features a program is specialised for, and the
+//! build (with its log on failure). Specialisation is by compiler defines
+//! generated in one place ([`Features::build_options`]), never by editing
+//! the source.
+
+use super::layout::{KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR};
+use crate::render::job::RenderJob;
+use crate::render::material::Bsdf;
+use crate::render::world::Geometry;
+use crate::render::Filter;
+use opencl3::context::Context;
+use opencl3::program::Program;
+
+/// The kernel's sources in dependency order (`kernels/`, built into the binary).
+pub const SOURCES: [&str; 8] = [
+    include_str!("../../../../../kernels/types.h"),
+    include_str!("../../../../../kernels/rng.h"),
+    include_str!("../../../../../kernels/camera.h"),
+    include_str!("../../../../../kernels/shapes.h"),
+    include_str!("../../../../../kernels/materials.h"),
+    include_str!("../../../../../kernels/lights.h"),
+    include_str!("../../../../../kernels/integrator.h"),
+    include_str!("../../../../../kernels/render.cl"),
+];
+
+/// What a scene and its settings use; one program per distinct value.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Features {
+    pub spheres: bool,
+    pub quads: bool,
+    pub diffuse: bool,
+    pub mirror: bool,
+    pub glass: bool,
+    pub schlick: bool,
+    pub exact: bool,
+    pub sphere_lights: bool,
+    pub quad_lights: bool,
+    pub nee: bool,
+    pub box_filter: bool,
+    pub num_objects: u32,
+    pub num_lights: u32,
+    pub max_depth: u32,
+    /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
+    pub inject_nan_every: Option<u64>,
+}
+
+impl Features {
+    pub fn of(job: &RenderJob) -> Self {
+        let w = &job.world;
+        let kind = |k: u32| {
+            w.objects.iter().any(|o| match o.geometry {
+                Geometry::Sphere(_) => k == KIND_SPHERE,
+                Geometry::Quad(_) => k == KIND_QUAD,
+            })
+        };
+        let used: Vec<_> = w.objects.iter().map(|o| w.materials[o.material as usize]).collect();
+        let mat = |k: u32| {
+            used.iter().any(|m| match m.bsdf {
+                Bsdf::Diffuse => k == MAT_DIFFUSE,
+                Bsdf::Mirror => k == MAT_MIRROR,
+                Bsdf::Glass { .. } => k == MAT_GLASS,
+            })
+        };
+        let glass_with = |want: bool| {
+            used.iter().any(|m| matches!(m.bsdf, Bsdf::Glass { schlick, .. } if schlick == want))
+        };
+        let light_kind = |k: u32| {
+            w.lights.iter().any(|&i| match w.objects[i as usize].geometry {
+                Geometry::Sphere(_) => k == KIND_SPHERE,
+                Geometry::Quad(_) => k == KIND_QUAD,
+            })
+        };
+        Self {
+            spheres: kind(KIND_SPHERE),
+            quads: kind(KIND_QUAD),
+            diffuse: mat(MAT_DIFFUSE),
+            mirror: mat(MAT_MIRROR),
+            glass: mat(MAT_GLASS),
+            schlick: glass_with(true),
+            exact: glass_with(false),
+            sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
+            quad_lights: job.settings.nee && light_kind(KIND_QUAD),
+            nee: job.settings.nee && !w.lights.is_empty(),
+            box_filter: job.filter == Filter::Box,
+            num_objects: w.objects.len() as u32,
+            num_lights: if job.settings.nee { w.lights.len() as u32 } else { 0 },
+            max_depth: job.settings.max_depth,
+            inject_nan_every: None,
+        }
+    }
+
+    /// `-D` options that specialise the kernel to these features.
+    pub fn build_options(&self) -> String {
+        let b = |v: bool| u8::from(v);
+        let mut o = format!(
+            "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
+             -D HAS_GLASS={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
+             -D NEE={} -D BOX_FILTER={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u",
+            b(self.spheres),
+            b(self.quads),
+            b(self.diffuse),
+            b(self.mirror),
+            b(self.glass),
+            b(self.schlick),
+            b(self.exact),
+            b(self.sphere_lights),
+            b(self.quad_lights),
+            b(self.nee),
+            b(self.box_filter),
+            self.num_objects,
+            self.num_lights,
+            self.max_depth,
+        );
+        if let Some(n) = self.inject_nan_every {
+            o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));
+        }
+        o
+    }
+}
+
+/// Which program: specialised to features, or the generic one (every
+/// feature compiled in, counts read at run time).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum ProgramKey {
+    Specialised(Features),
+    Generic { inject_nan_every: Option<u64> },
+}
+
+impl ProgramKey {
+    pub fn build_options(&self) -> String {
+        let common = "-cl-std=CL1.2";
+        match self {
+            ProgramKey::Specialised(f) => format!("{common} {}", f.build_options()),
+            ProgramKey::Generic { inject_nan_every: Some(n) } => format!("{common} -D INJECT_NAN_EVERY={n}UL"),
+            ProgramKey::Generic { inject_nan_every: None } => common.to_owned(),
+        }
+    }
+}
+
+/// Builds `sources` with `options`; the error carries the compiler's log.
+/// The sources go to the compiler as one string: `cl3`'s multi-source call
+/// passes Rust `&str`s where C expects `const char*`s, which crashes.
+pub fn build(context: &Context, sources: &[&str], options: &str) -> Result<Program, String> {
+    Program::create_and_build_from_source(context, &sources.concat(), options)
+}
