@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# The whole test suite: installs what the tests need when it is missing,
-# then runs every test in release mode (renders are heavy; debug is 30x slower).
+# The whole test suite: installs what the tests need when it is missing, then
+# runs every test in release mode (renders are heavy; debug is 30x slower).
+#   - an OpenCL loader and PoCL (a real OpenCL CPU device) for the OpenCL suite;
+#     where CI is set, that suite fails rather than skips without a device.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -9,7 +11,17 @@ if ! command -v cargo >/dev/null 2>&1; then
     exit 1
 fi
 
-# Nothing beyond Rust is needed yet. (The OpenCL and browser suites will
-# install ocl-icd-libopencl1, pocl-opencl-icd and chromium here.)
+have_opencl() {
+    ldconfig -p 2>/dev/null | grep -q 'libOpenCL\.so\.1' && ls /etc/OpenCL/vendors/*.icd >/dev/null 2>&1
+}
+
+if ! have_opencl; then
+    echo "test.sh: installing the OpenCL loader and PoCL (ocl-icd-libopencl1 pocl-opencl-icd)" >&2
+    sudo=""
+    if [ "$(id -u)" != 0 ]; then sudo="sudo"; fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq ocl-icd-libopencl1 pocl-opencl-icd >/dev/null
+fi
 
 cargo test --release --workspace --locked "$@"

@@ -82,6 +82,10 @@ pub struct RenderArgs {
     /// OpenCL device number (see `pathstream devices`); implies --backend opencl.
     #[arg(long, value_name = "N")]
     device: Option<usize>,
+    /// Use the one generic OpenCL program (every feature compiled in) instead
+    /// of one specialised to the scene: for measuring what specialisation buys.
+    #[arg(long)]
+    generic_kernel: bool,
     /// Exposure in stops applied before tone mapping (PNG only).
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
@@ -129,9 +133,13 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     };
     let mut backend =
         Backend::choose(backend_arg.choice(args.device)).map_err(|e| CliError::Failed(e.to_string()))?;
+    if let Backend::OpenCl { backend, .. } = &mut backend {
+        backend.generic = args.generic_kernel;
+    }
     tracing::info!(backend = backend.name(), device = %backend.device(), "rendering");
 
     let job = RenderJob::new(&scene, args.width, args.height, &quality);
+    backend.prepare(&job).map_err(|e| CliError::Failed(e.to_string()))?;
     let mut film = Film::new(args.width, args.height);
     let bar = progress_bar(&quality);
     let done = progressive::render(&job, &mut backend, &mut film, &quality, |p| {

@@ -99,6 +99,24 @@ impl Backend {
         }
     }
 
+    /// Gets ready to render `job` (builds the OpenCL program for its
+    /// features), so that timing the first pass does not time the compiler.
+    pub fn prepare(&mut self, job: &RenderJob) -> Result<(), BackendError> {
+        match self {
+            Backend::Cpu(_) => Ok(()),
+            Backend::OpenCl { backend, fallback } => match backend.prepare_program(job) {
+                Ok(()) => Ok(()),
+                Err(e) if *fallback => {
+                    let why = format!("OpenCL failed on {}: {e}", backend.info().name.trim());
+                    tracing::warn!("{why}; falling back to rayon on the CPU");
+                    *self = Backend::Cpu(CpuBackend::fallback(why));
+                    Ok(())
+                }
+                Err(e) => Err(e.into()),
+            },
+        }
+    }
+
     /// Adds `count` samples per pixel to `film`. On failure the film is as
     /// it was before the call.
     pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) -> Result<(), BackendError> {

@@ -3,6 +3,7 @@
 use opencl3::device::{Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU};
 use opencl3::platform::get_platforms;
 use serde::Serialize;
+use std::sync::OnceLock;
 
 /// One OpenCL device, numbered across all platforms (`--device N`).
 #[derive(Clone, Debug, Serialize)]
@@ -38,7 +39,14 @@ impl DeviceInfo {
 }
 
 /// Every OpenCL device, or why there are none (no loader, no platform).
+/// Enumerated once per process: some drivers (PoCL 5) crash when two threads
+/// initialise the platform at once, and devices do not come and go.
 pub fn list() -> Result<Vec<DeviceInfo>, String> {
+    static DEVICES: OnceLock<Result<Vec<DeviceInfo>, String>> = OnceLock::new();
+    DEVICES.get_or_init(enumerate).clone()
+}
+
+fn enumerate() -> Result<Vec<DeviceInfo>, String> {
     let platforms = get_platforms().map_err(|e| {
         if e.0 == -2000 {
             "no OpenCL loader (libOpenCL.so.1) found".to_owned()

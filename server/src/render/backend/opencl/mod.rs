@@ -278,6 +278,12 @@ impl OpenClBackend {
         Ok(())
     }
 
+    /// Builds (or finds) the program `job` needs.
+    pub fn prepare_program(&mut self, job: &RenderJob) -> Result<(), OpenClError> {
+        let key = self.key_for(job);
+        self.program(&key).map(|_| ())
+    }
+
     /// Adds `count` samples per pixel to `film`.
     pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) -> Result<(), OpenClError> {
         let key = self.key_for(job);
