@@ -288,3 +288,33 @@ fn explicit_opencl_with_a_bad_device_number_is_a_clear_error() {
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("--device 99"), "{err}");
 }
+
+#[test]
+fn a_device_that_fails_mid_render_loses_no_samples() {
+    let Some(first) = device() else { return };
+    let s = scene("cornell");
+    let job = RenderJob::new(&s, 8, 8, &Quality::default());
+    // Asked for by name: the error comes back and the film is untouched.
+    let mut named = Backend::OpenCl { backend: Box::new(first), fallback: false };
+    let mut film = Film::new(8, 8);
+    named.render(&job, &mut film, 4).expect("render");
+    let before = film.pixels().to_vec();
+    if let Backend::OpenCl { backend, .. } = &mut named {
+        backend.fail_launches = true;
+    }
+    let err = named.render(&job, &mut film, 4).expect_err("injected failure");
+    assert!(err.to_string().contains("kernel launch failed"), "{err}");
+    assert_eq!(film.spp(), 4);
+    assert_eq!(film.pixels(), &before[..]);
+    // Chosen by auto: a logged fall back to rayon that carries on from sample 4.
+    let mut failing = OpenClBackend::new(None).expect("device");
+    failing.fail_launches = true;
+    let mut auto = Backend::OpenCl { backend: Box::new(failing), fallback: true };
+    auto.render(&job, &mut film, 4).expect("falls back");
+    assert_eq!(auto.name(), "cpu");
+    assert!(auto.device().contains("OpenCL failed"), "{}", auto.device());
+    assert_eq!(film.spp(), 8);
+    let mut reference = Film::new(8, 8);
+    Backend::choose(BackendChoice::Cpu).expect("cpu").render(&job, &mut reference, 8).expect("render");
+    assert_agree(&reference, &film, 8, 4.5, 1e-4, "4 OpenCL samples + 4 CPU samples vs 8 CPU samples");
+}

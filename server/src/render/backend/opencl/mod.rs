@@ -79,6 +79,8 @@ pub struct OpenClBackend {
     pub generic: bool,
     /// Test hook: make every n-th sample NaN.
     pub inject_nan_every: Option<u64>,
+    /// Test hook: fail every launch from now on, as a lost device would.
+    pub fail_launches: bool,
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -122,6 +124,7 @@ impl OpenClBackend {
             state: None,
             generic: false,
             inject_nan_every: None,
+            fail_launches: false,
         })
     }
 
@@ -320,6 +323,12 @@ impl OpenClBackend {
     }
 
     fn launch(&mut self, key: &ProgramKey, pixels: usize, n: u64) -> Result<(), OpenClError> {
+        if self.fail_launches {
+            return Err(OpenClError::Call {
+                what: "kernel launch",
+                code: "CL_OUT_OF_RESOURCES (injected)".into(),
+            });
+        }
         let state = self.state.as_ref().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         let first: cl_ulong = state.spp;
         let count: cl_uint = n as cl_uint;
