@@ -318,3 +318,20 @@ fn a_device_that_fails_mid_render_loses_no_samples() {
     Backend::choose(BackendChoice::Cpu).expect("cpu").render(&job, &mut reference, 8).expect("render");
     assert_agree(&reference, &film, 8, 4.5, 1e-4, "4 OpenCL samples + 4 CPU samples vs 8 CPU samples");
 }
+
+#[test]
+fn launches_split_into_pixel_ranges_give_the_same_image() {
+    let Some(mut whole) = device() else { return };
+    let mut tiled = OpenClBackend::new(None).expect("device");
+    // A target no launch can meet: one sample at a time over 64-pixel ranges.
+    tiled.launch_target = std::time::Duration::from_nanos(1);
+    let s = scene("cornell-glass");
+    let job = RenderJob::new(&s, 40, 30, &Quality { seed: 3, ..Quality::default() });
+    let (mut a, mut b) = (Film::new(40, 30), Film::new(40, 30));
+    for n in [1, 3, 4] {
+        whole.render(&job, &mut a, n).expect("render");
+        tiled.render(&job, &mut b, n).expect("render");
+    }
+    assert_eq!(b.spp(), 8);
+    assert_eq!(a.pixels(), b.pixels());
+}

@@ -26,8 +26,9 @@ impl DeviceInfo {
     /// One line for listings and logs.
     pub fn describe(&self) -> String {
         format!(
-            "{} ({}, {} compute units, {:.1} GiB, fp64 {}, {}, platform {})",
+            "{} ({}, {}, {} compute units, {:.1} GiB, fp64 {}, {}, platform {})",
             self.name.trim(),
+            self.vendor.trim(),
             self.kind,
             self.compute_units,
             self.global_mem_bytes as f64 / (1u64 << 30) as f64,

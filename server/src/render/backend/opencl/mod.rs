@@ -81,6 +81,8 @@ pub struct OpenClBackend {
     pub inject_nan_every: Option<u64>,
     /// Test hook: fail every launch from now on, as a lost device would.
     pub fail_launches: bool,
+    /// How long one launch should take (default [`LAUNCH_TARGET`]).
+    pub launch_target: Duration,
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -125,6 +127,7 @@ impl OpenClBackend {
             generic: false,
             inject_nan_every: None,
             fail_launches: false,
+            launch_target: LAUNCH_TARGET,
         })
     }
 
@@ -300,18 +303,35 @@ impl OpenClBackend {
         self.read_back(film, count)
     }
 
+    /// Renders `count` samples of every pixel in launches of about
+    /// `launch_target`: several samples per launch on a fast device, or,
+    /// where one sample of the whole image takes longer, one sample over
+    /// a range of pixels per launch (every pixel still gets the same samples).
     fn launch_all(&mut self, key: &ProgramKey, count: u64, pixels: usize) -> Result<(), OpenClError> {
+        let target = self.launch_target.as_secs_f64();
         let mut done = 0u64;
         while done < count {
-            let per = self.state.as_ref().and_then(|s| s.per_sample);
-            let n = match per {
+            let per_sample = self.state.as_ref().and_then(|s| s.per_sample).map(|d| d.as_secs_f64());
+            let start = Instant::now();
+            let n = match per_sample {
+                Some(p) if p > target => {
+                    let tile = ((pixels as f64 * target / p) as usize).clamp(64, pixels);
+                    let mut offset = 0;
+                    while offset < pixels {
+                        let len = tile.min(pixels - offset);
+                        self.launch(key, offset, len, 1)?;
+                        offset += len;
+                    }
+                    1
+                }
+                Some(p) if p > 0.0 => ((target / p) as u64).clamp(1, count - done),
+                Some(_) => count - done,
                 None => 1,
-                Some(p) if p.is_zero() => count - done,
-                Some(p) => ((LAUNCH_TARGET.as_secs_f64() / p.as_secs_f64()) as u64).clamp(1, count - done),
             }
             .min(u64::from(u32::MAX));
-            let start = Instant::now();
-            self.launch(key, pixels, n)?;
+            if per_sample.is_none_or(|p| p <= target) {
+                self.launch(key, 0, pixels, n)?;
+            }
             let took = start.elapsed();
             if let Some(s) = self.state.as_mut() {
                 s.spp += n;
@@ -322,7 +342,8 @@ impl OpenClBackend {
         Ok(())
     }
 
-    fn launch(&mut self, key: &ProgramKey, pixels: usize, n: u64) -> Result<(), OpenClError> {
+    /// One launch: samples `spp .. spp + n` of pixels `offset .. offset + len`.
+    fn launch(&mut self, key: &ProgramKey, offset: usize, len: usize, n: u64) -> Result<(), OpenClError> {
         if self.fail_launches {
             return Err(OpenClError::Call {
                 what: "kernel launch",
@@ -346,9 +367,9 @@ impl OpenClBackend {
             kernel.set_arg(5, &state.rejected.get()).map_err(call("set_arg"))?;
             kernel.set_arg(6, &first).map_err(call("set_arg"))?;
             kernel.set_arg(7, &count).map_err(call("set_arg"))?;
-            let global = [pixels];
+            let (offsets, global) = ([offset], [len]);
             self.queue
-                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
+                .enqueue_nd_range_kernel(kernel.get(), 1, offsets.as_ptr(), global.as_ptr(), ptr::null(), &[])
                 .map_err(call("kernel launch"))?;
         }
         self.queue.finish().map_err(call("kernel execution"))
