@@ -4,21 +4,9 @@
 
 mod common;
 
-use common::{assert_clean, assert_mean, render, scene};
-use pathstream::render::scene::{GlassJson, MaterialJson, ObjectJson, SphereJson, SurfaceJson};
+use common::{assert_clean, assert_mean, furnace, render};
+use pathstream::render::scene::{GlassJson, MaterialJson, ObjectJson, SphereJson};
 use pathstream::render::{Filter, Quality, Scene};
-
-fn furnace(albedo: f64, emission: f64) -> Scene {
-    let mut json = scene("furnace").to_json();
-    json.materials.insert(
-        "shell".into(),
-        MaterialJson::Diffuse(SurfaceJson {
-            albedo: [albedo; 3],
-            emission: Some([emission; 3]),
-        }),
-    );
-    Scene::from_json(&json).expect("valid furnace")
-}
 
 #[test]
 fn depth_capped_furnace_is_exact_with_and_without_nee() {

@@ -5,10 +5,10 @@
 
 mod common;
 
-use common::{assert_agree, assert_clean, assert_mean, render, render_on, scene};
+use common::{assert_agree, assert_clean, assert_mean, furnace, render, render_on, scene};
 use pathstream::render::backend::opencl::{OpenClBackend, OpenClError, SOURCES};
 use pathstream::render::math::DVec3;
-use pathstream::render::scene::{FresnelJson, GlassJson, MaterialJson, ObjectJson, SphereJson, SurfaceJson};
+use pathstream::render::scene::{FresnelJson, GlassJson, MaterialJson, ObjectJson, SphereJson};
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJob, Scene};
 
 fn opencl() -> Option<Backend> {
@@ -31,18 +31,6 @@ fn device() -> Option<OpenClBackend> {
             None
         }
     }
-}
-
-fn furnace(albedo: f64, emission: f64) -> Scene {
-    let mut json = scene("furnace").to_json();
-    json.materials.insert(
-        "shell".into(),
-        MaterialJson::Diffuse(SurfaceJson {
-            albedo: [albedo; 3],
-            emission: Some([emission; 3]),
-        }),
-    );
-    Scene::from_json(&json).expect("valid furnace")
 }
 
 #[test]

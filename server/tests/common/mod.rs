@@ -2,6 +2,7 @@
 //! reduce films to region means with their standard errors, and compare.
 #![allow(dead_code)]
 
+use pathstream::render::scene::{MaterialJson, SurfaceJson};
 use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene};
 
 /// Renders `spp` samples per pixel of `scene` on `backend`.
@@ -21,6 +22,19 @@ pub fn render(scene: &Scene, w: u32, h: u32, q: &Quality, spp: u64) -> Film {
 
 pub fn scene(name: &str) -> Scene {
     Scene::load(name).expect("built-in scene")
+}
+
+/// The furnace scene with the shell's albedo and emission replaced.
+pub fn furnace(albedo: f64, emission: f64) -> Scene {
+    let mut json = scene("furnace").to_json();
+    json.materials.insert(
+        "shell".into(),
+        MaterialJson::Diffuse(SurfaceJson {
+            albedo: [albedo; 3],
+            emission: Some([emission; 3]),
+        }),
+    );
+    Scene::from_json(&json).expect("valid furnace")
 }
 
 /// Mean of a block of pixels and the variance of that mean, per channel.

@@ -187,43 +187,45 @@ impl OpenClBackend {
     /// `sizeof` of each shared struct as the device compiler sees it:
     /// (Object, Material, Params).
     pub fn device_layout_sizes(&self) -> Result<[u32; 3], OpenClError> {
-        let program = self.build_sources(&SOURCES, "-cl-std=CL1.2")?;
-        let kernel = Kernel::create(&program, "layout_sizes").map_err(call("kernel creation"))?;
         let mut out = [0u32; 3];
-        unsafe {
-            let buf = self.buffer::<u32>(CL_MEM_READ_WRITE, 3)?;
-            kernel.set_arg(0, &buf.get()).map_err(call("set_arg"))?;
-            let global = [1usize];
-            self.queue
-                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
-                .map_err(call("launch"))?;
-            self.queue
-                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, &mut out, &[])
-                .map_err(call("read"))?;
-        }
+        self.run_check_kernel("layout_sizes", &mut out, |_| Ok(()))?;
         Ok(out)
     }
 
     /// The device's compensated sum of `count` copies of `value` (hi + lo),
     /// computed with the film's own addition.
     pub fn accumulate_constant(&self, value: f32, count: u32) -> Result<f64, OpenClError> {
-        let program = self.build_sources(&SOURCES, "-cl-std=CL1.2")?;
-        let kernel = Kernel::create(&program, "accumulate_constant").map_err(call("kernel creation"))?;
         let mut out = [0f32; 2];
+        self.run_check_kernel("accumulate_constant", &mut out, |k| unsafe {
+            k.set_arg(1, &value).map_err(call("set_arg"))?;
+            k.set_arg(2, &count).map_err(call("set_arg"))
+        })?;
+        Ok(f64::from(out[0]) + f64::from(out[1]))
+    }
+
+    /// Runs one work-item of a check kernel from `kernels/render.cl` whose
+    /// first argument is an output buffer the size of `out`; `args` sets the rest.
+    fn run_check_kernel<T: Copy>(
+        &self,
+        name: &str,
+        out: &mut [T],
+        args: impl FnOnce(&Kernel) -> Result<(), OpenClError>,
+    ) -> Result<(), OpenClError> {
+        let program = self.build_sources(&SOURCES, "-cl-std=CL1.2")?;
+        let kernel = Kernel::create(&program, name).map_err(call("kernel creation"))?;
         unsafe {
-            let buf = self.buffer::<f32>(CL_MEM_READ_WRITE, 2)?;
+            let buf = self.buffer::<T>(CL_MEM_READ_WRITE, out.len())?;
             kernel.set_arg(0, &buf.get()).map_err(call("set_arg"))?;
-            kernel.set_arg(1, &value).map_err(call("set_arg"))?;
-            kernel.set_arg(2, &count).map_err(call("set_arg"))?;
+            args(&kernel)?;
             let global = [1usize];
             self.queue
                 .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
                 .map_err(call("launch"))?;
             self.queue
-                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, &mut out, &[])
+                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, out, &[])
                 .map_err(call("read"))?;
         }
-        Ok(f64::from(out[0]) + f64::from(out[1]))
+        Ok(())
     }
 
     unsafe fn buffer<T>(&self, flags: u64, count: usize) -> Result<Buffer<T>, OpenClError> {
