@@ -10,12 +10,15 @@ use std::process::ExitCode;
 #[derive(Parser, Debug)]
 #[command(name = "pathstream", version, about, long_about = None)]
 struct Args {
+    /// What to do; without one, `serve` with its defaults.
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Run the render service: HTTP API, WebSocket stream, browser client (the default).
+    Serve(cli::serve::ServeArgs),
     /// Render a scene to a PNG or PFM file, with a progress bar.
     Render(cli::render::RenderArgs),
     /// List the built-in scenes, or print one as scene JSON.
@@ -27,19 +30,27 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    let mut args = Args::parse();
+    if args.command.is_none() {
+        // `pathstream` alone serves, reading PATHSTREAM_ADDR / PATHSTREAM_TOKEN.
+        args = Args::parse_from(["pathstream", "serve"]);
+    }
+    let serving = matches!(args.command, Some(Command::Serve(_)));
+    let default_filter = if serving { "info" } else { "warn" };
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_filter)),
         )
         .with_writer(std::io::stderr)
         .init();
-    let args = Args::parse();
     let result = match args.command {
-        Command::Render(a) => cli::render::run(a),
-        Command::Scenes(a) => cli::scenes::run(a),
-        Command::Diff(a) => cli::diff::run(a),
-        Command::Devices(a) => cli::devices::run(a),
+        Some(Command::Serve(a)) => cli::serve::run(a),
+        None => cli::serve::run(cli::serve::ServeArgs::default()),
+        Some(Command::Render(a)) => cli::render::run(a),
+        Some(Command::Scenes(a)) => cli::scenes::run(a),
+        Some(Command::Diff(a)) => cli::diff::run(a),
+        Some(Command::Devices(a)) => cli::devices::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

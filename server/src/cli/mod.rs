@@ -4,6 +4,7 @@ pub mod devices;
 pub mod diff;
 pub mod render;
 pub mod scenes;
+pub mod serve;
 
 use std::process::ExitCode;
 

@@ -1,0 +1,76 @@
+//! `pathstream serve` (the default command): the render service.
+
+use super::render::BackendArg;
+use super::CliError;
+use pathstream::service::{self, ServeConfig};
+use std::net::SocketAddr;
+use std::time::Duration;
+
+#[derive(clap::Args, Debug, Default)]
+pub struct ServeArgs {
+    /// Address to listen on.
+    #[arg(long, env = "PATHSTREAM_ADDR", value_name = "HOST:PORT", help = "Address to listen on [default: 127.0.0.1:8080]")]
+    addr: Option<SocketAddr>,
+    /// Where sessions render by default (a session may ask for another).
+    #[arg(long, value_enum)]
+    backend: Option<BackendArg>,
+    /// OpenCL device number (see `pathstream devices`); implies --backend opencl.
+    #[arg(long, value_name = "N")]
+    device: Option<usize>,
+    /// Require this bearer token on every /api route and the WebSocket.
+    #[arg(long, env = "PATHSTREAM_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// Most sessions at once.
+    #[arg(long, value_name = "N")]
+    max_sessions: Option<usize>,
+    /// Most pixels (width x height) per session.
+    #[arg(long, value_name = "N")]
+    max_pixels: Option<u64>,
+    /// Delete sessions that had no client and no request for this many seconds.
+    #[arg(long, value_name = "S")]
+    idle_timeout_s: Option<u64>,
+    /// Allow cross-origin requests from any site (off by default).
+    #[arg(long)]
+    cors: bool,
+}
+
+pub fn run(args: ServeArgs) -> Result<(), CliError> {
+    let defaults = ServeConfig::default();
+    let backend = match (args.backend.unwrap_or(BackendArg::Auto), args.device) {
+        (BackendArg::Cpu, Some(_)) => return Err(CliError::Usage("--device: only with --backend opencl or auto".into())),
+        (BackendArg::Auto, Some(_)) => BackendArg::Opencl,
+        (b, _) => b,
+    };
+    if args.max_sessions == Some(0) {
+        return Err(CliError::Usage("--max-sessions: must be at least 1".into()));
+    }
+    let config = ServeConfig {
+        addr: args.addr.unwrap_or(defaults.addr),
+        backend: backend.choice(args.device),
+        token: args.token.filter(|t| !t.is_empty()),
+        max_sessions: args.max_sessions.unwrap_or(defaults.max_sessions),
+        max_pixels: args.max_pixels.unwrap_or(defaults.max_pixels),
+        idle_timeout: args.idle_timeout_s.map_or(defaults.idle_timeout, Duration::from_secs),
+        max_body_bytes: defaults.max_body_bytes,
+        cors: args.cors,
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| CliError::Failed(format!("cannot start the async runtime: {e}")))?;
+    runtime.block_on(async move {
+        let running = service::start(config).await.map_err(CliError::Failed)?;
+        let backends: Vec<String> = (0..running.state.backend_count())
+            .map(|i| {
+                let (b, d) = running.state.worker_info(i);
+                format!("{b} ({d})")
+            })
+            .collect();
+        println!("pathstream serving on http://{}/  - open it in a browser", running.addr);
+        println!("render workers: {}", backends.join("; "));
+        if running.state.config.token.is_some() {
+            println!("a bearer token is required on /api (Authorization: Bearer ..., or ?token=...)");
+        }
+        running.until_signal().await.map_err(|e| CliError::Failed(e.to_string()))
+    })
+}

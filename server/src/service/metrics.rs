@@ -1,0 +1,57 @@
+//! Counters for `/metrics` (Prometheus text format).
+
+use std::fmt::Write;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+#[derive(Debug, Default)]
+pub struct Metrics {
+    pub samples_cpu: AtomicU64,
+    pub samples_opencl: AtomicU64,
+    pub frames_sent: AtomicU64,
+    pub frames_dropped: AtomicU64,
+    pub rejected_samples: AtomicU64,
+    pub sessions_created: AtomicU64,
+}
+
+impl Metrics {
+    pub fn add_samples(&self, backend: &str, paths: u64) {
+        let counter = if backend == "opencl" { &self.samples_opencl } else { &self.samples_cpu };
+        counter.fetch_add(paths, Ordering::Relaxed);
+    }
+
+    pub fn render(&self, sessions: usize) -> String {
+        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
+        let mut out = String::new();
+        let mut metric = |name: &str, kind: &str, help: &str, lines: &[(String, u64)]| {
+            let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} {kind}");
+            for (labels, v) in lines {
+                let _ = writeln!(out, "{name}{labels} {v}");
+            }
+        };
+        metric("pathstream_sessions", "gauge", "Render sessions open.", &[(String::new(), sessions as u64)]);
+        metric("pathstream_sessions_created_total", "counter", "Render sessions created.", &[(String::new(), get(&self.sessions_created))]);
+        metric(
+            "pathstream_samples_total",
+            "counter",
+            "Camera paths rendered, by backend.",
+            &[
+                ("{backend=\"cpu\"}".into(), get(&self.samples_cpu)),
+                ("{backend=\"opencl\"}".into(), get(&self.samples_opencl)),
+            ],
+        );
+        metric("pathstream_frames_sent_total", "counter", "Frames sent over WebSockets.", &[(String::new(), get(&self.frames_sent))]);
+        metric(
+            "pathstream_frames_dropped_total",
+            "counter",
+            "Frames a WebSocket client skipped because a newer one was ready.",
+            &[(String::new(), get(&self.frames_dropped))],
+        );
+        metric(
+            "pathstream_rejected_samples_total",
+            "counter",
+            "Samples rejected as NaN or infinite.",
+            &[(String::new(), get(&self.rejected_samples))],
+        );
+        out
+    }
+}

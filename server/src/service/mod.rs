@@ -1,0 +1,261 @@
+//! The render service: sessions on worker threads, the HTTP API, the
+//! WebSocket frame stream. `app(state)` builds the whole router; `start`
+//! binds and serves it until shut down.
+
+pub mod config;
+pub mod error;
+mod metrics;
+mod routes;
+pub mod session;
+pub mod updates;
+mod worker;
+mod ws;
+
+pub use config::ServeConfig;
+pub use error::ApiError;
+pub use metrics::Metrics;
+
+use crate::render::{Backend, BackendChoice};
+use session::Session;
+use std::collections::HashMap;
+use std::net::SocketAddr;
+use std::sync::{Arc, Mutex, RwLock};
+use std::time::Duration;
+use tokio::sync::{oneshot, watch};
+use worker::Worker;
+
+/// Shared state of a running service.
+pub struct AppState {
+    pub config: ServeConfig,
+    sessions: RwLock<HashMap<String, (Arc<Session>, usize)>>,
+    workers: Mutex<Vec<Worker>>,
+    /// (backend name, device) of each worker, by index.
+    worker_info: Vec<(String, String)>,
+    default_worker: usize,
+    pub metrics: Arc<Metrics>,
+    shutdown: watch::Sender<bool>,
+}
+
+impl AppState {
+    /// Starts one worker for rayon and, as `config.backend` says, one for
+    /// an OpenCL device (the default for new sessions when there is one).
+    pub fn new(config: ServeConfig) -> Result<Arc<Self>, String> {
+        let metrics = Arc::new(Metrics::default());
+        let mut workers = vec![Worker::start(
+            Backend::choose(BackendChoice::Cpu).map_err(|e| e.to_string())?,
+            metrics.clone(),
+        )];
+        let mut default_worker = 0;
+        match config.backend {
+            BackendChoice::Cpu => {}
+            choice => {
+                let backend = Backend::choose(choice).map_err(|e| e.to_string())?;
+                if backend.name() == "opencl" {
+                    workers.push(Worker::start(backend, metrics.clone()));
+                    default_worker = 1;
+                } else {
+                    tracing::info!(device = %backend.device(), "sessions render with rayon");
+                }
+            }
+        }
+        let worker_info = workers
+            .iter()
+            .map(|w| (w.shared.backend.clone(), w.shared.device.clone()))
+            .collect();
+        let (shutdown, _) = watch::channel(false);
+        Ok(Arc::new(Self {
+            config,
+            sessions: RwLock::new(HashMap::new()),
+            workers: Mutex::new(workers),
+            worker_info,
+            default_worker,
+            metrics,
+            shutdown,
+        }))
+    }
+
+    pub fn session(&self, id: &str) -> Result<Arc<Session>, ApiError> {
+        let sessions = self.sessions.read().unwrap_or_else(|e| e.into_inner());
+        let (s, _) = sessions.get(id).ok_or_else(|| ApiError::unknown_session(id))?;
+        s.touch();
+        Ok(s.clone())
+    }
+
+    pub fn sessions(&self) -> Vec<Arc<Session>> {
+        let sessions = self.sessions.read().unwrap_or_else(|e| e.into_inner());
+        let mut list: Vec<_> = sessions.values().map(|(s, _)| s.clone()).collect();
+        list.sort_by(|a, b| a.id.cmp(&b.id));
+        list
+    }
+
+    pub fn session_count(&self) -> usize {
+        self.sessions.read().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
+    /// The worker a new session asking for `backend` goes to.
+    pub fn worker_for(&self, backend: Option<&str>) -> Result<usize, ApiError> {
+        match backend {
+            None | Some("auto") => Ok(self.default_worker),
+            Some("cpu") => Ok(0),
+            Some("opencl") => self
+                .worker_info
+                .iter()
+                .position(|(b, _)| b == "opencl")
+                .ok_or_else(|| ApiError::BadRequest("backend: this server has no OpenCL device".into())),
+            Some(other) => Err(ApiError::BadRequest(format!(
+                "backend: unknown backend '{other}' (expected auto, opencl or cpu)"
+            ))),
+        }
+    }
+
+    pub fn backend_count(&self) -> usize {
+        self.worker_info.len()
+    }
+
+    pub fn worker_info(&self, worker: usize) -> (String, String) {
+        self.worker_info[worker].clone()
+    }
+
+    /// Registers and starts a session, unless the session limit is reached.
+    pub fn add_session(&self, session: Arc<Session>, worker: usize) -> Result<(), ApiError> {
+        {
+            let mut sessions = self.sessions.write().unwrap_or_else(|e| e.into_inner());
+            if sessions.len() >= self.config.max_sessions {
+                return Err(ApiError::TooMany(format!(
+                    "the server already holds its limit of {} sessions",
+                    self.config.max_sessions
+                )));
+            }
+            sessions.insert(session.id.clone(), (session.clone(), worker));
+        }
+        self.metrics.sessions_created.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.workers.lock().unwrap_or_else(|e| e.into_inner())[worker].add(session);
+        Ok(())
+    }
+
+    pub fn remove_session(&self, id: &str) -> Result<(), ApiError> {
+        let removed = self.sessions.write().unwrap_or_else(|e| e.into_inner()).remove(id);
+        let (_, worker) = removed.ok_or_else(|| ApiError::unknown_session(id))?;
+        self.workers.lock().unwrap_or_else(|e| e.into_inner())[worker].remove(id);
+        Ok(())
+    }
+
+    /// Tells a session's worker that it has work (after a change).
+    pub fn wake(&self, id: &str) {
+        let worker = self.sessions.read().unwrap_or_else(|e| e.into_inner()).get(id).map(|(_, w)| *w);
+        if let Some(w) = worker {
+            self.workers.lock().unwrap_or_else(|e| e.into_inner())[w].wake();
+        }
+    }
+
+    pub fn shutdown_signal(&self) -> watch::Receiver<bool> {
+        self.shutdown.subscribe()
+    }
+
+    fn expire_idle(&self) {
+        let idle: Vec<String> = self
+            .sessions()
+            .into_iter()
+            .filter(|s| s.idle_for() > self.config.idle_timeout)
+            .map(|s| s.id.clone())
+            .collect();
+        for id in idle {
+            tracing::info!(session = %id, "expired (idle)");
+            let _ = self.remove_session(&id);
+        }
+    }
+
+    fn stop(&self) {
+        let _ = self.shutdown.send(true);
+        for w in self.workers.lock().unwrap_or_else(|e| e.into_inner()).iter_mut() {
+            w.stop();
+        }
+    }
+}
+
+pub use routes::app;
+
+/// A service bound to its address and serving.
+pub struct Running {
+    pub addr: SocketAddr,
+    pub state: Arc<AppState>,
+    stop: Option<oneshot::Sender<()>>,
+    task: tokio::task::JoinHandle<std::io::Result<()>>,
+}
+
+impl Running {
+    /// Graceful shutdown: stop accepting, close WebSockets, stop workers.
+    pub async fn shutdown(mut self) -> std::io::Result<()> {
+        if let Some(tx) = self.stop.take() {
+            let _ = tx.send(());
+        }
+        self.task.await.map_err(std::io::Error::other)?
+    }
+
+    /// Runs until the process gets SIGINT or SIGTERM, then shuts down.
+    pub async fn until_signal(self) -> std::io::Result<()> {
+        shutdown_signal().await;
+        tracing::info!("shutting down");
+        self.shutdown().await
+    }
+}
+
+/// Binds `config.addr` (port 0 picks one) and serves in the background.
+pub async fn start(config: ServeConfig) -> Result<Running, String> {
+    let listener = tokio::net::TcpListener::bind(config.addr)
+        .await
+        .map_err(|e| format!("cannot listen on {}: {e}", config.addr))?;
+    let addr = listener.local_addr().map_err(|e| e.to_string())?;
+    let state = AppState::new(config)?;
+    let (stop, stopped) = oneshot::channel::<()>();
+    let janitor_state = state.clone();
+    let janitor = tokio::spawn(async move {
+        let period = (janitor_state.config.idle_timeout / 4).clamp(Duration::from_millis(50), Duration::from_secs(5));
+        loop {
+            tokio::time::sleep(period).await;
+            janitor_state.expire_idle();
+        }
+    });
+    let serve_state = state.clone();
+    let signal_state = state.clone();
+    let task = tokio::spawn(async move {
+        let result = axum::serve(listener, app(serve_state.clone()))
+            .with_graceful_shutdown(async move {
+                let _ = stopped.await;
+                // Closing WebSockets first lets the connections drain.
+                let _ = signal_state.shutdown.send(true);
+            })
+            .await;
+        janitor.abort();
+        let s = serve_state.clone();
+        let _ = tokio::task::spawn_blocking(move || s.stop()).await;
+        result
+    });
+    Ok(Running {
+        addr,
+        state,
+        stop: Some(stop),
+        task,
+    })
+}
+
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        () = ctrl_c => {},
+        () = term => {},
+    }
+}

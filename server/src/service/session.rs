@@ -1,0 +1,369 @@
+//! A render session: scene, camera, light, quality and film, rendered pass
+//! by pass by a worker thread, with the latest frame published through a
+//! `watch` channel (newest wins; nobody waits for a slow reader).
+
+use super::error::ApiError;
+use super::metrics::Metrics;
+use super::updates::{light_status, LightStatus};
+use crate::render::output::{encode_pfm, encode_png};
+use crate::render::progressive::{self, Progress};
+use crate::render::tonemap::Tonemap;
+use crate::render::{Backend, Film, Quality, RenderJob, Scene};
+use serde::Serialize;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+use std::time::{Duration, Instant};
+use tokio::sync::watch;
+
+/// How long one pass of one session should take: short enough that a change
+/// shows within a frame or two, long enough to keep the device busy.
+pub const PASS_TARGET: Duration = Duration::from_millis(30);
+
+/// A published image and its statistics.
+#[derive(Debug)]
+pub struct Frame {
+    /// Increases with every frame the session publishes.
+    pub seq: u64,
+    /// Which restart of the session this frame belongs to.
+    pub generation: u64,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u64,
+    pub error_estimate: Option<f64>,
+    pub samples_per_sec: f64,
+    pub elapsed_ms: f64,
+    pub rejected: u64,
+    pub halted: bool,
+    pub backend: String,
+    pub device: String,
+    /// Mean radiance, row-major, top row first (empty before the first pass).
+    pub pixels: Vec<[f32; 3]>,
+    png: OnceLock<Vec<u8>>,
+}
+
+impl Frame {
+    fn empty(seq: u64, generation: u64, width: u32, height: u32, backend: String, device: String) -> Self {
+        Self {
+            seq,
+            generation,
+            width,
+            height,
+            spp: 0,
+            error_estimate: None,
+            samples_per_sec: 0.0,
+            elapsed_ms: 0.0,
+            rejected: 0,
+            halted: false,
+            backend,
+            device,
+            pixels: Vec::new(),
+            png: OnceLock::new(),
+        }
+    }
+
+    fn pixels_or_black(&self) -> std::borrow::Cow<'_, [[f32; 3]]> {
+        if self.pixels.is_empty() {
+            std::borrow::Cow::Owned(vec![[0.0; 3]; self.width as usize * self.height as usize])
+        } else {
+            std::borrow::Cow::Borrowed(&self.pixels)
+        }
+    }
+
+    /// The frame as PNG, encoded once however many clients want it. Call off
+    /// the async runtime (it takes milliseconds).
+    pub fn png(&self) -> Result<&[u8], ApiError> {
+        if let Some(png) = self.png.get() {
+            return Ok(png);
+        }
+        let png = encode_png(self.width, self.height, &self.pixels_or_black(), &Tonemap::default())
+            .map_err(|e| ApiError::Internal(e.to_string()))?;
+        Ok(self.png.get_or_init(|| png))
+    }
+
+    pub fn pfm(&self) -> Vec<u8> {
+        encode_pfm(self.width, self.height, &self.pixels_or_black())
+    }
+}
+
+/// Everything that a change restarts.
+pub struct SessionState {
+    pub scene_name: String,
+    pub scene: Scene,
+    pub width: u32,
+    pub height: u32,
+    pub quality: Quality,
+    pub job: Arc<RenderJob>,
+    /// None while a worker is rendering it.
+    film: Option<Film>,
+    pub generation: u64,
+    restarted: Instant,
+    halted: bool,
+    /// Why rendering stopped early (a device error).
+    pub failure: Option<String>,
+    per_sample: Option<Duration>,
+}
+
+pub struct Session {
+    pub id: String,
+    state: Mutex<SessionState>,
+    frames: watch::Sender<Arc<Frame>>,
+    seq: AtomicU64,
+    last_active: Mutex<Instant>,
+    /// Connected WebSocket clients (a session with clients never expires).
+    pub clients: AtomicUsize,
+}
+
+/// Status as `GET /api/sessions/{id}` reports it.
+#[derive(Debug, Serialize)]
+pub struct Status {
+    pub id: String,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub camera: crate::render::scene::CameraJson,
+    pub light: Option<LightStatus>,
+    pub quality: Quality,
+    /// `rendering` or `halted` (also after a device failure, see `failure`).
+    pub state: &'static str,
+    pub spp: u64,
+    pub error_estimate: Option<f64>,
+    pub samples_per_sec: f64,
+    pub elapsed_ms: f64,
+    pub rejected: u64,
+    pub backend: String,
+    pub device: String,
+    pub generation: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    // A panic while holding the lock cannot leave the state half-written in a
+    // way that matters more than stopping the service: carry on.
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl Session {
+    pub fn new(id: String, scene_name: String, scene: Scene, width: u32, height: u32, quality: Quality, backend: (String, String)) -> Self {
+        let job = Arc::new(RenderJob::new(&scene, width, height, &quality));
+        let (frames, _) = watch::channel(Arc::new(Frame::empty(0, 0, width, height, backend.0, backend.1)));
+        Self {
+            id,
+            state: Mutex::new(SessionState {
+                scene_name,
+                scene,
+                width,
+                height,
+                quality,
+                job,
+                film: Some(Film::new(width, height)),
+                generation: 0,
+                restarted: Instant::now(),
+                halted: false,
+                failure: None,
+                per_sample: None,
+            }),
+            frames,
+            seq: AtomicU64::new(1),
+            last_active: Mutex::new(Instant::now()),
+            clients: AtomicUsize::new(0),
+        }
+    }
+
+    pub fn touch(&self) {
+        *lock(&self.last_active) = Instant::now();
+    }
+
+    pub fn idle_for(&self) -> Duration {
+        if self.clients.load(Ordering::Relaxed) > 0 {
+            return Duration::ZERO;
+        }
+        lock(&self.last_active).elapsed()
+    }
+
+    pub fn subscribe(&self) -> watch::Receiver<Arc<Frame>> {
+        self.frames.subscribe()
+    }
+
+    pub fn latest(&self) -> Arc<Frame> {
+        self.frames.borrow().clone()
+    }
+
+    pub fn generation(&self) -> u64 {
+        lock(&self.state).generation
+    }
+
+    pub fn status(&self) -> Status {
+        let st = lock(&self.state);
+        let frame = self.latest();
+        let current = frame.generation == st.generation;
+        let c = st.scene.to_json().camera;
+        Status {
+            id: self.id.clone(),
+            scene: st.scene_name.clone(),
+            width: st.width,
+            height: st.height,
+            camera: c,
+            light: light_status(&st.scene),
+            quality: st.quality,
+            state: if st.halted { "halted" } else { "rendering" },
+            spp: if current { frame.spp } else { 0 },
+            error_estimate: if current { frame.error_estimate } else { None },
+            samples_per_sec: if current { frame.samples_per_sec } else { 0.0 },
+            elapsed_ms: st.restarted.elapsed().as_secs_f64() * 1e3,
+            rejected: if current { frame.rejected } else { 0 },
+            backend: frame.backend.clone(),
+            device: frame.device.clone(),
+            generation: st.generation,
+            failure: st.failure.clone(),
+        }
+    }
+
+    /// Applies a change: `update` gets the scene and quality and returns the
+    /// new ones (or an error, which changes nothing). Accumulation restarts.
+    pub fn change(
+        &self,
+        update: impl FnOnce(&SessionState) -> Result<(Option<(String, Scene)>, Option<Quality>), ApiError>,
+    ) -> Result<(), ApiError> {
+        let mut st = lock(&self.state);
+        let (scene, quality) = update(&st)?;
+        if let Some((name, scene)) = scene {
+            st.scene_name = name;
+            st.scene = scene;
+        }
+        if let Some(q) = quality {
+            st.quality = q;
+        }
+        st.job = Arc::new(RenderJob::new(&st.scene, st.width, st.height, &st.quality));
+        st.film = Some(Film::new(st.width, st.height));
+        st.generation += 1;
+        st.restarted = Instant::now();
+        st.halted = false;
+        st.failure = None;
+        st.per_sample = None;
+        let previous = self.latest();
+        let frame = Frame::empty(
+            self.seq.fetch_add(1, Ordering::Relaxed),
+            st.generation,
+            st.width,
+            st.height,
+            previous.backend.clone(),
+            previous.device.clone(),
+        );
+        drop(st);
+        self.frames.send_replace(Arc::new(frame));
+        Ok(())
+    }
+
+    /// Whether a worker should give this session a pass.
+    pub fn wants_render(&self) -> bool {
+        let st = lock(&self.state);
+        !st.halted && st.film.is_some()
+    }
+
+    /// One pass on `backend`: about [`PASS_TARGET`] of samples, then a frame.
+    /// A change made meanwhile wins: the pass's film is thrown away.
+    pub fn render_pass(&self, backend: &mut Backend, metrics: &Metrics) {
+        let (job, mut film, generation, quality, count) = {
+            let mut st = lock(&self.state);
+            if st.halted {
+                return;
+            }
+            let Some(film) = st.film.take() else { return };
+            let mut count = match st.per_sample {
+                Some(p) if !p.is_zero() => (PASS_TARGET.as_secs_f64() / p.as_secs_f64()) as u64,
+                _ => 1,
+            }
+            .clamp(1, 1 << 16);
+            if let Some(n) = st.quality.spp {
+                count = count.min(n.saturating_sub(film.spp())).max(1);
+            }
+            (st.job.clone(), film, st.generation, st.quality, count)
+        };
+        let rejected_before = film.rejected();
+        let start = Instant::now();
+        let result = backend.prepare(&job).and_then(|()| backend.render(&job, &mut film, count));
+        let took = start.elapsed();
+        let (name, device) = (backend.name().to_owned(), backend.device());
+        let mut st = lock(&self.state);
+        if st.generation != generation {
+            return; // changed while rendering: that film is stale
+        }
+        if let Err(e) = result {
+            tracing::error!(session = %self.id, error = %e, "rendering failed");
+            st.failure = Some(e.to_string());
+            st.halted = true;
+            st.film = Some(film);
+            drop(st);
+            self.publish_status_only(name, device);
+            return;
+        }
+        metrics.add_samples(&name, count * u64::from(film.width()) * u64::from(film.height()));
+        metrics.rejected_samples.fetch_add(film.rejected() - rejected_before, Ordering::Relaxed);
+        st.per_sample = Some(took / count as u32);
+        let progress = Progress::of(&film, st.restarted.elapsed());
+        st.halted = quality.halts() && progressive::halted(&quality, &progress);
+        let frame = Frame {
+            seq: self.seq.fetch_add(1, Ordering::Relaxed),
+            generation,
+            width: film.width(),
+            height: film.height(),
+            spp: progress.spp,
+            error_estimate: progress.error_estimate,
+            samples_per_sec: progress.samples_per_sec,
+            elapsed_ms: progress.elapsed.as_secs_f64() * 1e3,
+            rejected: progress.rejected,
+            halted: st.halted,
+            backend: name,
+            device,
+            pixels: film.mean(),
+            png: OnceLock::new(),
+        };
+        st.film = Some(film);
+        drop(st);
+        self.frames.send_replace(Arc::new(frame));
+    }
+
+    fn publish_status_only(&self, backend: String, device: String) {
+        let previous = self.latest();
+        let mut frame = Frame::empty(
+            self.seq.fetch_add(1, Ordering::Relaxed),
+            previous.generation,
+            previous.width,
+            previous.height,
+            backend,
+            device,
+        );
+        frame.halted = true;
+        frame.spp = previous.spp;
+        frame.error_estimate = previous.error_estimate;
+        frame.pixels = previous.pixels.clone();
+        self.frames.send_replace(Arc::new(frame));
+    }
+
+    /// The first frame of the current generation with at least `min_spp`
+    /// samples (or a halted one), waiting at most `timeout`; on timeout, the
+    /// latest frame.
+    pub async fn frame_with(&self, min_spp: u64, timeout: Duration) -> Arc<Frame> {
+        let mut rx = self.subscribe();
+        let ready = |f: &Frame, generation: u64| f.generation == generation && (f.spp >= min_spp || f.halted);
+        let wait = async {
+            loop {
+                let generation = self.generation();
+                {
+                    let f = rx.borrow_and_update();
+                    if ready(&f, generation) {
+                        return f.clone();
+                    }
+                }
+                if rx.changed().await.is_err() {
+                    return self.latest();
+                }
+            }
+        };
+        match tokio::time::timeout(timeout, wait).await {
+            Ok(frame) => frame,
+            Err(_) => self.latest(),
+        }
+    }
+}

@@ -1,0 +1,154 @@
+//! The WebSocket frame stream. The server sends binary PNG frames, each
+//! followed by a text message with its stats; the client sends JSON changes:
+//! `{"camera": {...}}`, `{"light": {...}}`, `{"quality": {...}}`,
+//! `{"scene": ...}`. A bad message gets `{"type": "error", "error": "..."}`
+//! and the socket stays open.
+//!
+//! At most one frame is in flight per client: the stream always sends the
+//! newest frame and skips the ones published meanwhile, so a slow or stalled
+//! client never slows rendering or anyone else.
+
+use super::error::ApiError;
+use super::routes::{apply_change, Change};
+use super::session::{Frame, Session, Status};
+use super::AppState;
+use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::{Path, State};
+use axum::response::Response;
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{json, Value};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// A client that takes longer than this to accept one frame is dropped.
+const SEND_TIMEOUT: Duration = Duration::from_secs(30);
+
+pub async fn upgrade(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+    ws: WebSocketUpgrade,
+) -> Result<Response, ApiError> {
+    let session = state.session(&id)?;
+    Ok(ws.on_upgrade(move |socket| serve(socket, state, session)))
+}
+
+fn stats(status: &Status, frame: &Frame) -> Value {
+    let mut v = serde_json::to_value(status).unwrap_or_else(|_| json!({}));
+    if let Value::Object(m) = &mut v {
+        m.insert("type".into(), json!("stats"));
+        // The stats of the frame just sent, not of whatever came after it.
+        if frame.generation == status.generation {
+            m.insert("spp".into(), json!(frame.spp));
+            m.insert("error_estimate".into(), json!(frame.error_estimate));
+            m.insert("samples_per_sec".into(), json!(frame.samples_per_sec));
+        }
+        m.insert("frame".into(), json!(frame.seq));
+    }
+    v
+}
+
+fn error_message(e: &str) -> Message {
+    Message::Text(Utf8Bytes::from(json!({"type": "error", "error": e}).to_string()))
+}
+
+/// Parses one client message into changes, in the order given.
+fn parse_changes(text: &str) -> Result<Vec<Change>, ApiError> {
+    let value: Value = super::error::parse_json(text.as_bytes())?;
+    let Value::Object(map) = value else {
+        return Err(ApiError::BadRequest("message: must be a JSON object".into()));
+    };
+    let mut changes = Vec::new();
+    for (key, v) in map {
+        let field = |e: ApiError| match e {
+            ApiError::BadRequest(m) => ApiError::BadRequest(format!("{key}.{m}")),
+            other => other,
+        };
+        changes.push(match key.as_str() {
+            "camera" => Change::Camera(serde_json::from_value(v).map_err(|e| field(ApiError::BadRequest(e.to_string())))?),
+            "light" => Change::Light(serde_json::from_value(v).map_err(|e| field(ApiError::BadRequest(e.to_string())))?),
+            "quality" => Change::Quality(v),
+            "scene" => Change::Scene(v),
+            other => {
+                return Err(ApiError::BadRequest(format!(
+                    "message: unknown key '{other}' (expected camera, light, quality or scene)"
+                )))
+            }
+        });
+    }
+    Ok(changes)
+}
+
+async fn serve(socket: WebSocket, state: Arc<AppState>, session: Arc<Session>) {
+    session.clients.fetch_add(1, Ordering::Relaxed);
+    let (mut sink, mut stream) = socket.split();
+    let mut frames = session.subscribe();
+    frames.mark_changed();
+    let mut shutdown = state.shutdown_signal();
+    let mut last_seq = 0u64;
+    loop {
+        tokio::select! {
+            changed = frames.changed() => {
+                if changed.is_err() {
+                    break;
+                }
+                let frame = frames.borrow_and_update().clone();
+                // Restarts publish an empty frame; wait for the first pass.
+                if frame.spp == 0 && !frame.halted {
+                    continue;
+                }
+                if last_seq != 0 && frame.seq > last_seq + 1 {
+                    state.metrics.frames_dropped.fetch_add(frame.seq - last_seq - 1, Ordering::Relaxed);
+                }
+                last_seq = frame.seq;
+                let f = frame.clone();
+                let png = match tokio::task::spawn_blocking(move || f.png().map(<[u8]>::to_vec)).await {
+                    Ok(Ok(png)) => png,
+                    _ => break,
+                };
+                let text = stats(&session.status(), &frame).to_string();
+                let send = async {
+                    sink.send(Message::Binary(png.into())).await?;
+                    sink.send(Message::Text(Utf8Bytes::from(text))).await
+                };
+                match tokio::time::timeout(SEND_TIMEOUT, send).await {
+                    Ok(Ok(())) => {
+                        state.metrics.frames_sent.fetch_add(1, Ordering::Relaxed);
+                    }
+                    _ => break,
+                }
+            }
+            message = stream.next() => {
+                let text = match message {
+                    Some(Ok(Message::Text(t))) => t,
+                    Some(Ok(Message::Binary(_))) => {
+                        if sink.send(error_message("message: expected JSON text, got binary")).await.is_err() {
+                            break;
+                        }
+                        continue;
+                    }
+                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
+                    Some(Ok(_)) => continue,
+                };
+                session.touch();
+                let result = parse_changes(text.as_str()).and_then(|changes| {
+                    changes.into_iter().try_for_each(|c| apply_change(&state, &session, c).map(|_| ()))
+                });
+                if let Err(e) = result {
+                    if sink.send(error_message(&e.to_string())).await.is_err() {
+                        break;
+                    }
+                }
+            }
+            _ = shutdown.changed() => {
+                let _ = sink.send(Message::Close(Some(axum::extract::ws::CloseFrame {
+                    code: axum::extract::ws::close_code::AWAY,
+                    reason: Utf8Bytes::from_static("server shutting down"),
+                }))).await;
+                break;
+            }
+        }
+    }
+    session.clients.fetch_sub(1, Ordering::Relaxed);
+    session.touch();
+}
