@@ -1,4 +1,7 @@
-/* Entry point: one work-item per pixel adds samples first .. first+count-1,
+/* Entry point: one work-item per pixel of pixels [pixel_base, pixel_end)
+ * (a launch may cover a range of the image; the range is a kernel argument
+ * rather than a global offset, which some drivers specialise kernels on)
+ * adds samples first .. first+count-1,
  * in index order, to the device film. The film keeps each sum as a pair of
  * floats (hi + lo, compensated with TwoSum) for the even and the odd
  * samples: 12 floats per pixel, [even hi rgb, even lo rgb, odd hi rgb,
@@ -20,9 +23,9 @@ inline void add_compensated(__global float *hi, __global float *lo, float x) {
 
 __kernel void render(__global const Params *P, __global const Object *objects, __global const Material *materials,
                      __global const uint *lights, __global float *film, __global uint *rejected, ulong first,
-                     uint count) {
-    uint gid = get_global_id(0);
-    if (gid >= P->width * P->height) {
+                     uint count, uint pixel_base, uint pixel_end) {
+    uint gid = pixel_base + (uint)get_global_id(0);
+    if (gid >= pixel_end) {
         return;
     }
     uint x = gid % P->width;

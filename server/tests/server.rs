@@ -97,6 +97,16 @@ async fn session_lifecycle() {
     let pixels = pfm(&base, &id, 32).await;
     assert_eq!(pixels.len(), 24 * 16);
 
+    let metrics = client().get(format!("{base}/metrics")).send().await.expect("req").text().await.expect("text");
+    assert!(metrics.contains("pathstream_sessions 1"), "{metrics}");
+    assert!(metrics.contains("pathstream_samples_total{backend=\"cpu\"} "), "{metrics}");
+    let rendered: u64 = metrics
+        .lines()
+        .find(|l| l.starts_with("pathstream_samples_total{backend=\"cpu\"}"))
+        .and_then(|l| l.rsplit(' ').next()?.parse().ok())
+        .expect("a count");
+    assert!(rendered >= 32 * 24 * 16, "{rendered} camera paths counted");
+
     let del = client().delete(format!("{base}/api/sessions/{id}")).send().await.expect("req");
     assert_eq!(del.status(), 204);
     let gone = client().get(format!("{base}/api/sessions/{id}")).send().await.expect("req");
@@ -189,6 +199,7 @@ async fn bad_input_gets_a_4xx_with_a_json_error_and_the_server_keeps_serving() {
     let mut cfg = config();
     cfg.max_body_bytes = 64 * 1024;
     cfg.max_pixels = 512 * 512;
+    cfg.max_sessions = 2;
     let (running, base) = server(cfg).await;
     let keep = create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await["id"].as_str().expect("id").to_owned();
     let id = keep.as_str();
@@ -238,6 +249,12 @@ async fn bad_input_gets_a_4xx_with_a_json_error_and_the_server_keeps_serving() {
         let msg = v["error"].as_str().unwrap_or_else(|| panic!("{method} {path}: no error field: {text}"));
         assert!(msg.contains(needle), "{method} {path}: '{needle}' not in '{msg}'");
     }
+    // The session limit: a second session fits, a third does not.
+    create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await;
+    let r = c.post(format!("{base}/api/sessions")).json(&json!({"width": 8, "height": 8})).send().await.expect("req");
+    assert_eq!(r.status(), 429);
+    let v: Value = r.json().await.expect("json");
+    assert!(v["error"].as_str().expect("msg").contains("limit of 2 sessions"), "{v}");
     // A WebSocket message that is not JSON: an error message, socket still usable.
     let mut ws = ws_connect(&base, id).await;
     ws.send(Message::Text("not json".into())).await.expect("send");

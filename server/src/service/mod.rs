@@ -15,6 +15,7 @@ pub use config::ServeConfig;
 pub use error::ApiError;
 pub use metrics::Metrics;
 
+use crate::render::backend::CpuBackend;
 use crate::render::{Backend, BackendChoice};
 use session::Session;
 use std::collections::HashMap;
@@ -41,10 +42,7 @@ impl AppState {
     /// an OpenCL device (the default for new sessions when there is one).
     pub fn new(config: ServeConfig) -> Result<Arc<Self>, String> {
         let metrics = Arc::new(Metrics::default());
-        let mut workers = vec![Worker::start(
-            Backend::choose(BackendChoice::Cpu).map_err(|e| e.to_string())?,
-            metrics.clone(),
-        )];
+        let mut workers = vec![Worker::start(Backend::Cpu(CpuBackend::low_priority()), metrics.clone())];
         let mut default_worker = 0;
         match config.backend {
             BackendChoice::Cpu => {}
@@ -219,6 +217,13 @@ pub async fn start(config: ServeConfig) -> Result<Running, String> {
     let serve_state = state.clone();
     let signal_state = state.clone();
     let task = tokio::spawn(async move {
+        // No Nagle: a frame is followed at once by its small stats message,
+        // which must not wait for the client's delayed ACK (~40 ms).
+        let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
+            if let Err(e) = tcp.set_nodelay(true) {
+                tracing::debug!("TCP_NODELAY: {e}");
+            }
+        });
         let result = axum::serve(listener, app(serve_state.clone()))
             .with_graceful_shutdown(async move {
                 let _ = stopped.await;

@@ -106,6 +106,9 @@ pub struct SessionState {
 pub struct Session {
     pub id: String,
     state: Mutex<SessionState>,
+    /// The state's generation, readable without the lock (a pass in flight
+    /// checks it to give up as soon as a change makes it useless).
+    current_generation: AtomicU64,
     frames: watch::Sender<Arc<Frame>>,
     seq: AtomicU64,
     last_active: Mutex<Instant>,
@@ -164,6 +167,7 @@ impl Session {
                 per_sample: None,
             }),
             frames,
+            current_generation: AtomicU64::new(0),
             seq: AtomicU64::new(1),
             last_active: Mutex::new(Instant::now()),
             clients: AtomicUsize::new(0),
@@ -237,6 +241,8 @@ impl Session {
         st.job = Arc::new(RenderJob::new(&st.scene, st.width, st.height, &st.quality));
         st.film = Some(Film::new(st.width, st.height));
         st.generation += 1;
+        self.current_generation.store(st.generation, Ordering::Relaxed);
+        tracing::debug!(session = %self.id, generation = st.generation, "changed");
         st.restarted = Instant::now();
         st.halted = false;
         st.failure = None;
@@ -282,12 +288,20 @@ impl Session {
         };
         let rejected_before = film.rejected();
         let start = Instant::now();
-        let result = backend.prepare(&job).and_then(|()| backend.render(&job, &mut film, count));
+        tracing::debug!(session = %self.id, generation, count, "pass starts");
+        let cancelled = || self.current_generation.load(Ordering::Relaxed) != generation;
+        let result = backend
+            .prepare(&job)
+            .and_then(|()| backend.render_unless(&job, &mut film, count, &cancelled));
         let took = start.elapsed();
         let (name, device) = (backend.name().to_owned(), backend.device());
         let mut st = lock(&self.state);
+        tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
         if st.generation != generation {
             return; // changed while rendering: that film is stale
+        }
+        if matches!(result, Ok(false)) {
+            return; // given up for a change; the state has a fresh film
         }
         if let Err(e) = result {
             tracing::error!(session = %self.id, error = %e, "rendering failed");

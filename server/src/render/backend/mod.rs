@@ -7,6 +7,7 @@
 
 mod cpu;
 pub mod opencl;
+mod priority;
 
 pub use cpu::CpuBackend;
 pub use opencl::{OpenClBackend, OpenClError};
@@ -114,6 +115,22 @@ impl Backend {
                 }
                 Err(e) => Err(e.into()),
             },
+        }
+    }
+
+    /// As [`Backend::render`], but a CPU pass gives up early once
+    /// `cancelled` says so (a device launch is short and runs to its end);
+    /// Ok(false) then, and the film must be thrown away.
+    pub fn render_unless(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        count: u64,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, BackendError> {
+        match self {
+            Backend::Cpu(b) => Ok(b.render_unless(job, film, count, cancelled)),
+            _ => self.render(job, film, count).map(|()| true),
         }
     }
 

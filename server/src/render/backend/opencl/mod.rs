@@ -30,6 +30,8 @@ use std::time::{Duration, Instant};
 
 /// A launch should return within about this long, so updates feel immediate.
 pub const LAUNCH_TARGET: Duration = Duration::from_millis(30);
+/// Most pixels one launch covers; larger images take several launches.
+pub const TILE: usize = 1 << 16;
 /// Floats per pixel in the device film: [even hi, even lo, odd hi, odd lo] x rgb.
 const FILM_FLOATS: usize = 12;
 
@@ -306,46 +308,40 @@ impl OpenClBackend {
     }
 
     /// Renders `count` samples of every pixel in launches of about
-    /// `launch_target`: several samples per launch on a fast device, or,
-    /// where one sample of the whole image takes longer, one sample over
-    /// a range of pixels per launch (every pixel still gets the same samples).
+    /// `launch_target`. Every launch has the same size (the whole image, or
+    /// [`TILE`] pixels and the image in several launches): drivers such as
+    /// PoCL compile a kernel anew for every new launch size. The number of
+    /// samples per launch adapts to the measured time instead.
     fn launch_all(&mut self, key: &ProgramKey, count: u64, pixels: usize) -> Result<(), OpenClError> {
         let target = self.launch_target.as_secs_f64();
+        let tile = pixels.min(TILE);
         let mut done = 0u64;
         while done < count {
             let per_sample = self.state.as_ref().and_then(|s| s.per_sample).map(|d| d.as_secs_f64());
-            let start = Instant::now();
             let n = match per_sample {
-                Some(p) if p > target => {
-                    let tile = ((pixels as f64 * target / p) as usize).clamp(64, pixels);
-                    let mut offset = 0;
-                    while offset < pixels {
-                        let len = tile.min(pixels - offset);
-                        self.launch(key, offset, len, 1)?;
-                        offset += len;
-                    }
-                    1
-                }
                 Some(p) if p > 0.0 => ((target / p) as u64).clamp(1, count - done),
                 Some(_) => count - done,
                 None => 1,
             }
             .min(u64::from(u32::MAX));
-            if per_sample.is_none_or(|p| p <= target) {
-                self.launch(key, 0, pixels, n)?;
+            let mut slowest = Duration::ZERO;
+            for offset in (0..pixels).step_by(tile) {
+                let start = Instant::now();
+                self.launch(key, offset, tile, pixels, n)?;
+                slowest = slowest.max(start.elapsed());
             }
-            let took = start.elapsed();
             if let Some(s) = self.state.as_mut() {
                 s.spp += n;
-                s.per_sample = Some(took / n as u32);
+                s.per_sample = Some(slowest / n as u32);
             }
             done += n;
         }
         Ok(())
     }
 
-    /// One launch: samples `spp .. spp + n` of pixels `offset .. offset + len`.
-    fn launch(&mut self, key: &ProgramKey, offset: usize, len: usize, n: u64) -> Result<(), OpenClError> {
+    /// One launch of `size` work-items: samples `spp .. spp + n` of pixels
+    /// `offset .. min(offset + size, pixels)`.
+    fn launch(&mut self, key: &ProgramKey, offset: usize, size: usize, pixels: usize, n: u64) -> Result<(), OpenClError> {
         if self.fail_launches {
             return Err(OpenClError::Call {
                 what: "kernel launch",
@@ -369,9 +365,12 @@ impl OpenClBackend {
             kernel.set_arg(5, &state.rejected.get()).map_err(call("set_arg"))?;
             kernel.set_arg(6, &first).map_err(call("set_arg"))?;
             kernel.set_arg(7, &count).map_err(call("set_arg"))?;
-            let (offsets, global) = ([offset], [len]);
+            let (base, end) = (offset as cl_uint, (offset + size).min(pixels) as cl_uint);
+            kernel.set_arg(8, &base).map_err(call("set_arg"))?;
+            kernel.set_arg(9, &end).map_err(call("set_arg"))?;
+            let global = [size];
             self.queue
-                .enqueue_nd_range_kernel(kernel.get(), 1, offsets.as_ptr(), global.as_ptr(), ptr::null(), &[])
+                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
                 .map_err(call("kernel launch"))?;
         }
         self.queue.finish().map_err(call("kernel execution"))

@@ -1,0 +1,113 @@
+//! Latency from a camera update sent on the WebSocket to the first frame
+//! that reflects it, p50 and p95 over 100 updates, plus PNG encode time and
+//! frames delivered per second. Runs its own server on 127.0.0.1:0.
+//!
+//!     cargo run --release --example latency -- [--backend cpu|opencl|auto] [--size 256] [--updates 100]
+
+use futures_util::{SinkExt, StreamExt};
+use pathstream::render::output::encode_png;
+use pathstream::render::tonemap::Tonemap;
+use pathstream::render::BackendChoice;
+use pathstream::service::{start, ServeConfig};
+use serde_json::{json, Value};
+use std::time::{Duration, Instant};
+use tokio_tungstenite::tungstenite::Message;
+
+fn arg(name: &str, default: &str) -> String {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1).cloned())
+        .unwrap_or_else(|| default.to_owned())
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
+}
+
+#[tokio::main]
+async fn main() -> anyhow::Result<()> {
+    if std::env::var_os("RUST_LOG").is_some() {
+        tracing_subscriber::fmt().with_env_filter(tracing_subscriber::EnvFilter::from_default_env()).init();
+    }
+    let size: u32 = arg("--size", "256").parse()?;
+    let updates: usize = arg("--updates", "100").parse()?;
+    let backend = match arg("--backend", "cpu").as_str() {
+        "opencl" => BackendChoice::OpenCl { device: None },
+        "auto" => BackendChoice::Auto,
+        _ => BackendChoice::Cpu,
+    };
+    let running = start(ServeConfig {
+        addr: "127.0.0.1:0".parse()?,
+        backend,
+        ..ServeConfig::default()
+    })
+    .await
+    .map_err(anyhow::Error::msg)?;
+    let base = format!("http://{}", running.addr);
+    let created: Value = reqwest::Client::new()
+        .post(format!("{base}/api/sessions"))
+        .json(&json!({"scene": "cornell-glass", "width": size, "height": size}))
+        .send()
+        .await?
+        .json()
+        .await?;
+    let id = created["id"].as_str().unwrap_or_default().to_owned();
+    println!("session on {} ({})", created["backend"], created["device"]);
+    let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{}/api/sessions/{id}/ws", running.addr)).await?;
+
+    // Warm up: a few frames.
+    let mut seen = 0;
+    while seen < 5 {
+        if let Some(Ok(Message::Binary(_))) = ws.next().await {
+            seen += 1;
+        }
+    }
+    let mut latencies = Vec::new();
+    for i in 0..updates {
+        let z = 250.0 + (i % 2) as f64 * 20.0;
+        let sent = Instant::now();
+        ws.send(Message::Text(json!({"camera": {"position": [50, 52, z]}}).to_string().into())).await?;
+        let target = i as u64 + 1; // generation after this update
+        loop {
+            match tokio::time::timeout(Duration::from_secs(30), ws.next()).await {
+                Ok(Some(Ok(Message::Text(t)))) => {
+                    let v: Value = serde_json::from_str(t.as_str())?;
+                    if v["type"] == "stats" && v["generation"].as_u64() >= Some(target) && v["spp"].as_u64() > Some(0) {
+                        latencies.push(sent.elapsed().as_secs_f64() * 1e3);
+                        break;
+                    }
+                }
+                Ok(Some(Ok(_))) => {}
+                _ => anyhow::bail!("stream ended"),
+            }
+        }
+    }
+    latencies.sort_by(f64::total_cmp);
+    println!(
+        "update -> first frame at {size}x{size}: p50 {:.1} ms, p95 {:.1} ms over {updates} updates",
+        percentile(&latencies, 0.5),
+        percentile(&latencies, 0.95)
+    );
+
+    // Frames delivered per second to one reading client, steady state.
+    let t0 = Instant::now();
+    let mut frames = 0;
+    while t0.elapsed() < Duration::from_secs(3) {
+        if let Ok(Some(Ok(Message::Binary(_)))) = tokio::time::timeout(Duration::from_secs(3), ws.next()).await {
+            frames += 1;
+        }
+    }
+    println!("frames delivered: {:.1} per second", frames as f64 / t0.elapsed().as_secs_f64());
+
+    // PNG encode time of one frame of this size (fast compression).
+    let pixels: Vec<[f32; 3]> = (0..size * size).map(|i| [(i % 7) as f32 / 7.0, 0.5, 0.25]).collect();
+    let t = Instant::now();
+    let n = 20;
+    for _ in 0..n {
+        std::hint::black_box(encode_png(size, size, &pixels, &Tonemap::default())?);
+    }
+    println!("PNG encode at {size}x{size}: {:.2} ms per frame", t.elapsed().as_secs_f64() * 1e3 / f64::from(n));
+    running.shutdown().await?;
+    Ok(())
+}
