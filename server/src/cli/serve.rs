@@ -32,6 +32,9 @@ pub struct ServeArgs {
     /// Allow cross-origin requests from any site (off by default).
     #[arg(long)]
     cors: bool,
+    /// Serve the browser client from this folder instead of the built-in copy.
+    #[arg(long, env = "PATHSTREAM_STATIC_DIR", value_name = "DIR")]
+    static_dir: Option<std::path::PathBuf>,
 }
 
 pub fn run(args: ServeArgs) -> Result<(), CliError> {
@@ -53,6 +56,7 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         idle_timeout: args.idle_timeout_s.map_or(defaults.idle_timeout, Duration::from_secs),
         max_body_bytes: defaults.max_body_bytes,
         cors: args.cors,
+        static_dir: args.static_dir,
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

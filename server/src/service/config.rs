@@ -19,6 +19,9 @@ pub struct ServeConfig {
     pub max_body_bytes: usize,
     /// Allow cross-origin requests (off by default).
     pub cors: bool,
+    /// Serve the browser client from this folder instead of the copy built
+    /// into the binary (for working on the page without rebuilding).
+    pub static_dir: Option<std::path::PathBuf>,
 }
 
 impl Default for ServeConfig {
@@ -32,6 +35,7 @@ impl Default for ServeConfig {
             idle_timeout: Duration::from_secs(600),
             max_body_bytes: 2 << 20,
             cors: false,
+            static_dir: None,
         }
     }
 }

@@ -45,9 +45,9 @@ pub fn app(state: Arc<AppState>) -> Router {
     let mut router = Router::new()
         .nest("/api", api)
         .route("/metrics", get(metrics))
-        .route("/", get(|| static_file("index.html")))
-        .route("/app.js", get(|| static_file("app.js")))
-        .route("/style.css", get(|| static_file("style.css")))
+        .route("/", get(|State(s): State<Arc<AppState>>| static_file(s, "index.html")))
+        .route("/app.js", get(|State(s): State<Arc<AppState>>| static_file(s, "app.js")))
+        .route("/style.css", get(|State(s): State<Arc<AppState>>| static_file(s, "style.css")))
         .fallback(api_not_found)
         .layer(DefaultBodyLimit::max(state.config.max_body_bytes))
         .layer(TraceLayer::new_for_http());
@@ -57,13 +57,21 @@ pub fn app(state: Arc<AppState>) -> Router {
     router.with_state(state)
 }
 
-async fn static_file(name: &str) -> Response {
-    let (body, mime) = match name {
+/// One of the client's three files: built in, or read from `static_dir`.
+async fn static_file(state: Arc<AppState>, name: &'static str) -> Response {
+    let (built_in, mime) = match name {
         "index.html" => (include_str!("../../../static/index.html"), "text/html; charset=utf-8"),
         "app.js" => (include_str!("../../../static/app.js"), "text/javascript; charset=utf-8"),
         _ => (include_str!("../../../static/style.css"), "text/css; charset=utf-8"),
     };
-    ([(header::CONTENT_TYPE, mime)], body).into_response()
+    let body = match &state.config.static_dir {
+        Some(dir) => match tokio::fs::read_to_string(dir.join(name)).await {
+            Ok(text) => text,
+            Err(e) => return ApiError::NotFound(format!("{name}: {e}")).into_response(),
+        },
+        None => built_in.to_owned(),
+    };
+    ([(header::CONTENT_TYPE, mime), (header::CACHE_CONTROL, "no-cache")], body).into_response()
 }
 
 async fn api_not_found(req: Request) -> ApiError {
