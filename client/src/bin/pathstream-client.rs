@@ -1,0 +1,458 @@
+//! `pathstream-client`: drive a pathstream server from a shell.
+//! Exit codes: 0 success, 2 bad arguments, 3 server error (message shown),
+//! 4 server unreachable.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use futures_util::StreamExt;
+use indicatif::{ProgressBar, ProgressStyle};
+use pathstream_client::{CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SceneSpec, SessionStatus};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+#[derive(Parser, Debug)]
+#[command(name = "pathstream-client", version, about = "Drive a pathstream render server over HTTP and WebSocket")]
+struct Cli {
+    /// Server URL.
+    #[arg(long, global = true, env = "PATHSTREAM_URL", default_value = "http://127.0.0.1:8080")]
+    server: String,
+    /// Bearer token, when the server requires one.
+    #[arg(long, global = true, env = "PATHSTREAM_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene to a file: create a session, wait for its halt, save, delete it.
+    Render(RenderArgs),
+    /// List sessions.
+    Sessions,
+    /// Create a session and print its status.
+    Create(CreateArgs),
+    /// Print a session's status.
+    Status { id: String },
+    /// Move or turn a session's camera.
+    Camera(CameraArgs),
+    /// Move, recolour or rescale a session's light.
+    Light(LightArgs),
+    /// Change a session's quality settings.
+    Quality {
+        id: String,
+        #[command(flatten)]
+        quality: QualityArgs,
+    },
+    /// Save a session's current frame (.png or .pfm).
+    Frame {
+        id: String,
+        /// Wait until the image has this many samples per pixel.
+        #[arg(long)]
+        min_spp: Option<u64>,
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Delete a session.
+    Delete { id: String },
+    /// Save frames from a session's stream as they arrive.
+    Stream {
+        id: String,
+        #[arg(long, default_value_t = 10)]
+        frames: usize,
+        #[arg(long)]
+        out_dir: PathBuf,
+    },
+    /// Render a turntable animation: the camera circles the scene's look-at
+    /// point (or --center) about its up axis.
+    Orbit {
+        #[arg(long, default_value = "cornell-glass")]
+        scene: String,
+        /// Centre of the orbit, x,y,z (default: the camera's look-at point).
+        #[arg(long, value_parser = vec3)]
+        center: Option<[f64; 3]>,
+        #[arg(long, default_value_t = 24)]
+        frames: usize,
+        /// Samples per pixel of each frame.
+        #[arg(long, default_value_t = 16)]
+        spp: u64,
+        #[arg(long, default_value_t = 256)]
+        width: u32,
+        #[arg(long, default_value_t = 256)]
+        height: u32,
+        #[arg(long)]
+        out_dir: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Switch {
+    On,
+    Off,
+}
+
+#[derive(Args, Debug, Default)]
+struct QualityArgs {
+    /// Halt at this many samples per pixel.
+    #[arg(long)]
+    spp: Option<u64>,
+    /// Halt after this many milliseconds.
+    #[arg(long)]
+    time_ms: Option<u64>,
+    /// Halt when the estimated relative error falls below this.
+    #[arg(long)]
+    target_error: Option<f64>,
+    /// Most bounces per path; 0 = unbounded.
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Bounces after which Russian roulette may end paths.
+    #[arg(long)]
+    rr_depth: Option<u32>,
+    /// Next-event estimation.
+    #[arg(long, value_enum)]
+    nee: Option<Switch>,
+    /// Pixel filter: tent2x2 or box.
+    #[arg(long)]
+    filter: Option<String>,
+    /// Largest sample radiance; 0 = off.
+    #[arg(long)]
+    clamp: Option<f32>,
+    #[arg(long)]
+    seed: Option<u64>,
+}
+
+impl QualityArgs {
+    fn patch(&self) -> QualityPatch {
+        QualityPatch {
+            max_depth: self.max_depth,
+            rr_depth: self.rr_depth,
+            nee: self.nee.map(|n| matches!(n, Switch::On)),
+            filter: self.filter.clone(),
+            clamp: self.clamp,
+            seed: self.seed,
+            spp: self.spp.map(Some),
+            time_ms: self.time_ms.map(Some),
+            target_error: self.target_error.map(Some),
+        }
+    }
+
+    fn halts(&self) -> bool {
+        self.spp.is_some() || self.time_ms.is_some() || self.target_error.is_some()
+    }
+}
+
+#[derive(Args, Debug)]
+struct CreateArgs {
+    /// Built-in scene name or a scene JSON file.
+    #[arg(long, default_value = "cornell-glass")]
+    scene: String,
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// auto, opencl or cpu.
+    #[arg(long)]
+    backend: Option<String>,
+    #[command(flatten)]
+    quality: QualityArgs,
+}
+
+#[derive(Args, Debug)]
+struct RenderArgs {
+    #[command(flatten)]
+    create: CreateArgs,
+    /// Output file: .png or .pfm.
+    #[arg(short, long)]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+struct CameraArgs {
+    id: String,
+    /// x,y,z
+    #[arg(long, value_parser = vec3)]
+    position: Option<[f64; 3]>,
+    /// x,y,z
+    #[arg(long, value_parser = vec3)]
+    look_at: Option<[f64; 3]>,
+    /// x,y,z
+    #[arg(long, value_parser = vec3)]
+    up: Option<[f64; 3]>,
+    #[arg(long)]
+    vfov_deg: Option<f64>,
+}
+
+#[derive(Args, Debug)]
+struct LightArgs {
+    id: String,
+    /// x,y,z
+    #[arg(long, value_parser = vec3)]
+    position: Option<[f64; 3]>,
+    /// r,g,b in [0, 1]
+    #[arg(long, value_parser = vec3)]
+    color: Option<[f64; 3]>,
+    #[arg(long)]
+    intensity: Option<f64>,
+}
+
+fn vec3(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("'{p}': {e}")))
+        .collect::<Result<_, _>>()?;
+    <[f64; 3]>::try_from(parts).map_err(|_| "expected three comma-separated numbers, e.g. 50,52,295.6".into())
+}
+
+/// A failure with its exit code.
+struct Failure(u8, String);
+
+impl From<ClientError> for Failure {
+    fn from(e: ClientError) -> Self {
+        let code = match e {
+            ClientError::Server { .. } | ClientError::Protocol(_) => 3,
+            ClientError::Unreachable(_) => 4,
+            ClientError::Input(_) => 2,
+        };
+        Failure(code, e.to_string())
+    }
+}
+
+fn usage(msg: String) -> Failure {
+    Failure(2, msg)
+}
+
+fn scene_spec(scene: &str) -> Result<SceneSpec, Failure> {
+    let path = Path::new(scene);
+    if scene.ends_with(".json") || path.is_file() {
+        let text = std::fs::read_to_string(path).map_err(|e| usage(format!("--scene {scene}: {e}")))?;
+        let json = serde_json::from_str(&text).map_err(|e| usage(format!("--scene {scene}: not JSON: {e}")))?;
+        Ok(SceneSpec::Json(json))
+    } else {
+        Ok(SceneSpec::Name(scene.to_owned()))
+    }
+}
+
+fn extension(out: &Path) -> Result<&'static str, Failure> {
+    match out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("png") => Ok("png"),
+        Some("pfm") => Ok("pfm"),
+        _ => Err(usage(format!("{}: the output must end in .png or .pfm", out.display()))),
+    }
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
+    std::fs::write(path, bytes).map_err(|e| Failure(1, format!("cannot write {}: {e}", path.display())))
+}
+
+fn print_status(s: &SessionStatus) -> Result<(), Failure> {
+    let text = serde_json::to_string_pretty(s).map_err(|e| Failure(1, e.to_string()))?;
+    println!("{text}");
+    Ok(())
+}
+
+async fn create(client: &Client, args: &CreateArgs, default_spp: bool) -> Result<SessionStatus, Failure> {
+    let mut quality = args.quality.patch();
+    if default_spp && !args.quality.halts() {
+        quality.spp = Some(Some(64));
+    }
+    let req = CreateSession {
+        scene: Some(scene_spec(&args.scene)?),
+        width: Some(args.width),
+        height: Some(args.height),
+        quality: Some(quality),
+        backend: args.backend.clone(),
+    };
+    Ok(client.create_session(&req).await?)
+}
+
+async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
+    let kind = extension(&args.out)?;
+    let session = create(client, &args.create, true).await?;
+    let id = session.id.clone();
+    let work = async {
+        let bar = ProgressBar::new(session.quality.spp.unwrap_or(0)).with_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        let status = loop {
+            let s = client.session(&id).await?;
+            bar.set_position(s.spp);
+            bar.set_message(format!(
+                "error {}  {:.2} M paths/s",
+                s.error_estimate.map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),
+                s.samples_per_sec / 1e6
+            ));
+            if s.halted() {
+                break s;
+            }
+            tokio::time::sleep(Duration::from_millis(200)).await;
+        };
+        bar.finish_and_clear();
+        if let Some(f) = &status.failure {
+            return Err(Failure(3, format!("rendering failed on the server: {f}")));
+        }
+        let bytes = match kind {
+            "png" => client.frame_png(&id, Some(status.spp), None).await?,
+            _ => client.frame_pfm(&id, Some(status.spp), None).await?,
+        };
+        write(&args.out, &bytes)?;
+        println!(
+            "{} {}x{}: {} spp, error estimate {}, {:.2} M paths/s on {} ({}) -> {}",
+            status.scene,
+            status.width,
+            status.height,
+            status.spp,
+            status.error_estimate.map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),
+            status.samples_per_sec / 1e6,
+            status.backend,
+            status.device,
+            args.out.display()
+        );
+        Ok(())
+    };
+    let result = tokio::select! {
+        r = work => r,
+        _ = tokio::signal::ctrl_c() => Err(Failure(130, "interrupted".into())),
+    };
+    // The session is ours: delete it whatever happened.
+    let deleted = client.delete_session(&id).await;
+    result?;
+    deleted?;
+    Ok(())
+}
+
+async fn orbit(
+    client: &Client,
+    scene: &str,
+    center: Option<[f64; 3]>,
+    frames: usize,
+    spp: u64,
+    size: (u32, u32),
+    out_dir: &Path,
+) -> Result<(), Failure> {
+    if frames == 0 {
+        return Err(usage("--frames: must be at least 1".into()));
+    }
+    std::fs::create_dir_all(out_dir).map_err(|e| Failure(1, format!("{}: {e}", out_dir.display())))?;
+    let req = CreateSession {
+        scene: Some(scene_spec(scene)?),
+        width: Some(size.0),
+        height: Some(size.1),
+        quality: Some(QualityPatch {
+            spp: Some(Some(spp)),
+            ..QualityPatch::default()
+        }),
+        backend: None,
+    };
+    let session = client.create_session(&req).await?;
+    let id = session.id.clone();
+    let work = async {
+        let c = &session.camera;
+        let (p, t, up) = (c.position, center.unwrap_or(c.look_at), c.up);
+        // Rotate the position about the up axis through the look-at point
+        // (Rodrigues' formula).
+        let norm = (up[0] * up[0] + up[1] * up[1] + up[2] * up[2]).sqrt();
+        let k = [up[0] / norm, up[1] / norm, up[2] / norm];
+        let v = [p[0] - t[0], p[1] - t[1], p[2] - t[2]];
+        let bar = ProgressBar::new(frames as u64);
+        for i in 0..frames {
+            let a = std::f64::consts::TAU * i as f64 / frames as f64;
+            let (s, co) = a.sin_cos();
+            let kxv = [k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]];
+            let kdv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+            let r: [f64; 3] = std::array::from_fn(|j| v[j] * co + kxv[j] * s + k[j] * kdv * (1.0 - co));
+            let position = [t[0] + r[0], t[1] + r[1], t[2] + r[2]];
+            client
+                .set_camera(&id, &CameraPatch { position: Some(position), look_at: Some(t), ..CameraPatch::default() })
+                .await?;
+            let png = client.frame_png(&id, Some(spp), Some(Duration::from_secs(600))).await?;
+            write(&out_dir.join(format!("frame_{i:04}.png")), &png)?;
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        println!("{frames} frames of {scene} in {}", out_dir.display());
+        Ok(())
+    };
+    let result = tokio::select! {
+        r = work => r,
+        _ = tokio::signal::ctrl_c() => Err(Failure(130, "interrupted".into())),
+    };
+    let deleted = client.delete_session(&id).await;
+    result?;
+    deleted?;
+    Ok(())
+}
+
+async fn run(cli: Cli) -> Result<(), Failure> {
+    let client = Client::new(&cli.server)?.token(cli.token.clone());
+    match cli.command {
+        Command::Render(args) => render(&client, &args).await,
+        Command::Sessions => {
+            for s in client.sessions().await? {
+                println!(
+                    "{}  {} {}x{}  {} spp  {}  {}",
+                    s.id, s.scene, s.width, s.height, s.spp, s.state, s.backend
+                );
+            }
+            Ok(())
+        }
+        Command::Create(args) => print_status(&create(&client, &args, false).await?),
+        Command::Status { id } => print_status(&client.session(&id).await?),
+        Command::Camera(a) => print_status(
+            &client
+                .set_camera(&a.id, &CameraPatch { position: a.position, look_at: a.look_at, up: a.up, vfov_deg: a.vfov_deg, near_clip: None })
+                .await?,
+        ),
+        Command::Light(a) => print_status(
+            &client
+                .set_light(&a.id, &LightPatch { position: a.position, color: a.color, intensity: a.intensity })
+                .await?,
+        ),
+        Command::Quality { id, quality } => print_status(&client.set_quality(&id, &quality.patch()).await?),
+        Command::Frame { id, min_spp, out } => {
+            let bytes = match extension(&out)? {
+                "png" => client.frame_png(&id, min_spp, None).await?,
+                _ => client.frame_pfm(&id, min_spp, None).await?,
+            };
+            write(&out, &bytes)
+        }
+        Command::Delete { id } => Ok(client.delete_session(&id).await?),
+        Command::Stream { id, frames, out_dir } => {
+            std::fs::create_dir_all(&out_dir).map_err(|e| Failure(1, format!("{}: {e}", out_dir.display())))?;
+            let mut stream = client.stream(&id).await?;
+            let mut saved = 0;
+            while saved < frames {
+                match stream.next().await {
+                    Some(Ok(frame)) => {
+                        write(&out_dir.join(format!("frame_{saved:04}.png")), &frame.png)?;
+                        println!("frame {saved}: {} spp", frame.status.spp);
+                        saved += 1;
+                    }
+                    Some(Err(e)) => return Err(e.into()),
+                    None => return Err(Failure(3, format!("the stream ended after {saved} frames"))),
+                }
+            }
+            Ok(())
+        }
+        Command::Orbit { scene, center, frames, spp, width, height, out_dir } => {
+            orbit(&client, &scene, center, frames, spp, (width, height), &out_dir).await
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    match runtime.block_on(run(cli)) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure(code, message)) => {
+            eprintln!("error: {message}");
+            ExitCode::from(code)
+        }
+    }
+}

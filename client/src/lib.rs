@@ -1,0 +1,183 @@
+//! A client for the pathstream render service: typed requests and responses
+//! for every route, the frame stream as a `Stream`, and a blocking wrapper.
+//!
+//! ```no_run
+//! # async fn demo() -> pathstream_client::Result<()> {
+//! use pathstream_client::{Client, CreateSession, SceneSpec};
+//! let client = Client::new("http://127.0.0.1:8080")?;
+//! let session = client
+//!     .create_session(&CreateSession { scene: Some(SceneSpec::Name("cornell".into())), ..Default::default() })
+//!     .await?;
+//! let png = client.frame_png(&session.id, Some(64), None).await?;
+//! client.delete_session(&session.id).await?;
+//! # Ok(()) }
+//! ```
+
+pub mod blocking;
+mod error;
+mod stream;
+mod types;
+
+pub use error::{ClientError, Result};
+pub use stream::FrameStream;
+pub use types::*;
+
+use reqwest::{Method, RequestBuilder, Response};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::time::Duration;
+
+/// An async client for one server.
+#[derive(Clone, Debug)]
+pub struct Client {
+    base: String,
+    token: Option<String>,
+    http: reqwest::Client,
+}
+
+impl Client {
+    /// A client for the server at `base` (e.g. `http://127.0.0.1:8080`), with
+    /// a 60 s timeout per request (frame requests add their own wait).
+    pub fn new(base: &str) -> Result<Self> {
+        Self::with_timeout(base, Duration::from_secs(60))
+    }
+
+    pub fn with_timeout(base: &str, timeout: Duration) -> Result<Self> {
+        let base = base.trim_end_matches('/').to_owned();
+        if !(base.starts_with("http://") || base.starts_with("https://")) {
+            return Err(ClientError::Input(format!("server URL '{base}' must start with http:// or https://")));
+        }
+        let http = reqwest::Client::builder()
+            .timeout(timeout)
+            .connect_timeout(Duration::from_secs(5))
+            .build()
+            .map_err(|e| ClientError::Input(e.to_string()))?;
+        Ok(Self { base, token: None, http })
+    }
+
+    /// Sends `Authorization: Bearer token` with every request.
+    pub fn token(mut self, token: Option<String>) -> Self {
+        self.token = token.filter(|t| !t.is_empty());
+        self
+    }
+
+    pub fn base_url(&self) -> &str {
+        &self.base
+    }
+
+    fn request(&self, method: Method, path: &str) -> RequestBuilder {
+        let r = self.http.request(method, format!("{}{path}", self.base));
+        match &self.token {
+            Some(t) => r.bearer_auth(t),
+            None => r,
+        }
+    }
+
+    async fn send(&self, r: RequestBuilder) -> Result<Response> {
+        let response = r.send().await.map_err(ClientError::from_reqwest)?;
+        if response.status().is_success() {
+            return Ok(response);
+        }
+        let status = response.status().as_u16();
+        let text = response.text().await.unwrap_or_default();
+        let message = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
+            .unwrap_or(text);
+        Err(ClientError::Server { status, message })
+    }
+
+    async fn json<T: DeserializeOwned>(&self, r: RequestBuilder) -> Result<T> {
+        let response = self.send(r).await?;
+        let bytes = response.bytes().await.map_err(ClientError::from_reqwest)?;
+        serde_json::from_slice(&bytes).map_err(|e| ClientError::Protocol(e.to_string()))
+    }
+
+    /// The raw JSON of a GET (the contract tests compare it with the types).
+    pub async fn get_json(&self, path: &str) -> Result<serde_json::Value> {
+        self.json(self.request(Method::GET, path)).await
+    }
+
+    pub async fn health(&self) -> Result<Health> {
+        self.json(self.request(Method::GET, "/api/health")).await
+    }
+
+    pub async fn devices(&self) -> Result<Devices> {
+        self.json(self.request(Method::GET, "/api/devices")).await
+    }
+
+    pub async fn scenes(&self) -> Result<Vec<String>> {
+        Ok(self.json::<Scenes>(self.request(Method::GET, "/api/scenes")).await?.scenes)
+    }
+
+    pub async fn create_session(&self, req: &CreateSession) -> Result<SessionStatus> {
+        self.json(self.request(Method::POST, "/api/sessions").json(req)).await
+    }
+
+    pub async fn sessions(&self) -> Result<Vec<SessionStatus>> {
+        Ok(self.json::<SessionList>(self.request(Method::GET, "/api/sessions")).await?.sessions)
+    }
+
+    pub async fn session(&self, id: &str) -> Result<SessionStatus> {
+        self.json(self.request(Method::GET, &format!("/api/sessions/{id}"))).await
+    }
+
+    async fn patch<B: Serialize>(&self, id: &str, what: &str, body: &B) -> Result<SessionStatus> {
+        self.json(self.request(Method::PATCH, &format!("/api/sessions/{id}/{what}")).json(body))
+            .await
+    }
+
+    pub async fn set_camera(&self, id: &str, patch: &CameraPatch) -> Result<SessionStatus> {
+        self.patch(id, "camera", patch).await
+    }
+
+    pub async fn set_light(&self, id: &str, patch: &LightPatch) -> Result<SessionStatus> {
+        self.patch(id, "light", patch).await
+    }
+
+    pub async fn set_quality(&self, id: &str, patch: &QualityPatch) -> Result<SessionStatus> {
+        self.patch(id, "quality", patch).await
+    }
+
+    pub async fn set_scene(&self, id: &str, scene: &SceneSpec) -> Result<SessionStatus> {
+        self.json(self.request(Method::PUT, &format!("/api/sessions/{id}/scene")).json(scene))
+            .await
+    }
+
+    async fn frame(&self, id: &str, kind: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
+        let wait = timeout.unwrap_or(Duration::from_secs(30));
+        let mut path = format!("/api/sessions/{id}/frame.{kind}?timeout_ms={}", wait.as_millis());
+        if let Some(n) = min_spp {
+            path.push_str(&format!("&min_spp={n}"));
+        }
+        let r = self.request(Method::GET, &path).timeout(wait + Duration::from_secs(30));
+        let response = self.send(r).await?;
+        Ok(response.bytes().await.map_err(ClientError::from_reqwest)?.to_vec())
+    }
+
+    /// The current image as PNG; with `min_spp`, once it has that many
+    /// samples per pixel (waiting at most `timeout`, default 30 s).
+    pub async fn frame_png(&self, id: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
+        self.frame(id, "png", min_spp, timeout).await
+    }
+
+    /// The same as linear PFM.
+    pub async fn frame_pfm(&self, id: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
+        self.frame(id, "pfm", min_spp, timeout).await
+    }
+
+    pub async fn delete_session(&self, id: &str) -> Result<()> {
+        self.send(self.request(Method::DELETE, &format!("/api/sessions/{id}"))).await?;
+        Ok(())
+    }
+
+    /// The session's frame stream over its WebSocket.
+    pub async fn stream(&self, id: &str) -> Result<FrameStream> {
+        let ws = self.base.replacen("http", "ws", 1);
+        let mut url = format!("{ws}/api/sessions/{id}/ws");
+        if let Some(t) = &self.token {
+            url.push_str(&format!("?token={t}"));
+        }
+        FrameStream::connect(&url).await
+    }
+}

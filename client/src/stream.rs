@@ -1,0 +1,95 @@
+//! The frame stream: a `Stream` of frames with their stats, and a way to
+//! send changes on the same socket.
+
+use crate::error::{ClientError, Result};
+use crate::types::{SessionStatus, StreamFrame};
+use futures_util::{SinkExt, Stream, StreamExt};
+use serde_json::Value;
+use std::pin::Pin;
+use std::task::{Context, Poll};
+use tokio_tungstenite::tungstenite::Message;
+use tokio_tungstenite::{MaybeTlsStream, WebSocketStream};
+
+type Socket = WebSocketStream<MaybeTlsStream<tokio::net::TcpStream>>;
+
+/// Frames as the server sends them (a PNG, then its stats). Server error
+/// messages (a rejected change) come out as `Err(ClientError::Server)`; the
+/// stream goes on after them.
+pub struct FrameStream {
+    socket: Socket,
+    png: Option<Vec<u8>>,
+}
+
+impl FrameStream {
+    pub(crate) async fn connect(url: &str) -> Result<Self> {
+        let (socket, _) = tokio_tungstenite::connect_async(url).await.map_err(|e| match e {
+            tokio_tungstenite::tungstenite::Error::Http(r) => ClientError::Server {
+                status: r.status().as_u16(),
+                message: r
+                    .body()
+                    .as_deref()
+                    .and_then(|b| serde_json::from_slice::<Value>(b).ok())
+                    .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
+                    .unwrap_or_else(|| "WebSocket upgrade refused".into()),
+            },
+            other => ClientError::Unreachable(other.to_string()),
+        })?;
+        Ok(Self { socket, png: None })
+    }
+
+    /// Sends a change: `{"camera": {...}}`, `{"light": {...}}`,
+    /// `{"quality": {...}}` or `{"scene": ...}`.
+    pub async fn send(&mut self, change: &Value) -> Result<()> {
+        self.socket
+            .send(Message::Text(change.to_string().into()))
+            .await
+            .map_err(|e| ClientError::Unreachable(e.to_string()))
+    }
+
+    pub async fn close(mut self) -> Result<()> {
+        self.socket.close(None).await.map_err(|e| ClientError::Unreachable(e.to_string()))
+    }
+}
+
+fn parse_stats(text: &str) -> Result<(SessionStatus, u64)> {
+    let mut v: Value = serde_json::from_str(text).map_err(|e| ClientError::Protocol(e.to_string()))?;
+    let map = v.as_object_mut().ok_or_else(|| ClientError::Protocol("stats: not an object".into()))?;
+    map.remove("type");
+    let seq = map.remove("frame").and_then(|f| f.as_u64()).unwrap_or(0);
+    let status = serde_json::from_value(v).map_err(|e| ClientError::Protocol(e.to_string()))?;
+    Ok((status, seq))
+}
+
+impl Stream for FrameStream {
+    type Item = Result<StreamFrame>;
+
+    fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Self::Item>> {
+        loop {
+            let message = match self.socket.poll_next_unpin(cx) {
+                Poll::Pending => return Poll::Pending,
+                Poll::Ready(None) => return Poll::Ready(None),
+                Poll::Ready(Some(Err(e))) => return Poll::Ready(Some(Err(ClientError::Unreachable(e.to_string())))),
+                Poll::Ready(Some(Ok(m))) => m,
+            };
+            match message {
+                Message::Binary(png) => self.png = Some(png.to_vec()),
+                Message::Text(text) => {
+                    let kind = serde_json::from_str::<Value>(text.as_str())
+                        .ok()
+                        .and_then(|v| v.get("type").and_then(|t| t.as_str()).map(str::to_owned));
+                    if kind.as_deref() == Some("error") {
+                        let message = serde_json::from_str::<Value>(text.as_str())
+                            .ok()
+                            .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
+                            .unwrap_or_default();
+                        return Poll::Ready(Some(Err(ClientError::Server { status: 400, message })));
+                    }
+                    let Some(png) = self.png.take() else { continue };
+                    return Poll::Ready(Some(parse_stats(text.as_str()).map(|(status, seq)| StreamFrame { png, status, seq })));
+                }
+                Message::Close(_) => return Poll::Ready(None),
+                _ => {}
+            }
+        }
+    }
+}

@@ -1,0 +1,197 @@
+//! The JSON contract of the pathstream API, as this client understands it.
+//! These types are written from the contract (README "HTTP and WebSocket
+//! API"), not imported from the server; `pathstream-tests` checks that the
+//! two agree field for field.
+
+use serde::{Deserialize, Serialize};
+
+/// Quality settings and halt conditions.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Quality {
+    pub max_depth: u32,
+    pub rr_depth: u32,
+    pub nee: bool,
+    /// `tent2x2` or `box`.
+    pub filter: String,
+    pub clamp: f32,
+    pub seed: u64,
+    pub spp: Option<u64>,
+    pub time_ms: Option<u64>,
+    pub target_error: Option<f64>,
+}
+
+/// A change of quality: only the fields set are sent. `Some(None)` clears a
+/// halt condition.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct QualityPatch {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_depth: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rr_depth: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nee: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub filter: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clamp: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spp: Option<Option<u64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_ms: Option<Option<u64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_error: Option<Option<f64>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Camera {
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    pub up: [f64; 3],
+    pub vfov_deg: f64,
+    pub near_clip: f64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct CameraPatch {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub look_at: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub up: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vfov_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_clip: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Light {
+    /// Index of the light object in the scene.
+    pub index: usize,
+    pub position: [f64; 3],
+    pub color: [f64; 3],
+    pub intensity: f64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LightPatch {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<f64>,
+}
+
+/// A session's status (`GET /api/sessions/{id}`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SessionStatus {
+    pub id: String,
+    /// Built-in scene name, or `custom`.
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub camera: Camera,
+    pub light: Option<Light>,
+    pub quality: Quality,
+    /// `rendering` or `halted`.
+    pub state: String,
+    pub spp: u64,
+    pub error_estimate: Option<f64>,
+    pub samples_per_sec: f64,
+    pub elapsed_ms: f64,
+    pub rejected: u64,
+    pub backend: String,
+    pub device: String,
+    /// Counts restarts (every change restarts accumulation).
+    pub generation: u64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+impl SessionStatus {
+    pub fn halted(&self) -> bool {
+        self.state == "halted"
+    }
+}
+
+/// A scene: a built-in name, or scene JSON.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum SceneSpec {
+    Name(String),
+    Json(serde_json::Value),
+}
+
+/// `POST /api/sessions`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct CreateSession {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scene: Option<SceneSpec>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub width: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quality: Option<QualityPatch>,
+    /// `auto`, `opencl` or `cpu`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub backend: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BackendInfo {
+    pub backend: String,
+    pub device: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Health {
+    pub status: String,
+    pub version: String,
+    pub sessions: usize,
+    pub backends: Vec<BackendInfo>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OpenClDevice {
+    pub index: usize,
+    pub platform: String,
+    pub name: String,
+    pub vendor: String,
+    pub kind: String,
+    pub compute_units: u32,
+    pub global_mem_bytes: u64,
+    pub fp64: bool,
+    pub opencl_c_version: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Devices {
+    pub backends: Vec<BackendInfo>,
+    pub default: String,
+    pub opencl_devices: Option<Vec<OpenClDevice>>,
+    pub opencl_error: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scenes {
+    pub scenes: Vec<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SessionList {
+    pub sessions: Vec<SessionStatus>,
+}
+
+/// One frame of the stream: the PNG and the stats sent with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamFrame {
+    pub png: Vec<u8>,
+    pub status: SessionStatus,
+    /// The server's frame number (gaps mean frames skipped for being stale).
+    pub seq: u64,
+}

@@ -1,0 +1,199 @@
+//! The `pathstream-client` command line against a real `pathstream` server
+//! process (the workspace builds both binaries into the same folder).
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+struct Server {
+    child: Child,
+    url: String,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn server_binary() -> PathBuf {
+    let cli = PathBuf::from(env!("CARGO_BIN_EXE_pathstream-client"));
+    let server = cli.with_file_name("pathstream");
+    assert!(server.exists(), "{} is missing: build the workspace (cargo test --workspace)", server.display());
+    server
+}
+
+/// Starts `pathstream serve` on a free port and reads the URL it prints.
+fn start_server() -> Server {
+    let mut child = Command::new(server_binary())
+        .args(["serve", "--addr", "127.0.0.1:0", "--backend", "cpu"])
+        .env("RUST_LOG", "warn")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("server starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let mut line = String::new();
+    BufReader::new(stdout).read_line(&mut line).expect("a first line");
+    let url = line
+        .split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .map(|u| u.trim_end_matches('/').to_owned())
+        .unwrap_or_else(|| panic!("no URL in: {line}"));
+    Server { child, url }
+}
+
+fn client(server: &Server, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
+        .arg("--server")
+        .arg(&server.url)
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+#[test]
+fn render_saves_a_png_and_a_pfm_and_deletes_its_session() {
+    let server = start_server();
+    let dir = tempfile::tempdir().expect("tempdir");
+    for name in ["a.png", "a.pfm"] {
+        let out = dir.path().join(name);
+        let run = client(
+            &server,
+            &["render", "--scene", "cornell", "--width", "24", "--height", "16", "--spp", "16", "-o", out.to_str().expect("utf-8")],
+        );
+        assert!(run.status.success(), "{}", text(&run.stderr));
+        assert!(text(&run.stdout).contains("16 spp"), "{}", text(&run.stdout));
+        let bytes = std::fs::read(&out).expect("file");
+        if name.ends_with("png") {
+            let img = image::load_from_memory(&bytes).expect("a PNG");
+            assert_eq!((img.width(), img.height()), (24, 16));
+        } else {
+            assert!(bytes.starts_with(b"PF\n24 16\n-1.0\n"));
+            assert_eq!(bytes.len(), 14 + 24 * 16 * 12);
+        }
+    }
+    let sessions = client(&server, &["sessions"]);
+    assert!(sessions.status.success());
+    assert_eq!(text(&sessions.stdout).trim(), "", "render deleted its sessions");
+}
+
+#[test]
+fn orbit_renders_n_distinct_frames() {
+    let server = start_server();
+    let dir = tempfile::tempdir().expect("tempdir");
+    // An open scene: a red ball and a blue one on a floor, under a lamp.
+    let scene = dir.path().join("balls.json");
+    std::fs::write(
+        &scene,
+        r#"{"camera": {"position": [0, 1, 4], "look_at": [0, 0.5, 0], "vfov_deg": 50},
+            "materials": {"floor": {"type": "diffuse", "albedo": [0.7, 0.7, 0.7]},
+                          "red": {"type": "diffuse", "albedo": [0.8, 0.1, 0.1]},
+                          "blue": {"type": "diffuse", "albedo": [0.1, 0.1, 0.8]},
+                          "lamp": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [10, 10, 10]}},
+            "objects": [{"type": "quad", "corner": [-5, 0, -5], "edge_u": [10, 0, 0], "edge_v": [0, 0, 10], "material": "floor"},
+                        {"type": "sphere", "center": [0.8, 0.5, 0], "radius": 0.5, "material": "red"},
+                        {"type": "sphere", "center": [-0.8, 0.4, 0.3], "radius": 0.4, "material": "blue"},
+                        {"type": "sphere", "center": [0, 4, 0], "radius": 0.5, "material": "lamp"}]}"#,
+    )
+    .expect("scene");
+    let out = dir.path().join("frames");
+    let run = client(
+        &server,
+        &["orbit", "--scene", scene.to_str().expect("utf-8"), "--frames", "4", "--spp", "4", "--width", "24", "--height", "24", "--out-dir", out.to_str().expect("utf-8")],
+    );
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let frames: Vec<Vec<u8>> = (0..4)
+        .map(|i| {
+            let img = image::open(out.join(format!("frame_{i:04}.png"))).expect("a frame");
+            img.to_rgb8().into_raw()
+        })
+        .collect();
+    for i in 0..4 {
+        for j in i + 1..4 {
+            assert_ne!(frames[i], frames[j], "frames {i} and {j} are the same");
+        }
+    }
+}
+
+#[test]
+fn ctrl_c_during_render_deletes_the_session() {
+    let server = start_server();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("never.png");
+    let mut render = Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
+        .args(["--server", &server.url, "render", "--scene", "cornell-glass", "--width", "64", "--height", "64", "--spp", "1000000", "-o"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs");
+    // Wait for its session to appear.
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        let list = client(&server, &["sessions"]);
+        if !text(&list.stdout).trim().is_empty() {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no session appeared");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let kill = Command::new("kill").args(["-INT", &render.id().to_string()]).status().expect("kill");
+    assert!(kill.success());
+    let status = render.wait().expect("exits");
+    assert_eq!(status.code(), Some(130), "interrupted");
+    assert!(!out.exists());
+    let list = client(&server, &["sessions"]);
+    assert_eq!(text(&list.stdout).trim(), "", "the session was deleted");
+}
+
+#[test]
+fn commands_for_one_session_and_exit_codes() {
+    let server = start_server();
+    let created = client(&server, &["create", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "4"]);
+    assert!(created.status.success(), "{}", text(&created.stderr));
+    let status: serde_json::Value = serde_json::from_slice(&created.stdout).expect("status JSON");
+    let id = status["id"].as_str().expect("id").to_owned();
+    let camera = client(&server, &["camera", &id, "--vfov-deg", "45", "--position", "0,0.1,0"]);
+    assert!(camera.status.success(), "{}", text(&camera.stderr));
+    let light = client(&server, &["light", &id, "--intensity", "2"]);
+    assert!(light.status.success(), "{}", text(&light.stderr));
+    let quality = client(&server, &["quality", &id, "--max-depth", "3", "--nee", "off"]);
+    let q: serde_json::Value = serde_json::from_slice(&quality.stdout).expect("status JSON");
+    assert_eq!(q["quality"]["max_depth"], 3);
+    assert_eq!(q["quality"]["nee"], false);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let frame = dir.path().join("f.png");
+    let run = client(&server, &["frame", &id, "--min-spp", "4", "-o", frame.to_str().expect("utf-8")]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    assert!(image::open(&frame).is_ok());
+    let stream_dir = dir.path().join("stream");
+    let run = client(&server, &["quality", &id, "--spp", "100000"]);
+    assert!(run.status.success());
+    let run = client(&server, &["stream", &id, "--frames", "3", "--out-dir", stream_dir.to_str().expect("utf-8")]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    assert_eq!(std::fs::read_dir(&stream_dir).expect("dir").count(), 3);
+    assert!(client(&server, &["status", &id]).status.success());
+    assert!(client(&server, &["delete", &id]).status.success());
+
+    // 3: the server said no, and its message is shown.
+    let gone = client(&server, &["status", &id]);
+    assert_eq!(gone.status.code(), Some(3));
+    assert!(text(&gone.stderr).contains(&format!("no session '{id}'")), "{}", text(&gone.stderr));
+    let bad = client(&server, &["camera", "x", "--position", "1,2"]);
+    assert_eq!(bad.status.code(), Some(2), "bad arguments");
+    let bad_out = client(&server, &["frame", "x", "-o", "f.jpg"]);
+    assert_eq!(bad_out.status.code(), Some(2));
+    // 4: nobody there.
+    let nobody = Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
+        .args(["--server", "http://127.0.0.1:9", "sessions"])
+        .output()
+        .expect("runs");
+    assert_eq!(nobody.status.code(), Some(4), "{}", text(&nobody.stderr));
+}
