@@ -187,3 +187,38 @@ async fn the_client_types_match_every_route_of_the_server() {
     assert_no_drift::<pathstream_client::SessionList>("GET /api/sessions", &client.get_json("/api/sessions").await.expect("json"));
     running.shutdown().await.expect("shutdown");
 }
+
+#[test]
+fn the_blocking_client_works_without_a_runtime_of_its_own() {
+    // The server runs on its own runtime thread; the test thread has none.
+    let (tx, rx) = std::sync::mpsc::channel();
+    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let server = std::thread::spawn(move || {
+        let rt = tokio::runtime::Runtime::new().expect("runtime");
+        rt.block_on(async move {
+            let running = server(None).await;
+            tx.send(running.addr).expect("send");
+            let _ = stop_rx.await;
+            running.shutdown().await.expect("shutdown");
+        });
+    });
+    let addr = rx.recv().expect("address");
+    let client = pathstream_client::blocking::Client::new(&format!("http://{addr}")).expect("client");
+    assert_eq!(client.health().expect("health").status, "ok");
+    assert!(!client.devices().expect("devices").backends.is_empty());
+    assert!(client.scenes().expect("scenes").len() >= 5);
+    let s = client.create_session(&small("cornell")).expect("create");
+    assert_eq!(client.sessions().expect("list").len(), 1);
+    assert!(client.frame_png(&s.id, Some(16), None).expect("png").starts_with(b"\x89PNG"));
+    assert!(client.frame_pfm(&s.id, None, None).expect("pfm").starts_with(b"PF"));
+    client.set_camera(&s.id, &CameraPatch { vfov_deg: Some(30.0), ..CameraPatch::default() }).expect("camera");
+    client.set_light(&s.id, &LightPatch { color: Some([1.0, 0.5, 0.5]), ..LightPatch::default() }).expect("light");
+    client.set_quality(&s.id, &QualityPatch { nee: Some(false), ..QualityPatch::default() }).expect("quality");
+    let st = client.set_scene(&s.id, &SceneSpec::Name("smallpt".into())).expect("scene");
+    assert_eq!((st.scene.as_str(), st.generation), ("smallpt", 4));
+    assert_eq!(client.session(&s.id).expect("status").quality.nee, false);
+    client.delete_session(&s.id).expect("delete");
+    assert!(matches!(client.session(&s.id), Err(ClientError::Server { status: 404, .. })));
+    stop_tx.send(()).expect("stop");
+    server.join().expect("server thread");
+}
