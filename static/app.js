@@ -683,7 +683,7 @@ function moveCamera(forward, right, up) {
   const by = add(add(scale(f.dir, forward), scale(f.right, right)), scale(f.up, up));
   const d = scale(by, state.moveStep);
   state.camera.position = add(state.camera.position, d);
-  state.camera.look_at = add(state.camera.look_at, d);
+  
   cameraChanged();
 }
 
