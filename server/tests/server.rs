@@ -1,68 +1,13 @@
 //! The render service end to end: a real server on 127.0.0.1:0, real HTTP
 //! and WebSocket clients.
 
+mod http;
+
 use futures_util::{SinkExt, StreamExt};
-use pathstream::render::BackendChoice;
-use pathstream::service::{start, Running, ServeConfig};
+use http::*;
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
-
-fn config() -> ServeConfig {
-    ServeConfig {
-        addr: "127.0.0.1:0".parse().expect("addr"),
-        backend: BackendChoice::Cpu,
-        ..ServeConfig::default()
-    }
-}
-
-async fn server(config: ServeConfig) -> (Running, String) {
-    let running = start(config).await.expect("server starts");
-    let base = format!("http://{}", running.addr);
-    (running, base)
-}
-
-fn client() -> reqwest::Client {
-    reqwest::Client::new()
-}
-
-async fn create(base: &str, body: Value) -> Value {
-    let r = client().post(format!("{base}/api/sessions")).json(&body).send().await.expect("request");
-    assert_eq!(r.status(), 201, "{:?}", r.text().await);
-    r.json().await.expect("json")
-}
-
-async fn status(base: &str, id: &str) -> Value {
-    client().get(format!("{base}/api/sessions/{id}")).send().await.expect("request").json().await.expect("json")
-}
-
-/// Linear image after at least `min_spp` samples.
-async fn pfm(base: &str, id: &str, min_spp: u64) -> Vec<[f32; 3]> {
-    let r = client()
-        .get(format!("{base}/api/sessions/{id}/frame.pfm?min_spp={min_spp}&timeout_ms=60000"))
-        .send()
-        .await
-        .expect("request");
-    assert_eq!(r.status(), 200);
-    let spp: u64 = r.headers()["x-pathstream-spp"].to_str().expect("header").parse().expect("number");
-    assert!(spp >= min_spp, "waited for {min_spp} spp, got {spp}");
-    let bytes = r.bytes().await.expect("body");
-    pathstream::render::output::decode_pfm(&bytes).expect("pfm").2
-}
-
-fn mean(img: &[[f32; 3]]) -> [f64; 3] {
-    let mut m = [0.0; 3];
-    for p in img {
-        for c in 0..3 {
-            m[c] += f64::from(p[c]) / img.len() as f64;
-        }
-    }
-    m
-}
-
-async fn patch(base: &str, id: &str, what: &str, body: Value) -> reqwest::Response {
-    client().patch(format!("{base}/api/sessions/{id}/{what}")).json(&body).send().await.expect("request")
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn session_lifecycle() {
@@ -171,27 +116,6 @@ async fn light_changes_the_image_where_expected() {
     let st: Value = r.json().await.expect("json");
     assert_eq!(st["light"]["position"], json!([20.0, 60.0, 100.0]));
     running.shutdown().await.expect("shutdown");
-}
-
-async fn ws_connect(base: &str, id: &str) -> tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>> {
-    let url = format!("{}/api/sessions/{id}/ws", base.replace("http://", "ws://"));
-    tokio_tungstenite::connect_async(url).await.expect("ws connects").0
-}
-
-/// Reads frames until `deadline`; returns (frames, last stats).
-async fn read_frames(
-    ws: &mut tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>,
-    until: Instant,
-) -> (usize, Value) {
-    let (mut frames, mut stats) = (0, Value::Null);
-    while let Ok(Some(Ok(msg))) = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next()).await {
-        match msg {
-            Message::Binary(_) => frames += 1,
-            Message::Text(t) => stats = serde_json::from_str(t.as_str()).expect("json stats"),
-            _ => {}
-        }
-    }
-    (frames, stats)
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -3,64 +3,11 @@
 //! function runs the scenarios one after the other, alone in this binary,
 //! so that no other test's rendering competes for the cores.
 
-use futures_util::StreamExt;
-use pathstream::render::BackendChoice;
-use pathstream::service::{start, Running, ServeConfig};
+mod http;
+
+use http::*;
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
-use tokio_tungstenite::tungstenite::Message;
-
-fn config() -> ServeConfig {
-    ServeConfig {
-        addr: "127.0.0.1:0".parse().expect("addr"),
-        backend: BackendChoice::Cpu,
-        ..ServeConfig::default()
-    }
-}
-
-async fn server(config: ServeConfig) -> (Running, String) {
-    let running = start(config).await.expect("server starts");
-    let base = format!("http://{}", running.addr);
-    (running, base)
-}
-
-fn client() -> reqwest::Client {
-    reqwest::Client::new()
-}
-
-async fn create(base: &str, body: Value) -> Value {
-    let r = client().post(format!("{base}/api/sessions")).json(&body).send().await.expect("request");
-    assert_eq!(r.status(), 201, "{:?}", r.text().await);
-    r.json().await.expect("json")
-}
-
-async fn status(base: &str, id: &str) -> Value {
-    client().get(format!("{base}/api/sessions/{id}")).send().await.expect("request").json().await.expect("json")
-}
-
-
-
-
-async fn ws_connect(base: &str, id: &str) -> tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>> {
-    let url = format!("{}/api/sessions/{id}/ws", base.replace("http://", "ws://"));
-    tokio_tungstenite::connect_async(url).await.expect("ws connects").0
-}
-
-/// Reads frames until `deadline`; returns (frames, last stats).
-async fn read_frames(
-    ws: &mut tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>,
-    until: Instant,
-) -> (usize, Value) {
-    let (mut frames, mut stats) = (0, Value::Null);
-    while let Ok(Some(Ok(msg))) = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next()).await {
-        match msg {
-            Message::Binary(_) => frames += 1,
-            Message::Text(t) => stats = serde_json::from_str(t.as_str()).expect("json stats"),
-            _ => {}
-        }
-    }
-    (frames, stats)
-}
 
 async fn eight_sessions_share_the_device_fairly() {
     let (running, base) = server(config()).await;

@@ -264,6 +264,22 @@ async fn create(client: &Client, args: &CreateArgs, default_spp: bool) -> Result
     Ok(client.create_session(&req).await?)
 }
 
+/// Runs `work` for a session this command created, then deletes the session
+/// whatever happened, Ctrl-C included (exit code 130).
+async fn owning<F>(client: &Client, id: &str, work: F) -> Result<(), Failure>
+where
+    F: std::future::Future<Output = Result<(), Failure>>,
+{
+    let result = tokio::select! {
+        r = work => r,
+        _ = tokio::signal::ctrl_c() => Err(Failure(130, "interrupted".into())),
+    };
+    let deleted = client.delete_session(id).await;
+    result?;
+    deleted?;
+    Ok(())
+}
+
 async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
     let kind = extension(&args.out)?;
     let session = create(client, &args.create, true).await?;
@@ -309,15 +325,7 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
         );
         Ok(())
     };
-    let result = tokio::select! {
-        r = work => r,
-        _ = tokio::signal::ctrl_c() => Err(Failure(130, "interrupted".into())),
-    };
-    // The session is ours: delete it whatever happened.
-    let deleted = client.delete_session(&id).await;
-    result?;
-    deleted?;
-    Ok(())
+    owning(client, &id, work).await
 }
 
 async fn orbit(
@@ -372,14 +380,7 @@ async fn orbit(
         println!("{frames} frames of {scene} in {}", out_dir.display());
         Ok(())
     };
-    let result = tokio::select! {
-        r = work => r,
-        _ = tokio::signal::ctrl_c() => Err(Failure(130, "interrupted".into())),
-    };
-    let deleted = client.delete_session(&id).await;
-    result?;
-    deleted?;
-    Ok(())
+    owning(client, &id, work).await
 }
 
 async fn run(cli: Cli) -> Result<(), Failure> {

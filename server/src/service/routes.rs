@@ -273,14 +273,24 @@ pub fn apply_change(state: &AppState, session: &Session, change: Change) -> AppR
     Ok(session.status())
 }
 
+/// The body of a change request parsed as `T`, turned into a change and applied.
+async fn change<T: serde::de::DeserializeOwned>(
+    state: Arc<AppState>,
+    id: String,
+    body: Result<Bytes, BytesRejection>,
+    make: fn(T) -> Change,
+) -> AppResult<Json<Status>> {
+    let session = state.session(&id)?;
+    let parsed: T = parse_json(&body_bytes(body, state.config.max_body_bytes)?)?;
+    Ok(Json(apply_change(&state, &session, make(parsed))?))
+}
+
 async fn patch_camera(
     State(state): State<Arc<AppState>>,
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    let session = state.session(&id)?;
-    let patch: CameraPatch = parse_json(&body_bytes(body, state.config.max_body_bytes)?)?;
-    Ok(Json(apply_change(&state, &session, Change::Camera(patch))?))
+    change(state, id, body, Change::Camera).await
 }
 
 async fn patch_light(
@@ -288,9 +298,7 @@ async fn patch_light(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    let session = state.session(&id)?;
-    let patch: LightPatch = parse_json(&body_bytes(body, state.config.max_body_bytes)?)?;
-    Ok(Json(apply_change(&state, &session, Change::Light(patch))?))
+    change(state, id, body, Change::Light).await
 }
 
 async fn patch_quality(
@@ -298,9 +306,7 @@ async fn patch_quality(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    let session = state.session(&id)?;
-    let patch: Value = parse_json(&body_bytes(body, state.config.max_body_bytes)?)?;
-    Ok(Json(apply_change(&state, &session, Change::Quality(patch))?))
+    change(state, id, body, Change::Quality).await
 }
 
 async fn put_scene(
@@ -308,9 +314,7 @@ async fn put_scene(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    let session = state.session(&id)?;
-    let scene: Value = parse_json(&body_bytes(body, state.config.max_body_bytes)?)?;
-    Ok(Json(apply_change(&state, &session, Change::Scene(scene))?))
+    change(state, id, body, Change::Scene).await
 }
 
 #[derive(Deserialize)]
