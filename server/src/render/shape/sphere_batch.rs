@@ -47,14 +47,13 @@ impl SphereBatch {
         let c = (Vec4::splat(ray.oo) + self.k) - oc * 2.0;
         let disc = b * b - c;
         let s = disc.max(Vec4::ZERO).sqrt();
-        let q = Vec4::select(b.cmpgt(Vec4::ZERO), -(b + s), s - b);
+        // q = -(b + sign(b) s): the root pair q, c/q without cancellation.
+        let q = -(b + s.copysign(b));
         let other = c / q;
         let t0 = q.min(other);
         let t1 = q.max(other);
-        let inf = Vec4::splat(f32::INFINITY);
-        let near = t0.cmpgt(Vec4::ZERO) & !far_only;
-        let t = Vec4::select(near, t0, Vec4::select(t1.cmpgt(Vec4::ZERO), t1, inf));
-        Vec4::select(disc.cmpge(Vec4::ZERO), t, inf)
+        let t = Vec4::select(t0.cmpgt(Vec4::ZERO) & !far_only, t0, t1);
+        Vec4::select(t.cmpgt(Vec4::ZERO) & disc.cmpge(Vec4::ZERO), t, Vec4::splat(f32::INFINITY))
     }
 }
 
