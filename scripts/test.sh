@@ -2,7 +2,9 @@
 # The whole test suite: installs what the tests need when it is missing, then
 # runs every test in release mode (renders are heavy; debug is 30x slower).
 #   - an OpenCL loader and PoCL (a real OpenCL CPU device) for the OpenCL suite;
-#     where CI is set, that suite fails rather than skips without a device.
+#     where CI is set, that suite fails rather than skips without a device;
+#   - Chromium and playwright-core for the browser client's tests
+#     (scripts/browser-tests.sh), which run after the Rust tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,3 +27,6 @@ if ! have_opencl; then
 fi
 
 cargo test --release --workspace --locked "$@"
+
+# The browser client in a real browser, against the server binary just built.
+scripts/browser-tests.sh

@@ -6,8 +6,11 @@
 // dropped from the address bar).
 //
 // For tests and scripts the page exposes window.pathstream (sessionId, the
-// last stats, frame count) and mirrors the essentials on <body> as data
-// attributes: data-session-id, data-conn, data-frames, data-generation.
+// last stats, frame count, the spp and generation of the frame on the canvas)
+// and mirrors the essentials on <body> as data attributes: data-session-id,
+// data-conn (starting, connecting, live, reconnecting), data-frames,
+// data-generation, data-spp (latest stats), data-frame-spp and
+// data-frame-generation (the image shown). Elements have stable ids.
 
 const $ = (id) => document.getElementById(id);
 const TOKEN_KEY = "pathstream.token";
@@ -65,11 +68,15 @@ const state = {
   cameraDirty: false,
   lightDirty: false,
   lastLocalEdit: 0,
+  maxGeneration: 0, // newest generation seen from the server
+  adoptFrom: 0, // stats older than this generation predate a change of ours
+  failure: null,
   ws: null,
   conn: "starting",
   retry: 0,
   retryTimer: null,
   connecting: false,
+  replacing: null, // promise of a scene change or new session in flight
   frames: 0,
   decoding: false,
   pendingFrame: null, // {blob, stats} waiting to be drawn
@@ -260,6 +267,8 @@ async function createSession({ restore = false } = {}) {
   const light = restore ? clone(state.light) : null;
   let status = await api("POST", "/sessions", body);
   state.sessionId = status.id;
+  state.maxGeneration = 0;
+  state.adoptFrom = 0;
   el.body.dataset.sessionId = status.id;
   const defaults = status;
   if (camera && !same(camera, status.camera)) {
@@ -271,7 +280,9 @@ async function createSession({ restore = false } = {}) {
   applyScene(defaults);
   state.camera = clone(status.camera);
   state.light = status.light ? pickLight(status.light) : null;
-  applyStatus(status);
+  state.cameraDirty = false;
+  state.lightDirty = false;
+  applyAnswer(status);
   updateSizeInputs();
   return status;
 }
@@ -345,7 +356,12 @@ function openSocket() {
         }
         applyStatus(m, true);
       }
-      else if (m.type === "error") showMessage(m.error);
+      else if (m.type === "error") {
+        // The change was refused: the server's settings stand.
+        state.adoptFrom = state.maxGeneration;
+        state.lastLocalEdit = 0;
+        showMessage(m.error);
+      }
     } else {
       const f = { blob: event.data, stats: null };
       state.lastReceived = f;
@@ -390,30 +406,57 @@ async function resize() {
   const old = state.sessionId;
   state.want.width = w;
   state.want.height = h;
-  try {
-    closeSocket();
-    await createSession({ restore: true });
-    state.chart = [];
-    openSocket();
-    if (old) api("DELETE", `/sessions/${old}`).catch(() => {});
-  } catch (e) {
-    showMessage(e.message);
-    if (!state.ws) scheduleReconnect("error");
-  }
+  await replacing(async () => {
+    try {
+      closeSocket();
+      await createSession({ restore: true });
+      state.chart = [];
+      openSocket();
+      if (old) api("DELETE", `/sessions/${old}`).catch(() => {});
+    } catch (e) {
+      showMessage(e.message);
+      if (!state.ws) scheduleReconnect("error");
+    }
+  });
 }
 
-async function setScene(name) {
+function setScene(name) {
   if (!state.sessionId) return;
-  try {
-    const status = await api("PUT", `/sessions/${state.sessionId}/scene`, name);
-    state.cameraDirty = false;
-    state.lightDirty = false;
-    applyScene(status);
-    applyStatus(status);
-  } catch (e) {
-    showMessage(e.message);
-    if (state.status) el.scene.value = state.status.scene;
+  return replacing(async () => {
+    try {
+      const status = await api("PUT", `/sessions/${state.sessionId}/scene`, name);
+      state.cameraDirty = false;
+      state.lightDirty = false;
+      applyScene(status);
+      applyAnswer(status);
+    } catch (e) {
+      showMessage(e.message);
+      if (state.status) el.scene.value = state.status.scene;
+    }
+  });
+}
+
+/** Runs fn, which replaces the scene or session; camera and light edits made
+ *  meanwhile wait for it (they must apply to the new scene's camera and light,
+ *  not to the old one's). */
+function replacing(fn) {
+  const run = (state.replacing || Promise.resolve()).then(fn);
+  const done = run.catch(() => {}).then(() => {
+    if (state.replacing === done) state.replacing = null;
+  });
+  state.replacing = done;
+  return run;
+}
+
+/** Runs an edit now, or once a scene change or new session is in place. */
+function edit(fn) {
+  if (state.replacing) {
+    const p = state.replacing;
+    p.then(() => (state.replacing && state.replacing !== p ? edit(fn) : fn()));
+    return true;
   }
+  fn();
+  return true;
 }
 
 // ---------------------------------------------------------------- status, HUD
@@ -441,8 +484,9 @@ function setHud(id, text, value) {
 }
 
 function applyStatus(s, fromStream = false) {
+  if (s.id && state.sessionId && s.id !== state.sessionId) return; // an old session's
   state.status = s;
-  if (s.id && s.id !== state.sessionId) return;
+  state.maxGeneration = Math.max(state.maxGeneration, s.generation);
   el.body.dataset.generation = String(s.generation);
   el.body.dataset.spp = String(s.spp);
   setHud("hud-state", s.failure ? `failed: ${s.failure}` : s.state, s.state);
@@ -453,24 +497,34 @@ function applyStatus(s, fromStream = false) {
   setHud("hud-elapsed", fmtTime(s.elapsed_ms), s.elapsed_ms);
   setHud("hud-res", `${s.width} × ${s.height}`);
   setHud("hud-device", `${s.backend}: ${s.device}`);
-  if (s.failure) showMessage(`rendering stopped: ${s.failure}`);
+  if (s.failure && s.failure !== state.failure) showMessage(`rendering stopped: ${s.failure}`);
+  state.failure = s.failure;
   state.want.width = s.width;
   state.want.height = s.height;
+  if (fromStream) addChartPoint(s);
+
+  // Settings from before this page's last change (stats sent before the
+  // server saw it) must not undo it.
+  if (s.generation < state.adoptFrom) return;
   state.want.quality = clone(s.quality);
   fillQuality(s.quality);
-
-  // The server's camera, light and scene win unless this page changed them
-  // just now (the stats may predate the change).
+  // The server's camera, light and scene win (someone else may have changed
+  // them) unless this page has changes of its own on the way.
   const quiet = !state.cameraDirty && !state.lightDirty && performance.now() - state.lastLocalEdit > QUIET_MS;
   if (quiet) {
-    if (s.scene !== state.want.scene && fromStream) applyScene(s);
+    if (s.scene !== state.want.scene) applyScene(s);
     if (!same(s.camera, state.camera)) state.camera = clone(s.camera);
     const l = s.light ? pickLight(s.light) : null;
     if (!same(l, state.light)) state.light = l;
     if (s.scene !== el.scene.value && document.activeElement !== el.scene) el.scene.value = s.scene;
   }
   fillLight();
-  if (fromStream) addChartPoint(s);
+}
+
+/** A change the server has answered: older stats are out of date. */
+function applyAnswer(status) {
+  state.adoptFrom = Math.max(state.adoptFrom, status.generation);
+  applyStatus(status);
 }
 
 // ---------------------------------------------------------------- frames
@@ -683,7 +737,7 @@ function moveCamera(forward, right, up) {
   const by = add(add(scale(f.dir, forward), scale(f.right, right)), scale(f.up, up));
   const d = scale(by, state.moveStep);
   state.camera.position = add(state.camera.position, d);
-  
+  state.camera.look_at = add(state.camera.look_at, d);
   cameraChanged();
 }
 
@@ -773,6 +827,7 @@ function flush() {
   if (send(message)) {
     state.cameraDirty = false;
     state.lightDirty = false;
+    state.adoptFrom = state.maxGeneration + 1;
     touchLocal();
   }
   // Otherwise the socket is down: the change stays dirty and goes when it
@@ -826,8 +881,7 @@ async function qualityChanged(input) {
   if (!state.sessionId) return;
   try {
     const status = await api("PATCH", `/sessions/${state.sessionId}/quality`, { [field]: value });
-    state.chart = state.chart.filter((s) => s.points.length > 2);
-    applyStatus(status);
+    applyAnswer(status);
   } catch (e) {
     showMessage(e.message);
     const active = document.activeElement;
@@ -869,8 +923,11 @@ el.lColor.addEventListener("input", () => {
     return;
   }
   // The server keeps the colour with its largest component at 1.
-  state.light.color = c.map((x) => Math.round((x / max) * 1000) / 1000);
-  lightChanged();
+  edit(() => {
+    if (!state.light) return;
+    state.light.color = c.map((x) => Math.round((x / max) * 1000) / 1000);
+    lightChanged();
+  });
 });
 
 el.lIntensity.addEventListener("change", () => {
@@ -881,8 +938,11 @@ el.lIntensity.addEventListener("change", () => {
     fillLight();
     return;
   }
-  state.light.intensity = n;
-  lightChanged();
+  edit(() => {
+    if (!state.light) return;
+    state.light.intensity = n;
+    lightChanged();
+  });
 });
 
 // ---------------------------------------------------------------- export
@@ -982,6 +1042,21 @@ function togglePointerLock() {
 /** Runs the action of a key (KeyboardEvent.code); true when it was one. */
 function keyAction(code, shift = false) {
   const k = shift ? 4 : 1;
+  if (/^Key[WSADQERIKJLUOMNP]$/.test(code)) return edit(() => editAction(code, k));
+  switch (code) {
+    case "KeyX": togglePointerLock(); break;
+    case "KeyH": toggleHelp(); break;
+    case "Digit1":
+    case "Digit2":
+      setScene(THESIS_SCENES[code]);
+      break;
+    default: return false;
+  }
+  return true;
+}
+
+/** The camera and light keys. */
+function editAction(code, k) {
   switch (code) {
     case "KeyW": moveCamera(k, 0, 0); break;
     case "KeyS": moveCamera(-k, 0, 0); break;
@@ -990,7 +1065,6 @@ function keyAction(code, shift = false) {
     case "KeyQ": moveCamera(0, 0, k); break;
     case "KeyE": moveCamera(0, 0, -k); break;
     case "KeyR": resetCamera(); break;
-    case "KeyX": togglePointerLock(); break;
     case "KeyI": moveLight(k, 0, 0); break;
     case "KeyK": moveLight(-k, 0, 0); break;
     case "KeyJ": moveLight(0, -k, 0); break;
@@ -1000,14 +1074,8 @@ function keyAction(code, shift = false) {
     case "KeyM": scaleLight(1.25); break;
     case "KeyN": scaleLight(1 / 1.25); break;
     case "KeyP": randomLightColor(); break;
-    case "KeyH": toggleHelp(); break;
-    case "Digit1":
-    case "Digit2":
-      setScene(THESIS_SCENES[code]);
-      break;
-    default: return false;
+    default: break;
   }
-  return true;
 }
 
 function typing(target) {
@@ -1041,7 +1109,8 @@ window.addEventListener("keydown", (e) => {
 // Mouse look with pointer lock: the mouse turns the view like in a game.
 document.addEventListener("mousemove", (e) => {
   if (document.pointerLockElement !== el.view) return;
-  look(e.movementX * 0.15, -e.movementY * 0.15);
+  const [dx, dy] = [e.movementX, e.movementY];
+  edit(() => look(dx * 0.15, -dy * 0.15));
 });
 document.addEventListener("pointerlockchange", () => {
   const locked = document.pointerLockElement === el.view;
@@ -1065,7 +1134,7 @@ document.addEventListener("pointerlockchange", () => {
     const dy = e.clientY - drag.y;
     drag.x = e.clientX;
     drag.y = e.clientY;
-    if (dx || dy) look(-dx * 0.2, dy * 0.2);
+    if (dx || dy) edit(() => look(-dx * 0.2, dy * 0.2));
   });
   const end = (e) => { if (drag && e.pointerId === drag.id) drag = null; };
   el.view.addEventListener("pointerup", end);

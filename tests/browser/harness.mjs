@@ -17,6 +17,11 @@ export const ARTIFACTS = path.join(REPO, "target/browser");
 
 export const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
+// Servers still running when this process ends (a test that failed half-way)
+// go with it.
+const running = new Set();
+process.on("exit", () => { for (const p of running) p.kill("SIGKILL"); });
+
 /** A port nobody listens on right now. */
 export async function freePort() {
   const s = net.createServer();
@@ -28,7 +33,11 @@ export async function freePort() {
   return port;
 }
 
-/** Polls fn until it returns a truthy value; throws with `what` after timeout. */
+/** An error that ends waitFor at once. */
+export class Fatal extends Error {}
+
+/** Polls fn until it returns a truthy value; throws with `what` after timeout
+ *  (or at once when fn throws Fatal). */
 export async function waitFor(what, fn, { timeout = 20000, interval = 100 } = {}) {
   const end = Date.now() + timeout;
   let last;
@@ -38,6 +47,7 @@ export async function waitFor(what, fn, { timeout = 20000, interval = 100 } = {}
       if (v) return v;
       last = v;
     } catch (e) {
+      if (e instanceof Fatal) throw e;
       last = e;
     }
     if (Date.now() > end) {
@@ -59,11 +69,16 @@ export async function startServer(port, { token } = {}) {
   const proc = spawn(BIN, args, { env, stdio: ["ignore", "ignore", "pipe"] });
   let log = "";
   proc.stderr.on("data", (d) => { log = (log + d).slice(-8000); });
+  running.add(proc);
   const exited = once(proc, "exit");
+  exited.then(() => running.delete(proc));
+  let died = null;
+  proc.on("exit", (code, signal) => { died = `${BIN} exited (${code ?? signal})`; });
+  proc.on("error", (e) => { died = `${BIN}: ${e.message}`; });
   const base = `http://127.0.0.1:${port}`;
   try {
     await waitFor(`the server on ${base}`, async () => {
-      if (proc.exitCode !== null) throw new Error(`server exited with ${proc.exitCode}: ${log}`);
+      if (died) throw new Fatal(`${died} before answering; its log: ${log}`);
       const r = await fetch(`${base}/api/health`, { headers: token ? { authorization: `Bearer ${token}` } : {} });
       return r.ok;
     }, { timeout: 30000, interval: 100 });

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# The browser client's tests in a real browser: Debian's Chromium driven by
+# playwright-core (no browser download) against a real `pathstream serve`.
+# Installs what is missing (chromium with apt-get, the npm packages with
+# `npm ci`), then runs `node --test tests/browser/`.
+#
+# Environment: PATHSTREAM_BIN (default target/release/pathstream; built when
+# missing), CHROMIUM (default /usr/bin/chromium). Screenshot: target/browser/page.png.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+CHROMIUM="${CHROMIUM:-/usr/bin/chromium}"
+export CHROMIUM
+export PATHSTREAM_BIN="${PATHSTREAM_BIN:-$PWD/target/release/pathstream}"
+
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+    echo "browser-tests.sh: node and npm are needed (Node 20 or later)" >&2
+    exit 1
+fi
+if [ "$(node -p 'process.versions.node.split(".")[0]')" -lt 20 ]; then
+    echo "browser-tests.sh: Node $(node --version) is too old; need 20 or later" >&2
+    exit 1
+fi
+
+if [ ! -x "$CHROMIUM" ]; then
+    echo "browser-tests.sh: installing chromium (apt-get)" >&2
+    sudo=""
+    if [ "$(id -u)" != 0 ]; then sudo="sudo"; fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq chromium >/dev/null
+fi
+
+# npm ci when playwright-core is missing or not the pinned version.
+want="$(node -p 'require("./tests/browser/package.json").devDependencies["playwright-core"]')"
+have="$(node -p 'try { require("./tests/browser/node_modules/playwright-core/package.json").version } catch { "" }')"
+if [ "$want" != "$have" ]; then
+    echo "browser-tests.sh: npm ci in tests/browser (playwright-core $want)" >&2
+    (cd tests/browser && npm ci --no-audit --no-fund --loglevel=error)
+fi
+
+if [ ! -x "$PATHSTREAM_BIN" ]; then
+    echo "browser-tests.sh: no server at $PATHSTREAM_BIN; building it" >&2
+    cargo build --release --locked --bin pathstream
+fi
+
+exec node --test --test-concurrency=1 tests/browser/
