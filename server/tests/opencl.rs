@@ -325,3 +325,21 @@ fn launches_split_into_pixel_ranges_give_the_same_image() {
     assert_eq!(b.spp(), 3);
     assert_eq!(a.pixels(), b.pixels());
 }
+
+#[test]
+fn sessions_taking_turns_on_one_device_keep_their_films() {
+    let Some(mut shared) = device() else { return };
+    let (a, b) = (scene("cornell"), scene("cornell-glass"));
+    let (ja, jb) = (RenderJob::new(&a, 16, 12, &Quality::default()), RenderJob::new(&b, 16, 12, &Quality::default()));
+    let (mut fa, mut fb) = (Film::new(16, 12), Film::new(16, 12));
+    for n in [3, 5] {
+        shared.render(&ja, &mut fa, n).expect("render");
+        shared.render(&jb, &mut fb, n).expect("render");
+    }
+    for (job, film) in [(&ja, &fa), (&jb, &fb)] {
+        let mut alone = OpenClBackend::new(None).expect("device");
+        let mut f = Film::new(16, 12);
+        alone.render(job, &mut f, 8).expect("render");
+        assert_eq!(f.pixels(), film.pixels(), "taking turns changed the image");
+    }
+}

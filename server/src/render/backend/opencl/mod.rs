@@ -30,6 +30,10 @@ use std::time::{Duration, Instant};
 
 /// A launch should return within about this long, so updates feel immediate.
 pub const LAUNCH_TARGET: Duration = Duration::from_millis(30);
+/// Most job states kept on the device at once (one per recent session).
+const RESIDENT_JOBS: usize = 16;
+/// Most device memory their films may take together.
+const RESIDENT_FILM_BYTES: usize = 1 << 30;
 /// Most pixels one launch covers; larger images take several launches.
 pub const TILE: usize = 1 << 16;
 /// Floats per pixel in the device film: [even hi, even lo, odd hi, odd lo] x rgb.
@@ -76,7 +80,9 @@ pub struct OpenClBackend {
     context: Context,
     queue: CommandQueue,
     programs: HashMap<ProgramKey, (Program, Kernel)>,
-    state: Option<JobState>,
+    /// Device state of recent jobs, most recently used last: a server worker
+    /// round-robins its sessions, and each keeps its film on the device.
+    states: Vec<JobState>,
     /// Use the one generic program instead of specialised ones (benchmark).
     pub generic: bool,
     /// Test hook: make every n-th sample NaN.
@@ -125,7 +131,7 @@ impl OpenClBackend {
             context,
             queue,
             programs: HashMap::new(),
-            state: None,
+            states: Vec::new(),
             generic: false,
             inject_nan_every: None,
             fail_launches: false,
@@ -246,15 +252,17 @@ impl OpenClBackend {
         }
     }
 
-    /// Makes the device hold `job` and a film equal to the host's.
+    /// Makes the device hold `job` and a film equal to the host's, as the
+    /// most recently used state (uploading only when it does not already).
     fn prepare(&mut self, job: &RenderJob, film: &Film, key: &ProgramKey) -> Result<(), OpenClError> {
-        let current = self
-            .state
-            .as_ref()
-            .is_some_and(|s| s.job_id == job.id && &s.key == key && s.spp == film.spp() && s.pixels == film.pixels().len());
-        if current {
+        let matches = |s: &JobState| s.job_id == job.id && &s.key == key && s.spp == film.spp() && s.pixels == film.pixels().len();
+        if let Some(i) = self.states.iter().position(matches) {
+            let s = self.states.remove(i);
+            self.states.push(s);
             return Ok(());
         }
+        let per_sample = self.states.iter().rev().find(|s| s.job_id == job.id).and_then(|s| s.per_sample);
+        self.states.retain(|s| s.job_id != job.id);
         let packed = layout::pack(job);
         let mut device_film = vec![0f32; film.pixels().len() * FILM_FLOATS];
         if film.spp() > 0 {
@@ -280,11 +288,18 @@ impl OpenClBackend {
                 rejected: self.upload(CL_MEM_READ_WRITE, &[0u32])?,
                 pixels: film.pixels().len(),
                 spp: film.spp(),
-                per_sample: self.state.as_ref().filter(|s| s.job_id == job.id).and_then(|s| s.per_sample),
+                per_sample,
                 rejected_reported: 0,
             }
         };
-        self.state = Some(state);
+        self.states.push(state);
+        // Keep at most RESIDENT_JOBS states and RESIDENT_FILM_BYTES of films.
+        let film_bytes = |s: &JobState| s.pixels * FILM_FLOATS * 4;
+        while self.states.len() > 1
+            && (self.states.len() > RESIDENT_JOBS || self.states.iter().map(film_bytes).sum::<usize>() > RESIDENT_FILM_BYTES)
+        {
+            self.states.remove(0);
+        }
         Ok(())
     }
 
@@ -301,7 +316,7 @@ impl OpenClBackend {
         self.prepare(job, film, &key)?;
         let result = self.launch_all(&key, count, film.pixels().len());
         if result.is_err() {
-            self.state = None; // the device film may be half updated: start over from the host's
+            self.states.pop(); // the device film may be half updated: start over from the host's
         }
         result?;
         self.read_back(film, count)
@@ -317,7 +332,7 @@ impl OpenClBackend {
         let tile = pixels.min(TILE);
         let mut done = 0u64;
         while done < count {
-            let per_sample = self.state.as_ref().and_then(|s| s.per_sample).map(|d| d.as_secs_f64());
+            let per_sample = self.states.last().and_then(|s| s.per_sample).map(|d| d.as_secs_f64());
             let n = match per_sample {
                 Some(p) if p > 0.0 => ((target / p) as u64).clamp(1, count - done),
                 Some(_) => count - done,
@@ -330,7 +345,7 @@ impl OpenClBackend {
                 self.launch(key, offset, tile, pixels, n)?;
                 slowest = slowest.max(start.elapsed());
             }
-            if let Some(s) = self.state.as_mut() {
+            if let Some(s) = self.states.last_mut() {
                 s.spp += n;
                 s.per_sample = Some(slowest / n as u32);
             }
@@ -348,7 +363,7 @@ impl OpenClBackend {
                 code: "CL_OUT_OF_RESOURCES (injected)".into(),
             });
         }
-        let state = self.state.as_ref().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
+        let state = self.states.last().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         let first: cl_ulong = state.spp;
         let count: cl_uint = n as cl_uint;
         let kernel = &self
@@ -377,7 +392,7 @@ impl OpenClBackend {
     }
 
     fn read_back(&mut self, film: &mut Film, count: u64) -> Result<(), OpenClError> {
-        let state = self.state.as_mut().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
+        let state = self.states.last_mut().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         let mut sums = vec![0f32; state.pixels * FILM_FLOATS];
         let mut rejected = [0u32];
         unsafe {
