@@ -9,6 +9,8 @@ use std::time::{Duration, Instant};
 struct Server {
     child: Child,
     url: String,
+    /// Kept open: the server may print more after its first line.
+    _stdout: BufReader<std::process::ChildStdout>,
 }
 
 impl Drop for Server {
@@ -34,15 +36,15 @@ fn start_server() -> Server {
         .stderr(Stdio::null())
         .spawn()
         .expect("server starts");
-    let stdout = child.stdout.take().expect("stdout");
+    let mut stdout = BufReader::new(child.stdout.take().expect("stdout"));
     let mut line = String::new();
-    BufReader::new(stdout).read_line(&mut line).expect("a first line");
+    stdout.read_line(&mut line).expect("a first line");
     let url = line
         .split_whitespace()
         .find(|w| w.starts_with("http://"))
         .map(|u| u.trim_end_matches('/').to_owned())
         .unwrap_or_else(|| panic!("no URL in: {line}"));
-    Server { child, url }
+    Server { child, url, _stdout: stdout }
 }
 
 fn client(server: &Server, args: &[&str]) -> Output {

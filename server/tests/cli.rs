@@ -151,3 +151,30 @@ fn diff_measures_relative_error_against_a_reference() {
     assert_eq!(missing.status.code(), Some(2));
     assert!(text(&missing.stderr).contains("/nonexistent.pfm"));
 }
+
+#[test]
+fn serve_prints_its_url_and_survives_a_closed_stdout() {
+    use std::io::{BufRead, BufReader, Read, Write};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pathstream"))
+        .args(["serve", "--addr", "127.0.0.1:0", "--backend", "cpu"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("starts");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().expect("stdout")).read_line(&mut line).expect("a line");
+    // The reader is gone now: later writes to stdout fail, and must not kill the server.
+    let url = line.split_whitespace().find(|w| w.starts_with("http://")).expect("a URL").to_owned();
+    let addr = url.trim_start_matches("http://").trim_end_matches('/').to_owned();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let mut stream = std::net::TcpStream::connect(&addr).expect("still listening");
+    stream
+        .write_all(format!("GET /api/health HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").as_bytes())
+        .expect("request");
+    let mut answer = String::new();
+    stream.read_to_string(&mut answer).expect("answer");
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(answer.starts_with("HTTP/1.1 200"), "{answer}");
+    assert!(answer.contains("\"status\":\"ok\""), "{answer}");
+}

@@ -3,6 +3,7 @@
 use super::render::BackendArg;
 use super::CliError;
 use pathstream::service::{self, ServeConfig};
+use std::io::Write;
 use std::net::SocketAddr;
 use std::time::Duration;
 
@@ -70,11 +71,14 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
                 format!("{b} ({d})")
             })
             .collect();
-        println!("pathstream serving on http://{}/  - open it in a browser", running.addr);
-        println!("render workers: {}", backends.join("; "));
+        // A closed stdout must not stop a server: write, and ignore failures.
+        let mut out = std::io::stdout();
+        let _ = writeln!(out, "pathstream serving on http://{}/  - open it in a browser", running.addr);
+        let _ = writeln!(out, "render workers: {}", backends.join("; "));
         if running.state.config.token.is_some() {
-            println!("a bearer token is required on /api (Authorization: Bearer ..., or ?token=...)");
+            let _ = writeln!(out, "a bearer token is required on /api (Authorization: Bearer ..., or ?token=...)");
         }
+        let _ = out.flush();
         running.until_signal().await.map_err(|e| CliError::Failed(e.to_string()))
     })
 }
