@@ -27,12 +27,18 @@ pub struct Progress {
 
 impl Progress {
     pub fn of(film: &Film, elapsed: Duration) -> Self {
+        Self::with_estimate(film, elapsed, film.error_estimate())
+    }
+
+    /// As [`Progress::of`], with the error estimate (an O(pixels) pass over
+    /// the film) already computed.
+    pub fn with_estimate(film: &Film, elapsed: Duration, error_estimate: Option<f64>) -> Self {
         let paths = film.spp() as f64 * f64::from(film.width()) * f64::from(film.height());
         let secs = elapsed.as_secs_f64();
         Self {
             spp: film.spp(),
             elapsed,
-            error_estimate: film.error_estimate(),
+            error_estimate,
             samples_per_sec: if secs > 0.0 { paths / secs } else { 0.0 },
             rejected: film.rejected(),
         }

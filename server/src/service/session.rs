@@ -201,7 +201,8 @@ impl Session {
         let st = lock(&self.state);
         let frame = self.latest();
         let current = frame.generation == st.generation;
-        let c = st.scene.to_json().camera;
+        // Only the camera, not the whole scene (this runs for every frame sent).
+        let c = st.scene.camera.to_json();
         Status {
             id: self.id.clone(),
             scene: st.scene_name.clone(),
@@ -295,6 +296,10 @@ impl Session {
             .and_then(|()| backend.render_unless(&job, &mut film, count, &cancelled));
         let took = start.elapsed();
         let (name, device) = (backend.name().to_owned(), backend.device());
+        // The O(pixels) work on the film happens before taking the lock, so
+        // that status requests and changes never wait for it.
+        let finished = matches!(result, Ok(true));
+        let (pixels, estimate) = if finished { (film.mean(), film.error_estimate()) } else { (Vec::new(), None) };
         let mut st = lock(&self.state);
         tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
         if st.generation != generation {
@@ -315,7 +320,7 @@ impl Session {
         metrics.add_samples(&name, count * u64::from(film.width()) * u64::from(film.height()));
         metrics.rejected_samples.fetch_add(film.rejected() - rejected_before, Ordering::Relaxed);
         st.per_sample = Some(took / count as u32);
-        let progress = Progress::of(&film, st.restarted.elapsed());
+        let progress = Progress::with_estimate(&film, st.restarted.elapsed(), estimate);
         st.halted = quality.halts() && progressive::halted(&quality, &progress);
         let frame = Frame {
             seq: self.seq.fetch_add(1, Ordering::Relaxed),
@@ -330,7 +335,7 @@ impl Session {
             halted: st.halted,
             backend: name,
             device,
-            pixels: film.mean(),
+            pixels,
             png: OnceLock::new(),
         };
         st.film = Some(film);

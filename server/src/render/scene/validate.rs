@@ -242,14 +242,7 @@ fn point(path: &str, v: [f64; 3]) -> Result<DVec3> {
 }
 
 pub(super) fn to_json(s: &Scene) -> SceneJson {
-    let c = &s.camera;
-    let camera = CameraJson {
-        position: c.position.to_array(),
-        look_at: c.look_at.to_array(),
-        up: c.up.to_array(),
-        vfov_deg: c.vfov_deg,
-        near_clip: c.near_clip,
-    };
+    let camera = s.camera.to_json();
     let emission = |m: &Material| m.is_emissive().then(|| m.emission.to_array());
     let materials = s
         .materials
@@ -306,5 +299,18 @@ pub(super) fn to_json(s: &Scene) -> SceneJson {
         materials,
         objects,
         light: s.light,
+    }
+}
+
+impl Camera {
+    /// The camera in its JSON form.
+    pub fn to_json(&self) -> CameraJson {
+        CameraJson {
+            position: self.position.to_array(),
+            look_at: self.look_at.to_array(),
+            up: self.up.to_array(),
+            vfov_deg: self.vfov_deg,
+            near_clip: self.near_clip,
+        }
     }
 }
