@@ -836,8 +836,54 @@ function flush() {
 
 // ---------------------------------------------------------------- panels
 
+// Presets from GET /api/presets, loaded once a session answers (the token
+// may be needed first).
+let presets = null;
+let presetsLoading = false;
+const PRESET_KNOBS = ["max_depth", "rr_depth", "nee", "filter", "clamp"];
+
+async function loadPresets() {
+  if (presets || presetsLoading) return;
+  presetsLoading = true;
+  try {
+    presets = (await api("GET", "/presets")).presets;
+    const select = $("q-preset");
+    for (const p of presets) {
+      const option = document.createElement("option");
+      option.value = p.name;
+      option.textContent = p.name;
+      option.title = p.description;
+      select.appendChild(option);
+    }
+    fillQuality(state.status && state.status.quality);
+  } catch (e) {
+    showMessage(`presets: ${e.message}`);
+  } finally {
+    presetsLoading = false;
+  }
+}
+
+/** The preset whose knobs `q` has, or "" (custom). */
+function presetOf(q) {
+  const p = (presets || []).find((p) => PRESET_KNOBS.every((k) => same(p.quality[k], q[k])));
+  return p ? p.name : "";
+}
+
+$("q-preset").addEventListener("change", async () => {
+  const name = $("q-preset").value;
+  if (!name || !state.sessionId) return;
+  try {
+    applyAnswer(await api("PATCH", `/sessions/${state.sessionId}/quality`, { preset: name }));
+  } catch (e) {
+    showMessage(e.message);
+    fillQuality(state.status && state.status.quality);
+  }
+});
+
 function fillQuality(q) {
   if (!q) return;
+  loadPresets();
+  if (document.activeElement !== $("q-preset")) $("q-preset").value = presetOf(q);
   const set = (id, v) => {
     const input = $(id);
     if (document.activeElement === input) return;

@@ -1,5 +1,6 @@
 //! pathstream: a progressive path tracer (`render`) served over HTTP
-//! (`service`). The renderer does not depend on the service.
+//! (`service`), and measured (`bench`). The renderer depends on neither.
 
+pub mod bench;
 pub mod render;
 pub mod service;

@@ -21,6 +21,8 @@ enum Command {
     Serve(cli::serve::ServeArgs),
     /// Render a scene to a PNG or PFM file, with a progress bar.
     Render(cli::render::RenderArgs),
+    /// Measure throughput and the speed/accuracy trade of every quality setting.
+    Bench(cli::bench::BenchArgs),
     /// List the built-in scenes, or print one as scene JSON.
     Scenes(cli::scenes::ScenesArgs),
     /// List OpenCL platforms and devices, and which one `auto` picks.
@@ -48,6 +50,7 @@ fn main() -> ExitCode {
         Some(Command::Serve(a)) => cli::serve::run(a),
         None => cli::serve::run(cli::serve::ServeArgs::default()),
         Some(Command::Render(a)) => cli::render::run(a),
+        Some(Command::Bench(a)) => cli::bench::run(a),
         Some(Command::Scenes(a)) => cli::scenes::run(a),
         Some(Command::Diff(a)) => cli::diff::run(a),
         Some(Command::Devices(a)) => cli::devices::run(a),

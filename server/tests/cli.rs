@@ -178,3 +178,27 @@ fn serve_prints_its_url_and_survives_a_closed_stdout() {
     assert!(answer.starts_with("HTTP/1.1 200"), "{answer}");
     assert!(answer.contains("\"status\":\"ok\""), "{answer}");
 }
+
+#[test]
+fn a_preset_sets_the_path_knobs_and_flags_override_it() {
+    use pathstream::render::{Preset, Quality};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let bytes = |file: &str, extra: &[&str]| {
+        let (out, path) = render(dir.path(), file, extra);
+        assert!(out.status.success(), "{extra:?}: {}", text(&out.stderr));
+        std::fs::read(path).expect("file")
+    };
+    for preset in Preset::ALL {
+        let q = Preset::apply(preset, Quality::default());
+        let (depth, clamp) = (q.max_depth.to_string(), q.clamp.to_string());
+        let explicit = ["--spp", "3", "--max-depth", &depth, "--clamp", &clamp, "--nee", "on", "--filter", "tent2x2"];
+        let a = bytes("a.pfm", &["--spp", "3", "--preset", preset.name()]);
+        assert_eq!(a, bytes("b.pfm", &explicit), "{} = its settings", preset.name());
+    }
+    // A flag beside the preset wins over it.
+    let a = bytes("c.pfm", &["--spp", "3", "--preset", "reference", "--max-depth", "1"]);
+    assert_eq!(a, bytes("d.pfm", &["--spp", "3", "--max-depth", "1", "--clamp", "0"]));
+    let out = pathstream(&["render", "--scene", "cornell", "--preset", "fast", "--out", "x.png"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("preview, interactive, final, reference"), "{}", text(&out.stderr));
+}

@@ -83,10 +83,22 @@ async fn updates_restart_accumulation_and_change_the_image() {
     assert_eq!(st["generation"], 2);
     assert_eq!(st["quality"]["max_depth"], 2);
     assert_eq!(st["quality"]["spp"], 64, "fields not named keep their values");
+    // A preset sets the path knobs; fields beside it win; seed and halts stay.
+    let st: Value = patch(&base, &id, "quality", json!({"preset": "reference", "rr_depth": 2})).await.json().await.expect("json");
+    let reference = pathstream::render::Preset::Reference.apply(pathstream::render::Quality::default());
+    assert_eq!(st["quality"]["max_depth"], reference.max_depth);
+    assert_eq!(st["quality"]["nee"], reference.nee);
+    assert_eq!(st["quality"]["rr_depth"], 2);
+    assert_eq!(st["quality"]["spp"], 64);
+    assert_eq!(st["generation"], 3);
+    let presets: Value = client().get(format!("{base}/api/presets")).send().await.expect("req").json().await.expect("json");
+    let names: Vec<&str> = presets["presets"].as_array().expect("list").iter().filter_map(|p| p["name"].as_str()).collect();
+    assert_eq!(names, ["preview", "interactive", "final", "reference"]);
+    assert_eq!(presets["presets"][3]["quality"]["max_depth"], reference.max_depth);
     let r = client().put(format!("{base}/api/sessions/{id}/scene")).json(&json!("cornell-glass")).send().await.expect("req");
     let st: Value = r.json().await.expect("json");
     assert_eq!(st["scene"], "cornell-glass");
-    assert_eq!(st["generation"], 3);
+    assert_eq!(st["generation"], 4);
     running.shutdown().await.expect("shutdown");
 }
 
@@ -152,6 +164,8 @@ async fn bad_input_gets_a_4xx_with_a_json_error_and_the_server_keeps_serving() {
         ("PATCH", format!("/api/sessions/{id}/light"), json!({"color": [2, 0, 0]}).to_string(), 400, "light.color"),
         ("PATCH", format!("/api/sessions/{id}/quality"), json!({"filter": "gauss"}).to_string(), 400, "quality.filter"),
         ("PATCH", format!("/api/sessions/{id}/quality"), json!([1, 2]).to_string(), 400, "quality: must be a JSON object"),
+        ("PATCH", format!("/api/sessions/{id}/quality"), json!({"preset": "fast"}).to_string(), 400, "quality.preset: unknown preset \"fast\" (one of preview, interactive, final, reference)"),
+        ("POST", "/api/sessions".into(), json!({"quality": {"preset": 3}}).to_string(), 400, "quality.preset: must be one of"),
         ("PUT", format!("/api/sessions/{id}/scene"), json!("nope").to_string(), 400, "unknown scene"),
         ("GET", format!("/api/sessions/{id}/frame.png?min_spp=abc"), String::new(), 400, "min_spp"),
         ("GET", "/api/nothing".into(), String::new(), 404, "no route"),

@@ -256,6 +256,25 @@ describe("browser client", { timeout: 600000 }, () => {
     errors.splice(errors.indexOf(refused[0]), 1);
   });
 
+  it("quality panel: a preset sets the knobs; editing one shows custom", T, async () => {
+    const presets = (await (await fetch(`${server.base}/api/presets`)).json()).presets;
+    const reference = presets.find((p) => p.name === "reference");
+    await page.waitForSelector("#q-preset option[value=reference]", { state: "attached" });
+    await page.selectOption("#q-preset", "reference");
+    await waitFor("the reference preset on the server", async () => {
+      const q = (await status()).quality;
+      return q.max_depth === reference.quality.max_depth && q.clamp === reference.quality.clamp;
+    });
+    await waitFor("the panel to show the preset's depth",
+      async () => (await page.inputValue("#q-max-depth")) === String(reference.quality.max_depth));
+    assert.equal(await page.inputValue("#q-preset"), "reference");
+    await page.fill("#q-max-depth", "3");
+    await page.press("#q-max-depth", "Tab");
+    await waitFor("max_depth 3 on the server", async () => (await status()).quality.max_depth === 3);
+    await waitFor("the preset to read custom", async () => (await page.inputValue("#q-preset")) === "");
+    await page.evaluate(() => document.activeElement.blur()); // keys go to the view again
+  });
+
   it("help overlay opens with ? and H, closes with Escape", T, async () => {
     assert.equal(await page.isVisible("#help"), false);
     await page.keyboard.press("?");

@@ -1,5 +1,6 @@
 //! Subcommands of the `pathstream` binary.
 
+pub mod bench;
 pub mod devices;
 pub mod diff;
 pub mod render;

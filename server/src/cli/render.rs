@@ -7,7 +7,7 @@ use pathstream::render::job::check_size;
 use pathstream::render::output::{write_image, ImageFormat};
 use pathstream::render::progressive::{self, DEFAULT_SPP};
 use pathstream::render::tonemap::Tonemap;
-use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJob, Scene};
+use pathstream::render::{Backend, BackendChoice, Film, Filter, Preset, Quality, RenderJob, Scene};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -58,21 +58,25 @@ pub struct RenderArgs {
     /// Halt when the estimated relative RMS error falls below E (e.g. 0.02).
     #[arg(long, value_name = "E")]
     target_error: Option<f64>,
-    /// Most bounces per path; 0 = unbounded (Russian roulette only).
-    #[arg(long, value_name = "D", default_value_t = Quality::default().max_depth)]
-    max_depth: u32,
-    /// Bounces after which Russian roulette may end paths.
-    #[arg(long, value_name = "D", default_value_t = Quality::default().rr_depth)]
-    rr_depth: u32,
-    /// Next-event estimation (shadow rays to the lights).
-    #[arg(long, value_enum, default_value_t = Switch::On)]
-    nee: Switch,
-    /// Pixel filter.
-    #[arg(long, value_enum, default_value_t = FilterArg::Tent2x2)]
-    filter: FilterArg,
-    /// Largest radiance of one sample; 0 = off (biased; removes fireflies).
-    #[arg(long, value_name = "C", default_value_t = 0.0)]
-    clamp: f32,
+    /// Named quality preset (path knobs; the flags below override it):
+    /// preview, interactive, final, reference. See `pathstream bench`.
+    #[arg(long, value_enum, value_name = "NAME")]
+    preset: Option<Preset>,
+    /// Most bounces per path; 0 = unbounded (Russian roulette only) [default: 6].
+    #[arg(long, value_name = "D")]
+    max_depth: Option<u32>,
+    /// Bounces after which Russian roulette may end paths [default: 5].
+    #[arg(long, value_name = "D")]
+    rr_depth: Option<u32>,
+    /// Next-event estimation (shadow rays to the lights) [default: on].
+    #[arg(long, value_enum)]
+    nee: Option<Switch>,
+    /// Pixel filter [default: tent2x2].
+    #[arg(long, value_enum)]
+    filter: Option<FilterArg>,
+    /// Largest radiance of one sample; 0 = off (biased; removes fireflies) [default: 0].
+    #[arg(long, value_name = "C")]
+    clamp: Option<f32>,
     /// Random seed; the same seed and sample count give the same image.
     #[arg(long, value_name = "S", default_value_t = 0)]
     seed: u64,
@@ -96,19 +100,24 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     fn quality(&self) -> Quality {
-        Quality {
-            max_depth: self.max_depth,
-            rr_depth: self.rr_depth,
-            nee: self.nee == Switch::On,
-            filter: match self.filter {
-                FilterArg::Tent2x2 => Filter::Tent2x2,
-                FilterArg::Box => Filter::Box,
-            },
-            clamp: self.clamp,
+        let base = Quality {
             seed: self.seed,
             spp: self.spp,
             time_ms: self.time_ms,
             target_error: self.target_error,
+            ..Quality::default()
+        };
+        let q = self.preset.map_or(base, |p| p.apply(base));
+        Quality {
+            max_depth: self.max_depth.unwrap_or(q.max_depth),
+            rr_depth: self.rr_depth.unwrap_or(q.rr_depth),
+            nee: self.nee.map_or(q.nee, |n| n == Switch::On),
+            filter: self.filter.map_or(q.filter, |f| match f {
+                FilterArg::Tent2x2 => Filter::Tent2x2,
+                FilterArg::Box => Filter::Box,
+            }),
+            clamp: self.clamp.unwrap_or(q.clamp),
+            ..q
         }
     }
 }

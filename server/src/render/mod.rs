@@ -6,7 +6,7 @@
 //! - `camera`, `filter`, `sampler`: where camera samples go and their randomness
 //! - `material`, `fresnel`, `light`, `integrator`: the path tracer
 //! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
-//! - `quality`, `job`, `progressive`, `backend`: what to render and where
+//! - `quality`, `preset`, `job`, `progressive`, `backend`: what to render and where
 
 pub mod backend;
 pub mod camera;
@@ -19,6 +19,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod output;
+pub mod preset;
 pub mod progressive;
 pub mod quality;
 pub mod ray;
@@ -32,6 +33,7 @@ pub use backend::{Backend, BackendChoice, BackendError};
 pub use film::Film;
 pub use filter::Filter;
 pub use job::RenderJob;
+pub use preset::Preset;
 pub use progressive::Progress;
 pub use quality::Quality;
 pub use scene::{Scene, SceneError};

@@ -6,7 +6,7 @@ use super::updates::{apply_camera, apply_light, apply_quality, parse_scene, Came
 use super::{ws, AppState};
 use crate::render::job::check_size;
 use crate::render::scene::BUILTIN_NAMES;
-use crate::render::Quality;
+use crate::render::{Preset, Quality};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
@@ -31,6 +31,7 @@ pub fn app(state: Arc<AppState>) -> Router {
         .route("/health", get(health))
         .route("/devices", get(devices))
         .route("/scenes", get(scenes))
+        .route("/presets", get(presets))
         .route("/sessions", get(list_sessions).post(create_session))
         .route("/sessions/{id}", get(get_session).delete(delete_session))
         .route("/sessions/{id}/camera", patch(patch_camera))
@@ -165,6 +166,23 @@ async fn devices(State(state): State<Arc<AppState>>) -> Json<Value> {
 
 async fn scenes() -> Json<Value> {
     Json(json!({"scenes": BUILTIN_NAMES}))
+}
+
+/// The quality presets: name, what it is for, and the settings it applies.
+async fn presets() -> Json<Value> {
+    let list: Vec<Value> = Preset::ALL
+        .iter()
+        .map(|p| {
+            let q = p.apply(Quality::default());
+            json!({
+                "name": p.name(),
+                "description": p.description(),
+                "quality": {"max_depth": q.max_depth, "rr_depth": q.rr_depth, "nee": q.nee,
+                            "filter": q.filter, "clamp": q.clamp},
+            })
+        })
+        .collect();
+    Json(json!({"presets": list}))
 }
 
 async fn metrics(State(state): State<Arc<AppState>>) -> impl IntoResponse {

@@ -6,13 +6,14 @@
 //! {"camera": {"position": [50, 52, 250], "look_at": [50, 40, 0], "vfov_deg": 40}}
 //! {"light": {"position": [50, 70, 80], "color": [1, 0.8, 0.6], "intensity": 20}}
 //! {"quality": {"max_depth": 4, "nee": false, "spp": null}}
+//! {"quality": {"preset": "interactive", "seed": 3}}
 //! {"scene": "cornell"}  or  {"scene": { ...scene JSON... }}
 //! ```
 
 use super::error::{parse_json, ApiError};
 use crate::render::math::DVec3;
 use crate::render::scene::{builtin, Shape, BUILTIN_NAMES, MAX_COORDINATE, MAX_EMISSION};
-use crate::render::{Quality, Scene};
+use crate::render::{Preset, Quality, Scene};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -169,14 +170,22 @@ pub fn parse_scene(value: Value) -> Result<(String, Scene), ApiError> {
     }
 }
 
-/// `current` with the fields of `patch` (a JSON object) replaced.
+/// `current` with the fields of `patch` (a JSON object) replaced; a
+/// `"preset"` field applies that preset first, the other fields over it.
 pub fn apply_quality(current: &Quality, patch: &Value) -> Result<Quality, ApiError> {
     let Value::Object(fields) = patch else {
         return Err(ApiError::BadRequest("quality: must be a JSON object".into()));
     };
-    let mut merged = serde_json::to_value(current).map_err(|e| ApiError::Internal(e.to_string()))?;
+    let base = match fields.get("preset") {
+        None => *current,
+        Some(Value::String(name)) => Preset::from_name(name).map(|p| p.apply(*current)).ok_or_else(|| {
+            ApiError::BadRequest(format!("quality.preset: unknown preset {name:?} (one of {})", Preset::names()))
+        })?,
+        Some(_) => return Err(ApiError::BadRequest(format!("quality.preset: must be one of {}", Preset::names()))),
+    };
+    let mut merged = serde_json::to_value(base).map_err(|e| ApiError::Internal(e.to_string()))?;
     if let Value::Object(m) = &mut merged {
-        for (k, v) in fields {
+        for (k, v) in fields.iter().filter(|(k, _)| *k != "preset") {
             m.insert(k.clone(), v.clone());
         }
     }

@@ -1,0 +1,115 @@
+//! Timed renders: throughput, and error-against-time traces.
+//!
+//! Only the backend's rendering is timed; building the OpenCL program, the
+//! warm-up and measuring the error are not.
+
+use super::fit::{corrected, TracePoint};
+use crate::render::film::relative_rms_error;
+use crate::render::progressive::{self, Progress};
+use crate::render::{Backend, BackendError, Film, Quality, RenderJob, Scene};
+use std::time::{Duration, Instant};
+
+/// Seed of the measured renders (the references use another).
+pub const TRACE_SEED: u64 = 1;
+
+/// Camera paths and samples per pixel per second.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Throughput {
+    pub spp: u64,
+    pub seconds: f64,
+    pub paths_per_sec: f64,
+    pub spp_per_sec: f64,
+}
+
+/// Renders `scene` at `width` x `height` for about `seconds` after a warm-up
+/// sample, and reports the rate.
+pub fn throughput(
+    backend: &mut Backend,
+    scene: &Scene,
+    (width, height): (u32, u32),
+    quality: &Quality,
+    seconds: f64,
+) -> Result<Throughput, BackendError> {
+    let job = RenderJob::new(scene, width, height, quality);
+    backend.prepare(&job)?;
+    let mut warm = Film::new(width, height);
+    backend.render(&job, &mut warm, 1)?;
+    let timed = Quality {
+        spp: None,
+        target_error: None,
+        time_ms: Some(((seconds * 1000.0).ceil() as u64).max(1)),
+        ..*quality
+    };
+    let mut film = Film::new(width, height);
+    let done: Progress = progressive::render(&job, backend, &mut film, &timed, |_| {})?;
+    let secs = done.elapsed.as_secs_f64();
+    Ok(Throughput {
+        spp: done.spp,
+        seconds: secs,
+        paths_per_sec: done.samples_per_sec,
+        spp_per_sec: if secs > 0.0 { done.spp as f64 / secs } else { 0.0 },
+    })
+}
+
+/// Renders with `quality` (seed [`TRACE_SEED`]) for `seconds` of rendering
+/// time, measuring the error against `reference` (whose own error estimate
+/// is `reference_error`) at sample counts growing by half each time.
+pub fn trace(
+    backend: &mut Backend,
+    scene: &Scene,
+    (width, height): (u32, u32),
+    quality: &Quality,
+    reference: (&[[f32; 3]], f64),
+    seconds: f64,
+) -> Result<Vec<TracePoint>, BackendError> {
+    let q = Quality { seed: TRACE_SEED, ..*quality };
+    let job = RenderJob::new(scene, width, height, &q);
+    backend.prepare(&job)?;
+    let mut film = Film::new(width, height);
+    let budget = Duration::from_secs_f64(seconds);
+    let mut rendering = Duration::ZERO;
+    let mut points = Vec::new();
+    let mut count = 1u64;
+    loop {
+        let start = Instant::now();
+        backend.render(&job, &mut film, count)?;
+        rendering += start.elapsed();
+        let error = relative_rms_error(&film.mean(), reference.0);
+        points.push(TracePoint {
+            seconds: rendering.as_secs_f64(),
+            spp: film.spp(),
+            true_error: corrected(error, reference.1),
+            estimate: film.error_estimate(),
+        });
+        if rendering >= budget {
+            return Ok(points);
+        }
+        // Next checkpoint at 1.5x the samples, but not far past the budget.
+        let per_spp = rendering.as_secs_f64() / film.spp() as f64;
+        let left = (budget - rendering).as_secs_f64();
+        let wanted = (film.spp() / 2).max(1);
+        let fits = if per_spp > 0.0 { (left / per_spp).ceil() as u64 } else { wanted };
+        count = wanted.min(fits).max(1);
+    }
+}
+
+/// Renders the reference: `quality` until its error estimate is at most
+/// `target_error` or `max_seconds` have passed; `on_progress` sees each pass.
+pub fn render_reference(
+    backend: &mut Backend,
+    job: &RenderJob,
+    target_error: f64,
+    max_seconds: f64,
+    on_progress: impl FnMut(&Progress),
+) -> Result<(Film, Progress), BackendError> {
+    backend.prepare(job)?;
+    let mut film = Film::new(job.width(), job.height());
+    let halt = Quality {
+        spp: None,
+        time_ms: Some(((max_seconds * 1000.0).ceil() as u64).max(1)),
+        target_error: Some(target_error),
+        ..Quality::default()
+    };
+    let done = progressive::render(job, backend, &mut film, &halt, on_progress)?;
+    Ok((film, done))
+}

@@ -1,0 +1,314 @@
+//! The benchmark's results as Markdown tables (stdout, docs) and CSV files.
+
+use super::fit::{self, Reach};
+use super::{thesis, Results, TradeCurve};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The error levels the trade tables give times for.
+pub const LEVELS: [f64; 4] = [0.10, 0.05, 0.02, 0.01];
+
+fn pct(e: f64) -> String {
+    match e {
+        e if !e.is_finite() => "n/a".into(),
+        e if e < 1e-4 => "< 0.01%".into(),
+        e if e < 0.1 => format!("{:.2}%", e * 100.0),
+        e => format!("{:.1}%", e * 100.0),
+    }
+}
+
+fn secs(s: f64) -> String {
+    match s {
+        s if s < 0.01 => format!("{:.1} ms", s * 1000.0),
+        s if s < 10.0 => format!("{s:.2} s"),
+        s if s < 1000.0 => format!("{s:.0} s"),
+        s => format!("{:.1} h", s / 3600.0),
+    }
+}
+
+fn reach(r: Reach) -> String {
+    match r {
+        Reach::Measured(s) => secs(s),
+        Reach::Extrapolated(s) => format!("~{}", secs(s)),
+        Reach::Never => "never".into(),
+        Reach::Unknown => "?".into(),
+    }
+}
+
+fn reaches(curve: &TradeCurve) -> [Reach; 4] {
+    LEVELS.map(|l| fit::time_to(&curve.points, curve.fit.as_ref(), l))
+}
+
+/// The whole report as Markdown.
+pub fn markdown(r: &Results) -> String {
+    let mut out = String::new();
+    let w = &mut out;
+    let _ = writeln!(w, "# pathstream bench\n");
+    let _ = writeln!(w, "- Machine: {}", r.machine);
+    for (name, device) in &r.backends {
+        let _ = writeln!(w, "- Backend `{name}`: {device}");
+    }
+    let _ = writeln!(w, "- Date: {}; renderer {}\n", r.date, r.renderer_version);
+    throughput(w, r);
+    trade(w, r);
+    calibration(w, r);
+    specialisation(w, r);
+    out
+}
+
+fn throughput(w: &mut String, r: &Results) {
+    if r.throughput.is_empty() {
+        return;
+    }
+    let _ = writeln!(w, "## Throughput\n");
+    let _ = writeln!(w, "Max depth 6, NEE on, tent filter (the thesis's settings). Thesis: 2016, AMD FX-6300 (OpenMP) and NVIDIA GTX 970 (OpenCL).\n");
+    let _ = writeln!(w, "| backend | scene | size | spp/s | M paths/s | thesis CPU spp/s | thesis GPU spp/s |");
+    let _ = writeln!(w, "| --- | --- | --- | ---: | ---: | ---: | ---: |");
+    for row in &r.throughput {
+        let t = thesis::figure(&row.scene, row.size.0, row.size.1);
+        let _ = writeln!(
+            w,
+            "| {} | {} | {}x{} | {:.2} | {:.2} | {} | {} |",
+            row.backend,
+            row.scene,
+            row.size.0,
+            row.size.1,
+            row.result.spp_per_sec,
+            row.result.paths_per_sec / 1e6,
+            t.map_or("-".into(), |t| format!("{:.2}", t.cpu_spp_per_sec)),
+            t.map_or("-".into(), |t| format!("{:.2}", t.gpu_spp_per_sec)),
+        );
+    }
+    let _ = writeln!(w);
+}
+
+fn trade(w: &mut String, r: &Results) {
+    let (tw, th) = r.trade_size;
+    let mut groups: Vec<(&str, &str)> = r.trade.iter().map(|c| (c.scene.as_str(), c.backend.as_str())).collect();
+    groups.dedup();
+    for (scene, backend) in groups {
+        let _ = writeln!(w, "## Speed/accuracy trade: `{scene}`, {tw}x{th}, {backend}\n");
+        if let Some((info, cached)) = r.references.iter().find(|(i, _)| i.scene == scene) {
+            let _ = writeln!(
+                w,
+                "Reference: unbounded, NEE, no clamp; {} spp in {} on {}, error estimate {}{}. Times are rendering time at {tw}x{th}; they scale with the pixel count. `~` marks a time extrapolated from the fit, `never` a bias floor above the level.\n",
+                info.spp,
+                secs(info.seconds),
+                info.backend,
+                pct(info.error_estimate),
+                if *cached { " (cached)" } else { "" }
+            );
+        }
+        let _ = writeln!(w, "| setting | M paths/s | to 10% | to 5% | to 2% | to 1% | bias floor | error x sqrt(s) |");
+        let _ = writeln!(w, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+        for c in r.trade.iter().filter(|c| c.scene == scene && c.backend == backend) {
+            let [a, b, cc, d] = reaches(c).map(reach);
+            let (bias, var) = c.fit.map_or(("?".into(), "?".into()), |f| (pct(f.bias), pct(f.variance_constant)));
+            let _ = writeln!(
+                w,
+                "| {} | {:.2} | {a} | {b} | {cc} | {d} | {bias} | {var} |",
+                c.setting.label,
+                c.paths_per_sec(r.trade_size) / 1e6
+            );
+        }
+        let _ = writeln!(w);
+    }
+}
+
+fn calibration(w: &mut String, r: &Results) {
+    if r.calibration.is_empty() {
+        return;
+    }
+    let _ = writeln!(w, "## Calibration of the error estimate\n");
+    let _ = writeln!(w, "Estimated / true relative RMS error of the unbiased setting, at every checkpoint with at least 8 spp and an error above twice the reference's.\n");
+    let _ = writeln!(w, "| backend | scene | checkpoints | median | min | max |");
+    let _ = writeln!(w, "| --- | --- | ---: | ---: | ---: | ---: |");
+    for row in &r.calibration {
+        match row.calibration {
+            Some(c) => {
+                let _ = writeln!(
+                    w,
+                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} |",
+                    row.backend, row.scene, c.points, c.median, c.min, c.max
+                );
+            }
+            None => {
+                let _ = writeln!(w, "| {} | {} | 0 | - | - | - |", row.backend, row.scene);
+            }
+        }
+    }
+    let _ = writeln!(w);
+}
+
+fn specialisation(w: &mut String, r: &Results) {
+    if r.specialisation.is_empty() {
+        return;
+    }
+    let _ = writeln!(w, "## OpenCL: scene-specialised vs generic program\n");
+    let _ = writeln!(w, "| device | scene | size | specialised M paths/s | generic M paths/s | ratio |");
+    let _ = writeln!(w, "| --- | --- | --- | ---: | ---: | ---: |");
+    for row in &r.specialisation {
+        let (s, g) = (row.specialised.paths_per_sec, row.generic.paths_per_sec);
+        let _ = writeln!(
+            w,
+            "| {} | {} | {}x{} | {:.2} | {:.2} | {:.2} |",
+            row.device,
+            row.scene,
+            row.size.0,
+            row.size.1,
+            s / 1e6,
+            g / 1e6,
+            if g > 0.0 { s / g } else { f64::NAN }
+        );
+    }
+    let _ = writeln!(w);
+}
+
+#[derive(Serialize)]
+struct ThroughputCsv<'a> {
+    backend: &'a str,
+    device: &'a str,
+    scene: &'a str,
+    width: u32,
+    height: u32,
+    spp: u64,
+    seconds: f64,
+    paths_per_sec: f64,
+    spp_per_sec: f64,
+    thesis_cpu_spp_per_sec: Option<f64>,
+    thesis_gpu_spp_per_sec: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct PointCsv<'a> {
+    backend: &'a str,
+    scene: &'a str,
+    setting: &'a str,
+    seconds: f64,
+    spp: u64,
+    true_error: f64,
+    estimate: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct TradeCsv<'a> {
+    backend: &'a str,
+    scene: &'a str,
+    setting: &'a str,
+    quality: String,
+    paths_per_sec: f64,
+    seconds_to_10pct: Option<f64>,
+    seconds_to_5pct: Option<f64>,
+    seconds_to_2pct: Option<f64>,
+    seconds_to_1pct: Option<f64>,
+    bias_floor: Option<f64>,
+    variance_constant: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct SpecialisationCsv<'a> {
+    device: &'a str,
+    scene: &'a str,
+    width: u32,
+    height: u32,
+    specialised_paths_per_sec: f64,
+    generic_paths_per_sec: f64,
+}
+
+fn write_rows<T: Serialize>(path: PathBuf, rows: impl IntoIterator<Item = T>) -> std::io::Result<PathBuf> {
+    let mut w = csv::Writer::from_path(&path)?;
+    for row in rows {
+        w.serialize(row)?;
+    }
+    w.flush()?;
+    Ok(path)
+}
+
+/// Writes the CSV files into `dir`; returns their paths.
+pub fn write_csv(r: &Results, dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    if !r.throughput.is_empty() {
+        files.push(write_rows(
+            dir.join("throughput.csv"),
+            r.throughput.iter().map(|t| {
+                let th = thesis::figure(&t.scene, t.size.0, t.size.1);
+                ThroughputCsv {
+                    backend: &t.backend,
+                    device: &t.device,
+                    scene: &t.scene,
+                    width: t.size.0,
+                    height: t.size.1,
+                    spp: t.result.spp,
+                    seconds: t.result.seconds,
+                    paths_per_sec: t.result.paths_per_sec,
+                    spp_per_sec: t.result.spp_per_sec,
+                    thesis_cpu_spp_per_sec: th.map(|f| f.cpu_spp_per_sec),
+                    thesis_gpu_spp_per_sec: th.map(|f| f.gpu_spp_per_sec),
+                }
+            }),
+        )?);
+    }
+    let curves = r.trade.iter();
+    let points = curves.clone().flat_map(|c| {
+        c.points.iter().map(move |p| PointCsv {
+            backend: &c.backend,
+            scene: &c.scene,
+            setting: &c.setting.label,
+            seconds: p.seconds,
+            spp: p.spp,
+            true_error: p.true_error,
+            estimate: p.estimate,
+        })
+    });
+    let calib_points = r.calibration.iter().flat_map(|c| {
+        c.points.iter().map(move |p| PointCsv {
+            backend: &c.backend,
+            scene: &c.scene,
+            setting: "unbiased (calibration)",
+            seconds: p.seconds,
+            spp: p.spp,
+            true_error: p.true_error,
+            estimate: p.estimate,
+        })
+    });
+    if !r.trade.is_empty() {
+        files.push(write_rows(dir.join("trade_points.csv"), points)?);
+        files.push(write_rows(
+            dir.join("trade.csv"),
+            curves.map(|c| {
+                let [a, b, cc, d] = reaches(c).map(|x| x.seconds());
+                TradeCsv {
+                    backend: &c.backend,
+                    scene: &c.scene,
+                    setting: &c.setting.label,
+                    quality: serde_json::to_string(&c.setting.quality).unwrap_or_default(),
+                    paths_per_sec: c.paths_per_sec(r.trade_size),
+                    seconds_to_10pct: a,
+                    seconds_to_5pct: b,
+                    seconds_to_2pct: cc,
+                    seconds_to_1pct: d,
+                    bias_floor: c.fit.map(|f| f.bias),
+                    variance_constant: c.fit.map(|f| f.variance_constant),
+                }
+            }),
+        )?);
+    }
+    if !r.calibration.is_empty() {
+        files.push(write_rows(dir.join("calibration_points.csv"), calib_points)?);
+    }
+    if !r.specialisation.is_empty() {
+        files.push(write_rows(
+            dir.join("specialisation.csv"),
+            r.specialisation.iter().map(|s| SpecialisationCsv {
+                device: &s.device,
+                scene: &s.scene,
+                width: s.size.0,
+                height: s.size.1,
+                specialised_paths_per_sec: s.specialised.paths_per_sec,
+                generic_paths_per_sec: s.generic.paths_per_sec,
+            }),
+        )?);
+    }
+    Ok(files)
+}

@@ -1,0 +1,105 @@
+//! Named quality presets: the path settings `pathstream bench` measured as
+//! the best trade for a purpose (docs/BENCHMARKS.md has the figures).
+//!
+//! A preset sets the path knobs (`max_depth`, `rr_depth`, `nee`, `filter`,
+//! `clamp`); it leaves the seed and the halt conditions alone. Settings given
+//! next to a preset override it: `--preset preview --max-depth 4`, or
+//! `{"preset": "preview", "max_depth": 4}` in the API.
+
+use crate::render::filter::Filter;
+use crate::render::quality::Quality;
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Preset {
+    /// Fastest usable picture: two bounces, clamped, for framing a shot.
+    Preview,
+    /// Moving the camera or the light: four bounces, mildly clamped.
+    Interactive,
+    /// A finished image: eight bounces, no clamp; bias below 1% on every
+    /// built-in scene.
+    Final,
+    /// Unbiased: unbounded paths (Russian roulette only), no clamp. What the
+    /// benchmark's reference images are rendered with.
+    Reference,
+}
+
+impl Preset {
+    pub const ALL: [Preset; 4] = [Preset::Preview, Preset::Interactive, Preset::Final, Preset::Reference];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Preview => "preview",
+            Preset::Interactive => "interactive",
+            Preset::Final => "final",
+            Preset::Reference => "reference",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Preset> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// One line on what the preset is for.
+    pub fn description(self) -> &'static str {
+        match self {
+            Preset::Preview => "framing a shot: 2 bounces, NEE, clamp 1 (biased: darker, no caustics)",
+            Preset::Interactive => "moving camera or light: 4 bounces, NEE, clamp 10 (bias of a few %)",
+            Preset::Final => "a finished image: 8 bounces, NEE, no clamp (bias well under 1%)",
+            Preset::Reference => "ground truth: unbounded paths, NEE, no clamp (unbiased)",
+        }
+    }
+
+    /// `quality` with this preset's path knobs.
+    pub fn apply(self, quality: Quality) -> Quality {
+        let (max_depth, clamp) = match self {
+            Preset::Preview => (2, 1.0),
+            Preset::Interactive => (4, 10.0),
+            Preset::Final => (8, 0.0),
+            Preset::Reference => (0, 0.0),
+        };
+        Quality {
+            max_depth,
+            rr_depth: Quality::default().rr_depth,
+            nee: true,
+            filter: Filter::Tent2x2,
+            clamp,
+            ..quality
+        }
+    }
+
+    /// Comma-separated names, for error messages.
+    pub fn names() -> String {
+        Self::ALL.map(Preset::name).join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_presets_are_valid() {
+        for p in Preset::ALL {
+            assert_eq!(Preset::from_name(p.name()), Some(p));
+            let json = serde_json::to_string(&p).expect("serialises");
+            assert_eq!(json, format!("\"{}\"", p.name()));
+            p.apply(Quality::default()).validate().expect("valid");
+        }
+        assert_eq!(Preset::from_name("fast"), None);
+    }
+
+    #[test]
+    fn a_preset_keeps_seed_and_halts() {
+        let q = Quality {
+            seed: 7,
+            spp: Some(3),
+            target_error: Some(0.1),
+            ..Quality::default()
+        };
+        let p = Preset::Reference.apply(q);
+        assert_eq!((p.seed, p.spp, p.target_error), (7, Some(3), Some(0.1)));
+        assert_eq!((p.max_depth, p.clamp, p.nee), (0, 0.0, true));
+    }
+}
