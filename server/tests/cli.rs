@@ -129,9 +129,17 @@ fn help_documents_every_render_flag() {
     let help = text(&out.stdout);
     for flag in [
         "--scene", "--width", "--height", "--spp", "--time-ms", "--target-error", "--max-depth", "--rr-depth",
-        "--nee", "--filter", "--clamp", "--seed", "--backend", "--exposure", "--out",
+        "--nee", "--filter", "--clamp", "--seed", "--backend", "--exposure", "--out", "--preset",
     ] {
         assert!(help.contains(flag), "{flag} missing from render --help");
+    }
+    let out = pathstream(&["bench", "--help"]);
+    let help = text(&out.stdout);
+    for flag in [
+        "--backend", "--device", "--sections", "--scenes", "--quick", "--out", "--cache", "--trade-size",
+        "--trade-seconds", "--throughput-seconds", "--reference-error", "--reference-seconds",
+    ] {
+        assert!(help.contains(flag), "{flag} missing from bench --help");
     }
 }
 
@@ -190,14 +198,15 @@ fn a_preset_sets_the_path_knobs_and_flags_override_it() {
     };
     for preset in Preset::ALL {
         let q = Preset::apply(preset, Quality::default());
-        let (depth, clamp) = (q.max_depth.to_string(), q.clamp.to_string());
-        let explicit = ["--spp", "3", "--max-depth", &depth, "--clamp", &clamp, "--nee", "on", "--filter", "tent2x2"];
+        let (depth, rr, clamp) = (q.max_depth.to_string(), q.rr_depth.to_string(), q.clamp.to_string());
+        let explicit =
+            ["--spp", "3", "--max-depth", &depth, "--rr-depth", &rr, "--clamp", &clamp, "--nee", "on", "--filter", "tent2x2"];
         let a = bytes("a.pfm", &["--spp", "3", "--preset", preset.name()]);
         assert_eq!(a, bytes("b.pfm", &explicit), "{} = its settings", preset.name());
     }
     // A flag beside the preset wins over it.
     let a = bytes("c.pfm", &["--spp", "3", "--preset", "reference", "--max-depth", "1"]);
-    assert_eq!(a, bytes("d.pfm", &["--spp", "3", "--max-depth", "1", "--clamp", "0"]));
+    assert_eq!(a, bytes("d.pfm", &["--spp", "3", "--max-depth", "1", "--rr-depth", "5", "--clamp", "0"]));
     let out = pathstream(&["render", "--scene", "cornell", "--preset", "fast", "--out", "x.png"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("preview, interactive, final, reference"), "{}", text(&out.stderr));

@@ -47,6 +47,17 @@ impl Fit {
     }
 }
 
+/// The bias floor where a run resolves it: `Ok(bias)` when it stands out of
+/// the noise left at the end of the run (`c / sqrt(t_end)`) and the
+/// reference's, combined in quadrature, by a factor of two; else
+/// `Err(bound)`: the bias is below what the run can tell from noise.
+pub fn resolved_bias(fit: &Fit, end_seconds: f64, reference_error: f64) -> Result<f64, f64> {
+    let noise = (fit.variance_constant * fit.variance_constant / end_seconds.max(1e-12)
+        + reference_error * reference_error)
+        .sqrt();
+    if fit.bias > 2.0 * noise { Ok(fit.bias) } else { Err(2.0 * noise) }
+}
+
 /// Points with fewer samples per pixel than this are left out of fits: the
 /// first passes carry start-up costs and too few samples for the model.
 pub const MIN_FIT_SPP: u64 = 4;
@@ -225,6 +236,15 @@ mod tests {
         assert!((c.median - 1.0).abs() < 1e-12 && (c.min - 1.0).abs() < 1e-12);
         assert_eq!(c.points, 19);
         assert_eq!(calibration(&synthetic(0.0, 0.05), 1.0, 8), None);
+    }
+
+    #[test]
+    fn bias_is_reported_only_where_the_run_resolves_it() {
+        let f = Fit { bias: 0.05, variance_constant: 0.03 };
+        assert_eq!(resolved_bias(&f, 9.0, 0.0), Ok(0.05));
+        let f = Fit { bias: 0.005, variance_constant: 0.03 };
+        let bound = resolved_bias(&f, 9.0, 0.0).expect_err("unresolved");
+        assert!((bound - 0.02).abs() < 1e-12);
     }
 
     #[test]

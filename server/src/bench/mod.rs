@@ -80,8 +80,8 @@ impl Config {
             trade_scenes: ["cornell", "cornell-glass", "smallpt"].map(String::from).to_vec(),
             trade_size: (64, 64),
             trade_seconds: 10.0,
-            reference_error: 0.005,
-            reference_seconds: 900.0,
+            reference_error: 0.0025,
+            reference_seconds: 1800.0,
             cache_dir: cache::default_dir(),
         }
     }

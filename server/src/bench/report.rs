@@ -89,10 +89,12 @@ fn trade(w: &mut String, r: &Results) {
     groups.dedup();
     for (scene, backend) in groups {
         let _ = writeln!(w, "## Speed/accuracy trade: `{scene}`, {tw}x{th}, {backend}\n");
-        if let Some((info, cached)) = r.references.iter().find(|(i, _)| i.scene == scene) {
+        let reference = r.references.iter().find(|(i, _)| i.scene == scene);
+        let reference_error = reference.map_or(0.0, |(i, _)| i.error_estimate);
+        if let Some((info, cached)) = reference {
             let _ = writeln!(
                 w,
-                "Reference: unbounded, NEE, no clamp; {} spp in {} on {}, error estimate {}{}. Times are rendering time at {tw}x{th}; they scale with the pixel count. `~` marks a time extrapolated from the fit, `never` a bias floor above the level.\n",
+                "Reference: unbounded, NEE, no clamp; {} spp in {} on {}, error estimate {}{}. Times are rendering time at {tw}x{th}; they scale with the pixel count. `~` marks a time extrapolated from the fit (err^2 = bias^2 + c^2/t), `never` a bias floor above the level; a bias floor `< x` is too small for this run to tell from noise.\n",
                 info.spp,
                 secs(info.seconds),
                 info.backend,
@@ -104,7 +106,14 @@ fn trade(w: &mut String, r: &Results) {
         let _ = writeln!(w, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
         for c in r.trade.iter().filter(|c| c.scene == scene && c.backend == backend) {
             let [a, b, cc, d] = reaches(c).map(reach);
-            let (bias, var) = c.fit.map_or(("?".into(), "?".into()), |f| (pct(f.bias), pct(f.variance_constant)));
+            let end = c.points.last().map_or(0.0, |p| p.seconds);
+            let (bias, var) = c.fit.map_or(("?".into(), "?".into()), |f| {
+                let bias = match fit::resolved_bias(&f, end, reference_error) {
+                    Ok(b) => pct(b),
+                    Err(bound) => format!("< {}", pct(bound)),
+                };
+                (bias, pct(f.variance_constant))
+            });
             let _ = writeln!(
                 w,
                 "| {} | {:.2} | {a} | {b} | {cc} | {d} | {bias} | {var} |",

@@ -61,10 +61,10 @@ pub struct BenchArgs {
     /// Seconds per throughput measurement [default: 3; 0.1 with --quick].
     #[arg(long, value_name = "S")]
     throughput_seconds: Option<f64>,
-    /// Render references until their estimated error is this low [default: 0.005; 0.03 with --quick]...
+    /// Render references until their estimated error is this low [default: 0.0025; 0.03 with --quick]...
     #[arg(long, value_name = "E")]
     reference_error: Option<f64>,
-    /// ...or for at most this many seconds [default: 900; 5 with --quick].
+    /// ...or for at most this many seconds [default: 1800; 5 with --quick].
     #[arg(long, value_name = "S")]
     reference_seconds: Option<f64>,
 }

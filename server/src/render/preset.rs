@@ -13,15 +13,17 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Preset {
-    /// Fastest usable picture: two bounces, clamped, for framing a shot.
+    /// Framing a shot: two bounces, Russian roulette from the first. Fastest;
+    /// biased dark where light needs more bounces (glass, caustics).
     Preview,
-    /// Moving the camera or the light: four bounces, mildly clamped.
+    /// Moving the camera or the light: four bounces, Russian roulette from
+    /// the first. A few per cent of bias on glass scenes.
     Interactive,
-    /// A finished image: eight bounces, no clamp; bias below 1% on every
-    /// built-in scene.
+    /// A finished image: unbounded paths (unbiased), Russian roulette from the
+    /// first bounce; reaches 1% error soonest of the settings measured.
     Final,
-    /// Unbiased: unbounded paths (Russian roulette only), no clamp. What the
-    /// benchmark's reference images are rendered with.
+    /// The benchmark's references: unbounded, Russian roulette from the
+    /// fifth bounce (the most conservative; unbiased).
     Reference,
 }
 
@@ -44,27 +46,27 @@ impl Preset {
     /// One line on what the preset is for.
     pub fn description(self) -> &'static str {
         match self {
-            Preset::Preview => "framing a shot: 2 bounces, NEE, clamp 1 (biased: darker, no caustics)",
-            Preset::Interactive => "moving camera or light: 4 bounces, NEE, clamp 10 (bias of a few %)",
-            Preset::Final => "a finished image: 8 bounces, NEE, no clamp (bias well under 1%)",
-            Preset::Reference => "ground truth: unbounded paths, NEE, no clamp (unbiased)",
+            Preset::Preview => "framing a shot: 2 bounces, RR from bounce 1, NEE (fastest; glass and caustics dark)",
+            Preset::Interactive => "moving camera or light: 4 bounces, RR from bounce 1, NEE (a few % bias on glass)",
+            Preset::Final => "a finished image: unbounded, RR from bounce 1, NEE (unbiased; soonest to 1%)",
+            Preset::Reference => "ground truth: unbounded, RR from bounce 5, NEE (unbiased, most conservative)",
         }
     }
 
     /// `quality` with this preset's path knobs.
     pub fn apply(self, quality: Quality) -> Quality {
-        let (max_depth, clamp) = match self {
-            Preset::Preview => (2, 1.0),
-            Preset::Interactive => (4, 10.0),
-            Preset::Final => (8, 0.0),
-            Preset::Reference => (0, 0.0),
+        let (max_depth, rr_depth) = match self {
+            Preset::Preview => (2, 1),
+            Preset::Interactive => (4, 1),
+            Preset::Final => (0, 1),
+            Preset::Reference => (0, 5),
         };
         Quality {
             max_depth,
-            rr_depth: Quality::default().rr_depth,
+            rr_depth,
             nee: true,
             filter: Filter::Tent2x2,
-            clamp,
+            clamp: 0.0,
             ..quality
         }
     }
