@@ -1,0 +1,263 @@
+//! The benchmark's order of work: open the backends, then throughput,
+//! references and traces, specialisation.
+
+use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
+use super::settings::{self, Setting};
+use super::{fit, measure, BenchError, CalibrationRow, Config, Observer, Results, SpecialisationRow, ThroughputRow, TradeCurve};
+use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
+use crate::render::{Backend, BackendChoice, Quality, RenderJob, Scene};
+
+fn load_scene(name: &str) -> Result<Scene, BenchError> {
+    Scene::load(name).map_err(|e| BenchError::Usage(format!("--scenes {name}: {e}")))
+}
+
+/// Opens the configured backends; an OpenCL one that cannot start is left
+/// out with a note when `optional_opencl`.
+fn open_backends(config: &Config, observer: &mut dyn Observer) -> Result<Vec<Backend>, BenchError> {
+    let mut out = Vec::new();
+    for &choice in &config.backends {
+        match Backend::choose(choice) {
+            Ok(b) => out.push(b),
+            Err(e) if config.optional_opencl && matches!(choice, BackendChoice::OpenCl { .. }) => {
+                observer.note(&format!("opencl left out: {e}"));
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+    if out.is_empty() {
+        return Err(BenchError::Usage("--backend: no backend could start".into()));
+    }
+    Ok(out)
+}
+
+/// Runs the benchmark.
+pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, BenchError> {
+    let load = |names: &[String]| -> Result<Scenes, BenchError> {
+        names.iter().map(|n| Ok((n.clone(), load_scene(n)?))).collect()
+    };
+    let throughput_scenes = load(&config.throughput_scenes)?;
+    let trade_scenes = load(&config.trade_scenes)?;
+    let mut backends = open_backends(config, observer)?;
+    let s = config.sections;
+    let settings: Vec<Setting> = if s.trade {
+        settings::trade_settings()
+    } else {
+        vec![Setting { label: "unbounded".into(), quality: settings::unbiased() }]
+    };
+    let opencl_count = backends.iter().filter(|b| matches!(b, Backend::OpenCl { .. })).count() as u64;
+    let (nb, nt, nr) = (backends.len() as u64, throughput_scenes.len() as u64, trade_scenes.len() as u64);
+    let traced = s.trade || s.calibration;
+    observer.begin(
+        u64::from(s.throughput) * nb * nt * config.throughput_sizes.len() as u64
+            + u64::from(traced) * nr * (1 + nb * settings.len() as u64)
+            + u64::from(s.specialisation) * opencl_count * nt * 2,
+    );
+
+    let mut results = Results {
+        machine: machine(),
+        date: humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string(),
+        renderer_version: RENDERER_VERSION.into(),
+        backends: backends.iter().map(|b| (b.name().to_owned(), b.device())).collect(),
+        trade_size: config.trade_size,
+        ..Results::default()
+    };
+    if s.throughput {
+        throughput(config, &mut backends, &throughput_scenes, observer, &mut results)?;
+    }
+    if traced {
+        trade(config, &mut backends, &trade_scenes, &settings, observer, &mut results)?;
+        if !s.trade {
+            results.trade.clear();
+        }
+        if !s.calibration {
+            results.calibration.clear();
+        }
+    }
+    if s.specialisation {
+        specialisation(config, &mut backends, &throughput_scenes, observer, &mut results)?;
+    }
+    Ok(results)
+}
+
+/// Scenes by name.
+type Scenes = Vec<(String, Scene)>;
+
+fn throughput(
+    config: &Config,
+    backends: &mut [Backend],
+    scenes: &Scenes,
+    observer: &mut dyn Observer,
+    results: &mut Results,
+) -> Result<(), BenchError> {
+    for backend in backends {
+        for (name, scene) in scenes {
+            for &size in &config.throughput_sizes {
+                observer.step(&format!("throughput {name} {}x{} on {}", size.0, size.1, backend.name()));
+                let result = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds)?;
+                results.throughput.push(ThroughputRow {
+                    backend: backend.name().into(),
+                    device: backend.device(),
+                    scene: name.clone(),
+                    size,
+                    result,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every setting's trace on every backend, against each scene's reference;
+/// the unbiased setting's traces also go to the calibration.
+fn trade(
+    config: &Config,
+    backends: &mut [Backend],
+    scenes: &Scenes,
+    settings: &[Setting],
+    observer: &mut dyn Observer,
+    results: &mut Results,
+) -> Result<(), BenchError> {
+    for (name, scene) in scenes {
+        observer.step(&format!("reference {name} {}x{}", config.trade_size.0, config.trade_size.1));
+        let reference = reference(config, &mut backends[0], name, scene, observer)?;
+        results.references.push((reference.info.clone(), reference.cached));
+        let reference_error = reference.info.error_estimate;
+        for backend in backends.iter_mut() {
+            for setting in settings {
+                observer.step(&format!("trade {name}: {} on {}", setting.label, backend.name()));
+                let points = measure::trace(
+                    backend,
+                    scene,
+                    config.trade_size,
+                    &setting.quality,
+                    (&reference.pixels, reference_error),
+                    config.trade_seconds,
+                )?;
+                if setting.quality == settings::unbiased() {
+                    results.calibration.push(CalibrationRow {
+                        backend: backend.name().into(),
+                        scene: name.clone(),
+                        calibration: fit::calibration(&points, reference_error, MIN_SPP_FOR_TARGET_ERROR),
+                        points: points.clone(),
+                    });
+                }
+                results.trade.push(TradeCurve {
+                    backend: backend.name().into(),
+                    scene: name.clone(),
+                    setting: setting.clone(),
+                    fit: fit::fit(&points),
+                    points,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Each OpenCL backend's throughput with the scene-specialised program and
+/// with the generic one, at the first throughput size.
+fn specialisation(
+    config: &Config,
+    backends: &mut [Backend],
+    scenes: &Scenes,
+    observer: &mut dyn Observer,
+    results: &mut Results,
+) -> Result<(), BenchError> {
+    let size = config.throughput_sizes[0];
+    for backend in backends {
+        if !matches!(backend, Backend::OpenCl { .. }) {
+            continue;
+        }
+        for (name, scene) in scenes {
+            let mut rates = Vec::with_capacity(2);
+            for generic in [false, true] {
+                let program = if generic { "generic" } else { "specialised" };
+                observer.step(&format!("specialisation {name}: {program} program"));
+                set_generic(backend, generic);
+                let rate = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds);
+                set_generic(backend, false);
+                rates.push(rate?);
+            }
+            results.specialisation.push(SpecialisationRow {
+                device: backend.device(),
+                scene: name.clone(),
+                size,
+                specialised: rates[0],
+                generic: rates[1],
+            });
+        }
+    }
+    Ok(())
+}
+
+fn set_generic(backend: &mut Backend, generic: bool) {
+    if let Backend::OpenCl { backend, .. } = backend {
+        backend.generic = generic;
+    }
+}
+
+/// The reference for `scene` at the trade size: from the cache, or rendered
+/// with the unbiased setting on `backend` and cached.
+fn reference(
+    config: &Config,
+    backend: &mut Backend,
+    name: &str,
+    scene: &Scene,
+    observer: &mut dyn Observer,
+) -> Result<Reference, BenchError> {
+    /// Seed of the references (the measured renders use another).
+    const REFERENCE_SEED: u64 = 0x0005_EED0_F2EF;
+    let quality = Quality { seed: REFERENCE_SEED, ..settings::unbiased() };
+    let stem = cache::stem(name, scene, config.trade_size, &quality);
+    if let Some(r) = cache::load(&config.cache_dir, &stem, config.reference_error, config.reference_seconds) {
+        observer.detail(&format!("cached: {stem}"));
+        return Ok(r);
+    }
+    let job = RenderJob::new(scene, config.trade_size.0, config.trade_size.1, &quality);
+    let (film, done) = measure::render_reference(backend, &job, config.reference_error, config.reference_seconds, |p| {
+        let e = p.error_estimate.map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0));
+        observer.detail(&format!("{} spp, error {e}", p.spp));
+    })?;
+    let reference = Reference {
+        info: ReferenceInfo {
+            scene: name.into(),
+            width: config.trade_size.0,
+            height: config.trade_size.1,
+            spp: done.spp,
+            seconds: done.elapsed.as_secs_f64(),
+            error_estimate: done.error_estimate.unwrap_or(f64::INFINITY),
+            backend: format!("{} ({})", backend.name(), backend.device()),
+            renderer_version: RENDERER_VERSION.into(),
+        },
+        pixels: film.mean(),
+        cached: false,
+    };
+    if reference.info.error_estimate > config.reference_error {
+        observer.note(&format!(
+            "reference {name}: error {:.2}% after {:.0} s, above the {:.2}% asked for (raise --reference-seconds)",
+            reference.info.error_estimate * 100.0,
+            reference.info.seconds,
+            config.reference_error * 100.0
+        ));
+    }
+    cache::store(&config.cache_dir, &stem, &reference).map_err(|source| BenchError::Cache {
+        path: config.cache_dir.clone(),
+        source,
+    })?;
+    Ok(reference)
+}
+
+/// CPU model and logical cores, from /proc/cpuinfo where there is one.
+fn machine() -> String {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_owned())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
+    format!("{model}, {cores} logical cores")
+}
