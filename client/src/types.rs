@@ -24,6 +24,9 @@ pub struct Quality {
 /// halt condition.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct QualityPatch {
+    /// A named preset (`GET /api/presets`), applied before the other fields.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_depth: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -170,6 +170,13 @@ fn commands_for_one_session_and_exit_codes() {
     let q: serde_json::Value = serde_json::from_slice(&quality.stdout).expect("status JSON");
     assert_eq!(q["quality"]["max_depth"], 3);
     assert_eq!(q["quality"]["nee"], false);
+    let preset = client(&server, &["quality", &id, "--preset", "reference", "--rr-depth", "2"]);
+    let q: serde_json::Value = serde_json::from_slice(&preset.stdout).expect("status JSON");
+    assert_eq!((q["quality"]["max_depth"].as_u64(), q["quality"]["nee"].as_bool()), (Some(0), Some(true)));
+    assert_eq!(q["quality"]["rr_depth"], 2, "a setting beside the preset wins");
+    let bad = client(&server, &["quality", &id, "--preset", "fast"]);
+    assert_eq!(bad.status.code(), Some(3));
+    assert!(text(&bad.stderr).contains("quality.preset"), "{}", text(&bad.stderr));
     let dir = tempfile::tempdir().expect("tempdir");
     let frame = dir.path().join("f.png");
     let run = client(&server, &["frame", &id, "--min-spp", "4", "-o", frame.to_str().expect("utf-8")]);

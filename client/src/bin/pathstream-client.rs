@@ -101,6 +101,10 @@ struct QualityArgs {
     /// Halt when the estimated relative error falls below this.
     #[arg(long)]
     target_error: Option<f64>,
+    /// Quality preset: preview, interactive, final or reference (the other
+    /// settings given override it).
+    #[arg(long, value_name = "NAME")]
+    preset: Option<String>,
     /// Most bounces per path; 0 = unbounded.
     #[arg(long)]
     max_depth: Option<u32>,
@@ -123,6 +127,7 @@ struct QualityArgs {
 impl QualityArgs {
     fn patch(&self) -> QualityPatch {
         QualityPatch {
+            preset: self.preset.clone(),
             max_depth: self.max_depth,
             rr_depth: self.rr_depth,
             nee: self.nee.map(|n| matches!(n, Switch::On)),
