@@ -152,6 +152,18 @@ pub fn time_to(points: &[TracePoint], fit: Option<&Fit>, target: f64) -> Reach {
     }
 }
 
+/// (seconds, estimate / true error) of the points [`calibration`] uses.
+pub fn calibration_points(
+    points: &[TracePoint],
+    reference_error: f64,
+    min_spp: u64,
+) -> impl Iterator<Item = (f64, f64)> + '_ {
+    points
+        .iter()
+        .filter(move |p| p.spp >= min_spp && p.true_error > 2.0 * reference_error && p.true_error > 0.0)
+        .filter_map(|p| p.estimate.filter(|e| e.is_finite()).map(|e| (p.seconds, e / p.true_error)))
+}
+
 /// How the film's error estimate compares with the true error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Calibration {
@@ -167,11 +179,8 @@ pub struct Calibration {
 /// enough samples for the estimate and an error well above the reference's
 /// noise (`reference_error`), where the true error is known well.
 pub fn calibration(points: &[TracePoint], reference_error: f64, min_spp: u64) -> Option<Calibration> {
-    let mut ratios: Vec<f64> = points
-        .iter()
-        .filter(|p| p.spp >= min_spp && p.true_error > 2.0 * reference_error && p.true_error > 0.0)
-        .filter_map(|p| p.estimate.filter(|e| e.is_finite()).map(|e| e / p.true_error))
-        .collect();
+    let mut ratios: Vec<f64> =
+        calibration_points(points, reference_error, min_spp).map(|(_, ratio)| ratio).collect();
     if ratios.is_empty() {
         return None;
     }

@@ -154,6 +154,8 @@ pub struct CalibrationRow {
     pub calibration: Option<Calibration>,
     /// The unbiased render's points (estimate and true error over time).
     pub points: Vec<TracePoint>,
+    /// The reference's own error estimate.
+    pub reference_error: f64,
 }
 
 /// Specialised vs generic OpenCL program on one scene.

@@ -3,7 +3,9 @@
 //! is drawn with an embedded DejaVu Sans (assets/, Bitstream Vera licence),
 //! so plotting needs no system fonts.
 
+use super::fit::calibration_points;
 use super::report::LEVELS;
+use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use super::{CalibrationRow, Results, TradeCurve};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -140,11 +142,11 @@ pub fn trade(path: &Path, title: &str, curves: &[&TradeCurve]) -> Result<(), Plo
 }
 
 /// Estimated / true error against rendering time, one line per scene and
-/// backend, with the ideal ratio 1 marked.
+/// backend (the points the calibration table uses), with the ideal ratio 1
+/// marked.
 pub fn calibration(path: &Path, rows: &[CalibrationRow]) -> Result<(), PlotError> {
-    let ratio = |p: &super::fit::TracePoint| p.estimate.map(|e| e / p.true_error).filter(|r| r.is_finite());
-    let shown = |p: &&super::fit::TracePoint| p.spp >= 8 && p.true_error > 0.0;
-    let x = log_range(rows.iter().flat_map(|r| r.points.iter().filter(shown).map(|p| p.seconds)));
+    let shown = |r: &CalibrationRow| calibration_points(&r.points, r.reference_error, MIN_SPP_FOR_TARGET_ERROR).collect::<Vec<_>>();
+    let x = log_range(rows.iter().flat_map(|r| shown(r).into_iter().map(|(t, _)| t)));
     png(path, |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         let mut chart = ChartBuilder::on(&root)
@@ -166,7 +168,7 @@ pub fn calibration(path: &Path, rows: &[CalibrationRow]) -> Result<(), PlotError
             .map_err(e)?;
         for (i, row) in rows.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
-            let line = row.points.iter().filter(shown).filter_map(|p| ratio(p).map(|r| (p.seconds, r.min(2.5))));
+            let line = shown(row).into_iter().map(|(t, r)| (t, r.min(2.5)));
             chart
                 .draw_series(LineSeries::new(line, colour.stroke_width(2)))
                 .map_err(e)?

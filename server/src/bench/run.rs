@@ -139,6 +139,7 @@ fn trade(
                         scene: name.clone(),
                         calibration: fit::calibration(&points, reference_error, MIN_SPP_FOR_TARGET_ERROR),
                         points: points.clone(),
+                        reference_error,
                     });
                 }
                 results.trade.push(TradeCurve {
