@@ -94,7 +94,7 @@ fn trade(w: &mut String, r: &Results) {
         if let Some((info, cached)) = reference {
             let _ = writeln!(
                 w,
-                "Reference: unbounded, NEE, no clamp; {} spp in {} on {}, error estimate {}{}. Times are rendering time at {tw}x{th}; they scale with the pixel count. `~` marks a time extrapolated from the fit (err^2 = bias^2 + c^2/t), `never` a bias floor above the level; a bias floor `< x` is too small for this run to tell from noise.\n",
+                "Reference: unbounded, NEE, no clamp; {} spp in {} on {}, error estimate {}{}. Times are rendering time at {tw}x{th}; they scale with the pixel count. `~` marks a time extrapolated from the fit (err^2 = bias^2 + c^2/t), `never` a bias floor above the level (`never?`: the fitted floor is above it but within the run's noise); a bias floor `< x` is too small for this run to tell from noise.\n",
                 info.spp,
                 secs(info.seconds),
                 info.backend,
@@ -105,8 +105,13 @@ fn trade(w: &mut String, r: &Results) {
         let _ = writeln!(w, "| setting | M paths/s | to 10% | to 5% | to 2% | to 1% | bias floor | error x sqrt(s) |");
         let _ = writeln!(w, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
         for c in r.trade.iter().filter(|c| c.scene == scene && c.backend == backend) {
-            let [a, b, cc, d] = reaches(c).map(reach);
             let end = c.points.last().map_or(0.0, |p| p.seconds);
+            // "never" stands only where the run resolves the bias floor.
+            let resolved = c.fit.is_some_and(|f| fit::resolved_bias(&f, end, reference_error).is_ok());
+            let [a, b, cc, d] = reaches(c).map(|r| match r {
+                Reach::Never if !resolved => "never?".to_owned(),
+                r => reach(r),
+            });
             let (bias, var) = c.fit.map_or(("?".into(), "?".into()), |f| {
                 let bias = match fit::resolved_bias(&f, end, reference_error) {
                     Ok(b) => pct(b),
