@@ -10,6 +10,7 @@
 
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
+use crate::render::isa::Isa;
 use crate::render::light;
 use crate::render::material::{scatter, Bsdf};
 use crate::render::math::{max_component, Vec3A};
@@ -34,15 +35,15 @@ pub struct PathSettings {
     pub clamp: f32,
 }
 
-/// Radiance arriving along `ray`.
-#[inline]
-pub fn radiance(world: &World, mut ray: Ray, settings: &PathSettings, sampler: &mut Sampler) -> Vec3A {
+/// Radiance arriving along `ray`; `isa` picks the intersection kernels.
+#[inline(always)]
+pub fn radiance<I: Isa>(isa: I, world: &World, mut ray: Ray, settings: &PathSettings, sampler: &mut Sampler) -> Vec3A {
     let mut l = Vec3A::ZERO;
     let mut beta = Vec3A::ONE;
     let mut specular = true;
     let mut from = Origin::NONE;
     let mut bounces = 0u32;
-    while let Some(hit) = world.intersect(&ray, from) {
+    while let Some(hit) = world.intersect(isa, &ray, from) {
         let m = world.material_of(hit.object);
         if m.emissive && (specular || !settings.nee) {
             l += beta * m.emission;
@@ -54,7 +55,7 @@ pub fn radiance(world: &World, mut ray: Ray, settings: &PathSettings, sampler: &
         let n = world.normal(hit.object, p);
         if settings.nee && m.bsdf == Bsdf::Diffuse {
             let nl = if ray.dir.dot(n) < 0.0 { n } else { -n };
-            let direct = light::direct(world, p, n, nl, hit.object, sampler);
+            let direct = light::direct(isa, world, p, n, nl, hit.object, sampler);
             l += beta * m.albedo * direct * FRAC_1_PI;
             if settings.max_depth != 0 && bounces + 1 >= settings.max_depth {
                 break; // the bounce's own hit would not count its emission
@@ -87,8 +88,10 @@ pub fn radiance(world: &World, mut ray: Ray, settings: &PathSettings, sampler: &
 }
 
 /// One camera path: sample `sample` of pixel (x, y).
-#[inline]
-pub fn sample_pixel(
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn sample_pixel<I: Isa>(
+    isa: I,
     world: &World,
     camera: &CameraRays,
     settings: &PathSettings,
@@ -102,5 +105,5 @@ pub fn sample_pixel(
     let (u1, u2) = sampler.next_2d();
     let (dx, dy) = filter.pixel_offset(sample, u1, u2);
     let ray = camera.ray(x as f32 + dx, y as f32 + dy);
-    radiance(world, ray, settings, &mut sampler)
+    radiance(isa, world, ray, settings, &mut sampler)
 }

@@ -4,6 +4,7 @@
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
 use crate::render::integrator::{self, PathSettings};
+use crate::render::isa::Isa;
 use crate::render::math::Vec3A;
 use crate::render::quality::Quality;
 use crate::render::scene::Scene;
@@ -63,9 +64,10 @@ impl RenderJob {
         self.camera.height
     }
 
-    /// Radiance of sample `sample` of pixel (x, y).
-    #[inline]
-    pub fn sample(&self, x: u32, y: u32, sample: u64) -> Vec3A {
-        integrator::sample_pixel(&self.world, &self.camera, &self.settings, self.filter, self.seed, (x, y), sample)
+    /// Radiance of sample `sample` of pixel (x, y), computed with `isa`'s
+    /// kernels (the same number whichever it is).
+    #[inline(always)]
+    pub fn sample<I: Isa>(&self, isa: I, x: u32, y: u32, sample: u64) -> Vec3A {
+        integrator::sample_pixel(isa, &self.world, &self.camera, &self.settings, self.filter, self.seed, (x, y), sample)
     }
 }

@@ -7,14 +7,14 @@
 pub use glam::{BVec4A, DVec3, Vec3A, Vec4};
 
 /// Largest of the three components.
-#[inline]
+#[inline(always)]
 pub fn max_component(v: Vec3A) -> f32 {
     v.x.max(v.y).max(v.z)
 }
 
 /// An orthonormal basis around unit `n` (Duff et al. 2017, branchless and
 /// continuous except at n.z = -0), returned as (tangent, bitangent).
-#[inline]
+#[inline(always)]
 pub fn basis(n: Vec3A) -> (Vec3A, Vec3A) {
     let sign = 1.0f32.copysign(n.z);
     let a = -1.0 / (sign + n.z);
@@ -29,7 +29,7 @@ pub fn basis(n: Vec3A) -> (Vec3A, Vec3A) {
 /// quarter turn is found from u, the rest is a degree-7/8 Taylor polynomial
 /// around pi/4 (error below 4e-7). Sampling directions needs no more, and the
 /// hot loop avoids a call that spills every vector register.
-#[inline]
+#[inline(always)]
 pub fn sincos_turns(u: f32) -> (f32, f32) {
     let x = u * 4.0;
     let quarter = x.floor();
@@ -49,7 +49,7 @@ pub fn sincos_turns(u: f32) -> (f32, f32) {
 }
 
 /// Whether every component is finite.
-#[inline]
+#[inline(always)]
 pub fn is_finite3(v: Vec3A) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
 }

@@ -1,9 +1,18 @@
 //! The rayon backend: rows in parallel, each pixel's samples in index order.
+//!
+//! A row is rendered by one function with the whole path loop inlined into
+//! it, compiled once for every CPU and once more for AVX2 and FMA; the
+//! latter is chosen at run time where the CPU has them. Both give the same
+//! image, bit for bit.
 
-use crate::render::film::Film;
+use crate::render::film::{Film, PixelSums};
+use crate::render::isa::{Isa, Portable};
 use crate::render::job::RenderJob;
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::Arc;
+#[cfg(target_arch = "x86_64")]
+use crate::render::isa::Avx2;
 
 #[derive(Debug, Default)]
 pub struct CpuBackend {
@@ -11,6 +20,8 @@ pub struct CpuBackend {
     fallback_reason: Option<String>,
     /// A pool of its own (the server's, at low priority); None: rayon's global pool.
     pool: Option<Arc<rayon::ThreadPool>>,
+    /// Never use the wide kernels, even where the CPU has them.
+    portable_only: bool,
 }
 
 impl CpuBackend {
@@ -18,7 +29,7 @@ impl CpuBackend {
     pub fn fallback(reason: String) -> Self {
         Self {
             fallback_reason: Some(reason),
-            pool: None,
+            ..Self::default()
         }
     }
 
@@ -34,9 +45,14 @@ impl CpuBackend {
             .map(Arc::new)
             .map_err(|e| tracing::warn!("no low-priority render pool ({e}); using the global one"))
             .ok();
+        Self { pool, ..Self::default() }
+    }
+
+    /// This backend without the wide kernels: the code every CPU runs.
+    pub fn portable_only(self) -> Self {
         Self {
-            fallback_reason: None,
-            pool,
+            portable_only: true,
+            ..self
         }
     }
 
@@ -59,6 +75,10 @@ impl CpuBackend {
     pub fn render_unless(&mut self, job: &RenderJob, film: &mut Film, count: u64, cancelled: &(dyn Fn() -> bool + Sync)) -> bool {
         let first = film.spp();
         let width = film.width() as usize;
+        #[cfg(target_arch = "x86_64")]
+        let wide = Avx2::detect().filter(|_| !self.portable_only);
+        #[cfg(not(target_arch = "x86_64"))]
+        let wide = None;
         let work = |film: &mut Film| -> Option<u64> {
             film.pixels_mut()
                 .par_chunks_mut(width)
@@ -67,15 +87,7 @@ impl CpuBackend {
                     if cancelled() {
                         return None;
                     }
-                    let mut rejected = 0u64;
-                    for (x, px) in row.iter_mut().enumerate() {
-                        for s in first..first + count {
-                            if !px.add(s, job.sample(x as u32, y as u32, s)) {
-                                rejected += 1;
-                            }
-                        }
-                    }
-                    Some(rejected)
+                    Some(render_row(wide, job, y as u32, row, first..first + count))
                 })
                 .sum()
         };
@@ -91,4 +103,43 @@ impl CpuBackend {
             None => false,
         }
     }
+}
+
+/// Adds samples `samples` to every pixel of row `y`; returns how many were
+/// rejected. Runs the wide code when `wide` is given.
+#[cfg(target_arch = "x86_64")]
+fn render_row(wide: Option<Avx2>, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
+    match wide {
+        // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
+        #[allow(unsafe_code)]
+        Some(isa) => unsafe { row_avx2(isa, job, y, row, samples) },
+        None => row_with(Portable, job, y, row, samples),
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn render_row(_: Option<Portable>, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
+    row_with(Portable, job, y, row, samples)
+}
+
+/// `row_with` compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn row_avx2(isa: Avx2, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
+    row_with(isa, job, y, row, samples)
+}
+
+/// The samples of one row, with the whole path loop inlined here so that it
+/// is compiled for the caller's instruction set.
+#[inline(always)]
+fn row_with<I: Isa>(isa: I, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
+    let mut rejected = 0u64;
+    for (x, px) in row.iter_mut().enumerate() {
+        for s in samples.clone() {
+            if !px.add(s, job.sample(isa, x as u32, y, s)) {
+                rejected += 1;
+            }
+        }
+    }
+    rejected
 }
