@@ -19,7 +19,9 @@ pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) 
     let (ox, oy, oz) = (splat(ray.origin.x), splat(ray.origin.y), splat(ray.origin.z));
     let (od, oo) = (splat(ray.od), splat(ray.oo));
     let from_id = splat(from.id);
-    let entering = if from.entering { _mm256_castsi256_ps(_mm256_set1_epi32(-1)) } else { zero };
+    // The sphere a ray leaves outwards is skipped altogether; NaN matches
+    // no lane.
+    let skip_id = splat(if from.entering { f32::NAN } else { from.id });
     let (mut best_t, mut best_id) = (inf, splat(-1.0));
     for batch in batches {
         let (cx, cy, cz, k, ids) = (
@@ -54,7 +56,7 @@ pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) 
         let t = _mm256_blendv_ps(t1, t0, near_ok);
         let hit = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(t, zero), _mm256_cmp_ps::<_CMP_GE_OQ>(disc, zero));
         let t = _mm256_blendv_ps(inf, t, hit);
-        let t = _mm256_blendv_ps(t, inf, _mm256_andnot_ps(entering, own));
+        let t = _mm256_blendv_ps(t, inf, _mm256_cmp_ps::<_CMP_EQ_OQ>(ids, skip_id));
         let closer = _mm256_cmp_ps::<_CMP_LT_OQ>(t, best_t);
         best_t = _mm256_blendv_ps(best_t, t, closer);
         best_id = _mm256_blendv_ps(best_id, ids, closer);
