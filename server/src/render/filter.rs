@@ -53,10 +53,15 @@ impl Filter {
 #[inline(always)]
 fn tent(u: f32) -> f32 {
     let r = 2.0 * u;
+    // sqrt(r) - 1 below r = 1, 1 - sqrt(2 - r) above (the same number as
+    // -(sqrt(2 - r) - 1)), with one square root and a select: which half
+    // a sample falls in is random, so a branch would be mispredicted half
+    // the time.
+    let d = r.min(2.0 - r).sqrt() - 1.0;
     if r < 1.0 {
-        r.sqrt() - 1.0
+        d
     } else {
-        1.0 - (2.0 - r).sqrt()
+        -d
     }
 }
 

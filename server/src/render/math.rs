@@ -39,13 +39,16 @@ pub fn sincos_turns(u: f32) -> (f32, f32) {
     let c = 1.0 + a2 * (-0.5 + a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0))));
     // sin and cos of (a + pi/4), the angle within the quarter turn.
     let (sin_q, cos_q) = ((s + c) * std::f32::consts::FRAC_1_SQRT_2, (c - s) * std::f32::consts::FRAC_1_SQRT_2);
-    let q = (quarter as i32) & 3;
-    let (sin, cos) = if q & 1 == 0 { (sin_q, cos_q) } else { (cos_q, -sin_q) };
-    if q >= 2 {
-        (-sin, -cos)
-    } else {
-        (sin, cos)
-    }
+    // The quarter turn by sign and swap, on the bits: the quadrant is random,
+    // so branches on it would be mispredicted half the time. Same values as
+    // (sin, cos) = odd ? (cos_q, -sin_q) : (sin_q, cos_q), negated if q >= 2.
+    let q = (quarter as i32 as u32) & 3;
+    let swap = 0u32.wrapping_sub(q & 1);
+    let neg = (q >> 1) << 31;
+    let (s_bits, c_bits) = (sin_q.to_bits(), cos_q.to_bits());
+    let sin = (c_bits & swap) | (s_bits & !swap);
+    let cos = ((s_bits ^ (1 << 31)) & swap) | (c_bits & !swap);
+    (f32::from_bits(sin ^ neg), f32::from_bits(cos ^ neg))
 }
 
 /// Whether every component is finite.

@@ -1,6 +1,9 @@
 //! The nearest sphere hit with all eight lanes of a [`SphereBatch`] at once
 //! (AVX2). The arithmetic is `SphereBatch::nearest`'s, operation for
-//! operation (no fused multiply-adds), so the two agree bit for bit.
+//! operation (no fused multiply-adds: they would lengthen the dependency
+//! chain, which is what limits this code), so the two agree bit for bit;
+//! only the selects that follow are arranged differently, with the same
+//! outcome, so that fewer of them wait on the division.
 
 use crate::render::ray::Ray;
 use crate::render::shape::sphere_batch::{Leaving, SphereBatch};
@@ -45,6 +48,14 @@ pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) 
         let b = _mm256_sub_ps(od, dc);
         let c = _mm256_sub_ps(_mm256_add_ps(oo, k), _mm256_mul_ps(oc, splat(2.0)));
         let disc = _mm256_sub_ps(_mm256_mul_ps(b, b), c);
+        // Lanes that can hit at all: real roots, not the sphere the ray
+        // leaves outwards. Known before the square root, off the critical
+        // path, like `own`.
+        let valid = _mm256_andnot_ps(
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(ids, skip_id),
+            _mm256_cmp_ps::<_CMP_GE_OQ>(disc, zero),
+        );
+        let near_valid = _mm256_andnot_ps(own, valid);
         let s = _mm256_sqrt_ps(_mm256_max_ps(disc, zero));
         // q = -(b + sign(b) s): the root pair q, c/q without cancellation.
         let s_signed = _mm256_or_ps(_mm256_and_ps(b, sign), _mm256_andnot_ps(sign, s));
@@ -52,13 +63,14 @@ pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) 
         let other = _mm256_div_ps(c, q);
         let t0 = _mm256_min_ps(q, other);
         let t1 = _mm256_max_ps(q, other);
-        let near_ok = _mm256_andnot_ps(own, _mm256_cmp_ps::<_CMP_GT_OQ>(t0, zero));
-        let t = _mm256_blendv_ps(t1, t0, near_ok);
-        let hit = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(t, zero), _mm256_cmp_ps::<_CMP_GE_OQ>(disc, zero));
-        let t = _mm256_blendv_ps(inf, t, hit);
-        let t = _mm256_blendv_ps(t, inf, _mm256_cmp_ps::<_CMP_EQ_OQ>(ids, skip_id));
+        // The near root if allowed and in front, else the far one if in
+        // front, else none: the portable test's selects, with both
+        // comparisons made at once.
+        let near = _mm256_and_ps(near_valid, _mm256_cmp_ps::<_CMP_GT_OQ>(t0, zero));
+        let far = _mm256_and_ps(valid, _mm256_cmp_ps::<_CMP_GT_OQ>(t1, zero));
+        let t = _mm256_blendv_ps(_mm256_blendv_ps(inf, t1, far), t0, near);
         let closer = _mm256_cmp_ps::<_CMP_LT_OQ>(t, best_t);
-        best_t = _mm256_blendv_ps(best_t, t, closer);
+        best_t = _mm256_min_ps(t, best_t);
         best_id = _mm256_blendv_ps(best_id, ids, closer);
     }
     let m = min_all(best_t);
