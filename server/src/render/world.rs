@@ -10,7 +10,7 @@ use crate::render::isa::Isa;
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
-use crate::render::scene::{Scene, Shape};
+use crate::render::scene::{Scene, Shape, MAX_OBJECTS};
 use crate::render::shape::{Leaving, Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
 
 /// An object's geometry; a closed set matched in one place (here).
@@ -113,7 +113,11 @@ impl World {
             entering: from.entering,
         };
         let (t, id) = isa.nearest_sphere(&self.sphere_batches, ray, leaving);
-        let mut best = Hit { t, object: id as u32 };
+        // id + 2^23 has the integer id in its low mantissa bits: no
+        // saturating float-to-int conversion on the way to the material.
+        const _: () = assert!(MAX_OBJECTS < 1 << 23);
+        let object = (id + 8_388_608.0).to_bits() & 0x7F_FFFF;
+        let mut best = Hit { t, object };
         for &(id, ref quad) in &self.quads {
             if id == from.object {
                 continue;

@@ -24,7 +24,8 @@ pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) 
     let from_id = splat(from.id);
     // The sphere a ray leaves outwards is skipped altogether; NaN matches
     // no lane.
-    let skip_id = splat(if from.entering { f32::NAN } else { from.id });
+    // (A select on the bits: `entering` is data, not worth a branch.)
+    let skip_id = splat(f32::from_bits(from.id.to_bits() | (u32::from(from.entering) * 0x7FC0_0000)));
     let (mut best_t, mut best_id) = (inf, splat(-1.0));
     for batch in batches {
         let (cx, cy, cz, k, ids) = (
