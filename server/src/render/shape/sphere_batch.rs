@@ -115,7 +115,7 @@ fn intersect4([cx, cy, cz, k]: [Vec4; 4], ray: &Ray, far_only: BVec4A) -> Vec4 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::render::math::{DVec3, Vec3A};
     use crate::render::sampler::Sampler;
