@@ -3,16 +3,16 @@
 //! A row is rendered by one function with the whole path loop inlined into
 //! it, compiled once for every CPU and once more for AVX2 and FMA; the
 //! latter is chosen at run time where the CPU has them. Both give the same
-//! image, bit for bit.
+//! image, bit for bit. Two samples of a pixel are traced side by side.
 
 use crate::render::film::{Film, PixelSums};
+#[cfg(target_arch = "x86_64")]
+use crate::render::isa::Avx2;
 use crate::render::isa::{Isa, Portable};
 use crate::render::job::RenderJob;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
-#[cfg(target_arch = "x86_64")]
-use crate::render::isa::Avx2;
 
 #[derive(Debug, Default)]
 pub struct CpuBackend {

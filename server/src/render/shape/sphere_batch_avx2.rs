@@ -10,8 +10,12 @@ use crate::render::shape::sphere_batch::{Leaving, SphereBatch};
 use std::arch::x86_64::*;
 
 /// Nearest sphere hit over `batches`: (distance, object index as f32),
-/// distance infinity when there is none. Only for CPUs with AVX2 and FMA
-/// (the render loop that calls it is compiled for them).
+/// distance infinity when there is none. The render loop that calls it is
+/// compiled for AVX2 and FMA too, so that it is inlined there.
+///
+/// # Safety
+///
+/// The CPU must have AVX2 and FMA (`isa::Avx2` is the proof).
 #[target_feature(enable = "avx2,fma")]
 #[inline]
 pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) {
