@@ -146,15 +146,11 @@ fn row_with<I: Isa>(isa: I, job: &RenderJob, y: u32, row: &mut [PixelSums], samp
             let mut a = job.camera_path(x, y, s);
             let mut b = if pair { job.camera_path(x, y, s + 1) } else { a };
             let (mut live_a, mut live_b) = (true, pair);
-            while live_a && live_b {
-                let hit_a = world.intersect(isa, &a.ray, a.from);
-                let hit_b = world.intersect(isa, &b.ray, b.from);
-                live_a = a.advance(isa, world, settings, hit_a);
-                live_b = b.advance(isa, world, settings, hit_b);
-            }
-            let (rest, live) = if live_a { (&mut a, true) } else { (&mut b, live_b) };
-            if live {
-                while rest.advance(isa, world, settings, world.intersect(isa, &rest.ray, rest.from)) {}
+            while live_a || live_b {
+                let hit_a = if live_a { world.intersect(isa, &a.ray, a.from) } else { None };
+                let hit_b = if live_b { world.intersect(isa, &b.ray, b.from) } else { None };
+                live_a = live_a && a.advance(isa, world, settings, hit_a);
+                live_b = live_b && b.advance(isa, world, settings, hit_b);
             }
             rejected += u64::from(!px.add(s, a.radiance(settings)));
             if pair {
