@@ -75,10 +75,7 @@ impl CpuBackend {
     pub fn render_unless(&mut self, job: &RenderJob, film: &mut Film, count: u64, cancelled: &(dyn Fn() -> bool + Sync)) -> bool {
         let first = film.spp();
         let width = film.width() as usize;
-        #[cfg(target_arch = "x86_64")]
-        let wide = Avx2::detect().filter(|_| !self.portable_only);
-        #[cfg(not(target_arch = "x86_64"))]
-        let wide = None;
+        let wide = if self.portable_only { None } else { wide_isa() };
         let work = |film: &mut Film| -> Option<u64> {
             film.pixels_mut()
                 .par_chunks_mut(width)
@@ -103,6 +100,17 @@ impl CpuBackend {
             None => false,
         }
     }
+}
+
+/// The wide kernels this CPU can run, if any.
+#[cfg(target_arch = "x86_64")]
+fn wide_isa() -> Option<Avx2> {
+    Avx2::detect()
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn wide_isa() -> Option<Portable> {
+    None
 }
 
 /// Adds samples `samples` to every pixel of row `y`; returns how many were
