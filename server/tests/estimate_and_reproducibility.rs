@@ -42,6 +42,21 @@ fn splitting_samples_into_passes_does_not_change_the_image() {
     assert_eq!(once.pixels(), passes.pixels());
 }
 
+#[test]
+fn the_wide_kernels_give_the_portable_image_bit_for_bit() {
+    use pathstream::render::backend::CpuBackend;
+    use pathstream::render::{Film, RenderJob};
+    for (name, max_depth, nee) in [("smallpt", 0, false), ("cornell-glass", 6, true), ("cornell", 6, true)] {
+        let s = scene(name);
+        let q = Quality { max_depth, nee, ..Quality::default() };
+        let job = RenderJob::new(&s, 32, 24, &q);
+        let (mut wide, mut portable) = (Film::new(32, 24), Film::new(32, 24));
+        CpuBackend::default().render(&job, &mut wide, 16);
+        CpuBackend::default().portable_only().render(&job, &mut portable, 16);
+        assert!(wide.pixels() == portable.pixels(), "{name}: the images differ");
+    }
+}
+
 /// Stated factor: averaged over four seeds, the estimate is within 25% of
 /// the true relative RMS error from 16 spp on (measured: 0.94 to 1.18).
 const ESTIMATE_FACTOR: f64 = 1.25;

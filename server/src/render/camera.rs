@@ -47,7 +47,7 @@ impl CameraRays {
     }
 
     /// The ray through raster position (`x`, `y`).
-    #[inline]
+    #[inline(always)]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let d = self.forward
             + self.right * (x * self.inv_width - 0.5)

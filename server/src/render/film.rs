@@ -27,7 +27,7 @@ pub struct PixelSums {
 impl PixelSums {
     /// Adds sample number `sample`; returns false (and adds nothing) when
     /// it is NaN or infinite.
-    #[inline]
+    #[inline(always)]
     pub fn add(&mut self, sample: u64, l: Vec3A) -> bool {
         if !is_finite3(l) {
             return false;

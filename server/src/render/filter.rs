@@ -36,7 +36,7 @@ impl Filter {
     /// `sample` given two uniform numbers. Samples 2k and 2k+1 share a
     /// sub-pixel so that the even and odd halves of the film (the error
     /// estimate) see the same sub-pixel pattern.
-    #[inline]
+    #[inline(always)]
     pub fn pixel_offset(self, sample: u64, u1: f32, u2: f32) -> (f32, f32) {
         match self {
             Filter::Box => (u1, u2),
@@ -50,13 +50,18 @@ impl Filter {
 }
 
 /// smallpt's tent: maps uniform [0, 1) to [-1, 1) with a triangular density.
-#[inline]
+#[inline(always)]
 fn tent(u: f32) -> f32 {
     let r = 2.0 * u;
+    // sqrt(r) - 1 below r = 1, 1 - sqrt(2 - r) above (the same number as
+    // -(sqrt(2 - r) - 1)), with one square root and a select: which half
+    // a sample falls in is random, so a branch would be mispredicted half
+    // the time.
+    let d = r.min(2.0 - r).sqrt() - 1.0;
     if r < 1.0 {
-        r.sqrt() - 1.0
+        d
     } else {
-        1.0 - (2.0 - r).sqrt()
+        -d
     }
 }
 

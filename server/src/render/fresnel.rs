@@ -10,7 +10,7 @@ pub struct Split {
 
 /// Refraction geometry shared by both models: cos of the transmitted angle,
 /// or None under total internal reflection. Light goes from index n1 to n2.
-#[inline]
+#[inline(always)]
 fn cos_transmitted(cos_i: f32, n1: f32, n2: f32) -> Option<f32> {
     // cos_t^2 = 1 - (n1/n2)^2 (1 - cos_i^2), arranged so that nearly
     // matched indices at grazing angles do not cancel catastrophically.
@@ -20,7 +20,7 @@ fn cos_transmitted(cos_i: f32, n1: f32, n2: f32) -> Option<f32> {
 
 /// Unpolarised Fresnel equations for light arriving at `cos_i` (> 0) in the
 /// medium of index n1 and meeting a medium of index n2.
-#[inline]
+#[inline(always)]
 pub fn exact(cos_i: f32, n1: f32, n2: f32) -> Split {
     let Some(cos_t) = cos_transmitted(cos_i, n1, n2) else {
         return Split {
@@ -41,7 +41,7 @@ pub fn exact(cos_i: f32, n1: f32, n2: f32) -> Split {
 /// Schlick's approximation, smallpt's convention: R0 = ((n1-n2)/(n1+n2))^2
 /// and the cosine is taken on the lower-index side (the incident angle when
 /// entering the denser medium, the transmitted angle when leaving it).
-#[inline]
+#[inline(always)]
 pub fn schlick(cos_i: f32, n1: f32, n2: f32) -> Split {
     let Some(cos_t) = cos_transmitted(cos_i, n1, n2) else {
         return Split {

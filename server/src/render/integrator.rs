@@ -10,12 +10,13 @@
 
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
+use crate::render::isa::Isa;
 use crate::render::light;
 use crate::render::material::{scatter, Bsdf};
 use crate::render::math::{max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::Sampler;
-use crate::render::world::{Origin, World};
+use crate::render::world::{Hit, Origin, World};
 use std::f32::consts::FRAC_1_PI;
 
 /// Largest Russian-roulette survival probability: even albedo-1 mirrors end
@@ -34,73 +35,109 @@ pub struct PathSettings {
     pub clamp: f32,
 }
 
-/// Radiance arriving along `ray`.
-#[inline]
-pub fn radiance(world: &World, mut ray: Ray, settings: &PathSettings, sampler: &mut Sampler) -> Vec3A {
-    let mut l = Vec3A::ZERO;
-    let mut beta = Vec3A::ONE;
-    let mut specular = true;
-    let mut from = Origin::NONE;
-    let mut bounces = 0u32;
-    while let Some(hit) = world.intersect(&ray, from) {
-        let m = world.material_of(hit.object);
-        if m.emissive && (specular || !settings.nee) {
-            l += beta * m.emission;
+/// A path between bounces: everything the path loop carries, so that the
+/// CPU backend can advance two side by side.
+#[derive(Clone, Copy, Debug)]
+pub struct Path {
+    /// The ray to trace next and the surface it leaves.
+    pub ray: Ray,
+    pub from: Origin,
+    sampler: Sampler,
+    l: Vec3A,
+    beta: Vec3A,
+    specular: bool,
+    bounces: u32,
+}
+
+impl Path {
+    /// A path starting with `ray` (which leaves no surface), drawing its
+    /// random numbers from `sampler`.
+    #[inline(always)]
+    pub fn new(ray: Ray, sampler: Sampler) -> Self {
+        Self {
+            ray,
+            from: Origin::NONE,
+            sampler,
+            l: Vec3A::ZERO,
+            beta: Vec3A::ONE,
+            specular: true,
+            bounces: 0,
         }
-        if settings.max_depth != 0 && bounces >= settings.max_depth {
-            break;
+    }
+
+    /// Continues the path at `hit`, the nearest hit along `self.ray`
+    /// (`world.intersect(isa, &self.ray, self.from)`); false once the path
+    /// has ended (it must not be advanced again then).
+    #[inline(always)]
+    pub fn advance<I: Isa>(&mut self, isa: I, world: &World, settings: &PathSettings, hit: Option<Hit>) -> bool {
+        let Some(hit) = hit else {
+            return false;
+        };
+        let ray = &self.ray;
+        let m = world.material_of(hit.object);
+        if m.emissive && (self.specular || !settings.nee) {
+            self.l += self.beta * m.emission;
+        }
+        if settings.max_depth != 0 && self.bounces >= settings.max_depth {
+            return false;
         }
         let p = ray.at(hit.t);
         let n = world.normal(hit.object, p);
         if settings.nee && m.bsdf == Bsdf::Diffuse {
             let nl = if ray.dir.dot(n) < 0.0 { n } else { -n };
-            let direct = light::direct(world, p, n, nl, hit.object, sampler);
-            l += beta * m.albedo * direct * FRAC_1_PI;
-            if settings.max_depth != 0 && bounces + 1 >= settings.max_depth {
-                break; // the bounce's own hit would not count its emission
+            let direct = light::direct(isa, world, p, n, nl, hit.object, &mut self.sampler);
+            self.l += self.beta * m.albedo * direct * FRAC_1_PI;
+            if settings.max_depth != 0 && self.bounces + 1 >= settings.max_depth {
+                return false; // the bounce's own hit would not count its emission
             }
         }
-        let s = scatter(m, ray.dir, n, sampler);
-        beta *= s.weight;
-        bounces += 1;
-        if bounces > settings.rr_depth || !(max_component(beta) > 0.0) {
-            let q = max_component(beta).min(MAX_SURVIVAL);
-            if !(sampler.next_f32() < q) {
-                break;
+        let s = scatter(m, ray.dir, n, &mut self.sampler);
+        self.beta *= s.weight;
+        self.bounces += 1;
+        if self.bounces > settings.rr_depth || !(max_component(self.beta) > 0.0) {
+            let q = max_component(self.beta).min(MAX_SURVIVAL);
+            if !(self.sampler.next_f32() < q) {
+                return false;
             }
-            beta /= q;
+            self.beta /= q;
         }
-        specular = s.specular;
-        from = Origin {
+        self.specular = s.specular;
+        self.from = Origin {
             object: hit.object,
             entering: s.dir.dot(n) < 0.0,
         };
-        ray = Ray::new(p, s.dir);
+        self.ray = Ray::new(p, s.dir);
+        true
     }
-    if settings.clamp > 0.0 {
-        let peak = max_component(l);
-        if peak > settings.clamp {
-            l *= settings.clamp / peak;
+
+    /// Runs the path to its end (`isa` picks the intersection kernels);
+    /// its radiance.
+    #[inline(always)]
+    pub fn trace<I: Isa>(mut self, isa: I, world: &World, settings: &PathSettings) -> Vec3A {
+        while self.advance(isa, world, settings, world.intersect(isa, &self.ray, self.from)) {}
+        self.radiance(settings)
+    }
+
+    /// The radiance the path has gathered, clamped as `settings` say.
+    #[inline(always)]
+    pub fn radiance(&self, settings: &PathSettings) -> Vec3A {
+        let mut l = self.l;
+        if settings.clamp > 0.0 {
+            let peak = max_component(l);
+            if peak > settings.clamp {
+                l *= settings.clamp / peak;
+            }
         }
+        l
     }
-    l
 }
 
-/// One camera path: sample `sample` of pixel (x, y).
-#[inline]
-pub fn sample_pixel(
-    world: &World,
-    camera: &CameraRays,
-    settings: &PathSettings,
-    filter: Filter,
-    seed: u64,
-    (x, y): (u32, u32),
-    sample: u64,
-) -> Vec3A {
+/// Sample `sample` of pixel (x, y): its camera ray, as a path about to start.
+#[inline(always)]
+pub fn camera_path(camera: &CameraRays, filter: Filter, seed: u64, (x, y): (u32, u32), sample: u64) -> Path {
     let pixel = u64::from(y) * u64::from(camera.width) + u64::from(x);
     let mut sampler = Sampler::new(seed, pixel, sample);
     let (u1, u2) = sampler.next_2d();
     let (dx, dy) = filter.pixel_offset(sample, u1, u2);
-    let ray = camera.ray(x as f32 + dx, y as f32 + dy);
-    radiance(world, ray, settings, &mut sampler)
+    Path::new(camera.ray(x as f32 + dx, y as f32 + dy), sampler)
 }

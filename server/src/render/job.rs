@@ -3,7 +3,8 @@
 
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
-use crate::render::integrator::{self, PathSettings};
+use crate::render::integrator::{self, Path, PathSettings};
+use crate::render::isa::Isa;
 use crate::render::math::Vec3A;
 use crate::render::quality::Quality;
 use crate::render::scene::Scene;
@@ -63,9 +64,16 @@ impl RenderJob {
         self.camera.height
     }
 
-    /// Radiance of sample `sample` of pixel (x, y).
-    #[inline]
-    pub fn sample(&self, x: u32, y: u32, sample: u64) -> Vec3A {
-        integrator::sample_pixel(&self.world, &self.camera, &self.settings, self.filter, self.seed, (x, y), sample)
+    /// Sample `sample` of pixel (x, y) as a path about to start.
+    #[inline(always)]
+    pub fn camera_path(&self, x: u32, y: u32, sample: u64) -> Path {
+        integrator::camera_path(&self.camera, self.filter, self.seed, (x, y), sample)
+    }
+
+    /// Radiance of sample `sample` of pixel (x, y), computed with `isa`'s
+    /// kernels (the same number whichever it is).
+    #[inline(always)]
+    pub fn sample<I: Isa>(&self, isa: I, x: u32, y: u32, sample: u64) -> Vec3A {
+        self.camera_path(x, y, sample).trace(isa, &self.world, &self.settings)
     }
 }

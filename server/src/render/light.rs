@@ -8,6 +8,7 @@
 //! light. Each emitter consumes exactly two sampler dimensions, whatever
 //! branch it takes, so the CPU and the kernel stay in step.
 
+use crate::render::isa::Isa;
 use crate::render::math::{basis, sincos_turns, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::Sampler;
@@ -17,8 +18,9 @@ use std::f32::consts::{PI, TAU};
 /// Sum over emitters of Le * V * cos(theta_s) / pdf(direction), for a
 /// shading point `p` on object `at` with outward normal `n`, facing `nl`.
 /// Multiply by the BRDF (albedo / pi for diffuse) to get reflected radiance.
-#[inline]
-pub fn direct(world: &World, p: Vec3A, n: Vec3A, nl: Vec3A, at: u32, sampler: &mut Sampler) -> Vec3A {
+/// `isa` picks the intersection kernels.
+#[inline(always)]
+pub fn direct<I: Isa>(isa: I, world: &World, p: Vec3A, n: Vec3A, nl: Vec3A, at: u32, sampler: &mut Sampler) -> Vec3A {
     let mut sum = Vec3A::ZERO;
     for &light in &world.lights {
         let (u1, u2) = sampler.next_2d();
@@ -33,7 +35,7 @@ pub fn direct(world: &World, p: Vec3A, n: Vec3A, nl: Vec3A, at: u32, sampler: &m
             object: at,
             entering: dir.dot(n) < 0.0,
         };
-        if let Some(hit) = world.intersect(&Ray::new(p, dir), from) {
+        if let Some(hit) = world.intersect(isa, &Ray::new(p, dir), from) {
             if hit.object == light {
                 sum += world.material_of(light).emission * (cos_s * weight);
             }
@@ -43,7 +45,7 @@ pub fn direct(world: &World, p: Vec3A, n: Vec3A, nl: Vec3A, at: u32, sampler: &m
 }
 
 /// A direction towards `light` and 1/pdf (solid angle) of choosing it.
-#[inline]
+#[inline(always)]
 fn sample_direction(
     world: &World,
     light: u32,

@@ -55,13 +55,13 @@ pub struct Scattered {
 }
 
 /// Mirror reflection of `d` about unit `n`.
-#[inline]
+#[inline(always)]
 pub fn reflect(d: Vec3A, n: Vec3A) -> Vec3A {
     d - n * (2.0 * d.dot(n))
 }
 
 /// Cosine-weighted direction about unit `n`.
-#[inline]
+#[inline(always)]
 pub fn cosine_hemisphere(n: Vec3A, u1: f32, u2: f32) -> Vec3A {
     let (sin, cos) = sincos_turns(u1);
     let r = u2.sqrt();
@@ -72,7 +72,7 @@ pub fn cosine_hemisphere(n: Vec3A, u1: f32, u2: f32) -> Vec3A {
 
 /// Samples the continuation of a ray travelling along unit `d` that hit a
 /// surface with outward unit normal `n`.
-#[inline]
+#[inline(always)]
 pub fn scatter(m: &SurfaceMaterial, d: Vec3A, n: Vec3A, sampler: &mut Sampler) -> Scattered {
     let entering = d.dot(n) < 0.0;
     let nl = if entering { n } else { -n };

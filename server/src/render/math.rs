@@ -7,14 +7,14 @@
 pub use glam::{BVec4A, DVec3, Vec3A, Vec4};
 
 /// Largest of the three components.
-#[inline]
+#[inline(always)]
 pub fn max_component(v: Vec3A) -> f32 {
     v.x.max(v.y).max(v.z)
 }
 
 /// An orthonormal basis around unit `n` (Duff et al. 2017, branchless and
 /// continuous except at n.z = -0), returned as (tangent, bitangent).
-#[inline]
+#[inline(always)]
 pub fn basis(n: Vec3A) -> (Vec3A, Vec3A) {
     let sign = 1.0f32.copysign(n.z);
     let a = -1.0 / (sign + n.z);
@@ -29,7 +29,7 @@ pub fn basis(n: Vec3A) -> (Vec3A, Vec3A) {
 /// quarter turn is found from u, the rest is a degree-7/8 Taylor polynomial
 /// around pi/4 (error below 4e-7). Sampling directions needs no more, and the
 /// hot loop avoids a call that spills every vector register.
-#[inline]
+#[inline(always)]
 pub fn sincos_turns(u: f32) -> (f32, f32) {
     let x = u * 4.0;
     let quarter = x.floor();
@@ -39,17 +39,20 @@ pub fn sincos_turns(u: f32) -> (f32, f32) {
     let c = 1.0 + a2 * (-0.5 + a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0))));
     // sin and cos of (a + pi/4), the angle within the quarter turn.
     let (sin_q, cos_q) = ((s + c) * std::f32::consts::FRAC_1_SQRT_2, (c - s) * std::f32::consts::FRAC_1_SQRT_2);
-    let q = (quarter as i32) & 3;
-    let (sin, cos) = if q & 1 == 0 { (sin_q, cos_q) } else { (cos_q, -sin_q) };
-    if q >= 2 {
-        (-sin, -cos)
-    } else {
-        (sin, cos)
-    }
+    // The quarter turn by sign and swap, on the bits: the quadrant is random,
+    // so branches on it would be mispredicted half the time. Same values as
+    // (sin, cos) = odd ? (cos_q, -sin_q) : (sin_q, cos_q), negated if q >= 2.
+    let q = (quarter as i32 as u32) & 3;
+    let swap = 0u32.wrapping_sub(q & 1);
+    let neg = (q >> 1) << 31;
+    let (s_bits, c_bits) = (sin_q.to_bits(), cos_q.to_bits());
+    let sin = (c_bits & swap) | (s_bits & !swap);
+    let cos = ((s_bits ^ (1 << 31)) & swap) | (c_bits & !swap);
+    (f32::from_bits(sin ^ neg), f32::from_bits(cos ^ neg))
 }
 
 /// Whether every component is finite.
-#[inline]
+#[inline(always)]
 pub fn is_finite3(v: Vec3A) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
 }

@@ -7,6 +7,7 @@
 //! - `material`, `fresnel`, `light`, `integrator`: the path tracer
 //! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
 //! - `quality`, `preset`, `job`, `progressive`, `backend`: what to render and where
+//! - `isa`: the instruction sets the CPU hot path is compiled for
 
 pub mod backend;
 pub mod camera;
@@ -14,6 +15,7 @@ pub mod film;
 pub mod filter;
 pub mod fresnel;
 pub mod integrator;
+pub mod isa;
 pub mod job;
 pub mod light;
 pub mod material;

@@ -15,7 +15,7 @@ pub struct Ray {
 }
 
 impl Ray {
-    #[inline]
+    #[inline(always)]
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
         Self {
             origin,
@@ -25,7 +25,7 @@ impl Ray {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn at(&self, t: f32) -> Vec3A {
         self.origin + self.dir * t
     }

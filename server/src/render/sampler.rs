@@ -14,7 +14,7 @@
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// SplitMix64's output function: a bijection on u64 with full avalanche.
-#[inline]
+#[inline(always)]
 pub fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -30,28 +30,28 @@ pub struct Sampler {
 
 impl Sampler {
     /// The stream of sample `sample` of pixel `pixel` under `seed`.
-    #[inline]
+    #[inline(always)]
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
         let key = mix64(mix64(mix64(seed ^ 0x5851_F42D_4C95_7F2D) ^ pixel) ^ sample);
         Self { key, dim: 0 }
     }
 
     /// The next dimension's number, uniform in [0, 1) with 24 bits.
-    #[inline]
+    #[inline(always)]
     pub fn next_f32(&mut self) -> f32 {
         (self.next_bits() >> 40) as f32 * (1.0 / 16_777_216.0)
     }
 
     /// Two numbers from one dimension's 64 bits (a 2-D sample): the top
     /// and the next 24 bits.
-    #[inline]
+    #[inline(always)]
     pub fn next_2d(&mut self) -> (f32, f32) {
         let bits = self.next_bits();
         const SCALE: f32 = 1.0 / 16_777_216.0;
         ((bits >> 40) as f32 * SCALE, ((bits >> 16) & 0xFF_FFFF) as f32 * SCALE)
     }
 
-    #[inline]
+    #[inline(always)]
     fn next_bits(&mut self) -> u64 {
         self.dim += 1;
         mix64(self.key.wrapping_add(self.dim.wrapping_mul(GOLDEN)))

@@ -6,11 +6,12 @@
 //! same f32 coordinates here as one at the origin (the subtraction is done in
 //! f64), so f32 only ever holds numbers of the scene's own size.
 
+use crate::render::isa::Isa;
 use crate::render::material::SurfaceMaterial;
-use crate::render::math::{BVec4A, DVec3, Vec3A, Vec4};
+use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
-use crate::render::scene::{Scene, Shape};
-use crate::render::shape::{Quad, Sphere, SphereBatch};
+use crate::render::scene::{Scene, Shape, MAX_OBJECTS};
+use crate::render::shape::{Leaving, Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
 
 /// An object's geometry; a closed set matched in one place (here).
 #[derive(Clone, Copy, Debug)]
@@ -57,11 +58,9 @@ pub struct World {
     pub materials: Vec<SurfaceMaterial>,
     /// Indices of emissive objects, in scene order.
     pub lights: Vec<u32>,
-    /// The spheres again, four to a batch, and the object index of each
-    /// lane as f32 (exact below 2^24; -1 for empty lanes), so that the
-    /// nearest hit is found with lane-wise selects instead of branches.
+    /// The spheres again, several to a batch with their object indices, so
+    /// that the nearest hit is found with lane-wise selects, not branches.
     sphere_batches: Vec<SphereBatch>,
-    sphere_ids: Vec<Vec4>,
     /// The quads again with their object indices.
     quads: Vec<(u32, Quad)>,
 }
@@ -87,57 +86,38 @@ impl World {
             })
             .collect::<Vec<_>>();
         let mut spheres = Vec::new();
-        let mut sphere_ids = Vec::new();
         let mut quads = Vec::new();
         for (i, o) in objects.iter().enumerate() {
             match o.geometry {
-                Geometry::Sphere(s) => {
-                    spheres.push(s);
-                    sphere_ids.push(i as u32);
-                }
+                Geometry::Sphere(s) => spheres.push((i as u32, s)),
                 Geometry::Quad(q) => quads.push((i as u32, q)),
             }
         }
-        let sphere_batches = spheres.chunks(4).map(SphereBatch::new).collect();
-        let sphere_ids = sphere_ids
-            .chunks(4)
-            .map(|ids| Vec4::from_array(std::array::from_fn(|i| ids.get(i).map_or(-1.0, |&id| id as f32))))
-            .collect();
+        let sphere_batches = spheres.chunks(SPHERE_BATCH_LANES).map(SphereBatch::new).collect();
         Self {
             origin,
             objects,
             sphere_batches,
-            sphere_ids,
             quads,
             materials: scene.materials.iter().map(SurfaceMaterial::new).collect(),
             lights: scene.emitters().map(|i| i as u32).collect(),
         }
     }
 
-    /// Nearest hit along `ray`, never the surface the ray starts on.
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, from: Origin) -> Option<Hit> {
-        let inf = Vec4::splat(f32::INFINITY);
-        let from_id = Vec4::splat(from.object as f32);
-        let (mut best_t, mut best_id) = (inf, Vec4::splat(-1.0));
-        let entering = if from.entering { BVec4A::TRUE } else { BVec4A::FALSE };
-        for (batch, &ids) in self.sphere_batches.iter().zip(&self.sphere_ids) {
-            // The sphere the ray starts on: only its far side, and only when
-            // the ray goes into it.
-            let own = ids.cmpeq(from_id);
-            let t = batch.intersect(ray, own);
-            let t = Vec4::select(own & !entering, inf, t);
-            let closer = t.cmplt(best_t);
-            best_t = Vec4::select(closer, t, best_t);
-            best_id = Vec4::select(closer, ids, best_id);
-        }
-        // Nearest lane without branches: the minimum, then its first lane.
-        let m = best_t.min_element();
-        let lane = best_t.cmpeq(Vec4::splat(m)).bitmask().trailing_zeros() as usize & 3;
-        let mut best = Hit {
-            t: m,
-            object: best_id.to_array()[lane] as u32,
+    /// Nearest hit along `ray`, never the surface the ray starts on; the
+    /// spheres are tested with `isa`'s kernel.
+    #[inline(always)]
+    pub fn intersect<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
+        let leaving = Leaving {
+            id: from.object as f32,
+            entering: from.entering,
         };
+        let (t, id) = isa.nearest_sphere(&self.sphere_batches, ray, leaving);
+        // id + 2^23 has the integer id in its low mantissa bits: no
+        // saturating float-to-int conversion on the way to the material.
+        const _: () = assert!(MAX_OBJECTS < 1 << 23);
+        let object = (id + 8_388_608.0).to_bits() & 0x7F_FFFF;
+        let mut best = Hit { t, object };
         for &(id, ref quad) in &self.quads {
             if id == from.object {
                 continue;
@@ -151,7 +131,7 @@ impl World {
     }
 
     /// Outward (spheres) or plane (quads) unit normal at `p` on `object`.
-    #[inline]
+    #[inline(always)]
     pub fn normal(&self, object: u32, p: Vec3A) -> Vec3A {
         match &self.objects[object as usize].geometry {
             Geometry::Sphere(s) => s.normal(p),
@@ -159,7 +139,7 @@ impl World {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn material_of(&self, object: u32) -> &SurfaceMaterial {
         &self.materials[self.objects[object as usize].material as usize]
     }

@@ -1,9 +1,14 @@
-//! Shapes in the hot path's form (camera-relative f32), one file each.
+//! Shapes in the hot path's form (camera-relative f32), one file each, and
+//! the sphere batches that test several spheres at once.
 
 mod quad;
 mod sphere;
 mod sphere_batch;
+#[cfg(target_arch = "x86_64")]
+mod sphere_batch_avx2;
 
 pub use quad::Quad;
 pub use sphere::{Roots, Sphere};
-pub use sphere_batch::SphereBatch;
+pub use sphere_batch::{Leaving, SphereBatch, LANES as SPHERE_BATCH_LANES};
+#[cfg(target_arch = "x86_64")]
+pub use sphere_batch_avx2::nearest as nearest_sphere_avx2;

@@ -31,7 +31,7 @@ impl Quad {
     }
 
     /// Distance along `ray` to the quad, or infinity.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> f32 {
         let to_corner = self.corner - ray.origin;
         let t = self.normal.dot(to_corner) / self.normal.dot(ray.dir);
@@ -49,7 +49,7 @@ impl Quad {
     }
 
     /// The point at parameters (a, b) in [0, 1]^2.
-    #[inline]
+    #[inline(always)]
     pub fn point(&self, a: f32, b: f32) -> Vec3A {
         self.corner + self.edge_u * a + self.edge_v * b
     }

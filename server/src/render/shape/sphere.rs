@@ -65,7 +65,7 @@ impl Sphere {
     }
 
     /// Outward unit normal at a point on the surface.
-    #[inline]
+    #[inline(always)]
     pub fn normal(&self, p: Vec3A) -> Vec3A {
         (p - self.center) * self.inv_radius
     }

@@ -1,0 +1,54 @@
+//! The instruction sets the CPU hot path is compiled for, as zero-sized
+//! tokens: the render loop is generic over one and inlined whole into a
+//! function compiled for it, so that the token's wide kernels and all the
+//! code around them use the same registers and instructions.
+//!
+//! [`Portable`] runs on every CPU (SSE2 on x86-64). [`Avx2`] can only be
+//! made by [`Avx2::detect`], on a CPU that has AVX2 and FMA; holding one is
+//! what makes calling its kernels sound.
+
+use crate::render::ray::Ray;
+use crate::render::shape::{Leaving, SphereBatch};
+
+/// The wide kernels of one instruction set.
+pub trait Isa: Copy + Send + Sync {
+    /// Nearest sphere hit over `batches`: (distance, object index as f32),
+    /// distance infinity when there is none. Same result on every `Isa`.
+    fn nearest_sphere(self, batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32);
+}
+
+/// Four-lane code that every CPU runs.
+#[derive(Clone, Copy, Debug)]
+pub struct Portable;
+
+impl Isa for Portable {
+    #[inline(always)]
+    fn nearest_sphere(self, batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) {
+        SphereBatch::nearest(batches, ray, from)
+    }
+}
+
+/// Eight-lane AVX2 code; proof that the CPU has AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub struct Avx2(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    /// The token, if this CPU has AVX2 and FMA.
+    pub fn detect() -> Option<Self> {
+        (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")).then_some(Self(()))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Isa for Avx2 {
+    #[inline(always)]
+    fn nearest_sphere(self, batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) {
+        // SAFETY: an `Avx2` exists only where `detect` found AVX2 and FMA.
+        #[allow(unsafe_code)]
+        unsafe {
+            crate::render::shape::nearest_sphere_avx2(batches, ray, from)
+        }
+    }
+}
