@@ -60,7 +60,7 @@ fn quick_bench_writes_tables_csv_and_plots_and_caches_references() {
     assert_eq!(throughput.len() - 1, 4, "2 scenes x 2 sizes");
     for name in ["trade-cornell-cpu.png", "calibration.png"] {
         let img = image::open(out_dir.path().join(name)).expect("a PNG");
-        assert_eq!((img.width(), img.height()), (1100, 720), "{name}");
+        assert_eq!((img.width(), img.height()), pathstream::bench::plot::SIZE, "{name}");
         let rgb = img.to_rgb8();
         assert!(rgb.pixels().any(|p| p.0 != [255, 255, 255]), "{name} is blank");
     }

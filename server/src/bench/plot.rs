@@ -12,9 +12,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-const SIZE: (u32, u32) = (1100, 720);
+/// Size of every plot, in pixels.
+pub const SIZE: (u32, u32) = (1200, 720);
 /// Width of the legend panel right of the chart.
-const LEGEND_WIDTH: u32 = 260;
+const LEGEND_WIDTH: u32 = 340;
 /// Line colours (Tableau 10, then darker ones); later lines reuse them.
 const COLOURS: [RGBColor; 18] = [
     RGBColor(31, 119, 180),

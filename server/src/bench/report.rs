@@ -167,7 +167,7 @@ fn specialisation(w: &mut String, r: &Results) {
         let _ = writeln!(
             w,
             "| {} | {} | {}x{} | {:.2} | {:.2} | {:.2} |",
-            row.device,
+            row.device.split(" (").next().unwrap_or(&row.device),
             row.scene,
             row.size.0,
             row.size.1,

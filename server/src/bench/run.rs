@@ -37,7 +37,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     };
     let throughput_scenes = load(&config.throughput_scenes)?;
     let trade_scenes = load(&config.trade_scenes)?;
-    let mut backends = open_backends(config, observer)?;
+    let backends = open_backends(config, observer)?;
     let s = config.sections;
     let settings: Vec<Setting> = if s.trade {
         settings::trade_settings()
@@ -53,7 +53,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
             + u64::from(s.specialisation) * opencl_count * nt * 2,
     );
 
-    let mut results = Results {
+    let results = Results {
         machine: machine(),
         date: humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string(),
         renderer_version: RENDERER_VERSION.into(),
@@ -61,134 +61,135 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         trade_size: config.trade_size,
         ..Results::default()
     };
+    let mut work = Work {
+        config,
+        backends,
+        observer,
+        results,
+    };
     if s.throughput {
-        throughput(config, &mut backends, &throughput_scenes, observer, &mut results)?;
+        work.throughput(&throughput_scenes)?;
     }
     if traced {
-        trade(config, &mut backends, &trade_scenes, &settings, observer, &mut results)?;
+        work.trade(&trade_scenes, &settings)?;
         if !s.trade {
-            results.trade.clear();
+            work.results.trade.clear();
         }
         if !s.calibration {
-            results.calibration.clear();
+            work.results.calibration.clear();
         }
     }
     if s.specialisation {
-        specialisation(config, &mut backends, &throughput_scenes, observer, &mut results)?;
+        work.specialisation(&throughput_scenes)?;
     }
-    Ok(results)
+    Ok(work.results)
 }
 
 /// Scenes by name.
 type Scenes = Vec<(String, Scene)>;
 
-fn throughput(
-    config: &Config,
-    backends: &mut [Backend],
-    scenes: &Scenes,
-    observer: &mut dyn Observer,
-    results: &mut Results,
-) -> Result<(), BenchError> {
-    for backend in backends {
+/// The open backends, and what has been measured on them so far.
+struct Work<'a> {
+    config: &'a Config,
+    backends: Vec<Backend>,
+    observer: &'a mut dyn Observer,
+    results: Results,
+}
+
+impl Work<'_> {
+    fn throughput(&mut self, scenes: &Scenes) -> Result<(), BenchError> {
+        let (config, observer, results) = (self.config, &mut *self.observer, &mut self.results);
+        for backend in &mut self.backends {
+            for (name, scene) in scenes {
+                for &size in &config.throughput_sizes {
+                    observer.step(&format!("throughput {name} {}x{} on {}", size.0, size.1, backend.name()));
+                    let result = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds)?;
+                    results.throughput.push(ThroughputRow {
+                        backend: backend.name().into(),
+                        device: backend.device(),
+                        scene: name.clone(),
+                        size,
+                        result,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every setting's trace on every backend, against each scene's reference;
+    /// the unbiased setting's traces also go to the calibration.
+    fn trade(&mut self, scenes: &Scenes, settings: &[Setting]) -> Result<(), BenchError> {
+        let (config, observer, results, backends) = (self.config, &mut *self.observer, &mut self.results, &mut self.backends);
         for (name, scene) in scenes {
-            for &size in &config.throughput_sizes {
-                observer.step(&format!("throughput {name} {}x{} on {}", size.0, size.1, backend.name()));
-                let result = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds)?;
-                results.throughput.push(ThroughputRow {
-                    backend: backend.name().into(),
+            observer.step(&format!("reference {name} {}x{}", config.trade_size.0, config.trade_size.1));
+            let reference = reference(config, &mut backends[0], name, scene, observer)?;
+            results.references.push((reference.info.clone(), reference.cached));
+            let reference_error = reference.info.error_estimate;
+            for backend in backends.iter_mut() {
+                for setting in settings {
+                    observer.step(&format!("trade {name}: {} on {}", setting.label, backend.name()));
+                    let points = measure::trace(
+                        backend,
+                        scene,
+                        config.trade_size,
+                        &setting.quality,
+                        (&reference.pixels, reference_error),
+                        config.trade_seconds,
+                    )?;
+                    if setting.quality == settings::unbiased() {
+                        results.calibration.push(CalibrationRow {
+                            backend: backend.name().into(),
+                            scene: name.clone(),
+                            calibration: fit::calibration(&points, reference_error, MIN_SPP_FOR_TARGET_ERROR),
+                            points: points.clone(),
+                            reference_error,
+                        });
+                    }
+                    results.trade.push(TradeCurve {
+                        backend: backend.name().into(),
+                        scene: name.clone(),
+                        setting: setting.clone(),
+                        fit: fit::fit(&points),
+                        points,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Each OpenCL backend's throughput with the scene-specialised program and
+    /// with the generic one, at the first throughput size.
+    fn specialisation(&mut self, scenes: &Scenes) -> Result<(), BenchError> {
+        let (config, observer, results) = (self.config, &mut *self.observer, &mut self.results);
+        let size = config.throughput_sizes[0];
+        for backend in &mut self.backends {
+            if !matches!(backend, Backend::OpenCl { .. }) {
+                continue;
+            }
+            for (name, scene) in scenes {
+                let mut rates = Vec::with_capacity(2);
+                for generic in [false, true] {
+                    let program = if generic { "generic" } else { "specialised" };
+                    observer.step(&format!("specialisation {name}: {program} program"));
+                    set_generic(backend, generic);
+                    let rate = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds);
+                    set_generic(backend, false);
+                    rates.push(rate?);
+                }
+                results.specialisation.push(SpecialisationRow {
                     device: backend.device(),
                     scene: name.clone(),
                     size,
-                    result,
+                    specialised: rates[0],
+                    generic: rates[1],
                 });
             }
         }
+        Ok(())
     }
-    Ok(())
-}
 
-/// Every setting's trace on every backend, against each scene's reference;
-/// the unbiased setting's traces also go to the calibration.
-fn trade(
-    config: &Config,
-    backends: &mut [Backend],
-    scenes: &Scenes,
-    settings: &[Setting],
-    observer: &mut dyn Observer,
-    results: &mut Results,
-) -> Result<(), BenchError> {
-    for (name, scene) in scenes {
-        observer.step(&format!("reference {name} {}x{}", config.trade_size.0, config.trade_size.1));
-        let reference = reference(config, &mut backends[0], name, scene, observer)?;
-        results.references.push((reference.info.clone(), reference.cached));
-        let reference_error = reference.info.error_estimate;
-        for backend in backends.iter_mut() {
-            for setting in settings {
-                observer.step(&format!("trade {name}: {} on {}", setting.label, backend.name()));
-                let points = measure::trace(
-                    backend,
-                    scene,
-                    config.trade_size,
-                    &setting.quality,
-                    (&reference.pixels, reference_error),
-                    config.trade_seconds,
-                )?;
-                if setting.quality == settings::unbiased() {
-                    results.calibration.push(CalibrationRow {
-                        backend: backend.name().into(),
-                        scene: name.clone(),
-                        calibration: fit::calibration(&points, reference_error, MIN_SPP_FOR_TARGET_ERROR),
-                        points: points.clone(),
-                        reference_error,
-                    });
-                }
-                results.trade.push(TradeCurve {
-                    backend: backend.name().into(),
-                    scene: name.clone(),
-                    setting: setting.clone(),
-                    fit: fit::fit(&points),
-                    points,
-                });
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Each OpenCL backend's throughput with the scene-specialised program and
-/// with the generic one, at the first throughput size.
-fn specialisation(
-    config: &Config,
-    backends: &mut [Backend],
-    scenes: &Scenes,
-    observer: &mut dyn Observer,
-    results: &mut Results,
-) -> Result<(), BenchError> {
-    let size = config.throughput_sizes[0];
-    for backend in backends {
-        if !matches!(backend, Backend::OpenCl { .. }) {
-            continue;
-        }
-        for (name, scene) in scenes {
-            let mut rates = Vec::with_capacity(2);
-            for generic in [false, true] {
-                let program = if generic { "generic" } else { "specialised" };
-                observer.step(&format!("specialisation {name}: {program} program"));
-                set_generic(backend, generic);
-                let rate = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds);
-                set_generic(backend, false);
-                rates.push(rate?);
-            }
-            results.specialisation.push(SpecialisationRow {
-                device: backend.device(),
-                scene: name.clone(),
-                size,
-                specialised: rates[0],
-                generic: rates[1],
-            });
-        }
-    }
-    Ok(())
 }
 
 fn set_generic(backend: &mut Backend, generic: bool) {

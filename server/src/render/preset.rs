@@ -20,7 +20,8 @@ pub enum Preset {
     /// the first. A few per cent of bias on glass scenes.
     Interactive,
     /// A finished image: unbounded paths (unbiased), Russian roulette from the
-    /// first bounce; reaches 1% error soonest of the settings measured.
+    /// first bounce; the first unbiased setting to reach 1% error on the
+    /// small-light scenes.
     Final,
     /// The benchmark's references: unbounded, Russian roulette from the
     /// fifth bounce (the most conservative; unbiased).
