@@ -77,7 +77,7 @@ impl Config {
             backends: vec![BackendChoice::Cpu, BackendChoice::OpenCl { device: None }],
             optional_opencl: true,
             sections: Sections::ALL,
-            throughput_scenes: ["cornell", "cornell-glass", "cornell-quads", "smallpt"].map(String::from).to_vec(),
+            throughput_scenes: ["cornell", "cornell-glass", "cornell-quads", "smallpt", "furnace"].map(String::from).to_vec(),
             throughput_sizes: vec![(512, 512), (1920, 1080)],
             throughput_seconds: 3.0,
             trade_scenes: ["cornell", "cornell-glass", "smallpt"].map(String::from).to_vec(),

@@ -38,7 +38,7 @@ pub struct BenchArgs {
     sections: Vec<SectionArg>,
     /// Scenes for every section, comma-separated (built-in names or JSON
     /// files) [default: throughput on cornell, cornell-glass, cornell-quads,
-    /// smallpt; trade on cornell, cornell-glass, smallpt].
+    /// smallpt, furnace; trade on cornell, cornell-glass, smallpt].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     scenes: Vec<String>,
     /// A small version that runs in seconds (small images, short runs,
