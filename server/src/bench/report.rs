@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 /// The error levels the trade tables give times for.
 pub const LEVELS: [f64; 4] = [0.10, 0.05, 0.02, 0.01];
 
-fn pct(e: f64) -> String {
+/// A relative error as a percentage, with as many decimals as it needs.
+pub fn pct(e: f64) -> String {
     match e {
         e if !e.is_finite() => "n/a".into(),
         e if e < 1e-4 => "< 0.01%".into(),

@@ -3,7 +3,7 @@
 
 use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
 use super::settings::{self, Setting};
-use super::{fit, measure, BenchError, CalibrationRow, Config, Observer, Results, SpecialisationRow, ThroughputRow, TradeCurve};
+use super::{fit, measure, report, BenchError, CalibrationRow, Config, Observer, Results, SpecialisationRow, ThroughputRow, TradeCurve};
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use crate::render::{Backend, BackendChoice, Quality, RenderJob, Scene};
 
@@ -123,7 +123,7 @@ impl Work<'_> {
         let (config, observer, results, backends) = (self.config, &mut *self.observer, &mut self.results, &mut self.backends);
         for (name, scene) in scenes {
             observer.step(&format!("reference {name} {}x{}", config.trade_size.0, config.trade_size.1));
-            let reference = reference(config, &mut backends[0], name, scene, observer)?;
+            let reference = reference(config, backends, name, scene, observer)?;
             results.references.push((reference.info.clone(), reference.cached));
             let reference_error = reference.info.error_estimate;
             for backend in backends.iter_mut() {
@@ -199,10 +199,10 @@ fn set_generic(backend: &mut Backend, generic: bool) {
 }
 
 /// The reference for `scene` at the trade size: from the cache, or rendered
-/// with the unbiased setting on `backend` and cached.
+/// with the unbiased setting on the fastest of `backends` and cached.
 fn reference(
     config: &Config,
-    backend: &mut Backend,
+    backends: &mut [Backend],
     name: &str,
     scene: &Scene,
     observer: &mut dyn Observer,
@@ -215,9 +215,10 @@ fn reference(
         observer.detail(&format!("cached: {stem}"));
         return Ok(r);
     }
+    let backend = fastest(backends, scene, config.trade_size, &quality, observer)?;
     let job = RenderJob::new(scene, config.trade_size.0, config.trade_size.1, &quality);
     let (film, done) = measure::render_reference(backend, &job, config.reference_error, config.reference_seconds, |p| {
-        let e = p.error_estimate.map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0));
+        let e = p.error_estimate.map_or_else(|| "n/a".into(), report::pct);
         observer.detail(&format!("{} spp, error {e}", p.spp));
     })?;
     let reference = Reference {
@@ -247,6 +248,31 @@ fn reference(
         source,
     })?;
     Ok(reference)
+}
+
+/// The backend that renders `quality` fastest (a short timed render on each
+/// when there are several): references take minutes on a CPU, seconds on a
+/// GPU, whatever order the backends were listed in.
+fn fastest<'a>(
+    backends: &'a mut [Backend],
+    scene: &Scene,
+    size: (u32, u32),
+    quality: &Quality,
+    observer: &mut dyn Observer,
+) -> Result<&'a mut Backend, BenchError> {
+    /// Seconds of each backend's trial render.
+    const TRIAL_SECONDS: f64 = 0.3;
+    let mut best = (0, 0.0);
+    if backends.len() > 1 {
+        for (i, backend) in backends.iter_mut().enumerate() {
+            observer.detail(&format!("timing {} for the reference", backend.name()));
+            let rate = measure::throughput(backend, scene, size, quality, TRIAL_SECONDS)?.paths_per_sec;
+            if rate > best.1 {
+                best = (i, rate);
+            }
+        }
+    }
+    Ok(&mut backends[best.0])
 }
 
 /// CPU model and logical cores, from /proc/cpuinfo where there is one.
