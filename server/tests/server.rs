@@ -210,7 +210,14 @@ async fn bad_input_gets_a_4xx_with_a_json_error_and_the_server_keeps_serving() {
     }
     assert!(errors[0].contains("invalid JSON"), "{errors:?}");
     assert!(errors[1].contains("unknown key 'zoom'"), "{errors:?}");
-    let st = status(&base, id).await;
+    // The socket applies messages in order, but the error replies can arrive
+    // before the third message is applied: wait for it (bounded).
+    let until = Instant::now() + Duration::from_secs(5);
+    let mut st = status(&base, id).await;
+    while st["camera"]["vfov_deg"] != 50.0 && Instant::now() < until {
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        st = status(&base, id).await;
+    }
     assert_eq!(st["camera"]["vfov_deg"], 50.0, "the valid message after the bad ones applied");
     // And the server still serves the session.
     assert_eq!(pfm(&base, id, 4).await.len(), 64);
