@@ -21,6 +21,7 @@ inline void camera_ray(__global const Params *P, float x, float y, float3 *origi
     float3 d = P->forward.xyz
         + P->right.xyz * (x * (1.0f / (float)P->width) - 0.5f)
         + P->up.xyz * (0.5f - y * (1.0f / (float)P->height));
-    *origin = d * P->forward.w;
+    /* near_clip along the ray itself (smallpt's camera), not to a plane. */
     *dir = normalize(d);
+    *origin = *dir * P->forward.w;
 }

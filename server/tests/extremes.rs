@@ -136,11 +136,13 @@ fn nested_and_touching_spheres() {
     for mut b in backends() {
         for depth in [2u32, 5] {
             let expected = 0.5 * (1.0 - 0.5f64.powi(depth as i32 + 1)) / 0.5;
-            let film = render_on(&mut b, &nested, 12, 12, &Quality { max_depth: depth, rr_depth: 1000, ..q(7) }, 8);
+            // Next-event estimation picks one of the two shells per
+            // shading point (by power), so a sample is no longer the closed
+            // form itself; its mean is.
+            let film = render_on(&mut b, &nested, 12, 12, &Quality { max_depth: depth, rr_depth: 1000, ..q(7) }, 128);
             assert_clean(&film, "nested");
-            for v in film.mean().into_iter().flatten() {
-                assert!((f64::from(v) - expected).abs() < 1e-4, "{}: nested shells depth {depth}: {v} vs {expected}", b.name());
-            }
+            assert_mean(&film, 4, expected, 4.5, 1e-6, &format!("{}: nested shells depth {depth}", b.name()));
+            assert_eq!(acne_pixels(&film), 0, "{}: nested shells: acne", b.name());
         }
         let film = render_on(&mut b, &glass, 16, 16, &Quality { max_depth: 0, rr_depth: 4, ..q(8) }, 256);
         assert_clean(&film, "glass in glass");

@@ -108,7 +108,7 @@ fn camera() {
 fn non_finite_numbers_built_in_code_are_rejected() {
     // JSON text cannot spell NaN; scenes built in code can.
     let mut raw = Scene::from_json_str(&valid().to_string()).expect("valid").to_json();
-    raw.camera.vfov_deg = f64::NAN;
+    raw.camera.as_mut().expect("camera").vfov_deg = f64::NAN;
     let err = Scene::from_json(&raw).expect_err("nan");
     assert_eq!(err.path, "camera.vfov_deg");
     assert!(err.reason.contains("finite"), "{err}");

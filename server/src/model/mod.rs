@@ -17,6 +17,8 @@
 
 use crate::render::scene::MaterialJson;
 
+pub mod generate;
+
 /// A model file, read.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Model {
@@ -100,3 +102,13 @@ pub enum Format {
     Glb,
     Ply,
 }
+
+/// Whether a file name has a model file's extension (`.obj`, `.gltf`,
+/// `.glb`, `.ply`, any case).
+pub fn is_model_name(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    [".obj", ".gltf", ".glb", ".ply"].iter().any(|e| lower.ends_with(e))
+}
+
+mod pending;
+pub use pending::{detect, load_bytes, load_file};

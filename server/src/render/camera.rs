@@ -3,9 +3,11 @@
 //!
 //! Raster (x right, y down, in pixels) maps to a direction
 //!     forward + right * (x/w - 1/2) + up * (1/2 - y/h)
-//! where |up| = 2 tan(vfov/2) and |right| = |up| * w/h; the ray starts at
-//! `near_clip` times that (unnormalised) direction, i.e. on the plane
-//! `near_clip` along the view axis. This is smallpt's camera exactly.
+//! where |up| = 2 tan(vfov/2) and |right| = |up| * w/h; the ray starts
+//! `near_clip` along itself (on a sphere around the camera, not a plane),
+//! as smallpt's camera does: it normalises the direction, then pushes the
+//! origin 140 units out along it. (A plane would start the top row of
+//! smallpt's image above its ceiling, seeing the light.)
 
 use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
@@ -49,10 +51,9 @@ impl CameraRays {
     /// The ray through raster position (`x`, `y`).
     #[inline(always)]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let d = self.forward
-            + self.right * (x * self.inv_width - 0.5)
-            + self.up * (0.5 - y * self.inv_height);
-        Ray::new(d * self.near_clip, d.normalize())
+        let d = (self.forward + self.right * (x * self.inv_width - 0.5) + self.up * (0.5 - y * self.inv_height))
+            .normalize();
+        Ray::new(d * self.near_clip, d)
     }
 }
 
@@ -81,7 +82,7 @@ mod tests {
     }
 
     #[test]
-    fn near_clip_starts_rays_on_the_plane() {
+    fn near_clip_starts_rays_that_far_along_themselves() {
         let cam = Camera {
             position: DVec3::ZERO,
             look_at: DVec3::new(0.0, 0.0, -1.0),
@@ -92,7 +93,8 @@ mod tests {
         let rays = CameraRays::new(&cam, 64, 64);
         for (x, y) in [(0.0, 0.0), (63.0, 10.0), (32.0, 32.0)] {
             let r = rays.ray(x, y);
-            assert!((r.origin.z + 140.0).abs() < 1e-3, "{:?}", r.origin);
+            assert!((r.origin.length() - 140.0).abs() < 1e-3, "{:?}", r.origin);
+            assert!((r.origin.normalize() - r.dir).length() < 1e-6);
         }
     }
 }

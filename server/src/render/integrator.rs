@@ -11,7 +11,7 @@
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
 use crate::render::isa::Isa;
-use crate::render::light;
+use crate::render::light::{self, LightSampling};
 use crate::render::material::{scatter, Bsdf};
 use crate::render::math::{max_component, Vec3A};
 use crate::render::ray::Ray;
@@ -33,6 +33,9 @@ pub struct PathSettings {
     pub nee: bool,
     /// Largest sample radiance (max component), 0 = off.
     pub clamp: f32,
+    /// How next-event estimation picks emitters (not a quality setting:
+    /// `Power` always, except where tests compare the two).
+    pub light_sampling: LightSampling,
 }
 
 /// A path between bounces: everything the path loop carries, so that the
@@ -71,28 +74,46 @@ impl Path {
     #[inline(always)]
     pub fn advance<I: Isa>(&mut self, isa: I, world: &World, settings: &PathSettings, hit: Option<Hit>) -> bool {
         let Some(hit) = hit else {
+            // Left the scene: the environment, counted as an emitter's hit.
+            if self.specular || !settings.nee {
+                self.l += self.beta * world.environment;
+            }
             return false;
         };
         let ray = &self.ray;
-        let m = world.material_of(hit.object);
+        let s = world.surface(&hit, ray);
+        let m = world.material(s.material);
         if m.emissive && (self.specular || !settings.nee) {
             self.l += self.beta * m.emission;
         }
         if settings.max_depth != 0 && self.bounces >= settings.max_depth {
             return false;
         }
-        let p = ray.at(hit.t);
-        let n = world.normal(hit.object, p);
+        // Geometric and shading normals on the side the ray came from.
+        let entering = ray.dir.dot(s.ng) < 0.0;
+        let nl = if entering { s.ng } else { -s.ng };
+        let ns = if !s.smooth {
+            nl
+        } else if s.ns.dot(nl) < 0.0 {
+            -s.ns
+        } else {
+            s.ns
+        };
         if settings.nee && m.bsdf == Bsdf::Diffuse {
-            let nl = if ray.dir.dot(n) < 0.0 { n } else { -n };
-            let direct = light::direct(isa, world, p, n, nl, hit.object, &mut self.sampler);
+            let direct = light::direct(isa, world, &s, nl, ns, settings.light_sampling, &mut self.sampler);
             self.l += self.beta * m.albedo * direct * FRAC_1_PI;
             if settings.max_depth != 0 && self.bounces + 1 >= settings.max_depth {
                 return false; // the bounce's own hit would not count its emission
             }
         }
-        let s = scatter(m, ray.dir, n, &mut self.sampler);
-        self.beta *= s.weight;
+        let sc = scatter(m, ray.dir, entering, ns, &mut self.sampler);
+        // A shading normal can send a direction to the wrong side of the
+        // actual surface: such a sample has no contribution (the same
+        // integral NEE estimates, so NEE on and off still agree).
+        if s.smooth && (sc.dir.dot(nl) > 0.0) == sc.transmitted {
+            return false;
+        }
+        self.beta *= sc.weight;
         self.bounces += 1;
         if self.bounces > settings.rr_depth || !(max_component(self.beta) > 0.0) {
             let q = max_component(self.beta).min(MAX_SURVIVAL);
@@ -101,12 +122,13 @@ impl Path {
             }
             self.beta /= q;
         }
-        self.specular = s.specular;
+        self.specular = sc.specular;
         self.from = Origin {
             object: hit.object,
-            entering: s.dir.dot(n) < 0.0,
+            prim: hit.prim,
+            entering: sc.dir.dot(s.ng) < 0.0,
         };
-        self.ray = Ray::new(p, s.dir);
+        self.ray = world.spawn(&s, sc.dir);
         true
     }
 

@@ -52,6 +52,8 @@ pub struct Scattered {
     pub weight: Vec3A,
     /// A delta lobe: next-event estimation cannot reach it.
     pub specular: bool,
+    /// Through the surface (refraction), not back off it.
+    pub transmitted: bool,
 }
 
 /// Mirror reflection of `d` about unit `n`.
@@ -71,11 +73,10 @@ pub fn cosine_hemisphere(n: Vec3A, u1: f32, u2: f32) -> Vec3A {
 }
 
 /// Samples the continuation of a ray travelling along unit `d` that hit a
-/// surface with outward unit normal `n`.
+/// surface from outside (`entering`, by the geometric normal) or inside;
+/// `nl` is the unit shading normal turned towards the side `d` came from.
 #[inline(always)]
-pub fn scatter(m: &SurfaceMaterial, d: Vec3A, n: Vec3A, sampler: &mut Sampler) -> Scattered {
-    let entering = d.dot(n) < 0.0;
-    let nl = if entering { n } else { -n };
+pub fn scatter(m: &SurfaceMaterial, d: Vec3A, entering: bool, nl: Vec3A, sampler: &mut Sampler) -> Scattered {
     match m.bsdf {
         Bsdf::Diffuse => {
             let (u1, u2) = sampler.next_2d();
@@ -83,22 +84,25 @@ pub fn scatter(m: &SurfaceMaterial, d: Vec3A, n: Vec3A, sampler: &mut Sampler) -
                 dir: cosine_hemisphere(nl, u1, u2),
                 weight: m.albedo,
                 specular: false,
+                transmitted: false,
             }
         }
         Bsdf::Mirror => Scattered {
             dir: reflect(d, nl),
             weight: m.albedo,
             specular: true,
+            transmitted: false,
         },
         Bsdf::Glass { ior, schlick } => {
             let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
-            let cos_i = (-d.dot(nl)).min(1.0);
+            let cos_i = (-d.dot(nl)).clamp(0.0, 1.0);
             let split = if schlick {
                 fresnel::schlick(cos_i, n1, n2)
             } else {
                 fresnel::exact(cos_i, n1, n2)
             };
-            let dir = if sampler.next_f32() < split.reflectance {
+            let reflected = sampler.next_f32() < split.reflectance;
+            let dir = if reflected {
                 reflect(d, nl)
             } else {
                 let eta = n1 / n2;
@@ -108,6 +112,7 @@ pub fn scatter(m: &SurfaceMaterial, d: Vec3A, n: Vec3A, sampler: &mut Sampler) -
                 dir,
                 weight: m.albedo,
                 specular: true,
+                transmitted: !reflected,
             }
         }
     }
@@ -150,7 +155,8 @@ mod tests {
         let n = Vec3A::Y;
         for i in 0..64 {
             let mut s = Sampler::new(0, i, 0);
-            let out = scatter(&m, d, n, &mut s);
+            let out = scatter(&m, d, true, n, &mut s);
+            assert_eq!(out.transmitted, out.dir.y < 0.0);
             if out.dir.y < 0.0 {
                 let sin_t = out.dir.x;
                 assert!((sin_t * 1.5 - 0.6).abs() < 1e-5, "Snell: {sin_t}");

@@ -4,7 +4,7 @@
 //! `DVec3` is for the validated scene (world space, f64); `Vec3A` is for the
 //! hot path (camera-relative f32, SIMD-aligned).
 
-pub use glam::{BVec4A, DVec3, Vec3A, Vec4};
+pub use glam::{Affine3A, BVec4A, DAffine3, DMat3, DVec3, Mat3A, Vec3, Vec3A, Vec4};
 
 /// Largest of the three components.
 #[inline(always)]
@@ -49,6 +49,13 @@ pub fn sincos_turns(u: f32) -> (f32, f32) {
     let sin = (c_bits & swap) | (s_bits & !swap);
     let cos = ((s_bits ^ (1 << 31)) & swap) | (c_bits & !swap);
     (f32::from_bits(sin ^ neg), f32::from_bits(cos ^ neg))
+}
+
+/// pbrt's bound on the relative error of n rounded operations:
+/// gamma(n) = n eps / (1 - n eps), eps = 2^-24.
+pub const fn gamma(n: u32) -> f32 {
+    let e = n as f32 * (f32::EPSILON * 0.5);
+    e / (1.0 - e)
 }
 
 /// Whether every component is finite.

@@ -2,7 +2,7 @@
 //! settings go in; a film that converges comes out.
 //!
 //! - `scene`: validated scene model, JSON, built-in scenes
-//! - `world`, `shape`, `ray`: the scene as the hot path sees it
+//! - `world`, `shape`, `bvh`, `ray`: the scene as the hot path sees it
 //! - `camera`, `filter`, `sampler`: where camera samples go and their randomness
 //! - `material`, `fresnel`, `light`, `integrator`: the path tracer
 //! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
@@ -10,6 +10,7 @@
 //! - `isa`: the instruction sets the CPU hot path is compiled for
 
 pub mod backend;
+pub mod bvh;
 pub mod camera;
 pub mod film;
 pub mod filter;

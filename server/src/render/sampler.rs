@@ -51,6 +51,13 @@ impl Sampler {
         ((bits >> 40) as f32 * SCALE, ((bits >> 16) & 0xFF_FFFF) as f32 * SCALE)
     }
 
+    /// The next dimension's full 64 bits (for choices among many, where
+    /// 24 bits would not resolve every option).
+    #[inline(always)]
+    pub fn next_u64(&mut self) -> u64 {
+        self.next_bits()
+    }
+
     #[inline(always)]
     fn next_bits(&mut self) -> u64 {
         self.dim += 1;

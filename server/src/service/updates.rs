@@ -12,7 +12,7 @@
 
 use super::error::{parse_json, ApiError};
 use crate::render::math::DVec3;
-use crate::render::scene::{builtin, Shape, BUILTIN_NAMES, MAX_COORDINATE, MAX_EMISSION};
+use crate::render::scene::{builtin, ImportKind, Shape, BUILTIN_NAMES, MAX_COORDINATE, MAX_EMISSION};
 use crate::render::{Preset, Quality, Scene};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -57,22 +57,15 @@ pub fn light_status(scene: &Scene) -> Option<LightStatus> {
     let color = if intensity > 0.0 { emission / intensity } else { DVec3::ZERO };
     Some(LightStatus {
         index,
-        position: center(object.shape).to_array(),
+        position: scene.object_center(index).to_array(),
         color: color.to_array(),
         intensity,
     })
 }
 
-fn center(shape: Shape) -> DVec3 {
-    match shape {
-        Shape::Sphere { center, .. } => center,
-        Shape::Quad { corner, edge_u, edge_v } => corner + (edge_u + edge_v) * 0.5,
-    }
-}
-
 pub fn apply_camera(scene: &Scene, patch: &CameraPatch) -> Result<Scene, ApiError> {
     let mut json = scene.to_json();
-    let c = &mut json.camera;
+    let c = json.camera.get_or_insert_with(|| scene.camera.to_json());
     if let Some(v) = patch.position {
         c.position = v;
     }
@@ -88,7 +81,7 @@ pub fn apply_camera(scene: &Scene, patch: &CameraPatch) -> Result<Scene, ApiErro
     if let Some(v) = patch.near_clip {
         c.near_clip = v;
     }
-    Scene::from_json(&json).map_err(|e| ApiError::BadRequest(e.to_string()))
+    scene.revalidate(&json).map_err(|e| ApiError::BadRequest(e.to_string()))
 }
 
 fn finite3(field: &str, v: [f64; 3], max: f64) -> Result<DVec3, ApiError> {
@@ -106,12 +99,8 @@ pub fn apply_light(scene: &Scene, patch: &LightPatch) -> Result<Scene, ApiError>
     let mut s = scene.clone();
     if let Some(p) = patch.position {
         let to = finite3("position", p, MAX_COORDINATE)?;
-        let object = &mut s.objects[index];
-        let by = to - center(object.shape);
-        object.shape = match object.shape {
-            Shape::Sphere { radius, .. } => Shape::Sphere { center: to, radius },
-            Shape::Quad { corner, edge_u, edge_v } => Shape::Quad { corner: corner + by, edge_u, edge_v },
-        };
+        let by = to - s.object_center(index);
+        s.move_object(index, by);
     }
     if patch.color.is_some() || patch.intensity.is_some() {
         let now = light_status(scene).ok_or_else(|| ApiError::Internal("light vanished".into()))?;
@@ -132,9 +121,22 @@ pub fn apply_light(scene: &Scene, patch: &LightPatch) -> Result<Scene, ApiError>
                 "light.intensity: must be between 0 and {MAX_EMISSION:e} (got {intensity})"
             )));
         }
-        // Give the light a material of its own if it shares one.
+        // Give the light a material of its own if it shares one (a mesh's
+        // come from its file: it gets one of the scene's instead).
         let m = s.objects[index].material;
-        if s.objects.iter().enumerate().any(|(i, o)| i != index && o.material == m) {
+        if let Shape::Import(k) = s.objects[index].shape {
+            if s.imports[k].kind == ImportKind::Model {
+                return Err(ApiError::BadRequest(
+                    "light: the light is a whole model file; recolour it in the file, or place it as a mesh".into(),
+                ));
+            }
+            let mut own = s.materials[m].clone();
+            own.name = unique_name(&s, "light");
+            own.imported = false;
+            s.imports[k].json.material = Some(own.name.clone());
+            s.materials.push(own);
+            s.objects[index].material = s.materials.len() - 1;
+        } else if s.objects.iter().enumerate().any(|(i, o)| i != index && o.material == m) {
             let mut own = s.materials[m].clone();
             own.name = unique_name(&s, &format!("{}-light", own.name));
             s.materials.push(own);
@@ -143,7 +145,7 @@ pub fn apply_light(scene: &Scene, patch: &LightPatch) -> Result<Scene, ApiError>
         let m = s.objects[index].material;
         s.materials[m].emission = color * intensity;
     }
-    Scene::from_json(&s.to_json()).map_err(|e| ApiError::BadRequest(e.to_string()))
+    s.revalidate(&s.to_json()).map_err(|e| ApiError::BadRequest(e.to_string()))
 }
 
 fn unique_name(s: &Scene, base: &str) -> String {

@@ -122,3 +122,26 @@ pub fn assert_clean(film: &Film, what: &str) {
     assert_eq!(film.rejected(), 0, "{what}: rejected samples");
     assert!(film.mean().iter().flatten().all(|v| v.is_finite()), "{what}: non-finite pixel");
 }
+
+/// A `mesh` object with inline data (normals kept only if `smooth`).
+pub fn mesh_object(m: &pathstream::model::MeshData, material: &str, transform: serde_json::Value, smooth: bool) -> serde_json::Value {
+    let mut data = serde_json::json!({
+        "positions": m.positions.iter().map(|p| p.map(f64::from)).collect::<Vec<_>>(),
+        "triangles": m.triangles,
+    });
+    if smooth {
+        if let Some(n) = &m.normals {
+            data["normals"] = serde_json::json!(n.iter().map(|p| p.map(f64::from)).collect::<Vec<_>>());
+        }
+    }
+    let mut o = serde_json::json!({"type": "mesh", "data": data, "material": material});
+    if !transform.is_null() {
+        o["transform"] = transform;
+    }
+    o
+}
+
+/// A built-in scene as JSON, to edit.
+pub fn scene_json(name: &str) -> serde_json::Value {
+    serde_json::to_value(scene(name).to_json()).expect("scene JSON")
+}

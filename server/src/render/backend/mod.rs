@@ -47,6 +47,14 @@ pub enum BackendError {
     OpenCl(#[from] OpenClError),
 }
 
+/// Says once per job that `auto` renders it with rayon, and why.
+fn log_scene_fallback(job: &RenderJob, why: &str) {
+    static LAST: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    if LAST.swap(job.id, std::sync::atomic::Ordering::Relaxed) != job.id {
+        tracing::info!(job = job.id, "OpenCL cannot render this scene ({why}); rendering it with rayon on the CPU");
+    }
+}
+
 /// A backend ready to render.
 #[derive(Debug)]
 pub enum Backend {
@@ -107,6 +115,7 @@ impl Backend {
             Backend::Cpu(_) => Ok(()),
             Backend::OpenCl { backend, fallback } => match backend.prepare_program(job) {
                 Ok(()) => Ok(()),
+                Err(OpenClError::Unsupported(_)) if *fallback => Ok(()),
                 Err(e) if *fallback => {
                     let why = format!("OpenCL failed on {}: {e}", backend.info().name.trim());
                     tracing::warn!("{why}; falling back to rayon on the CPU");
@@ -144,6 +153,12 @@ impl Backend {
             }
             Backend::OpenCl { backend, fallback } => match backend.render(job, film, count) {
                 Ok(()) => Ok(()),
+                Err(OpenClError::Unsupported(why)) if *fallback => {
+                    // This scene only: the device keeps serving the others.
+                    log_scene_fallback(job, &why);
+                    CpuBackend::fallback(why).render(job, film, count);
+                    Ok(())
+                }
                 Err(e) if *fallback => {
                     let why = format!("OpenCL failed on {}: {e}", backend.info().name.trim());
                     tracing::warn!("{why}; falling back to rayon on the CPU");

@@ -19,6 +19,21 @@
 //!   "light": 2
 //! }
 //! ```
+//!
+//! Meshes and whole model files (see `super::import`), a background:
+//!
+//! ```json
+//! {"objects": [
+//!    {"type": "mesh", "file": "bunny.ply", "material": "white",
+//!     "transform": {"translate": [0, 1, 0], "rotate": {"axis": [0, 1, 0], "deg": 30}, "scale": 10}},
+//!    {"type": "mesh", "asset": "3f2a...", "transform": {"matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}},
+//!    {"type": "mesh", "data": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]]}, "material": "lamp"},
+//!    {"type": "model", "file": "room.glb"}
+//!  ],
+//!  "environment": [0.2, 0.2, 0.25]}
+//! ```
+//! `camera` may be left out (the scene is then framed on its bounds, or a
+//! model's own camera is used), and so may `materials`.
 
 use super::SceneError;
 use serde::de::DeserializeOwned;
@@ -30,12 +45,17 @@ use std::collections::BTreeMap;
 /// full JSON path of any error, also inside tagged materials and objects.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct SceneJson {
-    pub camera: CameraJson,
+    /// None: framed automatically (or a model file's own camera).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraJson>,
     pub materials: BTreeMap<String, MaterialJson>,
     pub objects: Vec<ObjectJson>,
     /// Index of the object that the `light` API verb moves and recolours.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub light: Option<usize>,
+    /// Radiance of rays that leave the scene (default black).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment: Option<[f64; 3]>,
 }
 
 /// Pinhole camera.
@@ -103,6 +123,71 @@ pub struct GlassJson {
 pub enum ObjectJson {
     Sphere(SphereJson),
     Quad(QuadJson),
+    /// A triangle mesh from a file, an uploaded asset or inline data.
+    Mesh(ImportJson),
+    /// A whole model file: its meshes, materials, node hierarchy and camera.
+    Model(ImportJson),
+}
+
+/// A mesh or model: exactly one of `file`, `asset` and (meshes only) `data`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImportJson {
+    /// A path (relative to the scene file); read by `pathstream render`, never by the server.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// The id of an asset uploaded with `POST /api/assets`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub asset: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data: Option<MeshDataJson>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transform: Option<TransformJson>,
+    /// Meshes: one material for every triangle instead of the file's own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+}
+
+/// An inline indexed triangle mesh.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDataJson {
+    pub positions: Vec<[f64; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex shading normals.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normals: Option<Vec<[f64; 3]>>,
+}
+
+/// world_from_object: `matrix` (row-major 4x4, last row 0 0 0 1), or
+/// translate * rotate * scale, each optional.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TransformJson {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translate: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<RotateJson>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<ScaleJson>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<[[f64; 4]; 4]>,
+}
+
+/// A rotation by `deg` degrees about `axis` (right-handed).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RotateJson {
+    pub axis: [f64; 3],
+    pub deg: f64,
+}
+
+/// A uniform scale factor or one per axis.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum ScaleJson {
+    Uniform(f64),
+    PerAxis([f64; 3]),
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -131,11 +216,15 @@ impl SceneJson {
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
         struct Shell {
-            camera: CameraJson,
+            #[serde(default)]
+            camera: Option<CameraJson>,
+            #[serde(default)]
             materials: BTreeMap<String, Value>,
             objects: Vec<Value>,
             #[serde(default)]
             light: Option<usize>,
+            #[serde(default)]
+            environment: Option<[f64; 3]>,
         }
         let shell: Shell = at("", value)?;
         let materials = shell
@@ -157,9 +246,11 @@ impl SceneJson {
             .enumerate()
             .map(|(i, v)| {
                 let path = format!("objects[{i}]");
-                Ok(match tagged(&path, v, &["sphere", "quad"])? {
+                Ok(match tagged(&path, v, &["sphere", "quad", "mesh", "model"])? {
                     ("sphere", rest) => ObjectJson::Sphere(at(&path, rest)?),
-                    (_, rest) => ObjectJson::Quad(at(&path, rest)?),
+                    ("quad", rest) => ObjectJson::Quad(at(&path, rest)?),
+                    ("mesh", rest) => ObjectJson::Mesh(at(&path, rest)?),
+                    (_, rest) => ObjectJson::Model(at(&path, rest)?),
                 })
             })
             .collect::<Result<_, SceneError>>()?;
@@ -168,6 +259,7 @@ impl SceneJson {
             materials,
             objects,
             light: shell.light,
+            environment: shell.environment,
         })
     }
 }

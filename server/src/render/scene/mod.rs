@@ -1,23 +1,31 @@
 //! The validated scene model. Everything the renderer sees has been through
 //! [`Scene::from_json_str`] or [`Scene::from_json`]: finite numbers, known
-//! material names, positive radii, non-degenerate quads, a usable camera.
+//! material names, positive radii, non-degenerate quads, a usable camera,
+//! meshes whose files loaded (see `import`).
 //! World coordinates stay in f64 here; the hot path gets camera-relative f32
 //! (see `render::world`).
 
 mod builtin;
+mod frame;
+mod import;
 mod json;
+mod placement;
+mod resolve;
 mod transform;
 mod validate;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
+pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
-    CameraJson, FresnelJson, GlassJson, MaterialJson, ObjectJson, QuadJson, SceneJson, SphereJson, SurfaceJson,
+    CameraJson, FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson, QuadJson, RotateJson,
+    ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
 };
+pub use resolve::{FileResolver, LoadedModel, ModelSource, NoFiles, Resolver};
 
 use crate::render::math::DVec3;
 
-/// Most objects a scene may hold (intersection is a linear scan).
-pub const MAX_OBJECTS: usize = 4096;
+/// Most objects a scene's JSON may list (a model file counts as one).
+pub const MAX_OBJECTS: usize = 1 << 20;
 /// Largest coordinate or radius magnitude accepted (f32 keeps |c|^2 finite).
 pub const MAX_COORDINATE: f64 = 1e15;
 /// Largest emission component accepted.
@@ -78,6 +86,9 @@ pub struct Material {
     pub albedo: DVec3,
     /// Emitted radiance, from both sides of the surface.
     pub emission: DVec3,
+    /// Came from a model file (named `file/material`); not written back
+    /// to scene JSON, where the file brings it again.
+    pub imported: bool,
 }
 
 impl Material {
@@ -99,9 +110,12 @@ pub enum Shape {
         edge_u: DVec3,
         edge_v: DVec3,
     },
+    /// A mesh or model placed in the scene: `Scene::imports[i]`.
+    Import(usize),
 }
 
-/// A shape and the index of its material.
+/// A shape and the index of its material (for an import: its `material`
+/// override, else the material of its first triangle).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Object {
     pub shape: Shape,
@@ -116,15 +130,25 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The object the `light` verb acts on, if the scene has one.
     pub light: Option<usize>,
+    /// Radiance of rays that leave the scene.
+    pub environment: DVec3,
+    /// The meshes and models that `Shape::Import` objects place.
+    pub imports: Vec<Import>,
+    /// What the scene's files hold that is not rendered, and what was
+    /// chosen for the user (a framed camera, a default environment).
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
-    /// Parses and validates scene JSON. Errors name the JSON path.
+    /// Parses and validates scene JSON. Errors name the JSON path. Meshes
+    /// may only be inline data (see [`Scene::from_json_with`]).
     pub fn from_json_str(text: &str) -> Result<Scene, SceneError> {
+        Self::from_json_value(Self::parse_value(text)?)
+    }
+
+    fn parse_value(text: &str) -> Result<serde_json::Value, SceneError> {
         let de = &mut serde_json::Deserializer::from_str(text);
-        let value: serde_json::Value = serde_path_to_error::deserialize(de)
-            .map_err(|e| SceneError::new(e.path().to_string(), e.into_inner().to_string()))?;
-        Self::from_json_value(value)
+        serde_path_to_error::deserialize(de).map_err(|e| SceneError::new(e.path().to_string(), e.into_inner().to_string()))
     }
 
     /// Validates already parsed JSON (e.g. the `scene` field of a request).
@@ -132,12 +156,27 @@ impl Scene {
         Self::from_json(&SceneJson::from_value(value)?)
     }
 
-    /// Validates an already parsed scene.
+    /// Validates an already parsed scene; mesh files and assets are not
+    /// read ([`NoFiles`]).
     pub fn from_json(raw: &SceneJson) -> Result<Scene, SceneError> {
-        validate::scene(raw)
+        Self::from_json_with(raw, &NoFiles)
     }
 
-    /// A scene given by built-in name or as a path to a JSON file.
+    /// Validates a scene whose meshes and models `resolver` reads.
+    pub fn from_json_with(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene, SceneError> {
+        validate::scene(raw, resolver)
+    }
+
+    /// Validates an edited form of this scene: its meshes and models are
+    /// taken from this scene where the edit still refers to them (nothing
+    /// is read or rebuilt), else as `from_json` would.
+    pub fn revalidate(&self, raw: &SceneJson) -> Result<Scene, SceneError> {
+        Self::from_json_with(raw, &resolve::Reuse::new(self, &NoFiles))
+    }
+
+    /// A scene given by built-in name, as a scene JSON file, or as a model
+    /// file (`.obj`, `.gltf`, `.glb`, `.ply`) framed and lit by default.
+    /// Files that a scene refers to are read relative to its directory.
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
         if let Some(scene) = builtin(name_or_path) {
             return Ok(scene);
@@ -152,22 +191,59 @@ impl Scene {
                 ),
             ));
         }
+        let resolver = FileResolver::new(path.parent().unwrap_or(std::path::Path::new(".")));
+        if crate::model::is_model_name(name_or_path) {
+            let file = path.file_name().map_or_else(|| name_or_path.to_owned(), |f| f.to_string_lossy().into_owned());
+            let raw = SceneJson {
+                camera: None,
+                materials: Default::default(),
+                objects: vec![ObjectJson::Model(ImportJson {
+                    file: Some(file),
+                    asset: None,
+                    data: None,
+                    transform: None,
+                    material: None,
+                })],
+                light: None,
+                environment: None,
+            };
+            return Self::from_json_with(&raw, &resolver);
+        }
         let text = std::fs::read_to_string(path)
             .map_err(|e| SceneError::new(".", format!("cannot read {name_or_path}: {e}")))?;
-        Self::from_json_str(&text)
+        Self::from_json_with(&SceneJson::from_value(Self::parse_value(&text)?)?, &resolver)
     }
 
-    /// The scene back in its JSON form (round-trips through `from_json`).
+    /// The scene back in its JSON form (round-trips through `from_json`
+    /// with the same resolver, or through `revalidate`).
     pub fn to_json(&self) -> SceneJson {
         validate::to_json(self)
     }
 
-    /// Indices of objects whose material emits.
+    /// Whether object `i` emits light (an import: any of its triangles).
+    pub fn object_emits(&self, i: usize) -> bool {
+        match self.objects[i].shape {
+            Shape::Import(k) => self.imports[k]
+                .instances
+                .iter()
+                .any(|inst| inst.materials.iter().any(|&m| self.materials[m as usize].is_emissive())),
+            _ => self.materials[self.objects[i].material].is_emissive(),
+        }
+    }
+
+    /// Indices of objects that emit.
     pub fn emitters(&self) -> impl Iterator<Item = usize> + '_ {
-        self.objects
+        (0..self.objects.len()).filter(|&i| self.object_emits(i))
+    }
+
+    /// Triangles held in memory (each mesh once, however often placed).
+    pub fn unique_triangles(&self) -> u64 {
+        let mut seen = std::collections::HashSet::new();
+        self.imports
             .iter()
-            .enumerate()
-            .filter(|(_, o)| self.materials[o.material].is_emissive())
-            .map(|(i, _)| i)
+            .flat_map(|i| &i.instances)
+            .filter(|inst| seen.insert(std::sync::Arc::as_ptr(&inst.mesh)))
+            .map(|inst| inst.mesh.triangles.len() as u64)
+            .sum()
     }
 }

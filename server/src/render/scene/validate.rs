@@ -1,28 +1,35 @@
 //! Raw JSON -> validated [`Scene`], and back. Every rule reports the JSON path
 //! of the field it rejects.
 
+use super::import::{ImportKind, Importer};
 use super::json::{
     CameraJson, FresnelJson, GlassJson, MaterialJson, ObjectJson, QuadJson, SceneJson, SphereJson, SurfaceJson,
 };
+use super::resolve::Resolver;
 use super::{
-    Camera, Fresnel, Material, MaterialKind, Object, Scene, SceneError, Shape, MAX_COORDINATE,
+    frame, Camera, Fresnel, Material, MaterialKind, Object, Scene, SceneError, Shape, MAX_COORDINATE,
     MAX_EMISSION, MAX_OBJECTS,
 };
 use crate::render::math::DVec3;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
 /// Highest index of refraction accepted.
 const MAX_IOR: f64 = 10.0;
 
-pub(super) fn scene(raw: &SceneJson) -> Result<Scene> {
-    let camera = camera(&raw.camera)?;
+/// Most objects a scene may place, counting every placement of a mesh.
+pub const MAX_PLACED: usize = 1 << 22;
 
+/// The environment a scene of meshes without emitters gets, so that a bare
+/// model shows up lit.
+pub const DEFAULT_ENVIRONMENT: [f64; 3] = [1.0, 1.0, 1.0];
+
+pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
     let mut materials = Vec::with_capacity(raw.materials.len());
     let mut index_of = BTreeMap::new();
     for (name, m) in &raw.materials {
-        index_of.insert(name.as_str(), materials.len());
+        index_of.insert(name.clone(), materials.len());
         materials.push(material(name, m)?);
     }
 
@@ -35,32 +42,115 @@ pub(super) fn scene(raw: &SceneJson) -> Result<Scene> {
             format!("{} objects is more than the limit of {MAX_OBJECTS}", raw.objects.len()),
         ));
     }
-    let objects = raw
-        .objects
-        .iter()
-        .enumerate()
-        .map(|(i, o)| object(&format!("objects[{i}]"), o, &index_of))
-        .collect::<Result<Vec<_>>>()?;
+    let mut imports = Vec::new();
+    let mut objects = Vec::with_capacity(raw.objects.len());
+    let mut importer = Importer {
+        resolver,
+        materials: &mut materials,
+        index_of: &mut index_of,
+        added: HashMap::new(),
+    };
+    let mut placed = 0usize;
+    for (i, o) in raw.objects.iter().enumerate() {
+        let path = format!("objects[{i}]");
+        let object = match o {
+            ObjectJson::Mesh(json) | ObjectJson::Model(json) => {
+                let kind = if matches!(o, ObjectJson::Mesh(_)) { ImportKind::Mesh } else { ImportKind::Model };
+                let (import, material) = importer.import(&path, kind, json)?;
+                placed += import.instances.len();
+                imports.push(import);
+                Object {
+                    shape: Shape::Import(imports.len() - 1),
+                    material,
+                }
+            }
+            _ => {
+                placed += 1;
+                object(&path, o, importer.index_of)?
+            }
+        };
+        objects.push(object);
+    }
+    if placed > MAX_PLACED {
+        return Err(SceneError::new(
+            "objects",
+            format!("the scene places {placed} objects (mesh placements included), more than the limit of {MAX_PLACED}"),
+        ));
+    }
 
-    let light = match raw.light {
-        Some(i) if i >= objects.len() => {
-            return Err(SceneError::new(
-                "light",
-                format!("object index {i} is out of range (the scene has {} objects)", objects.len()),
-            ))
+    let mut warnings = Vec::new();
+    for import in &imports {
+        for w in &import.model.warnings {
+            let line = format!("{}: {w}", import.model.name);
+            if !warnings.contains(&line) {
+                warnings.push(line);
+            }
         }
-        Some(i) => Some(i),
-        None => objects
-            .iter()
-            .position(|o| materials[o.material].is_emissive()),
+    }
+
+    let camera = match &raw.camera {
+        Some(c) => camera(c)?,
+        None => {
+            let from_model = imports.iter().filter(|i| i.kind == ImportKind::Model).find_map(|i| {
+                let c = i.model.camera?;
+                let t = i.world_from_json;
+                Some(CameraJson {
+                    position: t.transform_point3(DVec3::from_array(c.position)).to_array(),
+                    look_at: t.transform_point3(DVec3::from_array(c.look_at)).to_array(),
+                    up: t.transform_vector3(DVec3::from_array(c.up)).to_array(),
+                    vfov_deg: c.vfov_deg,
+                    near_clip: 0.0,
+                })
+            });
+            match from_model {
+                Some(c) => camera(&c).map_err(|e| SceneError::new("camera", format!("the model's camera: {}", e.reason)))?,
+                None => {
+                    let (lo, hi) = frame::bounds(&objects, &imports)
+                        .ok_or_else(|| SceneError::new("camera", "the scene has no bounds to frame; give a camera"))?;
+                    warnings.push("no camera given: framed the scene's bounds".to_owned());
+                    camera(&frame::framed(lo, hi).to_json())?
+                }
+            }
+        }
     };
 
-    Ok(Scene {
+    let environment = match raw.environment {
+        Some(e) => {
+            let e = vec3("environment", e)?;
+            if e.min_element() < 0.0 || e.max_element() > MAX_EMISSION {
+                return Err(SceneError::new("environment", format!("components must be between 0 and {MAX_EMISSION:e}")));
+            }
+            e
+        }
+        None => DVec3::ZERO,
+    };
+
+    let mut scene = Scene {
         camera,
         materials,
         objects,
-        light,
-    })
+        light: None,
+        environment,
+        imports,
+        warnings,
+    };
+    scene.light = match raw.light {
+        Some(i) if i >= scene.objects.len() => {
+            return Err(SceneError::new(
+                "light",
+                format!("object index {i} is out of range (the scene has {} objects)", scene.objects.len()),
+            ))
+        }
+        Some(i) => Some(i),
+        None => scene.emitters().next(),
+    };
+    if raw.environment.is_none() && !scene.imports.is_empty() && scene.light.is_none() {
+        scene.environment = DVec3::from_array(DEFAULT_ENVIRONMENT);
+        scene.warnings.push(format!(
+            "the scene has no emitters: lit by a uniform environment {DEFAULT_ENVIRONMENT:?} (set \"environment\" to change it)"
+        ));
+    }
+    Ok(scene)
 }
 
 fn camera(c: &CameraJson) -> Result<Camera> {
@@ -104,7 +194,7 @@ fn camera(c: &CameraJson) -> Result<Camera> {
     })
 }
 
-fn material(name: &str, m: &MaterialJson) -> Result<Material> {
+pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
     let path = format!("materials.{name}");
     let (kind, albedo, emission) = match m {
         MaterialJson::Diffuse(SurfaceJson { albedo, emission }) => (MaterialKind::Diffuse, *albedo, *emission),
@@ -152,10 +242,11 @@ fn material(name: &str, m: &MaterialJson) -> Result<Material> {
         kind,
         albedo,
         emission,
+        imported: false,
     })
 }
 
-fn object(path: &str, o: &ObjectJson, index_of: &BTreeMap<&str, usize>) -> Result<Object> {
+fn object(path: &str, o: &ObjectJson, index_of: &BTreeMap<String, usize>) -> Result<Object> {
     let (shape, material) = match o {
         ObjectJson::Sphere(SphereJson {
             center,
@@ -203,15 +294,18 @@ fn object(path: &str, o: &ObjectJson, index_of: &BTreeMap<&str, usize>) -> Resul
                 material,
             )
         }
+        ObjectJson::Mesh(_) | ObjectJson::Model(_) => unreachable!("imports are validated by the importer"),
     };
     let Some(&material) = index_of.get(material.as_str()) else {
-        let known: Vec<&str> = index_of.keys().copied().collect();
-        return Err(SceneError::new(
-            format!("{path}.material"),
-            format!("unknown material '{material}' (known: {})", known.join(", ")),
-        ));
+        return Err(unknown_material(&format!("{path}.material"), material, index_of));
     };
     Ok(Object { shape, material })
+}
+
+/// The error for a material name that the scene does not define.
+pub(super) fn unknown_material(path: &str, name: &str, index_of: &BTreeMap<String, usize>) -> SceneError {
+    let known: Vec<&str> = index_of.keys().map(String::as_str).collect();
+    SceneError::new(path, format!("unknown material '{name}' (known: {})", known.join(", ")))
 }
 
 fn finite(path: &str, x: f64) -> Result<f64> {
@@ -247,6 +341,7 @@ pub(super) fn to_json(s: &Scene) -> SceneJson {
     let materials = s
         .materials
         .iter()
+        .filter(|m| !m.imported)
         .map(|m| {
             let json = match m.kind {
                 MaterialKind::Diffuse => MaterialJson::Diffuse(SurfaceJson {
@@ -291,14 +386,23 @@ pub(super) fn to_json(s: &Scene) -> SceneJson {
                     edge_v: edge_v.to_array(),
                     material,
                 }),
+                Shape::Import(k) => {
+                    let import = &s.imports[k];
+                    let json = import.json.clone();
+                    match import.kind {
+                        ImportKind::Mesh => ObjectJson::Mesh(json),
+                        ImportKind::Model => ObjectJson::Model(json),
+                    }
+                }
             }
         })
         .collect();
     SceneJson {
-        camera,
+        camera: Some(camera),
         materials,
         objects,
         light: s.light,
+        environment: (s.environment != DVec3::ZERO).then(|| s.environment.to_array()),
     }
 }
 

@@ -5,7 +5,8 @@
 use crate::render::job::RenderJob;
 use crate::render::material::Bsdf;
 use crate::render::math::Vec3A;
-use crate::render::world::Geometry;
+use crate::render::light::EmitterShape;
+use crate::render::world::{Geometry, World};
 use crate::render::Filter;
 use bytemuck::{Pod, Zeroable};
 
@@ -69,6 +70,17 @@ fn v4(v: Vec3A, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
 }
 
+/// The objects the kernel's next-event estimation aims at: every emissive
+/// sphere and quad (the kernel takes one shadow ray to each).
+pub fn kernel_lights(w: &World) -> Vec<u32> {
+    w.lights
+        .emitters
+        .iter()
+        .filter(|e| matches!(e.shape, EmitterShape::Sphere(_) | EmitterShape::Quad(_)))
+        .map(|e| e.object)
+        .collect()
+}
+
 /// The job's scene and settings in the kernel's layout.
 pub struct Packed {
     pub params: Params,
@@ -100,6 +112,7 @@ pub fn pack(job: &RenderJob) -> Packed {
                 material: o.material,
                 ..Object::default()
             },
+            Geometry::Instance(_) => unreachable!("scenes with meshes are refused before packing"),
         })
         .collect();
     let materials = w
@@ -136,13 +149,13 @@ pub fn pack(job: &RenderJob) -> Packed {
         filter: u32::from(job.filter == Filter::Box),
         clamp: s.clamp,
         num_objects: w.objects.len() as u32,
-        num_lights: w.lights.len() as u32,
+        num_lights: kernel_lights(w).len() as u32,
         pad0: 0,
     };
     Packed {
         params,
         objects,
         materials,
-        lights: w.lights.clone(),
+        lights: kernel_lights(w),
     }
 }

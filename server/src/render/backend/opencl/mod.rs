@@ -47,6 +47,22 @@ pub enum OpenClError {
     Build { device: String, log: String },
     #[error("OpenCL {what} failed: {code}")]
     Call { what: &'static str, code: String },
+    /// The scene uses what the kernel does not model yet.
+    #[error("the OpenCL backend cannot render this scene: {0}")]
+    Unsupported(String),
+}
+
+/// Why the kernel cannot render `job`'s scene, if it cannot: it models
+/// spheres and quads lit by their own emission.
+pub fn unsupported(job: &RenderJob) -> Option<String> {
+    let w = &job.world;
+    if !w.instances.is_empty() {
+        Some("it has triangle meshes (rendered on the CPU for now)".into())
+    } else if w.environment.max_element() > 0.0 {
+        Some("it has an environment light (rendered on the CPU for now)".into())
+    } else {
+        None
+    }
 }
 
 fn call(what: &'static str) -> impl Fn(opencl3::error_codes::ClError) -> OpenClError {
@@ -305,12 +321,18 @@ impl OpenClBackend {
 
     /// Builds (or finds) the program `job` needs.
     pub fn prepare_program(&mut self, job: &RenderJob) -> Result<(), OpenClError> {
+        if let Some(why) = unsupported(job) {
+            return Err(OpenClError::Unsupported(why));
+        }
         let key = self.key_for(job);
         self.program(&key).map(|_| ())
     }
 
     /// Adds `count` samples per pixel to `film`.
     pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) -> Result<(), OpenClError> {
+        if let Some(why) = unsupported(job) {
+            return Err(OpenClError::Unsupported(why));
+        }
         let key = self.key_for(job);
         self.program(&key)?;
         self.prepare(job, film, &key)?;

@@ -3,7 +3,7 @@
 //! generated in one place ([`Features::build_options`]), never by editing
 //! the source.
 
-use super::layout::{KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR};
+use super::layout::{kernel_lights, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR};
 use crate::render::job::RenderJob;
 use crate::render::material::Bsdf;
 use crate::render::world::Geometry;
@@ -51,9 +51,16 @@ impl Features {
             w.objects.iter().any(|o| match o.geometry {
                 Geometry::Sphere(_) => k == KIND_SPHERE,
                 Geometry::Quad(_) => k == KIND_QUAD,
+                Geometry::Instance(_) => false,
             })
         };
-        let used: Vec<_> = w.objects.iter().map(|o| w.materials[o.material as usize]).collect();
+        let used: Vec<_> = w
+            .objects
+            .iter()
+            .filter(|o| !matches!(o.geometry, Geometry::Instance(_)))
+            .map(|o| w.materials[o.material as usize])
+            .collect();
+        let lights = kernel_lights(w);
         let mat = |k: u32| {
             used.iter().any(|m| match m.bsdf {
                 Bsdf::Diffuse => k == MAT_DIFFUSE,
@@ -65,9 +72,10 @@ impl Features {
             used.iter().any(|m| matches!(m.bsdf, Bsdf::Glass { schlick, .. } if schlick == want))
         };
         let light_kind = |k: u32| {
-            w.lights.iter().any(|&i| match w.objects[i as usize].geometry {
+            lights.iter().any(|&i| match w.objects[i as usize].geometry {
                 Geometry::Sphere(_) => k == KIND_SPHERE,
                 Geometry::Quad(_) => k == KIND_QUAD,
+                Geometry::Instance(_) => false,
             })
         };
         Self {
@@ -80,10 +88,10 @@ impl Features {
             exact: glass_with(false),
             sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
             quad_lights: job.settings.nee && light_kind(KIND_QUAD),
-            nee: job.settings.nee && !w.lights.is_empty(),
+            nee: job.settings.nee && !lights.is_empty(),
             box_filter: job.filter == Filter::Box,
             num_objects: w.objects.len() as u32,
-            num_lights: if job.settings.nee { w.lights.len() as u32 } else { 0 },
+            num_lights: if job.settings.nee { lights.len() as u32 } else { 0 },
             max_depth: job.settings.max_depth,
             inject_nan_every: None,
         }

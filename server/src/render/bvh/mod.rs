@@ -1,0 +1,110 @@
+//! Bounding volume hierarchies: one layout for every use (the objects of a
+//! scene, the triangles of a mesh) and for both backends.
+//!
+//! - `build`: a binary tree by the surface area heuristic, binned, with the
+//!   large splits binned in parallel and the subtrees built in parallel.
+//! - `flatten`: that tree collapsed to four children per node and laid out
+//!   depth first in one array of [`BvhNode`]s, the `#[repr(C)]` form that
+//!   the CPU traverses and the OpenCL kernel can read unchanged.
+//! - `traverse`: nearest-first traversal with a conservative box test.
+//!
+//! A BVH does not hold its primitives: a leaf is a range of slots, and
+//! `prims[slot]` is the index of the primitive in the caller's list (a mesh
+//! stores its triangles in slot order instead, so that a leaf's triangles
+//! are read in sequence).
+
+mod aabb;
+mod build;
+mod flatten;
+mod traverse;
+
+pub use aabb::Aabb;
+pub use build::MAX_LEAF;
+pub use traverse::BoxRay;
+
+use bytemuck::{Pod, Zeroable};
+
+/// A child slot that holds nothing.
+pub const EMPTY: u32 = u32::MAX;
+
+/// A node with up to four children, their boxes stored structure of arrays
+/// so that one ray is tested against all four at once.
+///
+/// Child `i` is
+/// - an inner node: `count[i] == 0`, `child[i]` its index in the node array;
+/// - a leaf: `count[i] > 0` primitives in slots `child[i] .. child[i] + count[i]`;
+/// - empty: `count[i] == 0`, `child[i] == EMPTY`, and an inverted box
+///   (min +inf, max -inf) that no ray meets.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    /// min x, min y, min z, max x, max y, max z, each for the four children.
+    pub bounds: [[f32; 4]; 6],
+    pub child: [u32; 4],
+    pub count: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<BvhNode>() == 128);
+
+impl BvhNode {
+    /// A node whose four slots are empty.
+    pub const EMPTY_NODE: BvhNode = BvhNode {
+        bounds: [
+            [f32::INFINITY; 4],
+            [f32::INFINITY; 4],
+            [f32::INFINITY; 4],
+            [f32::NEG_INFINITY; 4],
+            [f32::NEG_INFINITY; 4],
+            [f32::NEG_INFINITY; 4],
+        ],
+        child: [EMPTY; 4],
+        count: [0; 4],
+    };
+
+    /// The box of child `i`.
+    pub fn child_bounds(&self, i: usize) -> Aabb {
+        let b = &self.bounds;
+        Aabb::new([b[0][i], b[1][i], b[2][i]].into(), [b[3][i], b[4][i], b[5][i]].into())
+    }
+
+    fn set_child(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
+        for a in 0..3 {
+            self.bounds[a][i] = bounds.min[a];
+            self.bounds[a + 3][i] = bounds.max[a];
+        }
+        self.child[i] = child;
+        self.count[i] = count;
+    }
+}
+
+/// A hierarchy over `prims.len()` primitives. Node 0 is the root; an empty
+/// hierarchy has no nodes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Bvh {
+    pub nodes: Vec<BvhNode>,
+    /// Primitive index of every leaf slot.
+    pub prims: Vec<u32>,
+    /// Box of everything.
+    pub bounds: Aabb,
+    /// Most nodes on a path from the root to a leaf.
+    pub depth: u32,
+}
+
+impl Bvh {
+    /// A hierarchy over primitives with these boxes (finite, or the
+    /// primitive can never be hit: such boxes are placed but never split on).
+    pub fn build(boxes: &[Aabb]) -> Bvh {
+        let (tree, prims) = build::build(boxes);
+        let mut bvh = flatten::flatten(tree.as_ref());
+        bvh.prims = prims;
+        bvh
+    }
+
+    /// Bytes held by the nodes and the slot list.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<BvhNode>() + self.prims.len() * 4
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,215 @@
+//! The scene's emitters as next-event estimation samples them: emissive
+//! spheres, quads and triangles (each triangle of an emissive mesh is an
+//! emitter of its own), and the environment.
+//!
+//! Sampling, per shading point, a direction and 1/pdf of it (solid angle):
+//! - spheres seen from outside: uniformly in the cone they subtend (exact
+//!   for tiny lights); from inside, or from their own inner surface (the
+//!   furnace), uniformly by area, since every point is then visible;
+//! - quads and triangles: uniformly by area;
+//! - the environment: cosine-weighted about the shading normal.
+//!
+//! Every emitter is two-sided (emission leaves both sides of a surface).
+
+use super::alias::AliasTable;
+use crate::render::material::{cosine_hemisphere, SurfaceMaterial};
+use crate::render::math::{basis, sincos_turns, Vec3A};
+use crate::render::shape::{Quad, Sphere};
+use crate::render::world::{Geometry, Instance, Surface, WorldObject, NO_PRIM};
+use std::f32::consts::{PI, TAU};
+
+/// An emissive triangle in camera-relative space.
+#[derive(Clone, Copy, Debug)]
+pub struct LightTri {
+    pub p0: Vec3A,
+    pub e1: Vec3A,
+    pub e2: Vec3A,
+    /// Unit normal.
+    pub n: Vec3A,
+    pub area: f32,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum EmitterShape {
+    Sphere(Sphere),
+    Quad(Quad),
+    Triangle(LightTri),
+    Environment,
+}
+
+/// One thing next-event estimation can aim at.
+#[derive(Clone, Copy, Debug)]
+pub struct Emitter {
+    /// The object a shadow ray must hit to see it (unused for the environment).
+    pub object: u32,
+    /// The triangle of that object, or `NO_PRIM`.
+    pub prim: u32,
+    pub emission: Vec3A,
+    pub shape: EmitterShape,
+}
+
+/// Every emitter, and a table that picks one in proportion to its power.
+#[derive(Clone, Debug, Default)]
+pub struct Lights {
+    pub emitters: Vec<Emitter>,
+    pub table: Option<AliasTable>,
+}
+
+/// Radiance's brightness for the power estimate.
+fn brightness(e: Vec3A) -> f64 {
+    f64::from(e.x + e.y + e.z) / 3.0
+}
+
+impl Lights {
+    /// The emitters of these objects; `environment` (if not black) as seen
+    /// from everywhere within `radius` of the origin.
+    pub fn new(
+        objects: &[WorldObject],
+        instances: &[Instance],
+        materials: &[SurfaceMaterial],
+        environment: Vec3A,
+        radius: f64,
+    ) -> Self {
+        let mut emitters = Vec::new();
+        let mut power = Vec::new();
+        for (id, o) in objects.iter().enumerate() {
+            let id = id as u32;
+            match o.geometry {
+                Geometry::Sphere(s) => {
+                    let m = &materials[o.material as usize];
+                    if m.emissive {
+                        let r = f64::from(s.radius);
+                        power.push(brightness(m.emission) * 4.0 * std::f64::consts::PI * r * r);
+                        emitters.push(Emitter { object: id, prim: NO_PRIM, emission: m.emission, shape: EmitterShape::Sphere(s) });
+                    }
+                }
+                Geometry::Quad(q) => {
+                    let m = &materials[o.material as usize];
+                    if m.emissive {
+                        power.push(brightness(m.emission) * 2.0 * f64::from(q.area));
+                        emitters.push(Emitter { object: id, prim: NO_PRIM, emission: m.emission, shape: EmitterShape::Quad(q) });
+                    }
+                }
+                Geometry::Instance(i) => {
+                    let inst = &instances[i as usize];
+                    let mesh = &*inst.mesh;
+                    for (t, &slot) in mesh.materials.iter().enumerate() {
+                        let m = &materials[inst.materials[slot as usize] as usize];
+                        if !m.emissive {
+                            continue;
+                        }
+                        let [a, b, c] = mesh.vertices(t as u32).map(|v| inst.cam_from_obj.transform_point3a(v));
+                        let cross = (b - a).cross(c - a);
+                        let area = 0.5 * cross.length();
+                        if !(area > 0.0) {
+                            continue;
+                        }
+                        let tri = LightTri { p0: a, e1: b - a, e2: c - a, n: cross.normalize(), area };
+                        power.push(brightness(m.emission) * 2.0 * f64::from(area));
+                        emitters.push(Emitter { object: id, prim: t as u32, emission: m.emission, shape: EmitterShape::Triangle(tri) });
+                    }
+                }
+            }
+        }
+        if environment.max_element() > 0.0 {
+            // As bright as a sphere of the scene's size lit from everywhere.
+            power.push(brightness(environment) * 4.0 * std::f64::consts::PI * radius * radius);
+            emitters.push(Emitter { object: u32::MAX, prim: NO_PRIM, emission: environment, shape: EmitterShape::Environment });
+        }
+        // Power is brightness x area x pi (x the solid angle factor folded
+        // into the constants above); only ratios matter.
+        Self { table: AliasTable::new(&power), emitters }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.emitters.is_empty()
+    }
+}
+
+impl Emitter {
+    /// A direction from surface `s` towards this emitter and 1/pdf (solid
+    /// angle) of choosing it; `nl` is the geometric normal and `ns` the
+    /// shading normal, both on the side the path arrived from.
+    #[inline(always)]
+    pub fn sample_direction(&self, s: &Surface, nl: Vec3A, ns: Vec3A, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
+        let on_self = self.object == s.object && self.prim == s.prim;
+        match &self.shape {
+            EmitterShape::Sphere(sphere) => sample_sphere(sphere, s.p, nl, on_self, u1, u2),
+            EmitterShape::Quad(q) => {
+                if on_self {
+                    return None;
+                }
+                toward_point(s.p, q.point(u1, u2), q.normal, q.area)
+            }
+            EmitterShape::Triangle(t) => {
+                if on_self {
+                    return None;
+                }
+                let r = u1.sqrt();
+                let (b1, b2) = (1.0 - r, u2 * r);
+                toward_point(s.p, t.p0 + t.e1 * b1 + t.e2 * b2, t.n, t.area)
+            }
+            EmitterShape::Environment => {
+                let dir = cosine_hemisphere(ns, u1, u2);
+                let cos = ns.dot(dir);
+                (cos > 0.0).then(|| (dir, PI / cos))
+            }
+        }
+    }
+}
+
+/// The direction from `p` to `q` on a flat emitter of unit normal `n` and
+/// area `area` sampled uniformly, and 1/pdf in solid angle.
+#[inline(always)]
+fn toward_point(p: Vec3A, q: Vec3A, n: Vec3A, area: f32) -> Option<(Vec3A, f32)> {
+    let w = q - p;
+    let dist2 = w.length_squared();
+    if !(dist2 > 0.0) {
+        return None;
+    }
+    let dir = w / dist2.sqrt();
+    Some((dir, n.dot(dir).abs() * area / dist2))
+}
+
+#[inline(always)]
+fn sample_sphere(s: &Sphere, p: Vec3A, nl: Vec3A, on_self: bool, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
+    let to_center = s.center - p;
+    let d2 = to_center.length_squared();
+    let r2 = s.radius * s.radius;
+    let inside = if on_self {
+        // On the light itself: inside when facing its interior.
+        nl.dot(to_center) > 0.0
+    } else {
+        d2 < r2
+    };
+    if on_self && !inside {
+        return None;
+    }
+    if inside {
+        let z = 1.0 - 2.0 * u1;
+        let rxy = (1.0 - z * z).max(0.0).sqrt();
+        let (sin, cos) = sincos_turns(u2);
+        let m = Vec3A::new(rxy * cos, rxy * sin, z);
+        let w = s.center + m * s.radius - p;
+        let dist2 = w.length_squared();
+        if !(dist2 > 0.0) {
+            return None;
+        }
+        let dir = w / dist2.sqrt();
+        let cos_l = m.dot(dir).abs();
+        Some((dir, cos_l * 4.0 * PI * r2 / dist2))
+    } else {
+        // 1 - cos(theta_max) without cancellation for small lights.
+        let sin2 = r2 / d2;
+        let cos_max = (1.0 - sin2).max(0.0).sqrt();
+        let one_minus_cos_max = sin2 / (1.0 + cos_max);
+        let a = u1 * one_minus_cos_max;
+        let cos_t = 1.0 - a;
+        let sin_t = (a * (2.0 - a)).max(0.0).sqrt();
+        let (sin, cos) = sincos_turns(u2);
+        let axis = to_center / d2.sqrt();
+        let (t, b) = basis(axis);
+        let dir = t * (sin_t * cos) + b * (sin_t * sin) + axis * cos_t;
+        Some((dir, TAU * one_minus_cos_max))
+    }
+}

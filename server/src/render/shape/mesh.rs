@@ -1,0 +1,131 @@
+//! Indexed triangle meshes in their own (object) space, with their BVH.
+//!
+//! A mesh is built once per model file (or inline data) and shared, behind
+//! an `Arc`, by every placement (instance) and by every job: moving the
+//! camera or a light never rebuilds it. Its triangles are stored a second
+//! time in the BVH's leaf order ([`TriVerts`], 48 bytes each, the layout the
+//! OpenCL kernel reads too), so that a leaf reads its triangles in sequence;
+//! the indexed form stays for shading normals and materials.
+
+use crate::model::MeshData;
+use crate::render::bvh::{Aabb, Bvh};
+use crate::render::math::Vec3A;
+use crate::render::shape::TriVerts;
+use rayon::prelude::*;
+
+#[derive(Debug)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<[f32; 3]>,
+    /// Unit shading normals per vertex, if the mesh has them.
+    pub normals: Option<Vec<[f32; 3]>>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Per triangle: the mesh's own material slot (an instance maps slots
+    /// to scene materials).
+    pub materials: Vec<u32>,
+    /// Number of material slots (one more than the largest in `materials`).
+    pub material_slots: u32,
+    pub bvh: Bvh,
+    /// The triangles in leaf-slot order.
+    pub tris: Vec<TriVerts>,
+}
+
+/// Why mesh data cannot be used; the caller adds where it came from.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    #[error("the mesh has no triangles")]
+    Empty,
+    #[error("vertex {0}: position is not finite")]
+    Position(usize),
+    #[error("vertex {0}: normal is not finite")]
+    Normal(usize),
+    #[error("{0} normals for {1} vertices")]
+    NormalCount(usize, usize),
+    #[error("triangle {0}: vertex index {1} is out of range ({2} vertices)")]
+    Index(usize, u32, usize),
+    #[error("{0} material indices for {1} triangles")]
+    MaterialCount(usize, usize),
+}
+
+impl Mesh {
+    /// Checks the data and builds the BVH (in parallel).
+    pub fn new(data: MeshData) -> Result<Mesh, MeshError> {
+        let MeshData {
+            name,
+            positions,
+            normals,
+            triangles,
+            materials,
+        } = data;
+        if triangles.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        if let Some(i) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+            return Err(MeshError::Position(i));
+        }
+        if let Some(n) = &normals {
+            if n.len() != positions.len() {
+                return Err(MeshError::NormalCount(n.len(), positions.len()));
+            }
+            if let Some(i) = n.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+                return Err(MeshError::Normal(i));
+            }
+        }
+        for (i, t) in triangles.iter().enumerate() {
+            if let Some(&bad) = t.iter().find(|&&v| v as usize >= positions.len()) {
+                return Err(MeshError::Index(i, bad, positions.len()));
+            }
+        }
+        let materials = if materials.is_empty() { vec![0; triangles.len()] } else { materials };
+        if materials.len() != triangles.len() {
+            return Err(MeshError::MaterialCount(materials.len(), triangles.len()));
+        }
+        let material_slots = materials.iter().copied().max().unwrap_or(0) + 1;
+        let verts = |i: usize| -> [[f32; 3]; 3] { triangles[i].map(|v| positions[v as usize]) };
+        let boxes: Vec<Aabb> = (0..triangles.len())
+            .into_par_iter()
+            .map(|i| Aabb::of_points(verts(i).map(Vec3A::from)))
+            .collect();
+        let bvh = Bvh::build(&boxes);
+        let tris = bvh.prims.par_iter().map(|&p| TriVerts::new(p, verts(p as usize))).collect();
+        Ok(Mesh {
+            name,
+            positions,
+            normals,
+            triangles,
+            materials,
+            material_slots,
+            bvh,
+            tris,
+        })
+    }
+
+    /// The vertices of triangle `i`.
+    #[inline(always)]
+    pub fn vertices(&self, i: u32) -> [Vec3A; 3] {
+        self.triangles[i as usize].map(|v| Vec3A::from(self.positions[v as usize]))
+    }
+
+    /// The interpolated shading normal (not normalised) at barycentrics
+    /// `b` of triangle `i`, if the mesh has normals.
+    #[inline(always)]
+    pub fn shading_normal(&self, i: u32, b: [f32; 3]) -> Option<Vec3A> {
+        let normals = self.normals.as_ref()?;
+        let [a, c, d] = self.triangles[i as usize].map(|v| Vec3A::from(normals[v as usize]));
+        Some(a * b[0] + c * b[1] + d * b[2])
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.bvh.bounds
+    }
+
+    /// Bytes held: vertices, normals, triangles, materials, the BVH and the
+    /// leaf-ordered triangles.
+    pub fn memory_bytes(&self) -> usize {
+        self.positions.len() * 12
+            + self.normals.as_ref().map_or(0, |n| n.len() * 12)
+            + self.triangles.len() * 16
+            + self.bvh.memory_bytes()
+            + self.tris.len() * std::mem::size_of::<TriVerts>()
+    }
+}

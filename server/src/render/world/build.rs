@@ -1,0 +1,138 @@
+//! A validated scene turned into the hot path's world, relative to a render
+//! origin, with its accelerator chosen.
+//!
+//! Boxes of objects for the BVH are computed in f64 and padded: by a
+//! relative 1e-4 of their size and position for spheres (whose f32 test is
+//! accurate to the rounding of |o||c|/r, see `shape::sphere`), and 1e-5 for
+//! quads and mesh instances (whose rays are mapped into object space with
+//! f32 matrices). The padding costs nothing measurable and keeps the BVH
+//! from culling a hit that the scan would report.
+
+use super::{Accel, Geometry, Instance, World, WorldObject};
+use crate::render::bvh::{Aabb, Bvh};
+use crate::render::light::Lights;
+use crate::render::material::SurfaceMaterial;
+use crate::render::math::{DAffine3, DVec3, Vec3A};
+use crate::render::scene::{Scene, Shape};
+use crate::render::shape::{Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
+
+/// Scenes of at most this many objects (and no meshes) are scanned, not
+/// searched through a BVH. Measured with `cargo run --release --example
+/// accel_crossover`: see docs/BENCHMARKS.md.
+pub const SCAN_MAX_OBJECTS: usize = 16;
+
+const _: () = assert!(SCAN_MAX_OBJECTS < 1 << 23);
+
+/// Which accelerator a world uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AccelChoice {
+    /// The scan for a few spheres and quads, else the BVH.
+    #[default]
+    Auto,
+    /// Always the BVH (tests compare it with the brute-force search).
+    Bvh,
+}
+
+impl World {
+    /// The scene relative to `origin` (normally the camera position).
+    pub fn new(scene: &Scene, origin: DVec3) -> Self {
+        Self::with_accel(scene, origin, AccelChoice::Auto)
+    }
+
+    pub fn with_accel(scene: &Scene, origin: DVec3, choice: AccelChoice) -> Self {
+        let materials: Vec<SurfaceMaterial> = scene.materials.iter().map(SurfaceMaterial::new).collect();
+        let mut objects = Vec::with_capacity(scene.objects.len());
+        let mut instances = Vec::new();
+        let mut boxes = Vec::with_capacity(scene.objects.len());
+        for o in &scene.objects {
+            match o.shape {
+                Shape::Sphere { center, radius } => {
+                    let c = center - origin;
+                    objects.push(WorldObject {
+                        geometry: Geometry::Sphere(Sphere::new(c, radius)),
+                        material: o.material as u32,
+                    });
+                    let r = DVec3::splat(radius);
+                    boxes.push(padded(c - r, c + r, 1e-4));
+                }
+                Shape::Quad { corner, edge_u, edge_v } => {
+                    let c = corner - origin;
+                    objects.push(WorldObject {
+                        geometry: Geometry::Quad(Quad::new(c, edge_u, edge_v)),
+                        material: o.material as u32,
+                    });
+                    let corners = [c, c + edge_u, c + edge_v, c + edge_u + edge_v];
+                    let (lo, hi) = corners.iter().fold((corners[0], corners[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+                    boxes.push(padded(lo, hi, 1e-5));
+                }
+                Shape::Import(k) => {
+                    for inst in &scene.imports[k].instances {
+                        let index = instances.len() as u32;
+                        instances.push(Instance::new(inst.mesh.clone(), inst.world_from_object, origin, inst.materials.clone()));
+                        objects.push(WorldObject {
+                            geometry: Geometry::Instance(index),
+                            material: u32::MAX,
+                        });
+                        let cam_from_obj = DAffine3 {
+                            matrix3: inst.world_from_object.matrix3,
+                            translation: inst.world_from_object.translation - origin,
+                        };
+                        let (lo, hi) = transformed_bounds(&inst.mesh.bounds(), &cam_from_obj);
+                        boxes.push(padded(lo, hi, 1e-5));
+                    }
+                }
+            }
+        }
+        let scene_box = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        let radius = if scene_box.is_empty() { 1.0 } else { f64::from(scene_box.extent().length()) * 0.5 };
+        let environment: Vec3A = scene.environment.as_vec3().into();
+        let lights = Lights::new(&objects, &instances, &materials, environment, radius);
+        let scan = choice == AccelChoice::Auto && instances.is_empty() && objects.len() <= SCAN_MAX_OBJECTS;
+        let accel = if scan {
+            let mut spheres = Vec::new();
+            let mut quads = Vec::new();
+            for (i, o) in objects.iter().enumerate() {
+                match o.geometry {
+                    Geometry::Sphere(s) => spheres.push((i as u32, s)),
+                    Geometry::Quad(q) => quads.push((i as u32, q)),
+                    Geometry::Instance(_) => unreachable!("scanned worlds have no instances"),
+                }
+            }
+            Accel::Scan {
+                sphere_batches: spheres.chunks(SPHERE_BATCH_LANES).map(SphereBatch::new).collect(),
+                quads,
+            }
+        } else {
+            Accel::Bvh(Bvh::build(&boxes))
+        };
+        Self {
+            origin,
+            objects,
+            instances,
+            materials,
+            lights,
+            environment,
+            accel,
+        }
+    }
+}
+
+/// The f32 box holding [lo, hi] grown by `rel` of its size and position.
+fn padded(lo: DVec3, hi: DVec3, rel: f64) -> Aabb {
+    let scale = (hi - lo).max_element().max(lo.abs().max_element()).max(hi.abs().max_element());
+    let pad = DVec3::splat(rel * scale + f64::from(f32::MIN_POSITIVE));
+    Aabb::new((lo - pad).as_vec3().into(), (hi + pad).as_vec3().into())
+}
+
+/// Bounds of an object-space box's eight corners mapped by `a`.
+pub(super) fn transformed_bounds(b: &Aabb, a: &DAffine3) -> (DVec3, DVec3) {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for i in 0..8 {
+        let pick = |bit: usize, axis: usize| f64::from(if i >> bit & 1 == 0 { b.min[axis] } else { b.max[axis] });
+        let p = a.transform_point3(DVec3::new(pick(0, 0), pick(1, 1), pick(2, 2)));
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    (lo, hi)
+}

@@ -1,0 +1,253 @@
+//! The scene as the hot path sees it: f32, relative to a render origin (the
+//! camera position), with materials flattened and emitters listed.
+//!
+//! Working camera-relative is what makes the image independent of where the
+//! scene sits in the world: a scene moved 1e6 units from the origin has the
+//! same f32 coordinates here as one at the origin (the subtraction is done in
+//! f64), so f32 only ever holds numbers of the scene's own size. Meshes stay
+//! in their own object space (their BVHs are built once, whatever the
+//! camera does); an instance maps rays into it.
+//!
+//! Nearest hits are found by one of two accelerators, chosen per scene:
+//! a scan of every object (spheres eight at a time, then quads), fastest
+//! for the few objects of the thesis's scenes, or a BVH over all objects
+//! whose mesh instances hold BVHs of their own (`bvh`). Both find the
+//! same hit: among equal distances, the lowest (object, triangle).
+
+mod build;
+mod instance;
+mod scan;
+
+pub use build::{AccelChoice, SCAN_MAX_OBJECTS};
+pub use instance::Instance;
+
+use crate::render::bvh::{BoxRay, Bvh};
+use crate::render::isa::Isa;
+use crate::render::light::Lights;
+use crate::render::material::SurfaceMaterial;
+use crate::render::math::{DVec3, Vec3A};
+use crate::render::ray::Ray;
+use crate::render::shape::{Quad, Roots, Sphere, SphereBatch};
+
+/// `prim` of a hit or origin on an object that is not a mesh.
+pub const NO_PRIM: u32 = u32::MAX;
+/// `object` of no object.
+pub const NO_OBJECT: u32 = u32::MAX;
+
+/// An object's geometry; a closed set matched in one place (here).
+#[derive(Clone, Copy, Debug)]
+pub enum Geometry {
+    Sphere(Sphere),
+    Quad(Quad),
+    /// A placed mesh: `World::instances[i]`.
+    Instance(u32),
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct WorldObject {
+    pub geometry: Geometry,
+    /// Spheres and quads; an instance's triangles map their own.
+    pub material: u32,
+}
+
+/// The surface a ray starts on, so that it cannot hit it again: a ray
+/// leaving a quad or a triangle never meets that (flat) primitive again; a
+/// ray leaving a sphere outwards never meets it, one going into it meets
+/// only its far side. Triangles also move the ray's origin off the surface
+/// by the bound of its rounding error (`Surface::spawn`), for their
+/// neighbours' sake.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Origin {
+    pub object: u32,
+    /// The triangle, for a mesh instance; else [`NO_PRIM`].
+    pub prim: u32,
+    pub entering: bool,
+}
+
+impl Origin {
+    /// A ray that starts on no surface (camera rays).
+    pub const NONE: Origin = Origin {
+        object: NO_OBJECT,
+        prim: NO_PRIM,
+        entering: false,
+    };
+}
+
+/// The nearest intersection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub object: u32,
+    /// The triangle of a mesh instance, else [`NO_PRIM`].
+    pub prim: u32,
+    /// Barycentric weights of the triangle's vertices.
+    pub bary: [f32; 3],
+}
+
+impl Hit {
+    const NONE: Hit = Hit {
+        t: f32::INFINITY,
+        object: NO_OBJECT,
+        prim: NO_PRIM,
+        bary: [0.0; 3],
+    };
+
+    /// Takes (t, object, prim) if it comes before this hit: nearer, or as
+    /// near with a lower (object, prim).
+    #[inline(always)]
+    fn offer(&mut self, t: f32, object: u32, prim: u32, bary: [f32; 3]) {
+        if t < self.t || (t == self.t && (object, prim) < (self.object, self.prim)) {
+            *self = Hit { t, object, prim, bary };
+        }
+    }
+}
+
+/// Where a path met a surface, as shading needs it.
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    pub p: Vec3A,
+    /// Unit geometric normal (outward for spheres).
+    pub ng: Vec3A,
+    /// Unit shading normal: `ng`, or the mesh's interpolated normal.
+    pub ns: Vec3A,
+    /// Whether `ns` differs from `ng` (a mesh with vertex normals): then a
+    /// scattered direction must also be on the right side of `ng`.
+    pub smooth: bool,
+    pub material: u32,
+    pub object: u32,
+    pub prim: u32,
+    /// For triangles: where to start rays that leave the surface.
+    pub offset: Option<instance::Offset>,
+}
+
+#[derive(Clone, Debug)]
+enum Accel {
+    Scan {
+        /// The spheres again, several to a batch with their object
+        /// indices, so that the nearest hit is found with lane-wise selects.
+        sphere_batches: Vec<SphereBatch>,
+        /// The quads again with their object indices.
+        quads: Vec<(u32, Quad)>,
+    },
+    Bvh(Bvh),
+}
+
+#[derive(Clone, Debug)]
+pub struct World {
+    /// World-space position that is (0, 0, 0) here.
+    pub origin: DVec3,
+    pub objects: Vec<WorldObject>,
+    pub instances: Vec<Instance>,
+    pub materials: Vec<SurfaceMaterial>,
+    pub lights: Lights,
+    /// Radiance of rays that leave the scene.
+    pub environment: Vec3A,
+    accel: Accel,
+}
+
+impl World {
+    /// Whether nearest hits are found through a BVH (else by a scan).
+    pub fn uses_bvh(&self) -> bool {
+        matches!(self.accel, Accel::Bvh(_))
+    }
+
+    /// The BVH over the objects, if the world uses one.
+    pub fn object_bvh(&self) -> Option<&Bvh> {
+        match &self.accel {
+            Accel::Bvh(b) => Some(b),
+            Accel::Scan { .. } => None,
+        }
+    }
+
+    /// Nearest hit along `ray`, never the surface the ray starts on; the
+    /// spheres of a scan are tested with `isa`'s kernel.
+    #[inline(always)]
+    pub fn intersect<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
+        let hit = match &self.accel {
+            Accel::Scan { sphere_batches, quads } => scan::nearest(isa, sphere_batches, quads, ray, from),
+            Accel::Bvh(bvh) => {
+                let mut best = Hit::NONE;
+                bvh.traverse(&BoxRay::new(ray.origin, ray.dir), f32::INFINITY, |first, count, _| {
+                    for slot in first..first + count {
+                        self.offer_object::<false>(bvh.prims[slot as usize], ray, from, &mut best);
+                    }
+                    best.t
+                });
+                best
+            }
+        };
+        (hit.t < f32::INFINITY).then_some(hit)
+    }
+
+    /// The nearest hit found by testing every object and every triangle,
+    /// without any acceleration: what `intersect` must agree with.
+    pub fn intersect_brute(&self, ray: &Ray, from: Origin) -> Option<Hit> {
+        let mut best = Hit::NONE;
+        for id in 0..self.objects.len() as u32 {
+            self.offer_object::<true>(id, ray, from, &mut best);
+        }
+        (best.t < f32::INFINITY).then_some(best)
+    }
+
+    #[inline(always)]
+    fn offer_object<const BRUTE: bool>(&self, id: u32, ray: &Ray, from: Origin, best: &mut Hit) {
+        match &self.objects[id as usize].geometry {
+            Geometry::Sphere(s) => {
+                let roots = match (id == from.object, from.entering) {
+                    (false, _) => Roots::Any,
+                    (true, true) => Roots::FarOnly,
+                    (true, false) => return,
+                };
+                best.offer(s.intersect(ray, roots), id, NO_PRIM, [0.0; 3]);
+            }
+            Geometry::Quad(q) => {
+                if id != from.object {
+                    best.offer(q.intersect(ray), id, NO_PRIM, [0.0; 3]);
+                }
+            }
+            Geometry::Instance(i) => {
+                let skip = if id == from.object { from.prim } else { NO_PRIM };
+                self.instances[*i as usize].offer::<BRUTE>(id, ray, skip, best);
+            }
+        }
+    }
+
+    /// The surface at `hit`, found along `ray`.
+    #[inline(always)]
+    pub fn surface(&self, hit: &Hit, ray: &Ray) -> Surface {
+        let o = &self.objects[hit.object as usize];
+        let flat = |p: Vec3A, n: Vec3A| Surface {
+            p,
+            ng: n,
+            ns: n,
+            smooth: false,
+            material: o.material,
+            object: hit.object,
+            prim: NO_PRIM,
+            offset: None,
+        };
+        match &o.geometry {
+            Geometry::Sphere(s) => {
+                let p = ray.at(hit.t);
+                flat(p, s.normal(p))
+            }
+            Geometry::Quad(q) => flat(ray.at(hit.t), q.normal),
+            Geometry::Instance(i) => self.instances[*i as usize].surface(hit, *i),
+        }
+    }
+
+    /// A ray from surface `s` along `dir`, starting where it cannot meet
+    /// `s` again by rounding.
+    #[inline(always)]
+    pub fn spawn(&self, s: &Surface, dir: Vec3A) -> Ray {
+        match &s.offset {
+            None => Ray::new(s.p, dir),
+            Some(off) => Ray::new(self.instances[off.instance as usize].spawn_origin(off, s.ng, dir), dir),
+        }
+    }
+
+    #[inline(always)]
+    pub fn material(&self, index: u32) -> &SurfaceMaterial {
+        &self.materials[index as usize]
+    }
+}

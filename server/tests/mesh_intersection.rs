@@ -1,0 +1,205 @@
+//! Meshes and the BVH, checked against brute force and for watertightness.
+
+mod common;
+
+use common::{mesh_object, scene, scene_json};
+use pathstream::model::generate::icosphere;
+use pathstream::model::MeshData;
+use pathstream::render::isa::Portable;
+use pathstream::render::math::{DVec3, Vec3A};
+use pathstream::render::ray::Ray;
+use pathstream::render::sampler::Sampler;
+use pathstream::render::scene::BUILTIN_NAMES;
+use pathstream::render::world::{AccelChoice, Origin, World};
+use pathstream::render::Scene;
+use serde_json::json;
+
+fn unit(s: &mut Sampler) -> Vec3A {
+    let z = 1.0 - 2.0 * s.next_f32();
+    let phi = std::f32::consts::TAU * s.next_f32();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Random triangles (a soup, some sharing vertices) inside a box.
+fn soup(n: usize, seed: u64) -> MeshData {
+    let mut s = Sampler::new(seed, 0, 0);
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        let c = [s.next_f32() * 80.0 + 10.0, s.next_f32() * 60.0 + 10.0, s.next_f32() * 120.0 + 20.0];
+        let base = positions.len() as u32;
+        for _ in 0..3 {
+            positions.push([c[0] + s.next_f32() * 12.0 - 6.0, c[1] + s.next_f32() * 12.0 - 6.0, c[2] + s.next_f32() * 12.0 - 6.0]);
+        }
+        // Every fourth triangle reuses two vertices of the one before.
+        if i % 4 == 3 {
+            triangles.push([base - 3, base - 2, base]);
+        } else {
+            triangles.push([base, base + 1, base + 2]);
+        }
+    }
+    MeshData { name: "soup".into(), positions, normals: None, triangles, materials: vec![0; n] }
+}
+
+/// cornell-glass with a soup of triangles and an icosphere placed twice
+/// (rotated, unevenly scaled): spheres, quads-free walls and meshes together.
+fn mixed_scene() -> Scene {
+    let mut j = scene_json("cornell-glass");
+    let objects = j["objects"].as_array_mut().expect("objects");
+    objects.push(mesh_object(&soup(300, 1), "white", serde_json::Value::Null, false));
+    let ball = icosphere(2);
+    objects.push(mesh_object(&ball, "mirror", json!({"translate": [30, 50, 100], "scale": [8, 5, 11],
+        "rotate": {"axis": [1, 2, 3], "deg": 40}}), true));
+    objects.push(mesh_object(&ball, "white", json!({"translate": [70, 60, 40], "scale": 6}), false));
+    Scene::from_json_value(j).expect("valid")
+}
+
+/// Asserts that the BVH (or scan) and brute force agree on `rays`, also for
+/// rays that start on the surfaces the first rays hit.
+/// Ray origins are drawn in the box (lo, hi) of world space.
+fn agree(world: &World, (lo, hi): (DVec3, DVec3), rays: u64, seed: u64, what: &str) {
+    let (mut hits, mut on_surface) = (0u64, 0u64);
+    for i in 0..rays {
+        let mut s = Sampler::new(seed, i, 0);
+        let u = DVec3::new(f64::from(s.next_f32()), f64::from(s.next_f32()), f64::from(s.next_f32()));
+        let world_point = lo + (hi - lo) * u;
+        let o = Vec3A::from((world_point - world.origin).as_vec3());
+        let ray = Ray::new(o, unit(&mut s));
+        let fast = world.intersect(Portable, &ray, Origin::NONE);
+        let slow = world.intersect_brute(&ray, Origin::NONE);
+        assert_eq!(fast, slow, "{what}: ray {i}");
+        let Some(hit) = fast else { continue };
+        hits += 1;
+        // A ray leaving that surface, into a random direction.
+        let surface = world.surface(&hit, &ray);
+        let dir = unit(&mut s);
+        let from = Origin { object: hit.object, prim: hit.prim, entering: dir.dot(surface.ng) < 0.0 };
+        let next = world.spawn(&surface, dir);
+        let fast = world.intersect(Portable, &next, from);
+        let slow = world.intersect_brute(&next, from);
+        assert_eq!(fast, slow, "{what}: ray {i} leaving object {} prim {}", hit.object, hit.prim);
+        on_surface += u64::from(fast.is_some());
+    }
+    assert!(hits > rays / 4, "{what}: only {hits} of {rays} rays hit anything");
+    eprintln!("{what}: {hits} hits, {on_surface} secondary hits, all equal to brute force");
+}
+
+#[test]
+fn bvh_nearest_hit_equals_brute_force_on_random_meshes() {
+    let s = mixed_scene();
+    let world = World::new(&s, s.camera.position);
+    assert!(world.uses_bvh());
+    let the_box = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(99.0, 81.6, 170.0));
+    agree(&world, the_box, 500_000, 1, "mixed scene");
+    // Moved far away: the same in camera-relative coordinates.
+    let offset = DVec3::new(1e4, -3e4, 2e4);
+    let far = s.translated(offset);
+    let world = World::new(&far, far.camera.position);
+    agree(&world, (the_box.0 + offset, the_box.1 + offset), 100_000, 2, "mixed scene moved 4e4 away");
+    // And rays from far outside the box, meeting the walls from behind.
+    agree(&world, (the_box.0, the_box.1), 100_000, 4, "mixed scene seen from 4e4 away");
+}
+
+#[test]
+fn bvh_nearest_hit_equals_brute_force_on_every_built_in_scene() {
+    for name in BUILTIN_NAMES {
+        let s = scene(name);
+        let bvh = World::with_accel(&s, s.camera.position, AccelChoice::Bvh);
+        assert!(bvh.uses_bvh());
+        let c = s.camera.position;
+        let around = if name == "furnace" { 0.5 } else { 60.0 };
+        let region = (c - DVec3::splat(around) - DVec3::new(0.0, 0.0, if name == "furnace" { 0.0 } else { 150.0 }), c + DVec3::splat(around));
+        agree(&bvh, region, 100_000, 3, &format!("{name} through the BVH"));
+        let scan = World::new(&s, s.camera.position);
+        assert!(!scan.uses_bvh(), "{name} is scanned");
+    }
+}
+
+/// Rays from inside a closed mesh, aimed exactly at its vertices and at
+/// points of its shared edges: none may escape.
+#[test]
+fn rays_at_shared_edges_and_vertices_never_escape_a_closed_mesh() {
+    let ball = icosphere(4);
+    let mut j = json!({"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "vfov_deg": 40},
+        "materials": {"m": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}, "objects": []});
+    j["objects"] = json!([mesh_object(&ball, "m", serde_json::Value::Null, false)]);
+    let identity = Scene::from_json_value(j.clone()).expect("valid");
+    j["objects"] = json!([mesh_object(&ball, "m", json!({"scale": [3, 0.7, 1.3], "rotate": {"axis": [1, 1, 0], "deg": 33}}), false)]);
+    let transformed = Scene::from_json_value(j).expect("valid");
+    let edges: Vec<(u32, u32)> = ball.triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
+    for (scene, exact) in [(&identity, true), (&transformed, false)] {
+        // The camera, hence the render origin, is the world origin: with the
+        // identity placement object space is camera space exactly, so the
+        // aims below are exact there.
+        let world = World::new(scene, DVec3::ZERO);
+        let t = scene.imports[0].instances[0].world_from_object;
+        let mut escaped = 0;
+        let rays = 1_000_000u64;
+        for i in 0..rays {
+            let mut s = Sampler::new(11, i, 0);
+            let o = unit(&mut s) * (0.3 * s.next_f32());
+            let target = if i % 5 == 0 {
+                Vec3A::from(ball.positions[(i / 5) as usize % ball.positions.len()])
+            } else {
+                let (a, b) = edges[(s.next_u64() % edges.len() as u64) as usize];
+                let (a, b) = (Vec3A::from(ball.positions[a as usize]), Vec3A::from(ball.positions[b as usize]));
+                a + (b - a) * s.next_f32()
+            };
+            let (o, target) = if exact {
+                (o, target)
+            } else {
+                let map = |p: Vec3A| Vec3A::from(t.transform_point3(p.as_dvec3()).as_vec3());
+                (map(o), map(target))
+            };
+            let ray = Ray::new(o, (target - o).normalize());
+            if world.intersect(Portable, &ray, Origin::NONE).is_none() {
+                escaped += 1;
+            }
+        }
+        assert_eq!(escaped, 0, "{escaped} of {rays} rays escaped (exact aims: {exact})");
+    }
+}
+
+/// A ray leaving a triangle starts strictly on the side it leaves to, as
+/// the next traversal sees it (after the round trip camera -> object
+/// space), at any scale and distance from the camera: the offset covers
+/// every rounding on the way.
+#[test]
+fn spawned_origins_lie_on_the_side_they_leave_to() {
+    let ball = icosphere(3);
+    for (scale, at) in [(1e-3, 0.01), (1.0, 5.0), (1e3, 1e4), (3.0, 2e5)] {
+        let j = json!({"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "vfov_deg": 40},
+            "materials": {"m": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
+            "objects": [mesh_object(&ball, "m", json!({"translate": [at * 0.6, -at * 0.3, -at],
+                "scale": [scale, scale * 0.7, scale * 1.3], "rotate": {"axis": [1, 2, 0.5], "deg": 71}}), false)]});
+        let s = Scene::from_json_value(j).expect("valid");
+        let world = World::new(&s, s.camera.position);
+        let inst = &world.instances[0];
+        let (mut wrong_without_offset, mut tried) = (0, 0);
+        for i in 0..50_000u64 {
+            let mut smp = Sampler::new(21, i, 0);
+            // Aim at a random point of the ball from a random direction outside.
+            let target = inst.cam_from_obj.transform_point3a(unit(&mut smp) * 0.9);
+            let o = target + unit(&mut smp) * (3.0 * scale as f32);
+            let ray = Ray::new(o, (target - o).normalize());
+            let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else { continue };
+            let surface = world.surface(&hit, &ray);
+            let dir = unit(&mut smp);
+            let next = world.spawn(&surface, dir);
+            // The plane of the triangle in object space, exactly.
+            let v = inst.mesh.vertices(hit.prim).map(|p| p.as_dvec3());
+            let n = (v[1] - v[0]).cross(v[2] - v[0]);
+            let side = |p: Vec3A| n.dot(inst.obj_from_cam.transform_point3a(p).as_dvec3() - v[0]);
+            let leaving_front = inst.obj_from_cam.transform_vector3a(dir).as_dvec3().dot(n) > 0.0;
+            let d = side(next.origin);
+            assert!(d != 0.0 && (d > 0.0) == leaving_front, "scale {scale} at {at}: ray {i} starts on the wrong side ({d:e})");
+            tried += 1;
+            let bare = side(surface.p);
+            wrong_without_offset += usize::from(bare == 0.0 || (bare > 0.0) != leaving_front);
+        }
+        assert!(tried > 40_000, "scale {scale}: only {tried} hits");
+        // The offset is needed: the bare hit point is on the wrong side often.
+        assert!(wrong_without_offset > tried / 20, "scale {scale} at {at}: bare hit points wrong only {wrong_without_offset} of {tried} times");
+    }
+}
