@@ -14,6 +14,7 @@
 pub mod cache;
 pub mod fit;
 pub mod measure;
+pub mod meshes;
 pub mod plot;
 pub mod report;
 mod run;

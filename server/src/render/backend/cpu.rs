@@ -10,6 +10,8 @@ use crate::render::film::{Film, PixelSums};
 use crate::render::isa::Avx2;
 use crate::render::isa::{Isa, Portable};
 use crate::render::job::RenderJob;
+use crate::render::ray::Ray;
+use crate::render::world::{Hit, Origin, World};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -100,6 +102,41 @@ impl CpuBackend {
             None => false,
         }
     }
+}
+
+/// The nearest hit of every ray (leaving the surface it names), in
+/// parallel on rayon's threads with the widest kernels this CPU has: what
+/// the benchmarks time as rays per second.
+pub fn nearest_hits(world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+    let wide = wide_isa();
+    rays.par_chunks(4096).flat_map_iter(|chunk| hits_chunk(wide, world, chunk)).collect()
+}
+
+#[cfg(target_arch = "x86_64")]
+fn hits_chunk(wide: Option<Avx2>, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+    match wide {
+        // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
+        #[allow(unsafe_code)]
+        Some(isa) => unsafe { hits_avx2(isa, world, rays) },
+        None => hits_with(Portable, world, rays),
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn hits_chunk(_: Option<Portable>, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+    hits_with(Portable, world, rays)
+}
+
+/// `hits_with` compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn hits_avx2(isa: Avx2, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+    hits_with(isa, world, rays)
+}
+
+#[inline(always)]
+fn hits_with<I: Isa>(isa: I, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+    rays.iter().map(|(r, from)| world.intersect(isa, r, *from)).collect()
 }
 
 /// The wide kernels this CPU can run, if any.

@@ -91,9 +91,15 @@ pub struct Bvh {
 }
 
 impl Bvh {
+    /// Most primitives (or nodes) a hierarchy may index: stack entries keep
+    /// a slot or node index in 29 bits.
+    pub const MAX_PRIMS: usize = 1 << 28;
+
     /// A hierarchy over primitives with these boxes (finite, or the
     /// primitive can never be hit: such boxes are placed but never split on).
+    /// At most [`Bvh::MAX_PRIMS`] of them.
     pub fn build(boxes: &[Aabb]) -> Bvh {
+        assert!(boxes.len() <= Self::MAX_PRIMS, "too many primitives for one BVH");
         let (tree, prims) = build::build(boxes);
         let mut bvh = flatten::flatten(tree.as_ref());
         bvh.prims = prims;

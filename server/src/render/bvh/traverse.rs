@@ -19,6 +19,14 @@ const ROBUST: f32 = 1.0 + 2.0 * gamma(3);
 /// Deepest node stack a traversal needs: three more children than it pops
 /// at each level, and trees are at most 64 levels deep (see `build`).
 const STACK: usize = 3 * 64 + 4;
+/// The stack of trees at most `SHALLOW_DEPTH` deep (nearly all): small
+/// enough that setting it up costs nothing.
+const SHALLOW_STACK: usize = 64;
+const SHALLOW_DEPTH: u32 = (SHALLOW_STACK as u32 - 1) / 3;
+/// A stack entry holds a child as `child << 3 | count` (leaves hold at most
+/// `MAX_LEAF` < 8 primitives) and its entry distance.
+const COUNT_BITS: u32 = 3;
+const _: () = assert!(super::MAX_LEAF < 1 << COUNT_BITS);
 
 /// A ray prepared for box tests: origin and reciprocal direction in every
 /// lane, and for each axis which bound (min or max) it meets first.
@@ -89,19 +97,29 @@ impl Bvh {
     /// and returns the (possibly nearer) `t_max` to go on with; the last
     /// one is returned.
     #[inline(always)]
-    pub fn traverse(&self, ray: &BoxRay, mut t_max: f32, mut leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+    pub fn traverse(&self, ray: &BoxRay, t_max: f32, leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+        if self.depth <= SHALLOW_DEPTH {
+            self.traverse_with::<SHALLOW_STACK>(ray, t_max, leaf)
+        } else {
+            self.traverse_with::<STACK>(ray, t_max, leaf)
+        }
+    }
+
+    #[inline(always)]
+    fn traverse_with<const N: usize>(&self, ray: &BoxRay, mut t_max: f32, mut leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
         if self.nodes.is_empty() {
             return t_max;
         }
-        // (child, count, entry distance) as in `BvhNode`.
-        let mut stack = [(0u32, 0u32, 0.0f32); STACK];
+        const MASK: u32 = (1 << COUNT_BITS) - 1;
+        let mut stack = [(0u32, 0.0f32); N];
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let (child, count, t_near) = stack[top];
+            let (entry, t_near) = stack[top];
             if t_near > t_max {
                 continue;
             }
+            let (child, count) = (entry >> COUNT_BITS, entry & MASK);
             if count > 0 {
                 t_max = leaf(child, count, t_max);
                 continue;
@@ -110,15 +128,15 @@ impl Bvh {
             let (t, mut mask) = ray.test(node, t_max);
             let t = t.to_array();
             // The children hit, sorted by entry distance, nearest last.
-            let mut hits = [(0u32, 0u32, 0.0f32); 4];
+            let mut hits = [(0u32, 0.0f32); 4];
             let mut n = 0;
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let entry = (node.child[i], node.count[i], t[i]);
-                debug_assert_ne!(entry.0, EMPTY);
+                debug_assert_ne!(node.child[i], EMPTY);
+                let entry = (node.child[i] << COUNT_BITS | node.count[i], t[i]);
                 let mut j = n;
-                while j > 0 && hits[j - 1].2 < entry.2 {
+                while j > 0 && hits[j - 1].1 < entry.1 {
                     hits[j] = hits[j - 1];
                     j -= 1;
                 }
