@@ -22,7 +22,7 @@ use std::time::Instant;
 pub const RAY_IMAGE: (u32, u32) = (512, 512);
 
 /// One mesh size measured.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct MeshRow {
     pub triangles: usize,
     pub build_seconds: f64,

@@ -37,6 +37,8 @@ pub struct Sections {
     pub trade: bool,
     pub calibration: bool,
     pub specialisation: bool,
+    /// BVH build, rays/s and paths/s on generated meshes.
+    pub meshes: bool,
 }
 
 impl Sections {
@@ -45,6 +47,7 @@ impl Sections {
         trade: true,
         calibration: true,
         specialisation: true,
+        meshes: true,
     };
 }
 
@@ -68,6 +71,10 @@ pub struct Config {
     /// ...or for this long.
     pub reference_seconds: f64,
     pub cache_dir: PathBuf,
+    /// Triangle counts of the mesh section's meshes.
+    pub mesh_sizes: Vec<usize>,
+    /// Rendering seconds of each mesh's paths/s measurement.
+    pub mesh_seconds: f64,
 }
 
 impl Config {
@@ -87,6 +94,8 @@ impl Config {
             reference_error: 0.0025,
             reference_seconds: 1800.0,
             cache_dir: cache::default_dir(),
+            mesh_sizes: vec![10_000, 100_000, 1_000_000, 4_000_000],
+            mesh_seconds: 3.0,
         }
     }
 
@@ -102,6 +111,8 @@ impl Config {
             trade_seconds: 0.15,
             reference_error: 0.03,
             reference_seconds: 5.0,
+            mesh_sizes: vec![2_000, 20_000],
+            mesh_seconds: 0.1,
             ..Self::full()
         }
     }
@@ -184,6 +195,7 @@ pub struct Results {
     pub trade: Vec<TradeCurve>,
     pub calibration: Vec<CalibrationRow>,
     pub specialisation: Vec<SpecialisationRow>,
+    pub meshes: Vec<meshes::MeshRow>,
 }
 
 /// A benchmark that could not run.

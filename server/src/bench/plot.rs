@@ -6,6 +6,7 @@
 use super::fit::calibration_points;
 use super::report::LEVELS;
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
+use super::meshes::MeshRow;
 use super::{CalibrationRow, Results, TradeCurve};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -188,6 +189,46 @@ pub fn calibration(path: &Path, rows: &[CalibrationRow]) -> Result<(), PlotError
     })
 }
 
+/// Rays and paths per second against the mesh's triangle count (log-log).
+pub fn meshes(path: &Path, rows: &[MeshRow]) -> Result<(), PlotError> {
+    let series: [(&str, fn(&MeshRow) -> f64); 3] = [
+        ("camera rays/s", |m| m.camera_rays_per_sec),
+        ("bounce rays/s", |m| m.bounce_rays_per_sec),
+        ("paths/s", |m| m.paths_per_sec),
+    ];
+    let x = log_range(rows.iter().map(|m| m.triangles as f64));
+    let y = log_range(rows.iter().flat_map(|m| series.iter().map(move |(_, f)| f(m))));
+    png(path, |root| {
+        let e = |e: DrawingAreaErrorKind<_>| e.to_string();
+        let (root, side) = root.split_horizontally(SIZE.0 - LEGEND_WIDTH);
+        let entries: Vec<(String, RGBColor)> = series.iter().enumerate().map(|(i, (l, _))| ((*l).to_owned(), COLOURS[i])).collect();
+        legend(&side, &entries)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Meshes on the CPU: rays and paths per second", ("sans-serif", 24))
+            .margin(16)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x.clone().log_scale(), y.clone().log_scale())
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc("triangles")
+            .y_desc("per second (2 cores)")
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{:.1}M", v / 1e6))
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(e)?;
+        for (i, (_, f)) in series.iter().enumerate() {
+            let colour = COLOURS[i];
+            let points: Vec<(f64, f64)> = rows.iter().map(|m| (m.triangles as f64, f(m))).collect();
+            chart.draw_series(LineSeries::new(points.clone(), colour.stroke_width(3))).map_err(e)?;
+            chart.draw_series(points.iter().map(|&p| Circle::new(p, 5, colour.filled()))).map_err(e)?;
+        }
+        Ok(())
+    })
+}
+
 /// Writes every plot of `results` into `dir`; returns their paths.
 pub fn write_all(results: &Results, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let mut files = Vec::new();
@@ -203,6 +244,11 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<Vec<PathBuf>, PlotErro
     if !results.calibration.is_empty() {
         let path = dir.join("calibration.png");
         calibration(&path, &results.calibration)?;
+        files.push(path);
+    }
+    if results.meshes.len() > 1 {
+        let path = dir.join("meshes.png");
+        meshes(&path, &results.meshes)?;
         files.push(path);
     }
     Ok(files)

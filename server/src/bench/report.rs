@@ -55,7 +55,38 @@ pub fn markdown(r: &Results) -> String {
     trade(w, r);
     calibration(w, r);
     specialisation(w, r);
+    meshes(w, r);
     out
+}
+
+fn meshes(w: &mut String, r: &Results) {
+    if r.meshes.is_empty() {
+        return;
+    }
+    let _ = writeln!(w, "## Meshes (CPU)\n");
+    let _ = writeln!(
+        w,
+        "A closed bumpy sphere of N triangles, framed; camera rays through the centres of 512x512 pixels, one \
+         cosine-distributed bounce ray from each hit; paths: 256x256, max depth 4, NEE on, uniform sky. Build: \
+         loading the mesh, checks and the BVH.\n"
+    );
+    let _ = writeln!(w, "| triangles | build | memory | BVH nodes | depth | camera M rays/s | bounce M rays/s | M paths/s |");
+    let _ = writeln!(w, "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    for m in &r.meshes {
+        let _ = writeln!(
+            w,
+            "| {} | {} | {:.1} MiB | {} | {} | {:.2} | {:.2} | {:.2} |",
+            m.triangles,
+            secs(m.build_seconds),
+            m.memory_bytes as f64 / (1 << 20) as f64,
+            m.bvh_nodes,
+            m.bvh_depth,
+            m.camera_rays_per_sec / 1e6,
+            m.bounce_rays_per_sec / 1e6,
+            m.paths_per_sec / 1e6
+        );
+    }
+    let _ = writeln!(w);
 }
 
 fn throughput(w: &mut String, r: &Results) {
@@ -243,6 +274,9 @@ fn write_rows<T: Serialize>(path: PathBuf, rows: impl IntoIterator<Item = T>) ->
 /// Writes the CSV files into `dir`; returns their paths.
 pub fn write_csv(r: &Results, dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut files = Vec::new();
+    if !r.meshes.is_empty() {
+        files.push(write_rows(dir.join("meshes.csv"), &r.meshes)?);
+    }
     if !r.throughput.is_empty() {
         files.push(write_rows(
             dir.join("throughput.csv"),

@@ -50,7 +50,8 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     observer.begin(
         u64::from(s.throughput) * nb * nt * config.throughput_sizes.len() as u64
             + u64::from(traced) * nr * (1 + nb * settings.len() as u64)
-            + u64::from(s.specialisation) * opencl_count * nt * 2,
+            + u64::from(s.specialisation) * opencl_count * nt * 2
+            + u64::from(s.meshes) * config.mesh_sizes.len() as u64,
     );
 
     let results = Results {
@@ -82,6 +83,9 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     if s.specialisation {
         work.specialisation(&throughput_scenes)?;
     }
+    if s.meshes {
+        work.meshes()?;
+    }
     Ok(work.results)
 }
 
@@ -97,6 +101,16 @@ struct Work<'a> {
 }
 
 impl Work<'_> {
+    /// Build, memory, rays/s and paths/s of each mesh size (on the CPU).
+    fn meshes(&mut self) -> Result<(), BenchError> {
+        for &n in &self.config.mesh_sizes {
+            self.observer.step(&format!("mesh of {n} triangles"));
+            let row = super::meshes::measure(n, self.config.mesh_seconds)?;
+            self.results.meshes.push(row);
+        }
+        Ok(())
+    }
+
     fn throughput(&mut self, scenes: &Scenes) -> Result<(), BenchError> {
         let (config, observer, results) = (self.config, &mut *self.observer, &mut self.results);
         for backend in &mut self.backends {

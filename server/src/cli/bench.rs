@@ -20,6 +20,8 @@ pub enum SectionArg {
     Calibration,
     /// OpenCL: scene-specialised vs generic program.
     Specialisation,
+    /// Meshes: BVH build time and memory, rays/s, paths/s (CPU).
+    Meshes,
 }
 
 #[derive(clap::Args, Debug)]
@@ -61,6 +63,10 @@ pub struct BenchArgs {
     /// Seconds per throughput measurement [default: 3; 0.1 with --quick].
     #[arg(long, value_name = "S")]
     throughput_seconds: Option<f64>,
+    /// Triangle counts of the mesh section, comma-separated [default:
+    /// 10000,100000,1000000,4000000; 2000,20000 with --quick].
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    mesh_sizes: Vec<usize>,
     /// Render references until their estimated error is this low [default: 0.0025; 0.03 with --quick]...
     #[arg(long, value_name = "E")]
     reference_error: Option<f64>,
@@ -112,6 +118,7 @@ impl BenchArgs {
                 trade: has(SectionArg::Trade),
                 calibration: has(SectionArg::Calibration),
                 specialisation: has(SectionArg::Specialisation),
+                meshes: has(SectionArg::Meshes),
             };
         }
         if !self.scenes.is_empty() {
@@ -123,6 +130,12 @@ impl BenchArgs {
         }
         if let Some(size) = self.trade_size {
             c.trade_size = size;
+        }
+        if !self.mesh_sizes.is_empty() {
+            if let Some(bad) = self.mesh_sizes.iter().find(|&&n| !(100..=16_000_000).contains(&n)) {
+                return Err(CliError::Usage(format!("--mesh-sizes: {bad} is not between 100 and 16000000 triangles")));
+            }
+            c.mesh_sizes = self.mesh_sizes.clone();
         }
         c.trade_seconds = positive("trade-seconds", self.trade_seconds, c.trade_seconds)?;
         c.throughput_seconds = positive("throughput-seconds", self.throughput_seconds, c.throughput_seconds)?;

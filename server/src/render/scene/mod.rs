@@ -21,6 +21,7 @@ pub use json::{
     ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
 };
 pub use resolve::{FileResolver, LoadedModel, ModelSource, NoFiles, Resolver};
+pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};
 
 use crate::render::math::DVec3;
 

@@ -21,7 +21,7 @@ use crate::render::shape::{Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
 /// accel_crossover`: see docs/BENCHMARKS.md.
 pub const SCAN_MAX_OBJECTS: usize = 16;
 
-const _: () = assert!(SCAN_MAX_OBJECTS < 1 << 23);
+
 
 /// Which accelerator a world uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -31,6 +31,8 @@ pub enum AccelChoice {
     Auto,
     /// Always the BVH (tests compare it with the brute-force search).
     Bvh,
+    /// The scan whenever the scene has no meshes (to measure the crossover).
+    Scan,
 }
 
 impl World {
@@ -87,7 +89,12 @@ impl World {
         let radius = if scene_box.is_empty() { 1.0 } else { f64::from(scene_box.extent().length()) * 0.5 };
         let environment: Vec3A = scene.environment.as_vec3().into();
         let lights = Lights::new(&objects, &instances, &materials, environment, radius);
-        let scan = choice == AccelChoice::Auto && instances.is_empty() && objects.len() <= SCAN_MAX_OBJECTS;
+        let scan = instances.is_empty()
+            && match choice {
+                AccelChoice::Auto => objects.len() <= SCAN_MAX_OBJECTS,
+                AccelChoice::Bvh => false,
+                AccelChoice::Scan => true,
+            };
         let accel = if scan {
             let mut spheres = Vec::new();
             let mut quads = Vec::new();
@@ -103,7 +110,24 @@ impl World {
                 quads,
             }
         } else {
-            Accel::Bvh(Bvh::build(&boxes))
+            let big = big_spheres(&objects, &boxes);
+            let is_big = |i: usize| big.binary_search(&(i as u32)).is_ok();
+            let batch: Vec<(u32, Sphere)> = big
+                .iter()
+                .filter_map(|&i| match objects[i as usize].geometry {
+                    Geometry::Sphere(s) => Some((i, s)),
+                    _ => None,
+                })
+                .collect();
+            let ids: Vec<u32> = (0..boxes.len()).filter(|&i| !is_big(i)).map(|i| i as u32).collect();
+            let mut bvh = Bvh::build(&ids.iter().map(|&i| boxes[i as usize]).collect::<Vec<_>>());
+            for p in &mut bvh.prims {
+                *p = ids[*p as usize];
+            }
+            Accel::Bvh {
+                bvh,
+                big: batch.chunks(SPHERE_BATCH_LANES).map(SphereBatch::new).collect(),
+            }
         };
         Self {
             origin,
@@ -115,6 +139,37 @@ impl World {
             accel,
         }
     }
+}
+
+/// The spheres that enclose the scene: whose boxes hold at least three
+/// quarters of the other objects' centres (walls made of huge spheres, a
+/// furnace's shell). Nearly every ray enters their boxes, so the BVH could
+/// not cull them; they are tested first, eight at a time. Only the 64
+/// largest spheres are candidates.
+fn big_spheres(objects: &[WorldObject], boxes: &[Aabb]) -> Vec<u32> {
+    let mut spheres: Vec<(f32, u32)> = objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| match o.geometry {
+            Geometry::Sphere(s) => Some((s.radius, i as u32)),
+            _ => None,
+        })
+        .collect();
+    spheres.sort_by(|a, b| b.0.total_cmp(&a.0));
+    spheres.truncate(64);
+    let centers: Vec<Vec3A> = boxes.iter().map(Aabb::centroid).collect();
+    let others = centers.len().saturating_sub(1);
+    let mut big: Vec<u32> = spheres
+        .iter()
+        .filter(|&&(_, i)| {
+            let b = &boxes[i as usize];
+            let held = centers.iter().enumerate().filter(|&(j, c)| j != i as usize && b.contains(*c)).count();
+            4 * held >= 3 * others
+        })
+        .map(|&(_, i)| i)
+        .collect();
+    big.sort_unstable();
+    big
 }
 
 /// The f32 box holding [lo, hi] grown by `rel` of its size and position.
@@ -135,4 +190,35 @@ pub(super) fn transformed_bounds(b: &Aabb, a: &DAffine3) -> (DVec3, DVec3) {
         hi = hi.max(p);
     }
     (lo, hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::scene::builtin;
+
+    fn big_of(name: &str) -> usize {
+        let s = builtin(name).expect("built-in");
+        let w = World::with_accel(&s, s.camera.position, AccelChoice::Bvh);
+        match &w.accel {
+            Accel::Bvh { big, bvh } => {
+                let n: usize = big.iter().map(|b| b.ids.iter().filter(|&&id| id >= 0.0).count()).sum();
+                assert_eq!(n + bvh.prims.len(), w.objects.len(), "{name}: every object is in one place");
+                n
+            }
+            Accel::Scan { .. } => panic!("forced BVH"),
+        }
+    }
+
+    #[test]
+    fn spheres_that_dwarf_the_scene_are_scanned_not_put_in_the_bvh() {
+        // smallpt: the six radius-1e5 walls, not the radius-600 light above.
+        assert_eq!(big_of("smallpt"), 6);
+        // cornell with a field of small spheres: still the walls only.
+        // cornell: the six walls, not the radius-7 lamp.
+        assert_eq!(big_of("cornell"), 6);
+        assert_eq!(big_of("furnace"), 1);
+        // cornell-quads: the walls are quads; the balls and lamp are small.
+        assert_eq!(big_of("cornell-quads"), 0);
+    }
 }

@@ -129,7 +129,14 @@ enum Accel {
         /// The quads again with their object indices.
         quads: Vec<(u32, Quad)>,
     },
-    Bvh(Bvh),
+    /// A BVH over most objects; spheres that enclose the scene (smallpt's
+    /// walls, a furnace shell) are scanned first instead, in batches:
+    /// nearly every ray enters their boxes anyway, and their hit bounds the
+    /// BVH search from the start.
+    Bvh {
+        bvh: Bvh,
+        big: Vec<SphereBatch>,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -148,13 +155,13 @@ pub struct World {
 impl World {
     /// Whether nearest hits are found through a BVH (else by a scan).
     pub fn uses_bvh(&self) -> bool {
-        matches!(self.accel, Accel::Bvh(_))
+        matches!(self.accel, Accel::Bvh { .. })
     }
 
     /// The BVH over the objects, if the world uses one.
     pub fn object_bvh(&self) -> Option<&Bvh> {
         match &self.accel {
-            Accel::Bvh(b) => Some(b),
+            Accel::Bvh { bvh, .. } => Some(bvh),
             Accel::Scan { .. } => None,
         }
     }
@@ -165,9 +172,9 @@ impl World {
     pub fn intersect<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
         let hit = match &self.accel {
             Accel::Scan { sphere_batches, quads } => scan::nearest(isa, sphere_batches, quads, ray, from),
-            Accel::Bvh(bvh) => {
-                let mut best = Hit::NONE;
-                bvh.traverse(&BoxRay::new(ray.origin, ray.dir), f32::INFINITY, |first, count, _| {
+            Accel::Bvh { bvh, big } => {
+                let mut best = if big.is_empty() { Hit::NONE } else { scan::nearest(isa, big, &[], ray, from) };
+                bvh.traverse(&BoxRay::new(ray.origin, ray.dir), best.t, |first, count, _| {
                     for slot in first..first + count {
                         self.offer_object::<false>(bvh.prims[slot as usize], ray, from, &mut best);
                     }

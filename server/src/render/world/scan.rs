@@ -5,7 +5,7 @@
 use super::{Hit, Origin, NO_PRIM};
 use crate::render::isa::Isa;
 use crate::render::ray::Ray;
-use crate::render::scene::MAX_OBJECTS;
+use crate::render::scene::MAX_PLACED;
 use crate::render::shape::{Leaving, Quad, SphereBatch};
 
 #[inline(always)]
@@ -16,8 +16,9 @@ pub(super) fn nearest<I: Isa>(isa: I, batches: &[SphereBatch], quads: &[(u32, Qu
     };
     let (t, id) = isa.nearest_sphere(batches, ray, leaving);
     // id + 2^23 has the integer id in its low mantissa bits: no
-    // saturating float-to-int conversion on the way to the material.
-    const _: () = assert!(MAX_OBJECTS < 1 << 23);
+    // saturating float-to-int conversion on the way to the material
+    // (no world holds 2^23 objects).
+    const _: () = assert!(MAX_PLACED < 1 << 23);
     let object = (id + 8_388_608.0).to_bits() & 0x7F_FFFF;
     let mut best = Hit {
         t,
