@@ -40,8 +40,9 @@ impl BackendArg {
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
-    /// Built-in scene name (see `pathstream scenes`) or a scene JSON file.
-    #[arg(long, value_name = "NAME|FILE.json")]
+    /// Built-in scene name (see `pathstream scenes`), a scene JSON file, or a
+    /// model file (.obj, .gltf, .glb, .ply) framed and lit by default.
+    #[arg(long, value_name = "NAME|FILE")]
     scene: String,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512)]
@@ -134,6 +135,9 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         .validate()
         .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
     let scene = Scene::load(&args.scene).map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
 
     let backend_arg = match (args.backend, args.device) {
         (BackendArg::Cpu, Some(_)) => return Err(usage("--device: only with --backend opencl or auto".into())),

@@ -2,6 +2,7 @@
 //! WebSocket frame stream. `app(state)` builds the whole router; `start`
 //! binds and serves it until shut down.
 
+pub mod assets;
 pub mod config;
 pub mod error;
 mod metrics;

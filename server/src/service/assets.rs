@@ -1,0 +1,228 @@
+//! Uploaded model files (`POST /api/assets`): read once, kept as built
+//! meshes, named by the SHA-256 of their bytes (the same file uploaded twice
+//! is one asset). Scenes refer to them as `{"type": "mesh", "asset": ID}`;
+//! the store is the server's [`Resolver`], and it reads no files.
+//!
+//! Limits: the size of one upload (checked from `Content-Length` before the
+//! body is read, by the route), the triangles and vertices of one file, and
+//! the memory of all assets together. Deleting an asset frees it once no
+//! session's scene holds its meshes any more.
+
+use crate::model::{self, Limits};
+use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
+use serde::Serialize;
+use sha2::{Digest, Sha256};
+use std::collections::HashMap;
+use std::sync::{Arc, RwLock};
+use std::time::SystemTime;
+
+/// What the store accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AssetLimits {
+    /// Largest upload, in bytes.
+    pub max_asset_bytes: usize,
+    /// Most memory (built meshes) of all assets together, in bytes.
+    pub max_total_bytes: usize,
+    /// Most triangles (and vertices) in one file.
+    pub max_triangles: u64,
+}
+
+impl Default for AssetLimits {
+    fn default() -> Self {
+        Self {
+            max_asset_bytes: 256 << 20,
+            max_total_bytes: 4 << 30,
+            max_triangles: 16_000_000,
+        }
+    }
+}
+
+/// An uploaded model, read and built.
+#[derive(Debug)]
+pub struct Asset {
+    pub id: String,
+    /// The name it was uploaded under.
+    pub name: String,
+    pub format: &'static str,
+    /// Size of the uploaded file.
+    pub bytes: usize,
+    /// Memory of its built meshes.
+    pub memory: usize,
+    pub model: Arc<LoadedModel>,
+    pub created: SystemTime,
+}
+
+/// An asset as the API reports it.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct AssetInfo {
+    pub id: String,
+    pub name: String,
+    pub format: &'static str,
+    pub bytes: usize,
+    pub memory_bytes: usize,
+    pub triangles: u64,
+    pub meshes: usize,
+    pub instances: usize,
+    pub materials: Vec<String>,
+    pub has_camera: bool,
+    pub warnings: Vec<String>,
+}
+
+impl Asset {
+    pub fn info(&self) -> AssetInfo {
+        let m = &self.model;
+        AssetInfo {
+            id: self.id.clone(),
+            name: self.name.clone(),
+            format: self.format,
+            bytes: self.bytes,
+            memory_bytes: self.memory,
+            triangles: m.triangles(),
+            meshes: m.meshes.len(),
+            instances: m.instances.len(),
+            materials: m.materials.iter().map(|(n, _)| n.clone()).collect(),
+            has_camera: m.camera.is_some(),
+            warnings: m.warnings.clone(),
+        }
+    }
+}
+
+/// Why an upload was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AssetError {
+    /// The file cannot be read as a model (the message names the problem).
+    #[error("{0}")]
+    Invalid(String),
+    #[error("the file is {0} bytes, more than the limit of {1} bytes (--max-asset-bytes)")]
+    TooLarge(usize, usize),
+    #[error("the assets would hold {need} bytes, more than the limit of {limit} bytes; delete some (DELETE /api/assets/ID)")]
+    Full { need: usize, limit: usize },
+}
+
+/// The uploaded assets, by id.
+#[derive(Debug, Default)]
+pub struct AssetStore {
+    pub limits: AssetLimits,
+    assets: RwLock<HashMap<String, Arc<Asset>>>,
+}
+
+/// The id of some bytes: their SHA-256, in hex.
+pub fn asset_id(bytes: &[u8]) -> String {
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+impl AssetStore {
+    pub fn new(limits: AssetLimits) -> Self {
+        Self {
+            limits,
+            assets: RwLock::default(),
+        }
+    }
+
+    /// Reads and stores an upload (slow: call it off the async runtime).
+    /// Returns the asset and whether it is new (false: the same bytes were
+    /// uploaded before).
+    pub fn add(&self, name: &str, bytes: &[u8]) -> Result<(Arc<Asset>, bool), AssetError> {
+        if bytes.len() > self.limits.max_asset_bytes {
+            return Err(AssetError::TooLarge(bytes.len(), self.limits.max_asset_bytes));
+        }
+        let id = asset_id(bytes);
+        if let Some(a) = self.get(&id) {
+            return Ok((a, false));
+        }
+        let name = if name.trim().is_empty() { "upload" } else { name.trim() };
+        let format = match model::detect(name, bytes) {
+            Some(model::Format::Obj) => "obj",
+            Some(model::Format::Gltf) => "gltf",
+            Some(model::Format::Glb) => "glb",
+            Some(model::Format::Ply) => "ply",
+            None => {
+                return Err(AssetError::Invalid(format!(
+                    "{name}: not a model file this server reads (OBJ, glTF 2.0 .gltf/.glb, PLY); \
+                     name the upload with ?name=FILE.ext if its content does not say"
+                )))
+            }
+        };
+        let limits = Limits {
+            max_triangles: self.limits.max_triangles,
+            max_vertices: self.limits.max_triangles,
+        };
+        let read = model::load_bytes(bytes, name, &limits).map_err(|e| AssetError::Invalid(e.to_string()))?;
+        let loaded = LoadedModel::new(name, read).map_err(AssetError::Invalid)?;
+        let memory = loaded.memory_bytes();
+        let asset = Arc::new(Asset {
+            id: id.clone(),
+            name: name.to_owned(),
+            format,
+            bytes: bytes.len(),
+            memory,
+            model: Arc::new(loaded),
+            created: SystemTime::now(),
+        });
+        let mut assets = self.assets.write().unwrap_or_else(|e| e.into_inner());
+        if let Some(a) = assets.get(&id) {
+            return Ok((a.clone(), false));
+        }
+        let need = assets.values().map(|a| a.memory).sum::<usize>() + memory;
+        if need > self.limits.max_total_bytes {
+            return Err(AssetError::Full { need, limit: self.limits.max_total_bytes });
+        }
+        assets.insert(id, asset.clone());
+        Ok((asset, true))
+    }
+
+    pub fn get(&self, id: &str) -> Option<Arc<Asset>> {
+        self.assets.read().unwrap_or_else(|e| e.into_inner()).get(id).cloned()
+    }
+
+    /// Forgets an asset; false if there was none.
+    pub fn remove(&self, id: &str) -> bool {
+        self.assets.write().unwrap_or_else(|e| e.into_inner()).remove(id).is_some()
+    }
+
+    /// Every asset, oldest first.
+    pub fn list(&self) -> Vec<Arc<Asset>> {
+        let mut all: Vec<_> = self.assets.read().unwrap_or_else(|e| e.into_inner()).values().cloned().collect();
+        all.sort_by(|a, b| a.created.cmp(&b.created).then_with(|| a.id.cmp(&b.id)));
+        all
+    }
+
+    /// Memory of all assets' meshes.
+    pub fn memory(&self) -> usize {
+        self.assets.read().unwrap_or_else(|e| e.into_inner()).values().map(|a| a.memory).sum()
+    }
+}
+
+impl Resolver for AssetStore {
+    fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
+        match source {
+            ModelSource::Asset(id) => self
+                .get(id)
+                .map(|a| a.model.clone())
+                .ok_or_else(|| format!("no asset '{id}' on this server (upload the file with POST /api/assets)")),
+            ModelSource::File(_) => NoFiles.resolve(source),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_the_sha256_of_the_bytes() {
+        assert_eq!(asset_id(b"abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+    }
+
+    #[test]
+    fn oversized_and_unknown_uploads_are_refused_by_name() {
+        let store = AssetStore::new(AssetLimits { max_asset_bytes: 8, ..AssetLimits::default() });
+        assert_eq!(store.add("x.obj", &[0; 9]).unwrap_err(), AssetError::TooLarge(9, 8));
+        let e = store.add("notes.txt", b"hello").unwrap_err();
+        assert!(e.to_string().contains("not a model file"), "{e}");
+        assert!(store.list().is_empty());
+        let missing = store.resolve(ModelSource::Asset("feed")).unwrap_err();
+        assert!(missing.contains("no asset 'feed'"), "{missing}");
+        assert!(store.resolve(ModelSource::File("/etc/passwd")).is_err());
+    }
+}
