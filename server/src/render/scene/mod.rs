@@ -5,11 +5,13 @@
 //! (see `render::world`).
 
 mod builtin;
+mod edit;
 mod json;
 mod transform;
 mod validate;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
+pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
 pub use json::{
     CameraJson, FresnelJson, GlassJson, MaterialJson, ObjectJson, QuadJson, SceneJson, SphereJson, SurfaceJson,
 };
