@@ -12,6 +12,8 @@ pub enum ApiError {
     BadRequest(String),
     #[error("{0}")]
     NotFound(String),
+    #[error("{0}")]
+    MethodNotAllowed(String),
     #[error("missing or wrong bearer token")]
     Unauthorized,
     #[error("request body is larger than the limit of {0} bytes")]
@@ -27,6 +29,7 @@ impl ApiError {
         match self {
             ApiError::BadRequest(_) => StatusCode::BAD_REQUEST,
             ApiError::NotFound(_) => StatusCode::NOT_FOUND,
+            ApiError::MethodNotAllowed(_) => StatusCode::METHOD_NOT_ALLOWED,
             ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
             ApiError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
             ApiError::TooMany(_) => StatusCode::TOO_MANY_REQUESTS,
@@ -36,6 +39,13 @@ impl ApiError {
 
     pub fn unknown_session(id: &str) -> Self {
         ApiError::NotFound(format!("no session '{id}'"))
+    }
+}
+
+/// A refused scene edit is the client's mistake; its message names the field.
+impl From<crate::render::scene::EditError> for ApiError {
+    fn from(e: crate::render::scene::EditError) -> Self {
+        ApiError::BadRequest(e.to_string())
     }
 }
 
