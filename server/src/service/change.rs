@@ -15,10 +15,9 @@
 //! same message then applies to the new scene), then `camera`, `light` and
 //! `quality`.
 
-use super::error::{parse_json, ApiError};
+use super::error::{parse_field, parse_json, ApiError};
 use crate::render::scene::{builtin, CameraEdit, LightEdit, BUILTIN_NAMES};
 use crate::render::{Preset, Quality, Scene};
-use serde::de::DeserializeOwned;
 use serde_json::Value;
 
 /// One change to a session.
@@ -71,25 +70,12 @@ impl Change {
             .filter_map(|&key| map.remove(key).map(|v| (key, v)))
             .map(|(key, v)| match key {
                 "scene" => Change::scene(v),
-                "camera" => Ok(Change::Camera(from_field(key, v)?)),
-                "light" => Ok(Change::Light(from_field(key, v)?)),
+                "camera" => Ok(Change::Camera(parse_field(key, v)?)),
+                "light" => Ok(Change::Light(parse_field(key, v)?)),
                 _ => Ok(Change::Quality(v)),
             })
             .collect()
     }
-}
-
-/// `value` as a `T`; errors name the path below `key`.
-fn from_field<T: DeserializeOwned>(key: &str, value: Value) -> Result<T, ApiError> {
-    serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
-        let inner = e.into_inner();
-        if path == "." {
-            ApiError::BadRequest(format!("{key}: {inner}"))
-        } else {
-            ApiError::BadRequest(format!("{key}.{path}: {inner}"))
-        }
-    })
 }
 
 /// `current` with the fields of `patch` (a JSON object) replaced; a
@@ -111,7 +97,7 @@ pub fn patch_quality(current: &Quality, patch: &Value) -> Result<Quality, ApiErr
             m.insert(k.clone(), v.clone());
         }
     }
-    let q: Quality = from_field("quality", merged)?;
+    let q: Quality = parse_field("quality", merged)?;
     q.validate().map_err(|e| ApiError::BadRequest(e.to_string()))?;
     Ok(q)
 }

@@ -23,7 +23,7 @@ use tokio::sync::watch;
 pub const PASS_TARGET: Duration = Duration::from_millis(30);
 
 /// Everything that a change restarts.
-pub struct SessionState {
+struct SessionState {
     pub scene_name: String,
     pub scene: Scene,
     pub width: u32,
