@@ -206,3 +206,95 @@ fn commands_for_one_session_and_exit_codes() {
         .expect("runs");
     assert_eq!(nobody.status.code(), Some(4), "{}", text(&nobody.stderr));
 }
+
+/// A stand-in server that answers `POST /api/sessions` only when told to,
+/// so that a test can press Ctrl-C while the session is being created. It
+/// records every request line it gets.
+struct HeldServer {
+    url: String,
+    /// Request lines, as they arrive.
+    requests: std::sync::mpsc::Receiver<String>,
+    /// Lets the held POST answer.
+    release: std::sync::mpsc::Sender<()>,
+}
+
+/// Reads one HTTP/1.1 request (head and `content-length` body); its request line.
+fn read_request(stream: &mut std::net::TcpStream) -> Option<String> {
+    use std::io::Read;
+    let mut data = Vec::new();
+    let mut buf = [0u8; 4096];
+    let head_end = loop {
+        if let Some(i) = data.windows(4).position(|w| w == b"\r\n\r\n") {
+            break i + 4;
+        }
+        let n = stream.read(&mut buf).ok().filter(|&n| n > 0)?;
+        data.extend_from_slice(&buf[..n]);
+    };
+    let head = String::from_utf8_lossy(&data[..head_end]).into_owned();
+    let length: usize = head
+        .lines()
+        .find_map(|l| l.to_ascii_lowercase().strip_prefix("content-length:").map(|v| v.trim().parse().unwrap_or(0)))
+        .unwrap_or(0);
+    while data.len() < head_end + length {
+        let n = stream.read(&mut buf).ok().filter(|&n| n > 0)?;
+        data.extend_from_slice(&buf[..n]);
+    }
+    head.lines().next().map(str::to_owned)
+}
+
+/// Serves `created` (a session status) as the answer to the held POST, and
+/// 204 to anything else; one request per connection.
+fn held_server(created: String) -> HeldServer {
+    use std::io::Write;
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("bind");
+    let url = format!("http://{}", listener.local_addr().expect("addr"));
+    let (seen, requests) = std::sync::mpsc::channel();
+    let (release, released) = std::sync::mpsc::channel::<()>();
+    std::thread::spawn(move || {
+        for stream in listener.incoming().take(8) {
+            let Ok(mut stream) = stream else { continue };
+            let Some(line) = read_request(&mut stream) else { continue };
+            let _ = seen.send(line.clone());
+            let response = if line.starts_with("POST /api/sessions ") {
+                let _ = released.recv_timeout(Duration::from_secs(30));
+                format!("HTTP/1.1 201 Created\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{created}", created.len())
+            } else {
+                "HTTP/1.1 204 No Content\r\nconnection: close\r\n\r\n".to_owned()
+            };
+            let _ = stream.write_all(response.as_bytes());
+        }
+    });
+    HeldServer { url, requests, release }
+}
+
+#[test]
+fn ctrl_c_while_the_session_is_created_still_deletes_it() {
+    // A real session status for the stand-in to answer with.
+    let real = start_server();
+    let created = client(&real, &["create", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "1"]);
+    assert!(created.status.success(), "{}", text(&created.stderr));
+    let status: serde_json::Value = serde_json::from_slice(&created.stdout).expect("status JSON");
+    let id = status["id"].as_str().expect("id").to_owned();
+    let held = held_server(status.to_string());
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut render = Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
+        .args(["--server", &held.url, "render", "--scene", "furnace", "--width", "8", "--height", "8", "-o"])
+        .arg(dir.path().join("never.png"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs");
+    let first = held.requests.recv_timeout(Duration::from_secs(20)).expect("the create request");
+    assert!(first.starts_with("POST /api/sessions "), "{first}");
+    // Ctrl-C while the server has not answered yet.
+    let kill = Command::new("kill").args(["-INT", &render.id().to_string()]).status().expect("kill");
+    assert!(kill.success());
+    std::thread::sleep(Duration::from_millis(300));
+    held.release.send(()).expect("release the answer");
+    let status = render.wait().expect("exits");
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut render.stderr.take().expect("stderr"), &mut stderr).expect("stderr");
+    assert_eq!(status.code(), Some(130), "interrupted, not killed by the signal: {status:?} {stderr}");
+    let rest: Vec<String> = held.requests.try_iter().collect();
+    assert_eq!(rest, [format!("DELETE /api/sessions/{id} HTTP/1.1")], "the session made meanwhile was deleted");
+}

@@ -112,16 +112,33 @@ fn bad_arguments_exit_2_naming_the_problem() {
 #[test]
 fn opencl_throughput_and_specialisation() {
     let cache = tempfile::tempdir().expect("tempdir");
+    let out_dir = tempfile::tempdir().expect("tempdir");
     let out = pathstream(&[
         "bench", "--quick", "--backend", "opencl", "--sections", "throughput,specialisation", "--scenes", "cornell",
-        "--cache", path(cache.path()),
+        "--cache", path(cache.path()), "--out", path(out_dir.path()),
     ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let md = text(&out.stdout);
     assert!(md.contains("## OpenCL: scene-specialised vs generic program"), "{md}");
     let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| opencl | cornell |")).collect();
     assert_eq!(rows.len(), 2, "{md}");
+    // | device | scene | size | specialised M paths/s | generic M paths/s | ratio |
     let spec = md.lines().find(|l| l.contains("| cornell | 64x64 |") && !l.starts_with("| opencl")).expect("row");
-    let ratio: f64 = spec.rsplit('|').nth(1).expect("cell").trim().parse().expect("ratio");
-    assert!(ratio > 0.0 && ratio.is_finite(), "{spec}");
+    let cells: Vec<f64> = spec.split('|').map(str::trim).skip(4).take(3).map(|c| c.parse().expect("number")).collect();
+    let [specialised, generic, ratio] = cells[..] else { panic!("three numbers: {spec}") };
+    // The ratio is specialised / generic, to the table's rounding (each
+    // figure to 0.005).
+    let exact = specialised / generic;
+    let rounding = 0.005 + exact * (0.005 / specialised + 0.005 / generic);
+    assert!((ratio - exact).abs() <= rounding, "ratio {ratio} vs {specialised} / {generic} = {exact:.4}: {spec}");
+    // Both programs trace the same paths (the same image: tests/opencl.rs),
+    // so neither can be several times the other on any device.
+    assert!((0.25..4.0).contains(&ratio), "{spec}");
+    // The CSV holds the unrounded rates behind the table.
+    let csv = csv_rows(&out_dir.path().join("specialisation.csv"));
+    let col = |name: &str| csv[0].iter().position(|h| h == name).unwrap_or_else(|| panic!("{name} in {:?}", csv[0]));
+    let rate = |name: &str| csv[1][col(name)].parse::<f64>().expect("number") / 1e6;
+    let (s, g) = (rate("specialised_paths_per_sec"), rate("generic_paths_per_sec"));
+    assert!((s - specialised).abs() <= 0.005 + 1e-9 && (g - generic).abs() <= 0.005 + 1e-9, "CSV {s} {g} vs table {spec}");
+    assert!((s / g - ratio).abs() <= 0.005 + 1e-9, "CSV ratio {} vs table {ratio}", s / g);
 }

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{assert_agree, assert_clean, assert_mean, furnace, render_on, scene};
+use common::{assert_agree, assert_clean, assert_mean, assert_region, furnace, region, render_on, scene};
 use pathstream::render::math::DVec3;
 use pathstream::render::scene::{GlassJson, MaterialJson, ObjectJson, SphereJson, SurfaceJson};
 use pathstream::render::{Backend, BackendChoice, Film, Quality, Scene};
@@ -151,35 +151,115 @@ fn nested_and_touching_spheres() {
     }
 }
 
-/// Grazing rays: a camera looking along a wall, and rays tangent to spheres.
+/// The direction through raster position (`x`, `y`) of a `w` x `h` image
+/// (the pinhole camera of `render::camera`, in f64), not normalised.
+fn camera_dir(cam: &pathstream::render::scene::Camera, w: u32, h: u32, x: f64, y: f64) -> DVec3 {
+    let forward = (cam.look_at - cam.position).normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    let extent = 2.0 * (cam.vfov_deg.to_radians() / 2.0).tan();
+    forward + right * (extent * f64::from(w) / f64::from(h) * (x / f64::from(w) - 0.5)) + up * (extent * (0.5 - y / f64::from(h)))
+}
+
+/// Grazing rays, part one: a camera 1e-3 above a lit floor, looking along
+/// it. With one bounce (emitters seen directly plus direct light), a floor
+/// point p under a sphere light of radiance L, radius r and centre c
+/// reflects exactly albedo L r^2 cos(theta) / |c - p|^2. The rows below the
+/// horizon see points within 0.03 of the camera's foot, where this varies
+/// by less than 1%, so each region must match it (pixel centres, 1% floor).
 #[test]
-fn grazing_rays() {
-    // The camera sits 1e-3 above a lit floor, looking along it.
+fn grazing_rays_along_a_floor() {
+    let (albedo, radiance, radius, lamp) = (0.7, 20.0, 1.0, DVec3::new(0.0, 5.0, 0.0));
     let json = serde_json::json!({
         "camera": {"position": [0, 1e-3, 5], "look_at": [0, 1e-3, 0], "vfov_deg": 60},
         "materials": {
-            "floor": {"type": "diffuse", "albedo": [0.7, 0.7, 0.7]},
-            "lamp": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [20, 20, 20]}
+            "floor": {"type": "diffuse", "albedo": [albedo, albedo, albedo]},
+            "lamp": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [radiance, radiance, radiance]}
         },
         "objects": [
             {"type": "quad", "corner": [-50, 0, -50], "edge_u": [0, 0, 100], "edge_v": [100, 0, 0], "material": "floor"},
             {"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5, "material": "floor"},
-            {"type": "sphere", "center": [0, 5, 0], "radius": 1, "material": "lamp"}
+            {"type": "sphere", "center": lamp.to_array(), "radius": radius, "material": "lamp"}
         ]
     });
     let along = Scene::from_json_value(json).expect("valid");
+    let quality = Quality { max_depth: 1, filter: pathstream::render::Filter::Box, ..q(9) };
+    let expected = |x: u32, y: u32| {
+        let d = camera_dir(&along.camera, 32, 32, f64::from(x) + 0.5, f64::from(y) + 0.5);
+        let p = along.camera.position + d * (along.camera.position.y / -d.y);
+        let to_lamp = lamp - p;
+        albedo * radiance * radius * radius * (to_lamp.y / to_lamp.length()) / to_lamp.length_squared()
+    };
     for mut b in backends() {
-        let film = render_on(&mut b, &along, 32, 32, &q(9), 64);
+        let film = render_on(&mut b, &along, 32, 32, &quality, 64);
         assert_clean(&film, "camera along a wall");
-        // The floor below the horizon is lit: the bottom rows are not black.
-        let img = film.mean();
-        let bottom: f64 = img[img.len() - 32..].iter().map(|p| f64::from(p[0])).sum();
-        assert!(bottom > 0.0, "{}: floor along the camera unlit", b.name());
+        // Rows 17.. look at least 2 degrees down (row 16 reaches the horizon).
+        for y0 in (17..32).step_by(5) {
+            for x0 in (0..32).step_by(8) {
+                let (xs, ys) = (x0..x0 + 8, y0..y0 + 5);
+                let want = ys.clone().flat_map(|y| xs.clone().map(move |x| (x, y))).map(|(x, y)| expected(x, y)).sum::<f64>() / 40.0;
+                assert_region(&region(&film, xs, ys), want, 4.5, 0.01 * want, &format!("{}: floor at columns {x0}.., rows {y0}..", b.name()));
+            }
+        }
     }
-    // Tangent rays: the ball's silhouette in smallpt is clean on every backend.
+}
+
+/// Grazing rays, part two: rays tangent to a sphere. A diffuse ball (albedo
+/// a = 0.5) inside a black shell that emits 1 everywhere: every point of the
+/// ball sees only the shell, so it reflects exactly a; the shell is 1. A
+/// pixel is then 1 - (1 - a) x (the part of it the ball covers), computed
+/// here in f64 on a 64x64 grid per pixel (box filter). A bounce from a
+/// grazing hit that wrongly hits the ball again gives a^2 and darkens the
+/// silhouette; a missed tangent hit brightens it. NEE off: every sample of a
+/// pixel the ball covers wholly or not at all is exact.
+#[test]
+fn grazing_rays_tangent_to_a_sphere() {
+    let (center, radius, a) = (DVec3::new(0.1, -0.05, -0.6), 0.2, 0.5);
+    let mut json = furnace(0.0, 1.0).to_json();
+    json.materials.insert("ball".into(), MaterialJson::Diffuse(SurfaceJson { albedo: [a; 3], emission: None }));
+    json.objects.push(ObjectJson::Sphere(SphereJson { center: center.to_array(), radius, material: "ball".into() }));
+    let s = Scene::from_json(&json).expect("valid");
+    let n = 24u32;
+    const GRID: u32 = 64;
+    let coverage: Vec<f64> = (0..n * n)
+        .map(|i| {
+            let (x, y) = (i % n, i / n);
+            let mut hits = 0u32;
+            for sy in 0..GRID {
+                for sx in 0..GRID {
+                    let sub = |k: u32| (f64::from(k) + 0.5) / f64::from(GRID);
+                    let d = camera_dir(&s.camera, n, n, f64::from(x) + sub(sx), f64::from(y) + sub(sy)).normalize();
+                    let along = center.dot(d);
+                    hits += u32::from(along > 0.0 && center.length_squared() - along * along <= radius * radius);
+                }
+            }
+            f64::from(hits) / f64::from(GRID * GRID)
+        })
+        .collect();
+    let partial = coverage.iter().filter(|c| **c > 0.0 && **c < 1.0).count();
+    assert!(partial > 40, "the silhouette crosses {partial} pixels");
+    let expected = |x: u32, y: u32| 1.0 - (1.0 - a) * coverage[(y * n + x) as usize];
     for mut b in backends() {
-        let film = render_on(&mut b, &scene("cornell"), 32, 32, &q(10), 64);
-        assert_clean(&film, "tangent rays");
+        for nee in [false, true] {
+            let quality = Quality { max_depth: 3, rr_depth: 100, nee, filter: pathstream::render::Filter::Box, ..q(10) };
+            let film = render_on(&mut b, &s, n, n, &quality, 256);
+            let what = format!("{} nee {nee}", b.name());
+            assert_clean(&film, &what);
+            let img = film.mean();
+            for (i, c) in coverage.iter().enumerate() {
+                if !nee && (*c == 0.0 || *c == 1.0) {
+                    let v = f64::from(img[i][1]);
+                    assert!((v - (1.0 - (1.0 - a) * c)).abs() < 1e-5, "{what}: pixel {i} (coverage {c}): {v}");
+                }
+            }
+            for y0 in (0..n).step_by(6) {
+                for x0 in (0..n).step_by(6) {
+                    let want = (y0..y0 + 6).flat_map(|y| (x0..x0 + 6).map(move |x| (x, y))).map(|(x, y)| expected(x, y)).sum::<f64>() / 36.0;
+                    let r = region(&film, x0..x0 + 6, y0..y0 + 6);
+                    assert_region(&r, want, 5.0, 2e-3, &format!("{what}: silhouette region at ({x0}, {y0})"));
+                }
+            }
+        }
     }
 }
 
@@ -217,12 +297,23 @@ fn extreme_lights() {
                 }
             }
         }
-        // A light of radius 1e-4 as bright in total: power ~ E r^2, so scale E.
-        let tiny = with_light((7.0f64 / 1e-4).powi(2), 1e-4);
-        let film = render_on(&mut b, &tiny, 16, 16, &q(12), 64);
-        assert_clean(&film, "tiny light");
-        let mean: f64 = film.mean().iter().map(|p| f64::from(p[1])).sum::<f64>() / 256.0;
-        assert!(mean > 0.01, "{}: a radius-1e-4 light lights the room ({mean})", b.name());
+        // A light of radius 1e-4 gives the room the same light as one of
+        // radius 0.1 of equal power (radiance x r^2). Both sit in a corner
+        // the camera cannot see, so only the light they cast is compared;
+        // at 1.0 from the nearest wall the bigger one's size changes that
+        // by well under the 2% floor.
+        let corner = DVec3::new(2.5, 79.0, 160.0);
+        let at = |radius: f64| {
+            let mut s = with_light((7.0 / radius).powi(2), radius);
+            let light = s.light.expect("light");
+            s.objects[light].shape = pathstream::render::scene::Shape::Sphere { center: corner, radius };
+            Scene::from_json(&s.to_json()).expect("valid")
+        };
+        let tiny = render_on(&mut b, &at(1e-4), 16, 16, &q(12), 256);
+        let small = render_on(&mut b, &at(0.1), 16, 16, &q(13), 256);
+        assert_clean(&tiny, "tiny light");
+        assert!(common::regions(&small, 16)[0].mean[1] > 0.01, "the corner light lights the room");
+        assert_agree(&small, &tiny, 8, 4.5, 0.02, &format!("{}: a radius-1e-4 light vs one of radius 0.1 and equal power", b.name()));
     }
     // The camera inside a light: the emissive shell of the furnace seen from
     // inside, and a point on the light's own surface (the shell's inner side)
@@ -252,53 +343,99 @@ fn extreme_glass() {
     }
 }
 
-/// Resolutions 1x1, 1x4096 and 4096x1.
+/// Resolutions 1x1, 1x4096 and 4096x1: in the depth-capped furnace every
+/// pixel is exactly E (1 - a^(D+1)) / (1 - a) (so every pixel is rendered
+/// and none twice); and with the box filter the one pixel of a 1x1 image
+/// sees the whole frame: its value is the mean of a 16x16 image of it.
 #[test]
 fn extreme_resolutions() {
-    let s = scene("cornell");
+    let hot = furnace(0.5, 0.5);
+    let capped = Quality { max_depth: 3, rr_depth: 100, ..q(15) };
+    let cornell = scene("cornell");
+    let boxed = Quality { filter: pathstream::render::Filter::Box, ..q(15) };
     for mut b in backends() {
         for (w, h) in [(1, 1), (1, 4096), (4096, 1)] {
-            let film = render_on(&mut b, &s, w, h, &q(15), 2);
+            let film = render_on(&mut b, &hot, w, h, &capped, 2);
             assert_clean(&film, "resolution");
             assert_eq!(film.mean().len(), (w * h) as usize);
-            assert!(film.mean().iter().any(|p| p[0] > 0.0), "{}: {w}x{h} is black", b.name());
+            for (i, v) in film.mean().iter().flatten().enumerate() {
+                assert!((f64::from(*v) - 0.9375).abs() < 1e-5, "{}: {w}x{h}: value {i}: {v}", b.name());
+            }
         }
+        // Sixteen 1x1 renders with their own seeds: a mean and a standard
+        // error with 15 degrees of freedom (one pixel's even/odd halves give 1).
+        let ones: Vec<f64> = (0..16u64)
+            .map(|k| f64::from(render_on(&mut b, &cornell, 1, 1, &Quality { seed: 100 + k, ..boxed }, 64).mean()[0][1]))
+            .collect();
+        let one = ones.iter().sum::<f64>() / 16.0;
+        let one_var = ones.iter().map(|v| (v - one).powi(2)).sum::<f64>() / 15.0 / 16.0;
+        let many = region(&render_on(&mut b, &cornell, 16, 16, &boxed, 16), 0..16, 0..16);
+        let z = (one - many.mean[1]).abs() / (one_var + many.var[1]).sqrt();
+        assert!(z < 4.5, "{}: a 1x1 image {one} vs the mean of a 16x16 one {} ({z:.1} standard errors)", b.name(), many.mean[1]);
     }
 }
 
-/// Samples and seeds: 1 spp works (no error estimate yet); seeds 0 and
-/// u64::MAX are valid and differ.
+/// Samples and seeds: one sample is already exact where the answer is
+/// (the furnace), 1 then 3 samples are the same film as 4 at once, and
+/// there is no error estimate before the second; seeds 0 and u64::MAX
+/// are valid, differ, and converge to the same image.
 #[test]
 fn one_sample_and_extreme_seeds() {
     let s = scene("cornell");
+    let capped = Quality { max_depth: 3, rr_depth: 100, ..q(0) };
     for mut b in backends() {
-        let film = render_on(&mut b, &s, 8, 8, &q(0), 1);
-        assert_clean(&film, "1 spp");
+        let film = render_on(&mut b, &furnace(0.5, 0.5), 8, 8, &capped, 1);
         assert_eq!(film.error_estimate(), None);
-        let max = render_on(&mut b, &s, 8, 8, &q(u64::MAX), 4);
-        let zero = render_on(&mut b, &s, 8, 8, &q(0), 4);
+        for v in film.mean().iter().flatten() {
+            assert!((f64::from(*v) - 0.9375).abs() < 1e-5, "{}: 1 spp in the furnace: {v}", b.name());
+        }
+        let job = pathstream::render::RenderJob::new(&s, 8, 8, &q(0));
+        let mut stepwise = Film::new(8, 8);
+        b.render(&job, &mut stepwise, 1).expect("render");
+        assert_clean(&stepwise, "1 spp");
+        assert_eq!(stepwise.error_estimate(), None);
+        b.render(&job, &mut stepwise, 3).expect("render");
+        assert!(stepwise.error_estimate().is_some());
+        let at_once = render_on(&mut b, &s, 8, 8, &q(0), 4);
+        assert_eq!(stepwise.pixels(), at_once.pixels(), "{}: 1 + 3 samples vs 4", b.name());
+
+        let max = render_on(&mut b, &s, 16, 16, &q(u64::MAX), 32);
+        let zero = render_on(&mut b, &s, 16, 16, &q(0), 32);
         assert_clean(&max, "seed max");
         assert_ne!(max.pixels(), zero.pixels(), "{}", b.name());
+        assert_agree(&zero, &max, 8, 4.5, 0.0, &format!("{}: seed 0 vs seed u64::MAX", b.name()));
     }
 }
 
-/// Quality knobs at their ends: max depth 1 and 10000, clamp tiny and huge.
+/// Quality knobs at their ends, in the furnace (radiance 1 per bounce
+/// series, so each has a closed form): max depth 1 gives E (1 + a) = 0.75,
+/// max depth 10000 without roulette 1 - 0.5^10001 = 1; a clamp of 1e-6
+/// makes every sample 1e-6, one of 1e30 changes nothing. On cornell-glass
+/// they stay finite, and the clamp of 1e30 gives the very film of no clamp.
 #[test]
 fn quality_knobs_at_their_ends() {
-    let s = scene("cornell-glass");
+    let hot = furnace(0.5, 0.5);
+    let capped = Quality { max_depth: 3, rr_depth: 100, ..q(16) };
+    let cases = [
+        (Quality { max_depth: 1, ..q(16) }, 0.75),
+        (Quality { max_depth: 10_000, rr_depth: 10_000, ..q(16) }, 1.0),
+        (Quality { clamp: 1e-6, ..capped }, 1e-6),
+        (Quality { clamp: 1e30, ..capped }, 0.9375),
+    ];
+    let glass = scene("cornell-glass");
     for mut b in backends() {
-        for quality in [
-            Quality { max_depth: 1, ..q(16) },
-            Quality { max_depth: 10_000, rr_depth: 10_000, ..q(16) },
-            Quality { clamp: 1e-6, ..q(16) },
-            Quality { clamp: 1e30, ..q(16) },
-        ] {
-            let film = render_on(&mut b, &s, 8, 8, &quality, 8);
+        for (quality, expected) in cases {
+            let film = render_on(&mut b, &hot, 8, 8, &quality, 4);
             assert_clean(&film, "knobs");
-            if quality.clamp > 0.0 && quality.clamp < 1.0 {
-                assert!(film.mean().iter().flatten().all(|v| *v <= 1e-6 * 1.0001), "{}: clamp", b.name());
+            for v in film.mean().iter().flatten() {
+                assert!((f64::from(*v) - expected).abs() <= 1e-5 * expected, "{}: {quality:?}: {v} vs {expected}", b.name());
             }
+            let film = render_on(&mut b, &glass, 8, 8, &quality, 8);
+            assert_clean(&film, "knobs on cornell-glass");
         }
+        let huge = render_on(&mut b, &glass, 8, 8, &Quality { clamp: 1e30, ..q(17) }, 8);
+        let off = render_on(&mut b, &glass, 8, 8, &q(17), 8);
+        assert_eq!(huge.pixels(), off.pixels(), "{}: a clamp no sample reaches", b.name());
     }
 }
 

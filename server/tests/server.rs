@@ -102,31 +102,55 @@ async fn updates_restart_accumulation_and_change_the_image() {
     running.shutdown().await.expect("shutdown");
 }
 
+/// Luminance-weighted mean column of an image `width` pixels wide: where
+/// the light falls, left to right.
+fn centroid_x(img: &[[f32; 3]], width: usize) -> f64 {
+    let (mut sum, mut weighted) = (0.0, 0.0);
+    for (i, p) in img.iter().enumerate() {
+        let l = f64::from(p[0] + p[1] + p[2]);
+        sum += l;
+        weighted += l * (i % width) as f64;
+    }
+    weighted / sum
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn light_changes_the_image_where_expected() {
     let (running, base) = server(config()).await;
     let s = create(&base, json!({"scene": "cornell", "width": 16, "height": 16, "quality": {"spp": 256, "seed": 1}})).await;
     let id = s["id"].as_str().expect("id").to_owned();
-    let base_img = mean(&pfm(&base, &id, 256).await);
+    let base_img = pfm(&base, &id, 256).await;
 
-    // Twice the intensity: the only light, so every pixel doubles.
+    // Twice the intensity, same seed: every sample's path is the same and
+    // its radiance exactly doubles, so every pixel does, to f32 rounding.
     let st: Value = patch(&base, &id, "light", json!({"intensity": 24})).await.json().await.expect("json");
     assert_eq!(st["light"]["intensity"], 24.0);
-    let bright = mean(&pfm(&base, &id, 256).await);
-    for c in 0..3 {
-        let ratio = bright[c] / base_img[c];
-        assert!((ratio - 2.0).abs() < 0.1, "channel {c}: ratio {ratio}");
+    let bright = pfm(&base, &id, 256).await;
+    for (i, (b, a)) in bright.iter().zip(&base_img).enumerate() {
+        for c in 0..3 {
+            let (b, a) = (f64::from(b[c]), f64::from(a[c]));
+            assert!((b - 2.0 * a).abs() <= 2e-6 * a, "pixel {i} channel {c}: {b} vs 2 x {a}");
+        }
     }
+    assert!(mean(&base_img)[1] > 0.1, "the room is lit");
     // A red light: no green or blue at all.
     let st: Value = patch(&base, &id, "light", json!({"color": [1, 0, 0]})).await.json().await.expect("json");
     assert_eq!(st["light"]["color"], json!([1.0, 0.0, 0.0]));
     let red = mean(&pfm(&base, &id, 256).await);
     assert!(red[0] > 0.1 && red[1] == 0.0 && red[2] == 0.0, "{red:?}");
-    // Moving the light changes where light falls.
-    let r = patch(&base, &id, "light", json!({"position": [20, 60, 100], "color": [1, 1, 1]})).await;
-    assert_eq!(r.status(), 200);
-    let st: Value = r.json().await.expect("json");
-    assert_eq!(st["light"]["position"], json!([20.0, 60.0, 100.0]));
+    // Moving the light toward a wall moves the light in the image with it.
+    let centre = centroid_x(&bright, 16);
+    let mut seen = Vec::new();
+    for (x, side) in [(15.0, -1.0), (85.0, 1.0)] {
+        let r = patch(&base, &id, "light", json!({"position": [x, 60, 81.6], "color": [1, 1, 1]})).await;
+        assert_eq!(r.status(), 200);
+        let st: Value = r.json().await.expect("json");
+        assert_eq!(st["light"]["position"], json!([x, 60.0, 81.6]));
+        let moved = centroid_x(&pfm(&base, &id, 256).await, 16);
+        seen.push(moved);
+        assert!((moved - centre) * side > 1.5, "light at x = {x}: the image's centroid {moved:.2} vs {centre:.2} in the middle");
+    }
+    eprintln!("centroid column: light in the middle {centre:.2}, left {:.2}, right {:.2}", seen[0], seen[1]);
     running.shutdown().await.expect("shutdown");
 }
 
@@ -255,26 +279,76 @@ async fn the_token_guards_every_api_route_and_the_websocket() {
     let (mut ws, _) = tokio_tungstenite::connect_async(format!("{ws_base}/api/sessions/{id}/ws?token=s3cret"))
         .await
         .expect("with the token");
-    let (frames, _) = read_frames(&mut ws, Instant::now() + Duration::from_secs(2)).await;
-    assert!(frames > 0);
+    let frame = first_frame(&mut ws, Duration::from_secs(60)).await;
+    assert!(frame.starts_with(b"\x89PNG"), "a PNG frame through the guarded socket");
     // The browser client itself needs no token.
     assert_eq!(c.get(format!("{base}/")).send().await.expect("req").status(), 200);
+    // A query that is not valid percent-encoding, even with raw non-ASCII
+    // bytes, is a wrong token (401 with a JSON error), not a dropped request.
+    for query in [&b"token=%a\xc3\xa9"[..], b"token=%", b"token=%zz", b"token=s3cret%ff", b"token=%e9%"] {
+        let (code, body) = raw_get(&running.addr, b"/api/sessions?", query).await;
+        assert_eq!(code, 401, "{}: {body}", String::from_utf8_lossy(query));
+        assert!(body.contains("\"error\""), "{body}");
+    }
+    let (code, _) = raw_get(&running.addr, b"/api/sessions?", b"token=s3%63ret").await;
+    assert_eq!(code, 200, "a percent-encoded right token");
     running.shutdown().await.expect("shutdown");
+}
+
+/// A GET of `path` + `query` written byte for byte on a socket (no client
+/// library would send raw non-ASCII bytes): the status code and the body.
+async fn raw_get(addr: &std::net::SocketAddr, path: &[u8], query: &[u8]) -> (u16, String) {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut tcp = tokio::net::TcpStream::connect(addr).await.expect("connect");
+    let mut request = b"GET ".to_vec();
+    request.extend_from_slice(path);
+    request.extend_from_slice(query);
+    request.extend_from_slice(b" HTTP/1.1\r\nhost: test\r\nconnection: close\r\n\r\n");
+    tcp.write_all(&request).await.expect("write");
+    let mut response = Vec::new();
+    tokio::time::timeout(Duration::from_secs(20), tcp.read_to_end(&mut response))
+        .await
+        .expect("an answer in time")
+        .expect("read");
+    let text = String::from_utf8_lossy(&response).into_owned();
+    let code = text.split_whitespace().nth(1).and_then(|c| c.parse().ok()).unwrap_or_else(|| panic!("no status line: {text:?}"));
+    let body = text.split_once("\r\n\r\n").map_or(String::new(), |(_, b)| b.to_owned());
+    (code, body)
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn idle_sessions_expire_but_watched_ones_do_not() {
+    let timeout = Duration::from_millis(1000);
     let mut cfg = config();
-    cfg.idle_timeout = Duration::from_millis(400);
+    cfg.idle_timeout = timeout;
     let (running, base) = server(cfg).await;
-    let idle = create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await["id"].as_str().expect("id").to_owned();
+    // The watched session gets its client at once; then the idle one is made.
     let watched = create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await["id"].as_str().expect("id").to_owned();
     let mut ws = ws_connect(&base, &watched).await;
-    read_frames(&mut ws, Instant::now() + Duration::from_millis(1500)).await;
+    let created = Instant::now();
+    let idle = create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await["id"].as_str().expect("id").to_owned();
+    // The idle one goes, however slow this machine is (bounded)...
+    let state = running.state.clone();
+    let gone = async {
+        // `sessions()` lists without touching (a `session(id)` lookup would
+        // count as activity).
+        while state.sessions().iter().any(|s| s.id == idle) {
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+    };
+    tokio::select! {
+        () = gone => {}
+        _ = read_frames(&mut ws, Instant::now() + Duration::from_secs(60)) => panic!("the idle session outlived 60 s"),
+    }
+    let lived = created.elapsed();
+    assert!(lived >= timeout, "expired after {lived:?}, before its timeout of {timeout:?}");
+    // ... and the watched one, idle for HTTP as long, stays while its
+    // client keeps reading, for several timeouts more.
+    read_frames(&mut ws, Instant::now() + 3 * timeout).await;
     let gone = client().get(format!("{base}/api/sessions/{idle}")).send().await.expect("req");
     assert_eq!(gone.status(), 404);
     let kept = client().get(format!("{base}/api/sessions/{watched}")).send().await.expect("req");
-    assert_eq!(kept.status(), 200);
+    assert_eq!(kept.status(), 200, "a watched session does not expire");
     running.shutdown().await.expect("shutdown");
 }
 
@@ -300,4 +374,116 @@ async fn graceful_shutdown_closes_websockets_cleanly() {
         .expect("task")
         .expect("clean");
     assert!(client().get(format!("{base}/api/health")).send().await.is_err(), "no longer listening");
+}
+
+/// Every file under `static/`, `/`-separated, relative to it, sorted.
+fn static_files(dir: &std::path::Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).expect("read_dir") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let rel = path.strip_prefix(dir).expect("below").to_str().expect("utf-8").replace('\\', "/");
+                out.push(rel);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_file_under_static_is_served_built_in_and_from_a_folder() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../static");
+    let files = static_files(&dir);
+    assert!(files.iter().any(|f| f.starts_with("js/")), "the page's modules live in static/js: {files:?}");
+    let mut embedded: Vec<String> = pathstream::service::embedded_static_files().collect();
+    embedded.sort();
+    assert_eq!(embedded, files, "the binary carries exactly the files under static/");
+    for static_dir in [None, Some(dir.clone())] {
+        let from = if static_dir.is_some() { "--static-dir" } else { "built in" };
+        let mut cfg = config();
+        cfg.static_dir = static_dir;
+        let (running, base) = server(cfg).await;
+        let c = client();
+        for file in files.iter().map(String::as_str).chain(["/"]) {
+            let url = format!("{base}/{}", file.trim_start_matches('/'));
+            let r = c.get(&url).send().await.expect("req");
+            assert_eq!(r.status(), 200, "{from}: {url}");
+            let headers = r.headers().clone();
+            let on_disk = std::fs::read(dir.join(if file == "/" { "index.html" } else { file })).expect("file");
+            assert_eq!(r.bytes().await.expect("body").to_vec(), on_disk, "{from}: {url}");
+            let kind = headers["content-type"].to_str().expect("ascii").to_owned();
+            let want = match file.rsplit('.').next() {
+                Some("js") => "javascript",
+                Some("css") => "text/css",
+                _ => "text/html",
+            };
+            assert!(kind.contains(want), "{from}: {url} is {kind}");
+            assert_eq!(headers["cache-control"], "no-cache", "{from}: {url}");
+            // Revalidation: an unchanged file is not sent again.
+            let (name, value) = match (headers.get("etag"), headers.get("last-modified")) {
+                (Some(tag), _) => ("if-none-match", tag.clone()),
+                (None, Some(date)) => ("if-modified-since", date.clone()),
+                (None, None) => panic!("{from}: {url} has neither ETag nor Last-Modified"),
+            };
+            let again = c.get(&url).header(name, value).send().await.expect("req");
+            assert_eq!(again.status(), 304, "{from}: {url} with {name}");
+        }
+        for (method, path, code) in [("GET", "/nope.js", 404), ("GET", "/js/nope.js", 404), ("POST", "/app.js", 405)] {
+            let url = format!("{base}{path}");
+            let r = if method == "GET" { c.get(&url) } else { c.post(&url) }.send().await.expect("req");
+            assert_eq!(r.status(), code, "{from}: {method} {path}");
+            let v: Value = r.json().await.unwrap_or_else(|e| panic!("{from}: {method} {path}: not JSON: {e}"));
+            assert!(v["error"].as_str().is_some_and(|e| e.contains(path)), "{from}: {v}");
+        }
+        running.shutdown().await.expect("shutdown");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn after_the_opencl_device_fails_the_service_reports_rayon() {
+    use pathstream::render::backend::OpenClBackend;
+    use pathstream::render::Backend;
+    let mut device = match OpenClBackend::new(None) {
+        Ok(d) => d,
+        Err(e) if std::env::var_os("CI").is_some() => panic!("CI is set but there is no OpenCL device: {e}"),
+        Err(e) => return eprintln!("skipping: {e}"),
+    };
+    device.fail_launches = true;
+    let chosen_by_auto = Backend::OpenCl { backend: Box::new(device), fallback: true };
+    let running = pathstream::service::start_with_device(config(), Some(chosen_by_auto)).await.expect("starts");
+    let base = format!("http://{}", running.addr);
+    let get = |path: &'static str| {
+        let url = format!("{base}{path}");
+        async move { client().get(url).send().await.expect("req").json::<Value>().await.expect("json") }
+    };
+    let devices = get("/api/devices").await;
+    assert_eq!((devices["default"].as_str(), devices["backends"][1]["backend"].as_str()), (Some("opencl"), Some("opencl")), "{devices}");
+
+    let s = create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await;
+    let id = s["id"].as_str().expect("id").to_owned();
+    assert_eq!(s["backend"], "opencl", "placed on the device");
+    assert_eq!(pfm(&base, &id, 4).await.len(), 64, "renders on after the failure");
+    let st = status(&base, &id).await;
+    assert_eq!(st["backend"], "cpu", "{st}");
+    assert!(st["device"].as_str().expect("device").contains("OpenCL failed"), "{st}");
+    for path in ["/api/devices", "/api/health"] {
+        let v = get(path).await;
+        let worker = &v["backends"][1];
+        assert_eq!(worker["backend"], "cpu", "{path}: {v}");
+        assert!(worker["device"].as_str().expect("device").contains("OpenCL failed"), "{path}: {v}");
+    }
+    assert_eq!(get("/api/devices").await["default"], "cpu");
+    // A new session says where it will render before its first pass.
+    let fresh = create(&base, json!({"scene": "furnace", "width": 8, "height": 8, "quality": {"spp": 1}})).await;
+    assert_eq!(fresh["backend"], "cpu", "{fresh}");
+    let r = client().post(format!("{base}/api/sessions")).json(&json!({"backend": "opencl"})).send().await.expect("req");
+    assert_eq!(r.status(), 400);
+    let v: Value = r.json().await.expect("json");
+    assert!(v["error"].as_str().expect("msg").starts_with("backend: the OpenCL device is no longer in use"), "{v}");
+    running.shutdown().await.expect("shutdown");
 }

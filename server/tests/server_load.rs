@@ -6,48 +6,76 @@
 mod http;
 
 use http::*;
-use serde_json::{json, Value};
+use pathstream::service::Running;
+use serde_json::json;
 use std::time::{Duration, Instant};
 
+/// (passes, spp) of each session, read in-process, all at once.
+fn counts(running: &Running, ids: &[String]) -> Vec<(u64, u64)> {
+    ids.iter()
+        .map(|id| {
+            let s = running.state.session(id).expect("session");
+            (s.passes(), s.status().spp)
+        })
+        .collect()
+}
+
+/// Eight identical sessions on one worker: the worker gives them passes in
+/// turn (counted, so no clock decides it), each pass is sized to the same
+/// time, so they gain samples at the same rate. A session starved by a bug
+/// gets few or no passes and fails the bounds below however slow the machine.
 async fn eight_sessions_share_the_device_fairly() {
+    const PASSES: u64 = 24;
     let (running, base) = server(config()).await;
     let mut ids = Vec::new();
     for i in 0..8 {
         let s = create(&base, json!({"scene": "cornell", "width": 32, "height": 32, "quality": {"seed": i}})).await;
         ids.push(s["id"].as_str().expect("id").to_owned());
     }
-    let until = Instant::now() + Duration::from_secs(6);
-    let tasks: Vec<_> = ids
-        .iter()
-        .map(|id| {
-            let (base, id) = (base.clone(), id.clone());
-            tokio::spawn(async move {
-                let mut ws = ws_connect(&base, &id).await;
-                read_frames(&mut ws, until).await
-            })
-        })
-        .collect();
-    // Sample rates over a window, after the first passes have sized themselves.
-    tokio::time::sleep(Duration::from_secs(1)).await;
-    let spp = |v: Value| v["spp"].as_u64().expect("spp");
-    let mut start = Vec::new();
+    let mut streams = Vec::new();
     for id in &ids {
-        start.push(spp(status(&base, id).await));
+        streams.push(ws_connect(&base, id).await);
     }
-    let t0 = Instant::now();
-    tokio::time::sleep(Duration::from_secs(3)).await;
-    let mut rates = Vec::new();
-    for (id, s0) in ids.iter().zip(&start) {
-        rates.push((spp(status(&base, id).await) - s0) as f64 / t0.elapsed().as_secs_f64());
+    let readers: Vec<_> = streams
+        .into_iter()
+        .map(|mut ws| tokio::spawn(async move { read_frames(&mut ws, Instant::now() + Duration::from_secs(600)).await }))
+        .collect();
+    // Let the first passes size themselves, then count PASSES rounds.
+    let wait_for = |at_least: u64| {
+        let (running, ids) = (&running, &ids);
+        async move {
+            let deadline = Instant::now() + Duration::from_secs(120);
+            loop {
+                let c = counts(running, ids);
+                if c.iter().all(|(p, _)| *p >= at_least) {
+                    return c;
+                }
+                assert!(Instant::now() < deadline, "some session got fewer than {at_least} passes in 120 s: {c:?}");
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+        }
+    };
+    let start = wait_for(4).await;
+    let end = wait_for(start.iter().map(|(p, _)| *p).max().unwrap_or(0) + PASSES).await;
+    for r in readers {
+        r.abort();
     }
-    for t in tasks {
-        let (frames, stats) = t.await.expect("task");
-        assert!(frames > 2, "every session streams frames ({frames})");
-        assert_eq!(stats["type"], "stats");
+    let passes: Vec<u64> = end.iter().zip(&start).map(|(e, s)| e.0 - s.0).collect();
+    let spp: Vec<u64> = end.iter().zip(&start).map(|(e, s)| e.1 - s.1).collect();
+    eprintln!("eight sessions over {PASSES}+ rounds: passes {passes:?}, spp gained {spp:?}");
+    // Round robin: at any moment the counts differ by at most one pass
+    // (two, as the eight are read one after the other).
+    let (p_lo, p_hi) = (passes.iter().min().copied().unwrap_or(0), passes.iter().max().copied().unwrap_or(0));
+    assert!(p_hi - p_lo <= 2, "passes in turn: {passes:?}");
+    // Equal time per pass: samples within 2x over ~24 passes each (a starved
+    // session falls far below).
+    let (s_lo, s_hi) = (spp.iter().min().copied().unwrap_or(0), spp.iter().max().copied().unwrap_or(0));
+    assert!(s_lo > 0 && s_hi < 2 * s_lo, "samples per session: {spp:?}");
+    // And every client got frames meanwhile.
+    for id in &ids {
+        let frame = running.state.session(id).expect("session").latest();
+        assert!(frame.spp > 0, "{id} published frames");
     }
-    let (lo, hi) = rates.iter().fold((f64::MAX, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
-    eprintln!("eight sessions, spp/s: {rates:.1?}");
-    assert!(lo > 0.0 && hi / lo < 2.0, "rates within 2x of each other: {rates:?}");
     running.shutdown().await.expect("shutdown");
 }
 
@@ -58,41 +86,51 @@ fn rss_kib() -> u64 {
         .unwrap_or(0)
 }
 
+/// A third client on session a that never reads anything must not stall the
+/// worker (which would starve session b) nor pile up frames in memory. The
+/// windows count session b's passes (the worker's turns, which no other
+/// load on the machine changes) and samples over several seconds; a stall
+/// shows as (almost) nothing, while the bounds leave room for a busy 2-core
+/// machine.
 async fn a_client_that_never_reads_does_not_slow_the_others() {
+    const WINDOW: Duration = Duration::from_secs(4);
     let (running, base) = server(config()).await;
     let a = create(&base, json!({"scene": "cornell", "width": 96, "height": 96})).await["id"].as_str().expect("id").to_owned();
     let b = create(&base, json!({"scene": "cornell-glass", "width": 96, "height": 96})).await["id"].as_str().expect("id").to_owned();
     let mut wa = ws_connect(&base, &a).await;
     let mut wb = ws_connect(&base, &b).await;
-    let spp = |s: &Value| s["spp"].as_u64().expect("spp");
-    // Rate of session b's samples over a window, while both clients read.
-    let window = |base: String, b: String| async move {
-        let s0 = spp(&status(&base, &b).await);
-        let t0 = Instant::now();
-        tokio::time::sleep(Duration::from_secs(2)).await;
-        (spp(&status(&base, &b).await) - s0) as f64 / t0.elapsed().as_secs_f64()
+    let session_b = running.state.session(&b).expect("session");
+    // Session b's passes and samples over a window, while both clients read.
+    let window = || {
+        let session_b = session_b.clone();
+        async move {
+            let (p0, s0) = (session_b.passes(), session_b.status().spp);
+            tokio::time::sleep(WINDOW).await;
+            (session_b.passes() - p0, session_b.status().spp - s0)
+        }
     };
     let reading = tokio::spawn(async move {
-        let until = Instant::now() + Duration::from_secs(5);
+        let until = Instant::now() + 2 * WINDOW + Duration::from_secs(1);
         let (fa, fb) = tokio::join!(read_frames(&mut wa, until), read_frames(&mut wb, until));
         (fa.0, fb.0, wa, wb)
     });
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    let without = window(base.clone(), b.clone()).await;
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let without = window().await;
     let rss_before = rss_kib();
-    // A third client on session a that never reads anything.
     let _stalled = ws_connect(&base, &a).await;
     tokio::time::sleep(Duration::from_millis(200)).await;
-    let with = window(base.clone(), b.clone()).await;
+    let with = window().await;
     let (fa, fb, _wa, _wb) = reading.await.expect("task");
-    eprintln!("session b: {without:.1} spp/s without the stalled client, {with:.1} with it; frames {fa} {fb}");
-    assert!(fa > 0 && fb > 0);
-    assert!((with / without - 1.0).abs() < 0.2, "{with} vs {without} spp/s");
+    eprintln!("session b (passes, spp) per {WINDOW:?}: {without:?} without the stalled client, {with:?} with it; frames {fa} {fb}");
+    assert!(fa > 0 && fb > 0, "both reading clients got frames: {fa} {fb}");
+    assert!(with.0 * 2 >= without.0 && with.0 >= 4, "session b's passes: {} with vs {} without", with.0, without.0);
+    // Samples per pass also follow whatever else loads the machine (another
+    // build on a shared CI box halves them), so this bound is looser.
+    assert!(with.1 * 4 >= without.1, "session b's samples: {} with vs {} without", with.1, without.1);
     let grown = rss_kib().saturating_sub(rss_before);
     assert!(grown < 100 * 1024, "memory grew by {grown} KiB");
     running.shutdown().await.expect("shutdown");
 }
-
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 4)]
 async fn scheduling_under_load() {

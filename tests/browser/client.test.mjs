@@ -45,10 +45,16 @@ describe("browser client", { timeout: 600000 }, () => {
     await server?.stop();
   });
 
-  it("serves this checkout's static files", T, async () => {
-    for (const name of ["app.js", "style.css"]) {
-      const served = await (await fetch(`${server.base}/${name}`)).text();
-      assert.equal(served, fs.readFileSync(path.join(STATIC_DIR, name), "utf8"),
+  it("serves this checkout's static files, the page's modules included", T, async () => {
+    const names = fs.readdirSync(STATIC_DIR, { recursive: true })
+      .filter((n) => fs.statSync(path.join(STATIC_DIR, n)).isFile())
+      .map((n) => n.split(path.sep).join("/"));
+    assert.ok(names.includes("app.js") && names.some((n) => n.startsWith("js/")), `${names}`);
+    for (const name of names) {
+      const r = await fetch(`${server.base}/${name}`);
+      assert.equal(r.status, 200, name);
+      if (name.endsWith(".js")) assert.match(r.headers.get("content-type"), /javascript/, name);
+      assert.equal(await r.text(), fs.readFileSync(path.join(STATIC_DIR, name), "utf8"),
         `${name} differs from static/${name}: does the server binary support PATHSTREAM_STATIC_DIR?`);
     }
   });
@@ -410,7 +416,54 @@ describe("browser client with a token", { timeout: 120000 }, () => {
   });
 });
 
-describe("screenshot", { timeout: 180000 }, () => {
+/** Every visible control of the page (top bar, panels, touch pad) that a
+ *  user cannot reach: cut off at the sides, hidden under something else, or
+ *  outside the viewport with no scrollable panel to bring it in. Scrolls
+ *  each control into view as a user would; returns what failed and why. */
+async function unreachableControls(page) {
+  return page.evaluate(() => {
+    const vw = window.innerWidth;
+    const vh = window.innerHeight;
+    const slack = 0.5;
+    const problems = [];
+    const name = (c) => `${c.tagName.toLowerCase()}#${c.id || c.dataset.key || c.textContent.trim()}`;
+    const clips = (a) => ["overflow", "overflowX", "overflowY"].some((k) => getComputedStyle(a)[k] !== "visible");
+    if (document.scrollingElement.scrollWidth > vw + slack) {
+      problems.push(`the page scrolls sideways (${document.scrollingElement.scrollWidth} px wide in ${vw})`);
+    }
+    const controls = [...document.querySelectorAll("#bar :is(button, input, select), #panels :is(button, input, select), #touchpad button")]
+      .filter((c) => c.getClientRects().length > 0); // displayed (not in a hidden element)
+    for (const c of controls) {
+      c.scrollIntoView({ block: "nearest", inline: "nearest" });
+      const r = c.getBoundingClientRect();
+      if (r.left < -slack || r.right > vw + slack || r.top < -slack || r.bottom > vh + slack) {
+        problems.push(`${name(c)} at ${Math.round(r.left)},${Math.round(r.top)}-${Math.round(r.right)},${Math.round(r.bottom)} is outside the ${vw}x${vh} viewport`);
+        continue;
+      }
+      for (let a = c.parentElement; a && a !== document.body; a = a.parentElement) {
+        if (!clips(a)) continue;
+        const b = a.getBoundingClientRect();
+        const left = b.left + a.clientLeft;
+        const top = b.top + a.clientTop;
+        if (a.scrollLeft !== 0 || a.scrollWidth > a.clientWidth + 1) {
+          problems.push(`#${a.id || a.tagName} scrolls sideways (${a.scrollWidth} px of content in ${a.clientWidth})`);
+        }
+        if (r.left < left - slack || r.right > left + a.clientWidth + slack || r.top < top - slack || r.bottom > top + a.clientHeight + slack) {
+          problems.push(`${name(c)} is cut off by #${a.id || a.tagName}`);
+        }
+      }
+      const x = Math.min(Math.max(r.left + r.width / 2, 0), vw - 1);
+      const y = Math.min(Math.max(r.top + r.height / 2, 0), vh - 1);
+      const hit = document.elementFromPoint(x, y);
+      if (!(hit === c || c.contains(hit) || (hit && hit.control === c) || (hit && hit.tagName === "LABEL" && hit.contains(c)))) {
+        problems.push(`${name(c)} is covered by ${hit ? name(hit) : "nothing"}`);
+      }
+    }
+    return { count: controls.length, problems: [...new Set(problems)] };
+  });
+}
+
+describe("layout and screenshots", { timeout: 300000 }, () => {
   let server;
   let browser;
 
@@ -435,10 +488,6 @@ describe("screenshot", { timeout: 180000 }, () => {
     const px = Number(await page.inputValue("#px"));
     assert.ok(Math.abs(s.width * px - area.width) <= px && Math.abs(s.height * px - area.height) <= px,
       `${s.width}x${s.height} at 1:${px} in a ${area.width}x${area.height} area`);
-    // Every panel control is on screen or reachable by scrolling the side panel.
-    for (const sel of ["#q-max-depth", "#q-target", "#l-color", "#btn-curl", "#btn-help", "#conn"]) {
-      assert.ok(await page.isVisible(sel), `${sel} visible`);
-    }
     const bar = await page.locator("#bar").boundingBox();
     assert.ok(bar.height < 60, `the top bar fits on one line (${bar.height} px)`);
     await waitFor("a few seconds of samples", async () => Number((await bodyData(page)).frameSpp) >= 24, { timeout: 60000 });
@@ -446,5 +495,40 @@ describe("screenshot", { timeout: 180000 }, () => {
     await page.screenshot({ path: path.join(ARTIFACTS, "page.png") });
     assert.ok(fs.statSync(path.join(ARTIFACTS, "page.png")).size > 10000);
     assert.deepEqual(errors, []);
+    await page.close();
   });
+
+  const sizes = [
+    { width: 1920, height: 1080 },
+    { width: 1280, height: 720 },
+    // A phone: touch, a coarse pointer (larger controls, the touch pad on).
+    { width: 390, height: 844, phone: true },
+  ];
+  for (const size of sizes) {
+    const label = `${size.width}x${size.height}`;
+    it(`at ${label} every control is on screen or in a scrollable panel; saves target/browser/page-${label}.png`, T, async () => {
+      const context = await browser.newContext({
+        viewport: { width: size.width, height: size.height },
+        ...(size.phone ? { isMobile: true, hasTouch: true, deviceScaleFactor: 3 } : {}),
+      });
+      const page = await context.newPage();
+      const errors = watchConsole(page);
+      await page.goto(`${server.base}/?scene=cornell&${SMALL}`);
+      await waitFrame(page, { spp: 4 });
+      await page.waitForSelector("#q-preset option[value=reference]", { state: "attached" });
+      if (size.phone) assert.equal(await page.isVisible("#touchpad"), true, "a phone gets the touch pad");
+      fs.mkdirSync(ARTIFACTS, { recursive: true });
+      await page.screenshot({ path: path.join(ARTIFACTS, `page-${label}.png`) });
+      const { count, problems } = await unreachableControls(page);
+      // Top bar 9, quality 9, light 2, export 3; the touch pad's 16 on a phone.
+      assert.ok(count >= (size.phone ? 39 : 23), `only ${count} controls found`);
+      assert.deepEqual(problems, [], `${label}: ${problems.join("; ")}`);
+      if (!size.phone) {
+        const bar = await page.locator("#bar").boundingBox();
+        assert.ok(bar.height < 60, `the top bar fits on one line (${bar.height} px)`);
+      }
+      assert.deepEqual(errors, []);
+      await context.close();
+    });
+  }
 });

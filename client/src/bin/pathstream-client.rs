@@ -269,15 +269,64 @@ async fn create(client: &Client, args: &CreateArgs, default_spp: bool) -> Result
     Ok(client.create_session(&req).await?)
 }
 
+/// Ctrl-C, caught from the moment this is made (before the session it
+/// guards is created): a Ctrl-C no longer ends the process on the spot, and
+/// one that comes before anyone waits for it is kept, not lost.
+struct Interrupt {
+    #[cfg(unix)]
+    signal: tokio::signal::unix::Signal,
+    #[cfg(windows)]
+    signal: tokio::signal::windows::CtrlC,
+}
+
+impl Interrupt {
+    fn install() -> Result<Self, Failure> {
+        #[cfg(unix)]
+        let signal = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::interrupt());
+        #[cfg(windows)]
+        let signal = tokio::signal::windows::ctrl_c();
+        let signal = signal.map_err(|e| Failure(1, format!("cannot catch Ctrl-C: {e}")))?;
+        Ok(Self { signal })
+    }
+
+    async fn received(&mut self) {
+        self.signal.recv().await;
+    }
+}
+
+/// How long a Ctrl-C during session creation waits for the server's answer,
+/// so that the session it made can be deleted.
+const CREATE_GRACE: Duration = Duration::from_secs(10);
+
+/// Creates a session under `interrupt`: on a Ctrl-C while the request is out,
+/// waits (briefly) for the session the server may have made, deletes it, and
+/// fails with exit code 130.
+async fn create_guarded<F>(client: &Client, interrupt: &mut Interrupt, create: F) -> Result<SessionStatus, Failure>
+where
+    F: std::future::Future<Output = Result<SessionStatus, Failure>>,
+{
+    let mut create = std::pin::pin!(create);
+    tokio::select! {
+        biased;
+        created = &mut create => return created,
+        () = interrupt.received() => {}
+    }
+    if let Ok(Ok(session)) = tokio::time::timeout(CREATE_GRACE, create).await {
+        let _ = client.delete_session(&session.id).await;
+    }
+    Err(Failure(130, "interrupted".into()))
+}
+
 /// Runs `work` for a session this command created, then deletes the session
 /// whatever happened, Ctrl-C included (exit code 130).
-async fn owning<F>(client: &Client, id: &str, work: F) -> Result<(), Failure>
+async fn owning<F>(client: &Client, id: &str, interrupt: &mut Interrupt, work: F) -> Result<(), Failure>
 where
     F: std::future::Future<Output = Result<(), Failure>>,
 {
     let result = tokio::select! {
+        biased;
+        () = interrupt.received() => Err(Failure(130, "interrupted".into())),
         r = work => r,
-        _ = tokio::signal::ctrl_c() => Err(Failure(130, "interrupted".into())),
     };
     let deleted = client.delete_session(id).await;
     result?;
@@ -287,7 +336,8 @@ where
 
 async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
     let kind = extension(&args.out)?;
-    let session = create(client, &args.create, true).await?;
+    let mut interrupt = Interrupt::install()?;
+    let session = create_guarded(client, &mut interrupt, create(client, &args.create, true)).await?;
     let id = session.id.clone();
     let work = async {
         let bar = ProgressBar::new(session.quality.spp.unwrap_or(0)).with_style(
@@ -330,7 +380,7 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
         );
         Ok(())
     };
-    owning(client, &id, work).await
+    owning(client, &id, &mut interrupt, work).await
 }
 
 async fn orbit(
@@ -356,7 +406,8 @@ async fn orbit(
         }),
         backend: None,
     };
-    let session = client.create_session(&req).await?;
+    let mut interrupt = Interrupt::install()?;
+    let session = create_guarded(client, &mut interrupt, async { Ok(client.create_session(&req).await?) }).await?;
     let id = session.id.clone();
     let work = async {
         let c = &session.camera;
@@ -385,7 +436,7 @@ async fn orbit(
         println!("{frames} frames of {scene} in {}", out_dir.display());
         Ok(())
     };
-    owning(client, &id, work).await
+    owning(client, &id, &mut interrupt, work).await
 }
 
 async fn run(cli: Cli) -> Result<(), Failure> {

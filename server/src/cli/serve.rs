@@ -65,12 +65,7 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::Failed(format!("cannot start the async runtime: {e}")))?;
     runtime.block_on(async move {
         let running = service::start(config).await.map_err(CliError::Failed)?;
-        let backends: Vec<String> = (0..running.state.backend_count())
-            .map(|i| {
-                let (b, d) = running.state.worker_info(i);
-                format!("{b} ({d})")
-            })
-            .collect();
+        let backends: Vec<String> = running.state.backends().iter().map(|b| format!("{} ({})", b.backend, b.device)).collect();
         // A closed stdout must not stop a server: write, and ignore failures.
         let mut out = std::io::stdout();
         let _ = writeln!(out, "pathstream serving on http://{}/  - open it in a browser", running.addr);

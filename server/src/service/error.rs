@@ -12,6 +12,8 @@ pub enum ApiError {
     BadRequest(String),
     #[error("{0}")]
     NotFound(String),
+    #[error("{0}")]
+    MethodNotAllowed(String),
     #[error("missing or wrong bearer token")]
     Unauthorized,
     #[error("request body is larger than the limit of {0} bytes")]
@@ -27,6 +29,7 @@ impl ApiError {
         match self {
             ApiError::BadRequest(_) => StatusCode::BAD_REQUEST,
             ApiError::NotFound(_) => StatusCode::NOT_FOUND,
+            ApiError::MethodNotAllowed(_) => StatusCode::METHOD_NOT_ALLOWED,
             ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
             ApiError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
             ApiError::TooMany(_) => StatusCode::TOO_MANY_REQUESTS,
@@ -36,6 +39,13 @@ impl ApiError {
 
     pub fn unknown_session(id: &str) -> Self {
         ApiError::NotFound(format!("no session '{id}'"))
+    }
+}
+
+/// A refused scene edit is the client's mistake; its message names the field.
+impl From<crate::render::scene::EditError> for ApiError {
+    fn from(e: crate::render::scene::EditError) -> Self {
+        ApiError::BadRequest(e.to_string())
     }
 }
 
@@ -57,13 +67,23 @@ impl IntoResponse for ApiError {
 /// Parses a JSON body into `T`; errors name the JSON path of the field.
 pub fn parse_json<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, ApiError> {
     let de = &mut serde_json::Deserializer::from_slice(body);
-    serde_path_to_error::deserialize(de).map_err(|e| {
-        let path = e.path().to_string();
-        let inner = e.into_inner();
-        if path == "." {
-            ApiError::BadRequest(format!("invalid JSON: {inner}"))
-        } else {
-            ApiError::BadRequest(format!("{path}: {inner}"))
-        }
-    })
+    serde_path_to_error::deserialize(de).map_err(|e| path_error(e, "invalid JSON", ""))
+}
+
+/// Reads an already parsed JSON `value` (the field `key` of a message) as
+/// `T`; errors name the path below `key`, as in `camera.position: ...`.
+pub fn parse_field<T: serde::de::DeserializeOwned>(key: &str, value: serde_json::Value) -> Result<T, ApiError> {
+    serde_path_to_error::deserialize(value).map_err(|e| path_error(e, key, &format!("{key}.")))
+}
+
+/// A 400 naming where the error is: `whole` when it is the whole document,
+/// else `prefix` and the path.
+fn path_error<E: std::fmt::Display>(e: serde_path_to_error::Error<E>, whole: &str, prefix: &str) -> ApiError {
+    let path = e.path().to_string();
+    let inner = e.into_inner();
+    if path == "." {
+        ApiError::BadRequest(format!("{whole}: {inner}"))
+    } else {
+        ApiError::BadRequest(format!("{prefix}{path}: {inner}"))
+    }
 }

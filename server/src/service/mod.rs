@@ -3,25 +3,31 @@
 //! binds and serves it until shut down.
 
 pub mod assets;
+mod auth;
+pub mod change;
 pub mod config;
 pub mod error;
+mod frame;
 mod metrics;
 mod routes;
 pub mod session;
-pub mod updates;
+mod static_files;
 mod worker;
 mod ws;
 
 pub use config::ServeConfig;
 pub use error::ApiError;
 pub use metrics::Metrics;
+pub use routes::app;
+pub use static_files::embedded_names as embedded_static_files;
+pub use worker::BackendInfo;
 
 use crate::render::backend::CpuBackend;
 use crate::render::{Backend, BackendChoice};
 use session::Session;
 use std::collections::HashMap;
 use std::net::SocketAddr;
-use std::sync::{Arc, Mutex, RwLock};
+use std::sync::{Arc, RwLock};
 use std::time::Duration;
 use tokio::sync::{oneshot, watch};
 use worker::Worker;
@@ -30,9 +36,8 @@ use worker::Worker;
 pub struct AppState {
     pub config: ServeConfig,
     sessions: RwLock<HashMap<String, (Arc<Session>, usize)>>,
-    workers: Mutex<Vec<Worker>>,
-    /// (backend name, device) of each worker, by index.
-    worker_info: Vec<(String, String)>,
+    /// Rayon first; then the OpenCL device, if the service has one.
+    workers: Vec<Worker>,
     default_worker: usize,
     pub metrics: Arc<Metrics>,
     shutdown: watch::Sender<bool>,
@@ -42,35 +47,38 @@ impl AppState {
     /// Starts one worker for rayon and, as `config.backend` says, one for
     /// an OpenCL device (the default for new sessions when there is one).
     pub fn new(config: ServeConfig) -> Result<Arc<Self>, String> {
-        let metrics = Arc::new(Metrics::default());
-        let mut workers = vec![Worker::start(Backend::Cpu(CpuBackend::low_priority()), metrics.clone())];
-        let mut default_worker = 0;
-        match config.backend {
-            BackendChoice::Cpu => {}
+        let device = match config.backend {
+            BackendChoice::Cpu => None,
             choice => {
                 let backend = Backend::choose(choice).map_err(|e| e.to_string())?;
                 if backend.name() == "opencl" {
-                    workers.push(Worker::start(backend, metrics.clone()));
-                    default_worker = 1;
+                    Some(backend)
                 } else {
                     tracing::info!(device = %backend.device(), "sessions render with rayon");
+                    None
                 }
             }
+        };
+        Ok(Self::with_device(config, device))
+    }
+
+    /// As [`AppState::new`], with the device backend given (`config.backend`
+    /// is not read): new sessions render on it by default.
+    pub fn with_device(config: ServeConfig, device: Option<Backend>) -> Arc<Self> {
+        let metrics = Arc::new(Metrics::default());
+        let mut workers = vec![Worker::start(Backend::Cpu(CpuBackend::low_priority()), metrics.clone())];
+        if let Some(backend) = device {
+            workers.push(Worker::start(backend, metrics.clone()));
         }
-        let worker_info = workers
-            .iter()
-            .map(|w| (w.shared.backend.clone(), w.shared.device.clone()))
-            .collect();
         let (shutdown, _) = watch::channel(false);
-        Ok(Arc::new(Self {
+        Arc::new(Self {
             config,
             sessions: RwLock::new(HashMap::new()),
-            workers: Mutex::new(workers),
-            worker_info,
-            default_worker,
+            default_worker: workers.len() - 1,
+            workers,
             metrics,
             shutdown,
-        }))
+        })
     }
 
     pub fn session(&self, id: &str) -> Result<Arc<Session>, ApiError> {
@@ -96,23 +104,32 @@ impl AppState {
         match backend {
             None | Some("auto") => Ok(self.default_worker),
             Some("cpu") => Ok(0),
-            Some("opencl") => self
-                .worker_info
-                .iter()
-                .position(|(b, _)| b == "opencl")
-                .ok_or_else(|| ApiError::BadRequest("backend: this server has no OpenCL device".into())),
+            Some("opencl") => self.workers.iter().position(|w| w.info().backend == "opencl").ok_or_else(|| {
+                let why = match self.workers.get(1) {
+                    // A device that failed: its worker renders with rayon and says why.
+                    Some(fell_back) => format!("the OpenCL device is no longer in use ({})", fell_back.info().device),
+                    None => "this server has no OpenCL device".to_owned(),
+                };
+                ApiError::BadRequest(format!("backend: {why}"))
+            }),
             Some(other) => Err(ApiError::BadRequest(format!(
                 "backend: unknown backend '{other}' (expected auto, opencl or cpu)"
             ))),
         }
     }
 
-    pub fn backend_count(&self) -> usize {
-        self.worker_info.len()
+    /// What each worker renders with now.
+    pub fn backends(&self) -> Vec<BackendInfo> {
+        self.workers.iter().map(Worker::info).collect()
     }
 
-    pub fn worker_info(&self, worker: usize) -> (String, String) {
-        self.worker_info[worker].clone()
+    /// What new sessions render with unless they ask otherwise.
+    pub fn default_backend(&self) -> BackendInfo {
+        self.worker_info(self.default_worker)
+    }
+
+    pub fn worker_info(&self, worker: usize) -> BackendInfo {
+        self.workers[worker].info()
     }
 
     /// Registers and starts a session, unless the session limit is reached.
@@ -128,23 +145,15 @@ impl AppState {
             sessions.insert(session.id.clone(), (session.clone(), worker));
         }
         self.metrics.sessions_created.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        self.workers.lock().unwrap_or_else(|e| e.into_inner())[worker].add(session);
+        self.workers[worker].add(session);
         Ok(())
     }
 
     pub fn remove_session(&self, id: &str) -> Result<(), ApiError> {
         let removed = self.sessions.write().unwrap_or_else(|e| e.into_inner()).remove(id);
         let (_, worker) = removed.ok_or_else(|| ApiError::unknown_session(id))?;
-        self.workers.lock().unwrap_or_else(|e| e.into_inner())[worker].remove(id);
+        self.workers[worker].remove(id);
         Ok(())
-    }
-
-    /// Tells a session's worker that it has work (after a change).
-    pub fn wake(&self, id: &str) {
-        let worker = self.sessions.read().unwrap_or_else(|e| e.into_inner()).get(id).map(|(_, w)| *w);
-        if let Some(w) = worker {
-            self.workers.lock().unwrap_or_else(|e| e.into_inner())[w].wake();
-        }
     }
 
     pub fn shutdown_signal(&self) -> watch::Receiver<bool> {
@@ -166,13 +175,11 @@ impl AppState {
 
     fn stop(&self) {
         let _ = self.shutdown.send(true);
-        for w in self.workers.lock().unwrap_or_else(|e| e.into_inner()).iter_mut() {
+        for w in &self.workers {
             w.stop();
         }
     }
 }
-
-pub use routes::app;
 
 /// A service bound to its address and serving.
 pub struct Running {
@@ -201,11 +208,25 @@ impl Running {
 
 /// Binds `config.addr` (port 0 picks one) and serves in the background.
 pub async fn start(config: ServeConfig) -> Result<Running, String> {
-    let listener = tokio::net::TcpListener::bind(config.addr)
+    let listener = bind(&config).await?;
+    serve(listener, AppState::new(config)?)
+}
+
+/// As [`start`], with the device backend given instead of chosen by
+/// `config.backend` (tests: a device that fails on purpose).
+pub async fn start_with_device(config: ServeConfig, device: Option<Backend>) -> Result<Running, String> {
+    let listener = bind(&config).await?;
+    serve(listener, AppState::with_device(config, device))
+}
+
+async fn bind(config: &ServeConfig) -> Result<tokio::net::TcpListener, String> {
+    tokio::net::TcpListener::bind(config.addr)
         .await
-        .map_err(|e| format!("cannot listen on {}: {e}", config.addr))?;
+        .map_err(|e| format!("cannot listen on {}: {e}", config.addr))
+}
+
+fn serve(listener: tokio::net::TcpListener, state: Arc<AppState>) -> Result<Running, String> {
     let addr = listener.local_addr().map_err(|e| e.to_string())?;
-    let state = AppState::new(config)?;
     let (stop, stopped) = oneshot::channel::<()>();
     let janitor_state = state.clone();
     let janitor = tokio::spawn(async move {

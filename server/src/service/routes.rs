@@ -1,17 +1,20 @@
-//! HTTP routes (contract in ../shared/design.md) and the token check.
+//! HTTP routes (contract in ../shared/design.md): `app(state)` builds the
+//! whole service. Handlers parse requests into validated values at the edge
+//! and hand them to the session ([`Session::apply`] for changes).
 
+use super::auth::require_token;
+use super::change::{patch_quality, Change};
 use super::error::{parse_json, ApiError};
-use super::session::{Session, Status};
-use super::updates::{apply_camera, apply_light, apply_quality, parse_scene, CameraPatch, LightPatch};
-use super::{ws, AppState};
+use super::session::{Frame, Session, Status};
+use super::{static_files, ws, AppState};
 use crate::render::job::check_size;
-use crate::render::scene::BUILTIN_NAMES;
+use crate::render::scene::{CameraEdit, LightEdit, BUILTIN_NAMES};
 use crate::render::{Preset, Quality};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
 use axum::http::{header, StatusCode};
-use axum::middleware::{self, Next};
+use axum::middleware;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, patch, put};
 use axum::{Json, Router};
@@ -19,7 +22,6 @@ use serde::Deserialize;
 use serde_json::{json, Value};
 use std::sync::Arc;
 use std::time::Duration;
-use subtle::ConstantTimeEq;
 use tower_http::cors::CorsLayer;
 use tower_http::trace::TraceLayer;
 
@@ -36,7 +38,7 @@ pub fn app(state: Arc<AppState>) -> Router {
         .route("/sessions/{id}", get(get_session).delete(delete_session))
         .route("/sessions/{id}/camera", patch(patch_camera))
         .route("/sessions/{id}/light", patch(patch_light))
-        .route("/sessions/{id}/quality", patch(patch_quality))
+        .route("/sessions/{id}/quality", patch(patch_quality_route))
         .route("/sessions/{id}/scene", put(put_scene))
         .route("/sessions/{id}/frame.png", get(frame_png))
         .route("/sessions/{id}/frame.pfm", get(frame_pfm))
@@ -46,10 +48,7 @@ pub fn app(state: Arc<AppState>) -> Router {
     let mut router = Router::new()
         .nest("/api", api)
         .route("/metrics", get(metrics))
-        .route("/", get(|State(s): State<Arc<AppState>>| static_file(s, "index.html")))
-        .route("/app.js", get(|State(s): State<Arc<AppState>>| static_file(s, "app.js")))
-        .route("/style.css", get(|State(s): State<Arc<AppState>>| static_file(s, "style.css")))
-        .fallback(api_not_found)
+        .fallback_service(static_files::router(state.config.static_dir.as_deref()))
         .layer(DefaultBodyLimit::max(state.config.max_body_bytes))
         .layer(TraceLayer::new_for_http());
     if state.config.cors {
@@ -58,81 +57,8 @@ pub fn app(state: Arc<AppState>) -> Router {
     router.with_state(state)
 }
 
-/// One of the client's three files: built in, or read from `static_dir`.
-async fn static_file(state: Arc<AppState>, name: &'static str) -> Response {
-    let (built_in, mime) = match name {
-        "index.html" => (include_str!("../../../static/index.html"), "text/html; charset=utf-8"),
-        "app.js" => (include_str!("../../../static/app.js"), "text/javascript; charset=utf-8"),
-        _ => (include_str!("../../../static/style.css"), "text/css; charset=utf-8"),
-    };
-    let body = match &state.config.static_dir {
-        Some(dir) => match tokio::fs::read_to_string(dir.join(name)).await {
-            Ok(text) => text,
-            Err(e) => return ApiError::NotFound(format!("{name}: {e}")).into_response(),
-        },
-        None => built_in.to_owned(),
-    };
-    ([(header::CONTENT_TYPE, mime), (header::CACHE_CONTROL, "no-cache")], body).into_response()
-}
-
 async fn api_not_found(req: Request) -> ApiError {
     ApiError::NotFound(format!("no route for {} {}", req.method(), req.uri().path()))
-}
-
-/// Bearer token on every /api route: `Authorization: Bearer T`, or `?token=T`
-/// (browsers cannot set headers on WebSockets). Compared in constant time.
-async fn require_token(State(state): State<Arc<AppState>>, req: Request, next: Next) -> Response {
-    let Some(expected) = &state.config.token else {
-        return next.run(req).await;
-    };
-    let from_header = req
-        .headers()
-        .get(header::AUTHORIZATION)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.strip_prefix("Bearer "))
-        .map(str::to_owned);
-    let from_query = req.uri().query().and_then(|q| {
-        form_pairs(q).find(|(k, _)| k == "token").map(|(_, v)| v)
-    });
-    let ok = from_header
-        .or(from_query)
-        .is_some_and(|given| bool::from(given.as_bytes().ct_eq(expected.as_bytes())));
-    if ok {
-        next.run(req).await
-    } else {
-        ApiError::Unauthorized.into_response()
-    }
-}
-
-fn form_pairs(query: &str) -> impl Iterator<Item = (String, String)> + '_ {
-    query.split('&').filter_map(|pair| {
-        let (k, v) = pair.split_once('=')?;
-        Some((k.to_owned(), percent_decode(v)))
-    })
-}
-
-fn percent_decode(s: &str) -> String {
-    let bytes = s.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'%' if i + 2 < bytes.len() => {
-                match u8::from_str_radix(&s[i + 1..i + 3], 16) {
-                    Ok(b) => {
-                        out.push(b);
-                        i += 3;
-                        continue;
-                    }
-                    Err(_) => out.push(b'%'),
-                }
-            }
-            b'+' => out.push(b' '),
-            b => out.push(b),
-        }
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
 }
 
 fn body_bytes(body: Result<Bytes, BytesRejection>, limit: usize) -> AppResult<Bytes> {
@@ -150,15 +76,17 @@ async fn health(State(state): State<Arc<AppState>>) -> Json<Value> {
         "status": "ok",
         "version": env!("CARGO_PKG_VERSION"),
         "sessions": state.session_count(),
-        "backends": state.worker_info.iter().map(|(b, d)| json!({"backend": b, "device": d})).collect::<Vec<_>>(),
+        "backends": state.backends(),
     }))
 }
 
+/// The workers as they render now (after an OpenCL device failed, rayon)
+/// and the OpenCL devices this machine lists.
 async fn devices(State(state): State<Arc<AppState>>) -> Json<Value> {
     let listed = crate::render::backend::opencl::list_devices();
     Json(json!({
-        "backends": state.worker_info.iter().map(|(b, d)| json!({"backend": b, "device": d})).collect::<Vec<_>>(),
-        "default": state.worker_info[state.default_worker].0,
+        "backends": state.backends(),
+        "default": state.default_backend().backend,
         "opencl_devices": listed.as_ref().ok(),
         "opencl_error": listed.as_ref().err(),
     }))
@@ -245,12 +173,14 @@ async fn create_session(
         )));
     }
     let quality = match &req.quality {
-        Some(q) => apply_quality(&Quality::default(), q)?,
+        Some(q) => patch_quality(&Quality::default(), q)?,
         None => Quality::default(),
     };
-    let (name, scene) = parse_scene(req.scene)?;
+    let Change::Scene { name, scene } = Change::scene(req.scene)? else {
+        return Err(ApiError::Internal("Change::scene made another change".into()));
+    };
     let worker = state.worker_for(req.backend.as_deref())?;
-    let session = Arc::new(Session::new(new_id(), name, scene, width, height, quality, state.worker_info(worker)));
+    let session = Arc::new(Session::new(new_id(), name, *scene, width, height, quality, state.worker_info(worker)));
     state.add_session(session.clone(), worker)?;
     tracing::info!(session = %session.id, width, height, "session created");
     Ok((StatusCode::CREATED, Json(session.status())))
@@ -271,36 +201,16 @@ async fn delete_session(State(state): State<Arc<AppState>>, Path(id): Path<Strin
     Ok(StatusCode::NO_CONTENT)
 }
 
-/// The changes a client can make, over HTTP or the WebSocket.
-pub enum Change {
-    Camera(CameraPatch),
-    Light(LightPatch),
-    Quality(Value),
-    Scene(Value),
-}
-
-/// Applies a change and wakes the session's worker; the status after it.
-pub fn apply_change(state: &AppState, session: &Session, change: Change) -> AppResult<Status> {
-    session.change(|st| match change {
-        Change::Camera(p) => Ok((Some((st.scene_name.clone(), apply_camera(&st.scene, &p)?)), None)),
-        Change::Light(p) => Ok((Some((st.scene_name.clone(), apply_light(&st.scene, &p)?)), None)),
-        Change::Quality(q) => Ok((None, Some(apply_quality(&st.quality, &q)?))),
-        Change::Scene(v) => Ok((Some(parse_scene(v)?), None)),
-    })?;
-    state.wake(&session.id);
-    Ok(session.status())
-}
-
-/// The body of a change request parsed as `T`, turned into a change and applied.
+/// The body of a change request parsed as `T`, made a change and applied.
 async fn change<T: serde::de::DeserializeOwned>(
     state: Arc<AppState>,
     id: String,
     body: Result<Bytes, BytesRejection>,
-    make: fn(T) -> Change,
+    make: fn(T) -> Result<Change, ApiError>,
 ) -> AppResult<Json<Status>> {
     let session = state.session(&id)?;
     let parsed: T = parse_json(&body_bytes(body, state.config.max_body_bytes)?)?;
-    Ok(Json(apply_change(&state, &session, make(parsed))?))
+    Ok(Json(session.apply(make(parsed)?)?))
 }
 
 async fn patch_camera(
@@ -308,7 +218,7 @@ async fn patch_camera(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, Change::Camera).await
+    change(state, id, body, |edit: CameraEdit| Ok(Change::Camera(edit))).await
 }
 
 async fn patch_light(
@@ -316,15 +226,15 @@ async fn patch_light(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, Change::Light).await
+    change(state, id, body, |edit: LightEdit| Ok(Change::Light(edit))).await
 }
 
-async fn patch_quality(
+async fn patch_quality_route(
     State(state): State<Arc<AppState>>,
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, Change::Quality).await
+    change(state, id, body, |patch: Value| Ok(Change::Quality(patch))).await
 }
 
 async fn put_scene(
@@ -332,10 +242,11 @@ async fn put_scene(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, Change::Scene).await
+    change(state, id, body, Change::scene).await
 }
 
-#[derive(Deserialize)]
+/// `?min_spp=N&timeout_ms=T` on the frame routes.
+#[derive(Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FrameQuery {
     /// Wait until the image has at least this many samples per pixel.
@@ -347,18 +258,32 @@ struct FrameQuery {
     token: Option<String>,
 }
 
+impl FrameQuery {
+    const DEFAULT_TIMEOUT: Duration = Duration::from_secs(30);
+    const MAX_TIMEOUT: Duration = Duration::from_secs(600);
+
+    fn parse(query: Result<Query<FrameQuery>, QueryRejection>) -> AppResult<FrameQuery> {
+        query.map(|Query(q)| q).map_err(|e| ApiError::BadRequest(e.body_text()))
+    }
+
+    /// (samples per pixel to wait for, longest wait).
+    fn wait(&self) -> (u64, Duration) {
+        let timeout = self.timeout_ms.map_or(Self::DEFAULT_TIMEOUT, Duration::from_millis);
+        (self.min_spp.unwrap_or(0), timeout.min(Self::MAX_TIMEOUT))
+    }
+}
+
 async fn wait_frame(
     state: &AppState,
     id: &str,
     query: Result<Query<FrameQuery>, QueryRejection>,
-) -> AppResult<Arc<super::session::Frame>> {
-    let Query(q) = query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
+) -> AppResult<Arc<Frame>> {
+    let (min_spp, timeout) = FrameQuery::parse(query)?.wait();
     let session = state.session(id)?;
-    let timeout = Duration::from_millis(q.timeout_ms.unwrap_or(30_000).min(600_000));
-    Ok(session.frame_with(q.min_spp.unwrap_or(0), timeout).await)
+    Ok(session.frame_with(min_spp, timeout).await)
 }
 
-fn frame_headers(f: &super::session::Frame) -> [(&'static str, String); 3] {
+fn frame_headers(f: &Frame) -> [(&'static str, String); 3] {
     [
         ("x-pathstream-spp", f.spp.to_string()),
         ("x-pathstream-error-estimate", f.error_estimate.map_or("null".into(), |e| e.to_string())),
@@ -395,4 +320,38 @@ async fn frame_pfm(
         pfm,
     )
         .into_response())
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use axum::http::Uri;
+
+    fn query(q: &str) -> AppResult<FrameQuery> {
+        let uri: Uri = format!("/api/sessions/x/frame.png{q}").parse().unwrap();
+        FrameQuery::parse(Query::try_from_uri(&uri))
+    }
+
+    #[test]
+    fn frame_queries_decode_with_defaults_and_a_cap() {
+        assert_eq!(query("").unwrap().wait(), (0, Duration::from_secs(30)));
+        assert_eq!(query("?min_spp=64&timeout_ms=1500").unwrap().wait(), (64, Duration::from_millis(1500)));
+        assert_eq!(query("?timeout_ms=99999999").unwrap().wait().1, Duration::from_secs(600), "at most 10 min");
+        let q = query("?token=a%2Bb+c&min_spp=%31%36").unwrap();
+        assert_eq!((q.token.as_deref(), q.min_spp), (Some("a+b c"), Some(16)), "percent and plus decoded");
+    }
+
+    #[test]
+    fn bad_frame_queries_name_the_parameter() {
+        for (q, needle) in [
+            ("?min_spp=abc", "min_spp: invalid digit"),
+            ("?min_spp=-1", "min_spp: invalid digit"),
+            ("?timeout_ms=1e3", "timeout_ms: invalid digit"),
+            ("?zoom=2", "unknown field `zoom`"),
+        ] {
+            let e = query(q).expect_err(q).to_string();
+            assert!(e.contains(needle), "{q}: {e}");
+        }
+    }
 }

@@ -1,13 +1,16 @@
 //! A render session: scene, camera, light, quality and film, rendered pass
 //! by pass by a worker thread, with the latest frame published through a
-//! `watch` channel (newest wins; nobody waits for a slow reader).
+//! `watch` channel (newest wins; nobody waits for a slow reader). Changes
+//! (camera, light, quality, scene) come in through [`Session::apply`], from
+//! HTTP and the WebSocket alike.
 
+use super::change::{patch_quality, Change};
 use super::error::ApiError;
 use super::metrics::Metrics;
-use super::updates::{light_status, LightStatus};
-use crate::render::output::{encode_pfm, encode_png};
+use super::worker::{BackendInfo, Waker};
+pub use super::frame::Frame;
 use crate::render::progressive::{self, Progress};
-use crate::render::tonemap::Tonemap;
+use crate::render::scene::LightInfo;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
 use serde::Serialize;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -19,74 +22,8 @@ use tokio::sync::watch;
 /// shows within a frame or two, long enough to keep the device busy.
 pub const PASS_TARGET: Duration = Duration::from_millis(30);
 
-/// A published image and its statistics.
-#[derive(Debug)]
-pub struct Frame {
-    /// Increases with every frame the session publishes.
-    pub seq: u64,
-    /// Which restart of the session this frame belongs to.
-    pub generation: u64,
-    pub width: u32,
-    pub height: u32,
-    pub spp: u64,
-    pub error_estimate: Option<f64>,
-    pub samples_per_sec: f64,
-    pub elapsed_ms: f64,
-    pub rejected: u64,
-    pub halted: bool,
-    pub backend: String,
-    pub device: String,
-    /// Mean radiance, row-major, top row first (empty before the first pass).
-    pub pixels: Vec<[f32; 3]>,
-    png: OnceLock<Vec<u8>>,
-}
-
-impl Frame {
-    fn empty(seq: u64, generation: u64, width: u32, height: u32, backend: String, device: String) -> Self {
-        Self {
-            seq,
-            generation,
-            width,
-            height,
-            spp: 0,
-            error_estimate: None,
-            samples_per_sec: 0.0,
-            elapsed_ms: 0.0,
-            rejected: 0,
-            halted: false,
-            backend,
-            device,
-            pixels: Vec::new(),
-            png: OnceLock::new(),
-        }
-    }
-
-    fn pixels_or_black(&self) -> std::borrow::Cow<'_, [[f32; 3]]> {
-        if self.pixels.is_empty() {
-            std::borrow::Cow::Owned(vec![[0.0; 3]; self.width as usize * self.height as usize])
-        } else {
-            std::borrow::Cow::Borrowed(&self.pixels)
-        }
-    }
-
-    /// The frame as PNG, encoded once however many clients want it. Call off
-    /// the async runtime (it takes milliseconds).
-    pub fn png(&self) -> Result<&[u8], ApiError> {
-        if let Some(png) = self.png.get() {
-            return Ok(png);
-        }
-        let png = encode_png(self.width, self.height, &self.pixels_or_black(), &Tonemap::default())
-            .map_err(|e| ApiError::Internal(e.to_string()))?;
-        Ok(self.png.get_or_init(|| png))
-    }
-
-    pub fn pfm(&self) -> Vec<u8> {
-        encode_pfm(self.width, self.height, &self.pixels_or_black())
-    }
-}
-
 /// Everything that a change restarts.
-pub struct SessionState {
+struct SessionState {
     pub scene_name: String,
     pub scene: Scene,
     pub width: u32,
@@ -114,6 +51,10 @@ pub struct Session {
     last_active: Mutex<Instant>,
     /// Connected WebSocket clients (a session with clients never expires).
     pub clients: AtomicUsize,
+    /// Passes rendered, all generations (how the worker shares its device).
+    passes: AtomicU64,
+    /// Set by the worker that renders this session.
+    waker: OnceLock<Waker>,
 }
 
 /// Status as `GET /api/sessions/{id}` reports it.
@@ -124,7 +65,7 @@ pub struct Status {
     pub width: u32,
     pub height: u32,
     pub camera: crate::render::scene::CameraJson,
-    pub light: Option<LightStatus>,
+    pub light: Option<LightInfo>,
     pub quality: Quality,
     /// `rendering` or `halted` (also after a device failure, see `failure`).
     pub state: &'static str,
@@ -147,9 +88,9 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Session {
-    pub fn new(id: String, scene_name: String, scene: Scene, width: u32, height: u32, quality: Quality, backend: (String, String)) -> Self {
+    pub fn new(id: String, scene_name: String, scene: Scene, width: u32, height: u32, quality: Quality, backend: BackendInfo) -> Self {
         let job = Arc::new(RenderJob::new(&scene, width, height, &quality));
-        let (frames, _) = watch::channel(Arc::new(Frame::empty(0, 0, width, height, backend.0, backend.1)));
+        let (frames, _) = watch::channel(Arc::new(Frame::empty(0, 0, width, height, backend.backend, backend.device)));
         Self {
             id,
             state: Mutex::new(SessionState {
@@ -171,7 +112,19 @@ impl Session {
             seq: AtomicU64::new(1),
             last_active: Mutex::new(Instant::now()),
             clients: AtomicUsize::new(0),
+            passes: AtomicU64::new(0),
+            waker: OnceLock::new(),
         }
+    }
+
+    /// Called once by the worker the session is placed on.
+    pub(super) fn attach(&self, waker: Waker) {
+        let _ = self.waker.set(waker);
+    }
+
+    /// Passes rendered so far, all generations included.
+    pub fn passes(&self) -> u64 {
+        self.passes.load(Ordering::Relaxed)
     }
 
     pub fn touch(&self) {
@@ -209,7 +162,7 @@ impl Session {
             width: st.width,
             height: st.height,
             camera: c,
-            light: light_status(&st.scene),
+            light: st.scene.light_info(),
             quality: st.quality,
             state: if st.halted { "halted" } else { "rendering" },
             spp: if current { frame.spp } else { 0 },
@@ -224,20 +177,18 @@ impl Session {
         }
     }
 
-    /// Applies a change: `update` gets the scene and quality and returns the
-    /// new ones (or an error, which changes nothing). Accumulation restarts.
-    pub fn change(
-        &self,
-        update: impl FnOnce(&SessionState) -> Result<(Option<(String, Scene)>, Option<Quality>), ApiError>,
-    ) -> Result<(), ApiError> {
+    /// Applies a change and restarts accumulation at sample 0; the status
+    /// after it. A refused change (an error naming the field) changes nothing.
+    pub fn apply(&self, change: Change) -> Result<Status, ApiError> {
         let mut st = lock(&self.state);
-        let (scene, quality) = update(&st)?;
-        if let Some((name, scene)) = scene {
-            st.scene_name = name;
-            st.scene = scene;
-        }
-        if let Some(q) = quality {
-            st.quality = q;
+        match change {
+            Change::Camera(edit) => st.scene = st.scene.edit_camera(&edit)?,
+            Change::Light(edit) => st.scene = st.scene.edit_light(&edit)?,
+            Change::Quality(patch) => st.quality = patch_quality(&st.quality, &patch)?,
+            Change::Scene { name, scene } => {
+                st.scene_name = name;
+                st.scene = *scene;
+            }
         }
         st.job = Arc::new(RenderJob::new(&st.scene, st.width, st.height, &st.quality));
         st.film = Some(Film::new(st.width, st.height));
@@ -259,7 +210,10 @@ impl Session {
         );
         drop(st);
         self.frames.send_replace(Arc::new(frame));
-        Ok(())
+        if let Some(waker) = self.waker.get() {
+            waker.wake();
+        }
+        Ok(self.status())
     }
 
     /// Whether a worker should give this session a pass.
@@ -295,6 +249,7 @@ impl Session {
             .prepare(&job)
             .and_then(|()| backend.render_unless(&job, &mut film, count, &cancelled));
         let took = start.elapsed();
+        self.passes.fetch_add(1, Ordering::Relaxed);
         let (name, device) = (backend.name().to_owned(), backend.device());
         // The O(pixels) work on the film happens before taking the lock, so
         // that status requests and changes never wait for it.

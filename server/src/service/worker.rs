@@ -5,67 +5,112 @@
 use super::metrics::Metrics;
 use super::session::Session;
 use crate::render::Backend;
+use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, Weak};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-pub struct WorkerShared {
-    /// `cpu` or `opencl`: what the worker started as.
+/// What a worker renders with, as `/api/health` and `/api/devices` report it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct BackendInfo {
+    /// `cpu` or `opencl`.
     pub backend: String,
     pub device: String,
+}
+
+impl BackendInfo {
+    pub fn of(backend: &Backend) -> Self {
+        Self {
+            backend: backend.name().to_owned(),
+            device: backend.device(),
+        }
+    }
+}
+
+struct WorkerShared {
+    /// What the worker renders with now: an OpenCL backend chosen by `auto`
+    /// becomes rayon if its device fails, and this follows.
+    info: Mutex<BackendInfo>,
     sessions: Mutex<Vec<Arc<Session>>>,
     wake: Condvar,
     stop: AtomicBool,
 }
 
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Tells a worker that one of its sessions has work again. Held by the
+/// session; it does not keep the worker alive.
+#[derive(Clone, Debug)]
+pub struct Waker(Weak<WorkerShared>);
+
+impl Waker {
+    pub fn wake(&self) {
+        if let Some(shared) = self.0.upgrade() {
+            shared.notify();
+        }
+    }
+}
+
+impl WorkerShared {
+    fn notify(&self) {
+        // Taking the lock orders this after a worker's check for work and
+        // its wait (which holds the lock between them): no wake-up is lost.
+        let _sessions = lock(&self.sessions);
+        self.wake.notify_all();
+    }
+}
+
 pub struct Worker {
-    pub shared: Arc<WorkerShared>,
-    handle: Option<JoinHandle<()>>,
+    shared: Arc<WorkerShared>,
+    handle: Mutex<Option<JoinHandle<()>>>,
 }
 
 impl Worker {
     pub fn start(mut backend: Backend, metrics: Arc<Metrics>) -> Worker {
         let shared = Arc::new(WorkerShared {
-            backend: backend.name().to_owned(),
-            device: backend.device(),
+            info: Mutex::new(BackendInfo::of(&backend)),
             sessions: Mutex::new(Vec::new()),
             wake: Condvar::new(),
             stop: AtomicBool::new(false),
         });
         let s = shared.clone();
         let handle = std::thread::Builder::new()
-            .name(format!("render-{}", shared.backend))
+            .name(format!("render-{}", backend.name()))
             .spawn(move || run(&mut backend, &s, &metrics))
             .ok();
         if handle.is_none() {
             tracing::error!("could not start a render thread");
         }
-        Worker { shared, handle }
+        Worker {
+            shared,
+            handle: Mutex::new(handle),
+        }
     }
 
+    /// What the worker renders with now.
+    pub fn info(&self) -> BackendInfo {
+        lock(&self.shared.info).clone()
+    }
+
+    /// Places a session on this worker, which starts rendering it.
     pub fn add(&self, session: Arc<Session>) {
-        self.shared.sessions.lock().unwrap_or_else(|e| e.into_inner()).push(session);
-        self.wake();
+        session.attach(Waker(Arc::downgrade(&self.shared)));
+        lock(&self.shared.sessions).push(session);
+        self.shared.notify();
     }
 
     pub fn remove(&self, id: &str) {
-        self.shared
-            .sessions
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .retain(|s| s.id != id);
+        lock(&self.shared.sessions).retain(|s| s.id != id);
     }
 
-    /// Tells the worker that a session has work again.
-    pub fn wake(&self) {
-        self.shared.wake.notify_all();
-    }
-
-    pub fn stop(&mut self) {
+    /// Stops the thread after its current pass and waits for it.
+    pub fn stop(&self) {
         self.shared.stop.store(true, Ordering::Relaxed);
-        self.wake();
-        if let Some(h) = self.handle.take() {
+        self.shared.notify();
+        if let Some(h) = lock(&self.handle).take() {
             let _ = h.join();
         }
     }
@@ -73,9 +118,10 @@ impl Worker {
 
 fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
     let mut next = 0usize;
+    let mut rendering_with = backend.name();
     while !shared.stop.load(Ordering::Relaxed) {
         let session = {
-            let sessions = shared.sessions.lock().unwrap_or_else(|e| e.into_inner());
+            let sessions = lock(&shared.sessions);
             let n = sessions.len();
             let found = (0..n).map(|k| (next + k) % n.max(1)).find(|&i| sessions[i].wants_render());
             match found {
@@ -92,6 +138,12 @@ fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
         };
         if let Some(session) = session {
             session.render_pass(backend, metrics);
+            if backend.name() != rendering_with {
+                rendering_with = backend.name();
+                let info = BackendInfo::of(backend);
+                tracing::warn!(backend = %info.backend, device = %info.device, "the worker now renders elsewhere");
+                *lock(&shared.info) = info;
+            }
         }
     }
 }

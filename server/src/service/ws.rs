@@ -8,8 +8,8 @@
 //! newest frame and skips the ones published meanwhile, so a slow or stalled
 //! client never slows rendering or anyone else.
 
+use super::change::Change;
 use super::error::ApiError;
-use super::routes::{apply_change, Change};
 use super::session::{Frame, Session, Status};
 use super::AppState;
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
@@ -50,33 +50,6 @@ fn stats(status: &Status, frame: &Frame) -> Value {
 
 fn error_message(e: &str) -> Message {
     Message::Text(Utf8Bytes::from(json!({"type": "error", "error": e}).to_string()))
-}
-
-/// Parses one client message into changes, in the order given.
-fn parse_changes(text: &str) -> Result<Vec<Change>, ApiError> {
-    let value: Value = super::error::parse_json(text.as_bytes())?;
-    let Value::Object(map) = value else {
-        return Err(ApiError::BadRequest("message: must be a JSON object".into()));
-    };
-    let mut changes = Vec::new();
-    for (key, v) in map {
-        let field = |e: ApiError| match e {
-            ApiError::BadRequest(m) => ApiError::BadRequest(format!("{key}.{m}")),
-            other => other,
-        };
-        changes.push(match key.as_str() {
-            "camera" => Change::Camera(serde_json::from_value(v).map_err(|e| field(ApiError::BadRequest(e.to_string())))?),
-            "light" => Change::Light(serde_json::from_value(v).map_err(|e| field(ApiError::BadRequest(e.to_string())))?),
-            "quality" => Change::Quality(v),
-            "scene" => Change::Scene(v),
-            other => {
-                return Err(ApiError::BadRequest(format!(
-                    "message: unknown key '{other}' (expected camera, light, quality or scene)"
-                )))
-            }
-        });
-    }
-    Ok(changes)
 }
 
 async fn serve(socket: WebSocket, state: Arc<AppState>, session: Arc<Session>) {
@@ -131,9 +104,8 @@ async fn serve(socket: WebSocket, state: Arc<AppState>, session: Arc<Session>) {
                     Some(Ok(_)) => continue,
                 };
                 session.touch();
-                let result = parse_changes(text.as_str()).and_then(|changes| {
-                    changes.into_iter().try_for_each(|c| apply_change(&state, &session, c).map(|_| ()))
-                });
+                let result = Change::parse_message(text.as_str())
+                    .and_then(|changes| changes.into_iter().try_for_each(|c| session.apply(c).map(|_| ())));
                 if let Err(e) = result {
                     if sink.send(error_message(&e.to_string())).await.is_err() {
                         break;

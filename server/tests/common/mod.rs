@@ -44,34 +44,41 @@ pub struct Region {
     pub var: [f64; 3],
 }
 
-/// Splits the film into `block` x `block` regions. The variance of each
-/// pixel's mean comes from its even/odd halves, (A - B)^2 nA nB / n^2; pixels
-/// are independent, so a region's is the sum over n_pixels^2.
-pub fn regions(film: &Film, block: u32) -> Vec<Region> {
+/// The mean of the pixels in columns `xs` and rows `ys`, and the variance of
+/// that mean. The variance of each pixel's mean comes from its even/odd
+/// halves, (A - B)^2 nA nB / n^2; pixels are independent, so a region's is
+/// the sum over n_pixels^2.
+pub fn region(film: &Film, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -> Region {
     let n = film.spp() as f64;
     let (na, nb) = (film.spp().div_ceil(2) as f64, (film.spp() / 2) as f64);
+    let w = film.width();
+    let mut r = Region { mean: [0.0; 3], var: [0.0; 3] };
+    let mut count = 0.0;
+    for y in ys {
+        for x in xs.clone() {
+            let p = film.pixels()[(y * w + x) as usize];
+            for c in 0..3 {
+                r.mean[c] += (p.even[c] + p.odd[c]) / n;
+                let d = p.even[c] / na - p.odd[c] / nb;
+                r.var[c] += d * d * na * nb / (n * n);
+            }
+            count += 1.0;
+        }
+    }
+    for c in 0..3 {
+        r.mean[c] /= count;
+        r.var[c] /= count * count;
+    }
+    r
+}
+
+/// Splits the film into `block` x `block` regions, row by row.
+pub fn regions(film: &Film, block: u32) -> Vec<Region> {
     let (w, h) = (film.width(), film.height());
     let mut out = Vec::new();
     for by in (0..h).step_by(block as usize) {
         for bx in (0..w).step_by(block as usize) {
-            let mut r = Region { mean: [0.0; 3], var: [0.0; 3] };
-            let mut count = 0.0;
-            for y in by..(by + block).min(h) {
-                for x in bx..(bx + block).min(w) {
-                    let p = film.pixels()[(y * w + x) as usize];
-                    for c in 0..3 {
-                        r.mean[c] += (p.even[c] + p.odd[c]) / n;
-                        let d = p.even[c] / na - p.odd[c] / nb;
-                        r.var[c] += d * d * na * nb / (n * n);
-                    }
-                    count += 1.0;
-                }
-            }
-            for c in 0..3 {
-                r.mean[c] /= count;
-                r.var[c] /= count * count;
-            }
-            out.push(r);
+            out.push(region(film, bx..(bx + block).min(w), by..(by + block).min(h)));
         }
     }
     out
@@ -144,4 +151,20 @@ pub fn mesh_object(m: &pathstream::model::MeshData, material: &str, transform: s
 /// A built-in scene as JSON, to edit.
 pub fn scene_json(name: &str) -> serde_json::Value {
     serde_json::to_value(scene(name).to_json()).expect("scene JSON")
+}
+
+/// Asserts that the region's mean is within `z_max` standard errors (plus an
+/// absolute `floor` for what the expectation's own computation may miss) of
+/// `expected`, in every channel.
+pub fn assert_region(r: &Region, expected: f64, z_max: f64, floor: f64, what: &str) {
+    for c in 0..3 {
+        let diff = (r.mean[c] - expected).abs();
+        let se = r.var[c].sqrt();
+        assert!(
+            diff <= floor + z_max * se,
+            "{what}: channel {c}: {} vs expected {expected} ({:.1} standard errors, se {se:.2e})",
+            r.mean[c],
+            (diff - floor).max(0.0) / se
+        );
+    }
 }

@@ -5,7 +5,7 @@ use futures_util::StreamExt;
 use pathstream::render::BackendChoice;
 use pathstream::service::{start, Running, ServeConfig};
 use serde_json::Value;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
 
 pub type Ws = tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
@@ -87,3 +87,15 @@ pub async fn read_frames(
     (frames, stats)
 }
 
+
+/// The first binary (PNG) frame, waiting at most `timeout`.
+pub async fn first_frame(ws: &mut Ws, timeout: Duration) -> Vec<u8> {
+    let until = Instant::now() + timeout;
+    loop {
+        match tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next()).await {
+            Ok(Some(Ok(Message::Binary(png)))) => return png.to_vec(),
+            Ok(Some(Ok(_))) => {}
+            other => panic!("no frame within {timeout:?}: {other:?}"),
+        }
+    }
+}

@@ -8,6 +8,7 @@
 mod builtin;
 mod frame;
 mod import;
+mod edit;
 mod json;
 mod placement;
 mod resolve;
@@ -16,6 +17,7 @@ mod validate;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use import::{Import, ImportKind, MeshInstance};
+pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
 pub use json::{
     CameraJson, FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson, QuadJson, RotateJson,
     ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,

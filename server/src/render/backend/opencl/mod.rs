@@ -7,7 +7,13 @@
 //! sums (see `kernels/render.cl`), and after each `render` call the film comes
 //! back once and replaces the host's sums. If anything fails the host film is
 //! left as it was: no accumulated sample is lost.
-#![allow(unsafe_code)] // OpenCL enqueue calls are unsafe in opencl3
+//!
+//! `unsafe` is allowed statement by statement, each with a `SAFETY:` comment:
+//! opencl3 leaves to its caller that host pointers outlive the device's use
+//! of them (every transfer here blocks), that buffers are as large as what
+//! kernels touch, and that kernel arguments have the kernel's types. Only
+//! `bytemuck::Pod` types cross between host and device memory, so any bytes
+//! either side writes are valid values on the other.
 
 mod devices;
 mod layout;
@@ -21,9 +27,10 @@ use crate::render::job::RenderJob;
 use opencl3::command_queue::CommandQueue;
 use opencl3::context::Context;
 use opencl3::kernel::Kernel;
+use bytemuck::Pod;
 use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
 use opencl3::program::Program;
-use opencl3::types::{cl_ulong, cl_uint, CL_BLOCKING};
+use opencl3::types::{cl_mem_flags, cl_ulong, cl_uint, CL_BLOCKING};
 use std::collections::HashMap;
 use std::ptr;
 use std::time::{Duration, Instant};
@@ -62,6 +69,24 @@ pub fn unsupported(job: &RenderJob) -> Option<String> {
         Some("it has an environment light (rendered on the CPU for now)".into())
     } else {
         None
+    }
+}
+
+/// How kernels use a device buffer. Neither variant lets OpenCL use or copy
+/// host memory (`CL_MEM_USE_HOST_PTR`, `CL_MEM_COPY_HOST_PTR`), which is what
+/// makes creating a buffer with a null host pointer sound.
+#[derive(Clone, Copy, Debug)]
+enum Access {
+    ReadOnly,
+    ReadWrite,
+}
+
+impl Access {
+    fn flags(self) -> cl_mem_flags {
+        match self {
+            Access::ReadOnly => CL_MEM_READ_ONLY,
+            Access::ReadWrite => CL_MEM_READ_WRITE,
+        }
     }
 }
 
@@ -220,16 +245,22 @@ impl OpenClBackend {
     /// computed with the film's own addition.
     pub fn accumulate_constant(&self, value: f32, count: u32) -> Result<f64, OpenClError> {
         let mut out = [0f32; 2];
-        self.run_check_kernel("accumulate_constant", &mut out, |k| unsafe {
-            k.set_arg(1, &value).map_err(call("set_arg"))?;
-            k.set_arg(2, &count).map_err(call("set_arg"))
+        self.run_check_kernel("accumulate_constant", &mut out, |k| {
+            #[allow(unsafe_code)]
+            // SAFETY: `accumulate_constant(__global float *sum, float value,
+            // uint count)`: arguments 1 and 2 are an f32 and a u32.
+            unsafe {
+                k.set_arg(1, &value).map_err(call("set_arg"))?;
+                k.set_arg(2, &count).map_err(call("set_arg"))
+            }
         })?;
         Ok(f64::from(out[0]) + f64::from(out[1]))
     }
 
     /// Runs one work-item of a check kernel from `kernels/render.cl` whose
-    /// first argument is an output buffer the size of `out`; `args` sets the rest.
-    fn run_check_kernel<T: Copy>(
+    /// first argument is an output buffer the size of `out`, which is all the
+    /// kernel may write; `args` sets the rest.
+    fn run_check_kernel<T: Pod>(
         &self,
         name: &str,
         out: &mut [T],
@@ -237,35 +268,46 @@ impl OpenClBackend {
     ) -> Result<(), OpenClError> {
         let program = self.build_sources(&SOURCES, "-cl-std=CL1.2")?;
         let kernel = Kernel::create(&program, name).map_err(call("kernel creation"))?;
-        unsafe {
-            let buf = self.buffer::<T>(CL_MEM_READ_WRITE, out.len())?;
-            kernel.set_arg(0, &buf.get()).map_err(call("set_arg"))?;
-            args(&kernel)?;
-            let global = [1usize];
-            self.queue
-                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
-                .map_err(call("launch"))?;
-            self.queue
-                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, out, &[])
-                .map_err(call("read"))?;
-        }
+        let buf = self.buffer::<T>(Access::ReadWrite, out.len())?;
+        #[allow(unsafe_code)]
+        // SAFETY: argument 0 of every check kernel is a `__global` pointer,
+        // here a cl_mem of `out.len()` elements, as many as the kernel writes.
+        unsafe { kernel.set_arg(0, &buf.get()) }.map_err(call("set_arg"))?;
+        args(&kernel)?;
+        let global = [1usize];
+        #[allow(unsafe_code)]
+        // SAFETY: every argument is set; `buf` lives until the blocking read
+        // below has returned; `global` has `work_dim` (1) entries.
+        unsafe { self.queue.enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[]) }
+            .map_err(call("launch"))?;
+        #[allow(unsafe_code)]
+        // SAFETY: a blocking read of `out.len()` elements, the buffer's size,
+        // into `out`, which lives past the call; T: Pod takes any bytes.
+        unsafe { self.queue.enqueue_read_buffer(&buf, CL_BLOCKING, 0, out, &[]) }.map_err(call("read"))?;
         Ok(())
     }
 
-    unsafe fn buffer<T>(&self, flags: u64, count: usize) -> Result<Buffer<T>, OpenClError> {
-        unsafe { Buffer::<T>::create(&self.context, flags, count.max(1), ptr::null_mut()).map_err(call("buffer allocation")) }
+    /// A device buffer of `count` elements (at least 1: OpenCL refuses empty
+    /// buffers), uninitialised.
+    fn buffer<T: Pod>(&self, access: Access, count: usize) -> Result<Buffer<T>, OpenClError> {
+        #[allow(unsafe_code)]
+        // SAFETY: the host pointer is null and `access` never asks OpenCL to
+        // read it; the size is computed by opencl3 from `count.max(1)` and T.
+        let buf = unsafe { Buffer::<T>::create(&self.context, access.flags(), count.max(1), ptr::null_mut()) };
+        buf.map_err(call("buffer allocation"))
     }
 
-    unsafe fn upload<T>(&self, flags: u64, data: &[T]) -> Result<Buffer<T>, OpenClError> {
-        unsafe {
-            let mut buf = self.buffer::<T>(flags, data.len())?;
-            if !data.is_empty() {
-                self.queue
-                    .enqueue_write_buffer(&mut buf, CL_BLOCKING, 0, data, &[])
-                    .map_err(call("write"))?;
-            }
-            Ok(buf)
+    /// A device buffer holding a copy of `data`.
+    fn upload<T: Pod>(&self, access: Access, data: &[T]) -> Result<Buffer<T>, OpenClError> {
+        let mut buf = self.buffer::<T>(access, data.len())?;
+        if !data.is_empty() {
+            #[allow(unsafe_code)]
+            // SAFETY: a blocking write: OpenCL is done with `data` when the
+            // call returns; the buffer holds `data.len()` elements; T: Pod has
+            // no padding or pointers, only the plain values the kernel reads.
+            unsafe { self.queue.enqueue_write_buffer(&mut buf, CL_BLOCKING, 0, data, &[]) }.map_err(call("write"))?;
         }
+        Ok(buf)
     }
 
     /// Makes the device hold `job` and a film equal to the host's, as the
@@ -292,21 +334,19 @@ impl OpenClBackend {
                 }
             }
         }
-        let state = unsafe {
-            JobState {
-                job_id: job.id,
-                key: key.clone(),
-                params: self.upload(CL_MEM_READ_ONLY, std::slice::from_ref(&packed.params))?,
-                objects: self.upload(CL_MEM_READ_ONLY, &packed.objects)?,
-                materials: self.upload(CL_MEM_READ_ONLY, &packed.materials)?,
-                lights: self.upload(CL_MEM_READ_ONLY, &packed.lights)?,
-                film: self.upload(CL_MEM_READ_WRITE, &device_film)?,
-                rejected: self.upload(CL_MEM_READ_WRITE, &[0u32])?,
-                pixels: film.pixels().len(),
-                spp: film.spp(),
-                per_sample,
-                rejected_reported: 0,
-            }
+        let state = JobState {
+            job_id: job.id,
+            key: key.clone(),
+            params: self.upload(Access::ReadOnly, std::slice::from_ref(&packed.params))?,
+            objects: self.upload(Access::ReadOnly, &packed.objects)?,
+            materials: self.upload(Access::ReadOnly, &packed.materials)?,
+            lights: self.upload(Access::ReadOnly, &packed.lights)?,
+            film: self.upload(Access::ReadWrite, &device_film)?,
+            rejected: self.upload(Access::ReadWrite, &[0u32])?,
+            pixels: film.pixels().len(),
+            spp: film.spp(),
+            per_sample,
+            rejected_reported: 0,
         };
         self.states.push(state);
         // Keep at most RESIDENT_JOBS states and RESIDENT_FILM_BYTES of films.
@@ -393,6 +433,11 @@ impl OpenClBackend {
             .get(key)
             .ok_or_else(|| OpenClError::Unavailable("program cache".into()))?
             .1;
+        let (base, end) = (offset as cl_uint, (offset + size).min(pixels) as cl_uint);
+        #[allow(unsafe_code)]
+        // SAFETY: the types of `render` in kernels/render.cl, in order: six
+        // `__global` pointers (the cl_mem handles of this job's buffers),
+        // `ulong first`, `uint count`, `uint pixel_base`, `uint pixel_end`.
         unsafe {
             kernel.set_arg(0, &state.params.get()).map_err(call("set_arg"))?;
             kernel.set_arg(1, &state.objects.get()).map_err(call("set_arg"))?;
@@ -402,14 +447,18 @@ impl OpenClBackend {
             kernel.set_arg(5, &state.rejected.get()).map_err(call("set_arg"))?;
             kernel.set_arg(6, &first).map_err(call("set_arg"))?;
             kernel.set_arg(7, &count).map_err(call("set_arg"))?;
-            let (base, end) = (offset as cl_uint, (offset + size).min(pixels) as cl_uint);
             kernel.set_arg(8, &base).map_err(call("set_arg"))?;
             kernel.set_arg(9, &end).map_err(call("set_arg"))?;
-            let global = [size];
-            self.queue
-                .enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[])
-                .map_err(call("kernel launch"))?;
         }
+        let global = [size];
+        #[allow(unsafe_code)]
+        // SAFETY: every argument is set and the buffers live in `state` past
+        // the `finish` below. The kernel reads as many objects, materials and
+        // lights as `layout::pack` counted into the params with them, and
+        // work-items at or past `pixel_end` (<= the film's pixels) return
+        // before touching the film of `pixels` x FILM_FLOATS floats.
+        unsafe { self.queue.enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[]) }
+            .map_err(call("kernel launch"))?;
         self.queue.finish().map_err(call("kernel execution"))
     }
 
@@ -417,6 +466,10 @@ impl OpenClBackend {
         let state = self.states.last_mut().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         let mut sums = vec![0f32; state.pixels * FILM_FLOATS];
         let mut rejected = [0u32];
+        #[allow(unsafe_code)]
+        // SAFETY: blocking reads, each into a host slice exactly the size of
+        // its buffer (`pixels` x FILM_FLOATS floats; one u32) that outlives
+        // the call; f32 and u32 take any bytes.
         unsafe {
             self.queue
                 .enqueue_read_buffer(&state.film, CL_BLOCKING, 0, &mut sums, &[])

@@ -1,0 +1,73 @@
+//! A published image and its statistics: what a session's `watch` channel
+//! carries to the WebSocket streams and the frame endpoints.
+
+use super::error::ApiError;
+use crate::render::output::{encode_pfm, encode_png};
+use crate::render::tonemap::Tonemap;
+use std::sync::OnceLock;
+
+/// A published image and its statistics.
+#[derive(Debug)]
+pub struct Frame {
+    /// Increases with every frame the session publishes.
+    pub seq: u64,
+    /// Which restart of the session this frame belongs to.
+    pub generation: u64,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u64,
+    pub error_estimate: Option<f64>,
+    pub samples_per_sec: f64,
+    pub elapsed_ms: f64,
+    pub rejected: u64,
+    pub halted: bool,
+    pub backend: String,
+    pub device: String,
+    /// Mean radiance, row-major, top row first (empty before the first pass).
+    pub pixels: Vec<[f32; 3]>,
+    pub(super) png: OnceLock<Vec<u8>>,
+}
+
+impl Frame {
+    pub(super) fn empty(seq: u64, generation: u64, width: u32, height: u32, backend: String, device: String) -> Self {
+        Self {
+            seq,
+            generation,
+            width,
+            height,
+            spp: 0,
+            error_estimate: None,
+            samples_per_sec: 0.0,
+            elapsed_ms: 0.0,
+            rejected: 0,
+            halted: false,
+            backend,
+            device,
+            pixels: Vec::new(),
+            png: OnceLock::new(),
+        }
+    }
+
+    fn pixels_or_black(&self) -> std::borrow::Cow<'_, [[f32; 3]]> {
+        if self.pixels.is_empty() {
+            std::borrow::Cow::Owned(vec![[0.0; 3]; self.width as usize * self.height as usize])
+        } else {
+            std::borrow::Cow::Borrowed(&self.pixels)
+        }
+    }
+
+    /// The frame as PNG, encoded once however many clients want it. Call off
+    /// the async runtime (it takes milliseconds).
+    pub fn png(&self) -> Result<&[u8], ApiError> {
+        if let Some(png) = self.png.get() {
+            return Ok(png);
+        }
+        let png = encode_png(self.width, self.height, &self.pixels_or_black(), &Tonemap::default())
+            .map_err(|e| ApiError::Internal(e.to_string()))?;
+        Ok(self.png.get_or_init(|| png))
+    }
+
+    pub fn pfm(&self) -> Vec<u8> {
+        encode_pfm(self.width, self.height, &self.pixels_or_black())
+    }
+}

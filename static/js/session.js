@@ -1,0 +1,298 @@
+// The session: opening it (again, with the same settings, when the server
+// lost it), its WebSocket, the status it reports, and the changes this page
+// sends (scene and size over HTTP; camera and light over the socket, at most
+// once per animation frame).
+
+import { api } from "./api.js";
+import { el } from "./dom.js";
+import { setConn, showMessage } from "./messages.js";
+import { QUIET_MS, RETRY_MAX_MS, emit, state } from "./state.js";
+import { clone, length, same } from "./vec.js";
+import { drawFrames, markDisplayed, updateSizeInputs } from "./view.js";
+
+export function applyScene(status) {
+  state.camera = clone(status.camera);
+  state.defaultCamera = clone(status.camera);
+  state.light = status.light ? pickLight(status.light) : null;
+  state.defaultLight = clone(state.light);
+  // Step: 2% of the camera's distance from the origin (6 units in the
+  // Cornell box), at least 0.05 (the unit-sphere furnace).
+  state.moveStep = Math.max(0.05, 0.02 * length(status.camera.position));
+  state.want.scene = status.scene;
+  el.scene.value = status.scene;
+}
+
+export function pickLight(l) {
+  return { position: [...l.position], color: [...l.color], intensity: l.intensity };
+}
+
+/** Opens a session with what the page wants; restores camera and light when
+ *  it replaces a lost one. */
+export async function createSession({ restore = false } = {}) {
+  const w = state.want;
+  const body = { scene: w.scene, width: w.width, height: w.height };
+  if (w.quality) body.quality = w.quality;
+  const camera = restore ? clone(state.camera) : null;
+  const light = restore ? clone(state.light) : null;
+  let status = await api("POST", "/sessions", body);
+  state.sessionId = status.id;
+  state.maxGeneration = 0;
+  state.adoptFrom = 0;
+  el.body.dataset.sessionId = status.id;
+  const defaults = status;
+  if (camera && !same(camera, status.camera)) {
+    status = await api("PATCH", `/sessions/${status.id}/camera`, camera);
+  }
+  if (light && status.light && !same(light, pickLight(status.light))) {
+    status = await api("PATCH", `/sessions/${status.id}/light`, light);
+  }
+  applyScene(defaults);
+  state.camera = clone(status.camera);
+  state.light = status.light ? pickLight(status.light) : null;
+  state.cameraDirty = false;
+  state.lightDirty = false;
+  applyAnswer(status);
+  updateSizeInputs();
+  return status;
+}
+
+/** The session exists (made again when the server forgot it) and the socket is open. */
+export async function connect() {
+  if (state.connecting) return;
+  state.connecting = true;
+  clearTimeout(state.retryTimer);
+  try {
+    if (!state.sessionId) {
+      await createSession();
+    } else {
+      try {
+        const status = await api("GET", `/sessions/${state.sessionId}`);
+        applyStatus(status);
+      } catch (e) {
+        if (e.status !== 404) throw e;
+        const old = state.sessionId;
+        await createSession({ restore: true });
+        showMessage(`The server no longer had session ${old}; opened ${state.sessionId} with the same settings.`, "info", 6000);
+      }
+    }
+    openSocket();
+  } catch (e) {
+    if (e.status === 0) {
+      scheduleReconnect("server unreachable");
+    } else {
+      showMessage(e.message);
+      scheduleReconnect("error");
+    }
+  } finally {
+    state.connecting = false;
+  }
+}
+
+export function scheduleReconnect(why) {
+  clearTimeout(state.retryTimer);
+  const delay = Math.min(RETRY_MAX_MS, 250 * 2 ** state.retry);
+  state.retry += 1;
+  setConn("reconnecting", `reconnecting (${why}, try ${state.retry})`);
+  state.retryTimer = setTimeout(connect, delay);
+}
+
+export function openSocket() {
+  closeSocket();
+  const proto = location.protocol === "https:" ? "wss" : "ws";
+  const q = state.token ? `?token=${encodeURIComponent(state.token)}` : "";
+  const ws = new WebSocket(`${proto}://${location.host}/api/sessions/${state.sessionId}/ws${q}`);
+  ws.binaryType = "blob";
+  state.ws = ws;
+  setConn("connecting", "connecting");
+  ws.onopen = () => {
+    if (state.ws !== ws) return;
+    state.retry = 0;
+    setConn("live", "live");
+    // Anything changed while the socket was down goes now.
+    if (state.cameraDirty || state.lightDirty) requestFlush();
+  };
+  ws.onmessage = (event) => {
+    if (state.ws !== ws) return;
+    if (typeof event.data === "string") {
+      let m;
+      try { m = JSON.parse(event.data); } catch { return; }
+      if (m.type === "stats") {
+        // The stats describe the frame sent just before them.
+        const f = state.lastReceived;
+        if (f && !f.stats) {
+          f.stats = { spp: m.spp, generation: m.generation };
+          if (state.displayed === f) markDisplayed(f);
+        }
+        applyStatus(m, true);
+      }
+      else if (m.type === "error") {
+        // The change was refused: the server's settings stand.
+        state.adoptFrom = state.maxGeneration;
+        state.lastLocalEdit = 0;
+        showMessage(m.error);
+      }
+    } else {
+      const f = { blob: event.data, stats: null };
+      state.lastReceived = f;
+      state.pendingFrame = f;
+      drawFrames();
+    }
+  };
+  ws.onclose = (event) => {
+    if (state.ws !== ws) return;
+    state.ws = null;
+    const why = event.code === 1001 ? "server going away" : "socket closed";
+    scheduleReconnect(why);
+  };
+}
+
+export function closeSocket() {
+  const ws = state.ws;
+  state.ws = null;
+  if (ws) {
+    ws.onclose = null;
+    ws.onmessage = null;
+    try { ws.close(); } catch { /* already closed */ }
+  }
+}
+
+export function send(message) {
+  if (state.ws && state.ws.readyState === WebSocket.OPEN) {
+    state.ws.send(JSON.stringify(message));
+    return true;
+  }
+  return false;
+}
+
+/** Opens a new session at the resolution in the inputs (the old one is deleted). */
+export async function resize() {
+  const w = Number.parseInt(el.width.value, 10);
+  const h = Number.parseInt(el.height.value, 10);
+  if (!(w > 0 && h > 0)) {
+    showMessage("width and height must be positive whole numbers");
+    return;
+  }
+  const old = state.sessionId;
+  state.want.width = w;
+  state.want.height = h;
+  await replacing(async () => {
+    try {
+      closeSocket();
+      await createSession({ restore: true });
+      state.chart = [];
+      openSocket();
+      if (old) api("DELETE", `/sessions/${old}`).catch(() => {});
+    } catch (e) {
+      showMessage(e.message);
+      if (!state.ws) scheduleReconnect("error");
+    }
+  });
+}
+
+export function setScene(name) {
+  if (!state.sessionId) return;
+  return replacing(async () => {
+    try {
+      const status = await api("PUT", `/sessions/${state.sessionId}/scene`, name);
+      state.cameraDirty = false;
+      state.lightDirty = false;
+      applyScene(status);
+      applyAnswer(status);
+    } catch (e) {
+      showMessage(e.message);
+      if (state.status) el.scene.value = state.status.scene;
+    }
+  });
+}
+
+/** Runs fn, which replaces the scene or session; camera and light edits made
+ *  meanwhile wait for it (they must apply to the new scene's camera and light,
+ *  not to the old one's). */
+export function replacing(fn) {
+  const run = (state.replacing || Promise.resolve()).then(fn);
+  const done = run.catch(() => {}).then(() => {
+    if (state.replacing === done) state.replacing = null;
+  });
+  state.replacing = done;
+  return run;
+}
+
+/** Runs an edit now, or once a scene change or new session is in place. */
+export function edit(fn) {
+  if (state.replacing) {
+    const p = state.replacing;
+    p.then(() => (state.replacing && state.replacing !== p ? edit(fn) : fn()));
+    return true;
+  }
+  fn();
+  return true;
+}
+
+// ---------------------------------------------------------------- status
+
+export function applyStatus(s, fromStream = false) {
+  if (s.id && state.sessionId && s.id !== state.sessionId) return; // an old session's
+  state.status = s;
+  state.maxGeneration = Math.max(state.maxGeneration, s.generation);
+  el.body.dataset.generation = String(s.generation);
+  el.body.dataset.spp = String(s.spp);
+  el.viewport.dataset.state = s.state;
+  emit("status", s, fromStream);
+  if (s.failure && s.failure !== state.failure) showMessage(`rendering stopped: ${s.failure}`);
+  state.failure = s.failure;
+  state.want.width = s.width;
+  state.want.height = s.height;
+
+  // Settings from before this page's last change (stats sent before the
+  // server saw it) must not undo it.
+  if (s.generation < state.adoptFrom) return;
+  state.want.quality = clone(s.quality);
+  // The server's camera, light and scene win (someone else may have changed
+  // them) unless this page has changes of its own on the way.
+  const quiet = !state.cameraDirty && !state.lightDirty && performance.now() - state.lastLocalEdit > QUIET_MS;
+  if (quiet) {
+    if (s.scene !== state.want.scene) applyScene(s);
+    if (!same(s.camera, state.camera)) state.camera = clone(s.camera);
+    const l = s.light ? pickLight(s.light) : null;
+    if (!same(l, state.light)) state.light = l;
+    if (s.scene !== el.scene.value && document.activeElement !== el.scene) el.scene.value = s.scene;
+  }
+  emit("settings", s);
+}
+
+/** A change the server has answered: older stats are out of date. */
+export function applyAnswer(status) {
+  state.adoptFrom = Math.max(state.adoptFrom, status.generation);
+  applyStatus(status);
+}
+
+// ---------------------------------------------------------------- camera and light updates
+
+export function touchLocal() {
+  state.lastLocalEdit = performance.now();
+}
+
+// At most one camera and one light update per animation frame.
+let flushQueued = false;
+export function requestFlush() {
+  if (flushQueued) return;
+  flushQueued = true;
+  requestAnimationFrame(flush);
+}
+
+export function flush() {
+  flushQueued = false;
+  if (!state.sessionId) return;
+  const message = {};
+  if (state.cameraDirty && state.camera) message.camera = clone(state.camera);
+  if (state.lightDirty && state.light) message.light = clone(state.light);
+  if (!Object.keys(message).length) return;
+  if (send(message)) {
+    state.cameraDirty = false;
+    state.lightDirty = false;
+    state.adoptFrom = state.maxGeneration + 1;
+    touchLocal();
+  }
+  // Otherwise the socket is down: the change stays dirty and goes when it
+  // reopens (or with the new session, which restores camera and light).
+}
