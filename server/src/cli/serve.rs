@@ -36,6 +36,15 @@ pub struct ServeArgs {
     /// Serve the browser client from this folder instead of the built-in copy.
     #[arg(long, env = "PATHSTREAM_STATIC_DIR", value_name = "DIR")]
     static_dir: Option<std::path::PathBuf>,
+    /// Largest model file accepted by POST /api/assets, in bytes [default: 268435456 (256 MiB)].
+    #[arg(long, value_name = "BYTES")]
+    max_asset_bytes: Option<usize>,
+    /// Most memory all uploaded assets' meshes may hold, in bytes [default: 4294967296 (4 GiB)].
+    #[arg(long, value_name = "BYTES")]
+    max_asset_memory: Option<usize>,
+    /// Most triangles in one session's scene (and in one uploaded file) [default: 16000000].
+    #[arg(long, value_name = "N")]
+    max_triangles: Option<u64>,
 }
 
 pub fn run(args: ServeArgs) -> Result<(), CliError> {
@@ -48,6 +57,21 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
     if args.max_sessions == Some(0) {
         return Err(CliError::Usage("--max-sessions: must be at least 1".into()));
     }
+    for (flag, v) in [
+        ("--max-asset-bytes", args.max_asset_bytes.map(|v| v as u64)),
+        ("--max-asset-memory", args.max_asset_memory.map(|v| v as u64)),
+        ("--max-triangles", args.max_triangles),
+    ] {
+        if v == Some(0) {
+            return Err(CliError::Usage(format!("{flag}: must be at least 1")));
+        }
+    }
+    let max_triangles = args.max_triangles.unwrap_or(defaults.max_triangles);
+    let assets = service::assets::AssetLimits {
+        max_asset_bytes: args.max_asset_bytes.unwrap_or(defaults.assets.max_asset_bytes),
+        max_total_bytes: args.max_asset_memory.unwrap_or(defaults.assets.max_total_bytes),
+        max_triangles,
+    };
     let config = ServeConfig {
         addr: args.addr.unwrap_or(defaults.addr),
         backend: backend.choice(args.device),
@@ -58,6 +82,8 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         max_body_bytes: defaults.max_body_bytes,
         cors: args.cors,
         static_dir: args.static_dir,
+        assets,
+        max_triangles,
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

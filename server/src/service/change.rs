@@ -16,7 +16,7 @@
 //! `quality`.
 
 use super::error::{parse_field, parse_json, ApiError};
-use crate::render::scene::{builtin, CameraEdit, LightEdit, BUILTIN_NAMES};
+use crate::render::scene::{builtin, CameraEdit, LightEdit, NoFiles, Resolver, SceneJson, BUILTIN_NAMES};
 use crate::render::{Preset, Quality, Scene};
 use serde_json::Value;
 
@@ -32,10 +32,26 @@ pub enum Change {
     Scene { name: String, scene: Box<Scene> },
 }
 
+/// What a scene sent to the server may use: meshes from `resolver` (the
+/// server's assets; never files), at most `max_triangles` of them.
+#[derive(Clone, Copy)]
+pub struct SceneRules<'a> {
+    pub resolver: &'a dyn Resolver,
+    pub max_triangles: u64,
+}
+
+impl SceneRules<'static> {
+    /// Built-in scenes and inline meshes only, no limit (tests).
+    pub const INLINE_ONLY: SceneRules<'static> = SceneRules {
+        resolver: &NoFiles,
+        max_triangles: u64::MAX,
+    };
+}
+
 impl Change {
-    /// A scene by built-in name (a JSON string) or as scene JSON (an object).
-    /// Names never reach the file system.
-    pub fn scene(value: Value) -> Result<Change, ApiError> {
+    /// A scene by built-in name (a JSON string) or as scene JSON (an object)
+    /// whose meshes `rules` allow. Names never reach the file system.
+    pub fn scene(value: Value, rules: &SceneRules<'_>) -> Result<Change, ApiError> {
         let (name, scene) = match value {
             Value::String(name) => {
                 let scene = builtin(&name).ok_or_else(|| {
@@ -44,7 +60,15 @@ impl Change {
                 (name, scene)
             }
             value @ Value::Object(_) => {
-                let scene = Scene::from_json_value(value).map_err(|e| ApiError::BadRequest(format!("scene: {e}")))?;
+                let bad = |e: crate::render::SceneError| ApiError::BadRequest(format!("scene: {e}"));
+                let scene = Scene::from_json_with(&SceneJson::from_value(value).map_err(bad)?, rules.resolver).map_err(bad)?;
+                let triangles = scene.unique_triangles();
+                if triangles > rules.max_triangles {
+                    return Err(ApiError::BadRequest(format!(
+                        "scene: {triangles} triangles is more than this server's limit of {} per session",
+                        rules.max_triangles
+                    )));
+                }
                 ("custom".to_owned(), scene)
             }
             _ => return Err(ApiError::BadRequest("scene: must be a built-in scene name or a scene JSON object".into())),
@@ -54,7 +78,7 @@ impl Change {
 
     /// One WebSocket message: a JSON object with any of the keys `scene`,
     /// `camera`, `light` and `quality`; the changes in that order.
-    pub fn parse_message(text: &str) -> Result<Vec<Change>, ApiError> {
+    pub fn parse_message(text: &str, rules: &SceneRules<'_>) -> Result<Vec<Change>, ApiError> {
         const ORDER: [&str; 4] = ["scene", "camera", "light", "quality"];
         let value: Value = parse_json(text.as_bytes())?;
         let Value::Object(mut map) = value else {
@@ -69,7 +93,7 @@ impl Change {
             .iter()
             .filter_map(|&key| map.remove(key).map(|v| (key, v)))
             .map(|(key, v)| match key {
-                "scene" => Change::scene(v),
+                "scene" => Change::scene(v, rules),
                 "camera" => Ok(Change::Camera(parse_field(key, v)?)),
                 "light" => Ok(Change::Light(parse_field(key, v)?)),
                 _ => Ok(Change::Quality(v)),
@@ -109,7 +133,7 @@ mod tests {
     use serde_json::json;
 
     fn message(text: &str) -> Result<Vec<Change>, String> {
-        Change::parse_message(text).map_err(|e| e.to_string())
+        Change::parse_message(text, &SceneRules::INLINE_ONLY).map_err(|e| e.to_string())
     }
 
     #[test]
@@ -147,7 +171,7 @@ mod tests {
     fn a_scene_object_is_custom_and_validated() {
         let furnace = builtin("furnace").unwrap();
         let json = serde_json::to_value(furnace.to_json()).unwrap();
-        let Change::Scene { name, scene } = Change::scene(json).unwrap() else { panic!("a scene") };
+        let Change::Scene { name, scene } = Change::scene(json, &SceneRules::INLINE_ONLY).unwrap() else { panic!("a scene") };
         assert_eq!((name.as_str(), *scene), ("custom", furnace));
     }
 

@@ -1,5 +1,6 @@
 //! What `pathstream serve` is started with.
 
+use super::assets::AssetLimits;
 use crate::render::BackendChoice;
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -22,6 +23,11 @@ pub struct ServeConfig {
     /// Serve the browser client from this folder instead of the copy built
     /// into the binary (for working on the page without rebuilding).
     pub static_dir: Option<std::path::PathBuf>,
+    /// Uploaded model files: largest upload, all assets' memory, triangles
+    /// of one file.
+    pub assets: AssetLimits,
+    /// Most triangles one session's scene may hold (each mesh counted once).
+    pub max_triangles: u64,
 }
 
 impl Default for ServeConfig {
@@ -36,6 +42,8 @@ impl Default for ServeConfig {
             max_body_bytes: 2 << 20,
             cors: false,
             static_dir: None,
+            assets: AssetLimits::default(),
+            max_triangles: 16_000_000,
         }
     }
 }

@@ -20,6 +20,9 @@ pub enum ApiError {
     TooLarge(usize),
     #[error("{0}")]
     TooMany(String),
+    /// Out of room for what the request would store (assets).
+    #[error("{0}")]
+    Full(String),
     #[error("internal error")]
     Internal(String),
 }
@@ -33,6 +36,7 @@ impl ApiError {
             ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
             ApiError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
             ApiError::TooMany(_) => StatusCode::TOO_MANY_REQUESTS,
+            ApiError::Full(_) => StatusCode::INSUFFICIENT_STORAGE,
             ApiError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }

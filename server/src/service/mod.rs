@@ -3,6 +3,7 @@
 //! binds and serves it until shut down.
 
 pub mod assets;
+mod assets_routes;
 mod auth;
 pub mod change;
 pub mod config;
@@ -16,6 +17,8 @@ mod worker;
 mod ws;
 
 pub use config::ServeConfig;
+use assets::AssetStore;
+use change::SceneRules;
 pub use error::ApiError;
 pub use metrics::Metrics;
 pub use routes::app;
@@ -35,6 +38,8 @@ use worker::Worker;
 /// Shared state of a running service.
 pub struct AppState {
     pub config: ServeConfig,
+    /// Uploaded model files; the resolver of every scene the API takes.
+    pub assets: AssetStore,
     sessions: RwLock<HashMap<String, (Arc<Session>, usize)>>,
     /// Rayon first; then the OpenCL device, if the service has one.
     workers: Vec<Worker>,
@@ -72,6 +77,7 @@ impl AppState {
         }
         let (shutdown, _) = watch::channel(false);
         Arc::new(Self {
+            assets: AssetStore::new(config.assets),
             config,
             sessions: RwLock::new(HashMap::new()),
             default_worker: workers.len() - 1,
@@ -79,6 +85,14 @@ impl AppState {
             metrics,
             shutdown,
         })
+    }
+
+    /// What scenes sent to this server may use: its assets, its triangle limit.
+    pub fn scene_rules(&self) -> SceneRules<'_> {
+        SceneRules {
+            resolver: &self.assets,
+            max_triangles: self.config.max_triangles,
+        }
     }
 
     pub fn session(&self, id: &str) -> Result<Arc<Session>, ApiError> {

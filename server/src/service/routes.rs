@@ -6,7 +6,7 @@ use super::auth::require_token;
 use super::change::{patch_quality, Change};
 use super::error::{parse_json, ApiError};
 use super::session::{Frame, Session, Status};
-use super::{static_files, ws, AppState};
+use super::{assets_routes, static_files, ws, AppState};
 use crate::render::job::check_size;
 use crate::render::scene::{CameraEdit, LightEdit, BUILTIN_NAMES};
 use crate::render::{Preset, Quality};
@@ -43,6 +43,7 @@ pub fn app(state: Arc<AppState>) -> Router {
         .route("/sessions/{id}/frame.png", get(frame_png))
         .route("/sessions/{id}/frame.pfm", get(frame_pfm))
         .route("/sessions/{id}/ws", get(ws::upgrade))
+        .merge(assets_routes::router(state.config.assets.max_asset_bytes))
         .fallback(api_not_found)
         .route_layer(middleware::from_fn_with_state(state.clone(), require_token));
     let mut router = Router::new()
@@ -176,7 +177,7 @@ async fn create_session(
         Some(q) => patch_quality(&Quality::default(), q)?,
         None => Quality::default(),
     };
-    let Change::Scene { name, scene } = Change::scene(req.scene)? else {
+    let Change::Scene { name, scene } = Change::scene(req.scene, &state.scene_rules())? else {
         return Err(ApiError::Internal("Change::scene made another change".into()));
     };
     let worker = state.worker_for(req.backend.as_deref())?;
@@ -206,11 +207,11 @@ async fn change<T: serde::de::DeserializeOwned>(
     state: Arc<AppState>,
     id: String,
     body: Result<Bytes, BytesRejection>,
-    make: fn(T) -> Result<Change, ApiError>,
+    make: fn(T, &AppState) -> Result<Change, ApiError>,
 ) -> AppResult<Json<Status>> {
     let session = state.session(&id)?;
     let parsed: T = parse_json(&body_bytes(body, state.config.max_body_bytes)?)?;
-    Ok(Json(session.apply(make(parsed)?)?))
+    Ok(Json(session.apply(make(parsed, &state)?)?))
 }
 
 async fn patch_camera(
@@ -218,7 +219,7 @@ async fn patch_camera(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, |edit: CameraEdit| Ok(Change::Camera(edit))).await
+    change(state, id, body, |edit: CameraEdit, _| Ok(Change::Camera(edit))).await
 }
 
 async fn patch_light(
@@ -226,7 +227,7 @@ async fn patch_light(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, |edit: LightEdit| Ok(Change::Light(edit))).await
+    change(state, id, body, |edit: LightEdit, _| Ok(Change::Light(edit))).await
 }
 
 async fn patch_quality_route(
@@ -234,7 +235,7 @@ async fn patch_quality_route(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, |patch: Value| Ok(Change::Quality(patch))).await
+    change(state, id, body, |patch: Value, _| Ok(Change::Quality(patch))).await
 }
 
 async fn put_scene(
@@ -242,7 +243,7 @@ async fn put_scene(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, Change::scene).await
+    change(state, id, body, |v, state| Change::scene(v, &state.scene_rules())).await
 }
 
 /// `?min_spp=N&timeout_ms=T` on the frame routes.

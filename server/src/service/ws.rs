@@ -104,7 +104,7 @@ async fn serve(socket: WebSocket, state: Arc<AppState>, session: Arc<Session>) {
                     Some(Ok(_)) => continue,
                 };
                 session.touch();
-                let result = Change::parse_message(text.as_str())
+                let result = Change::parse_message(text.as_str(), &state.scene_rules())
                     .and_then(|changes| changes.into_iter().try_for_each(|c| session.apply(c).map(|_| ())));
                 if let Err(e) = result {
                     if sink.send(error_message(&e.to_string())).await.is_err() {
