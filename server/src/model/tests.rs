@@ -1,0 +1,1 @@
+//! Loaders tested together on generated models.
