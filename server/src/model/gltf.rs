@@ -393,7 +393,13 @@ fn read_mesh(
         let path = format!("meshes[{mi}].primitives[{}]", prim.index());
         let mode = prim.mode();
         if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
-            ctx.warn(format!("{path} (mesh {name:?}): {mode:?} primitive skipped (only triangles are rendered)"));
+            let mode = match mode {
+                Mode::Points => "POINTS",
+                Mode::Lines => "LINES",
+                Mode::LineLoop => "LINE_LOOP",
+                _ => "LINE_STRIP",
+            };
+            ctx.warn(format!("{path} (mesh {name:?}): {mode} primitive skipped (only triangles are rendered)"));
             continue;
         }
         let Some(pos) = prim.get(&Semantic::Positions) else {

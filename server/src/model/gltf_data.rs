@@ -9,7 +9,7 @@ use super::common::Ctx;
 use super::ModelError;
 use ::gltf::accessor::{sparse::IndexType, Accessor, DataType, Dimensions};
 use ::gltf::buffer::{Source, View};
-use ::gltf::json::validation::{Error as Invalid, Validate};
+use ::gltf::json::validation::{Checked, Error as Invalid, Validate};
 use ::gltf::Document;
 use std::path::Path;
 
@@ -75,10 +75,26 @@ pub(super) fn parse_document(ctx: &Ctx, json: &[u8]) -> Result<Document, ModelEr
         let reason = text.split(" at line ").next().unwrap_or(&text).to_owned();
         ctx.err_at(format!("JSON line {}, column {}", e.line(), e.column()), reason)
     })?;
+    // gltf-json's validation indexes `accessors` by each POSITION without a
+    // check (and panics): check those first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim.attributes.get(&Checked::Valid(::gltf::Semantic::Positions));
+            if position.is_some_and(|i| i.value() >= root.accessors.len()) {
+                return Err(ctx.err_at(
+                    format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
+                    "index out of range",
+                ));
+            }
+        }
+    }
     let mut problems = Vec::new();
     root.validate(&root, ::gltf::json::Path::new, &mut |path: &dyn Fn() -> ::gltf::json::Path, e| {
         let path = path().to_string();
-        if !(e == Invalid::Unsupported && path.starts_with("extensionsRequired")) {
+        // Accessor bounds are not used (the spec's required POSITION min/max
+        // are missing from some exporters' files).
+        let unused = path.ends_with(".min") || path.ends_with(".max");
+        if !unused && !(e == Invalid::Unsupported && path.starts_with("extensionsRequired")) {
             problems.push((path, e));
         }
     });
@@ -283,17 +299,17 @@ fn read<T: Copy + Default>(
     if let Some(sparse) = acc.sparse() {
         let n = sparse.count();
         let (indices, values) = (sparse.indices(), sparse.values());
-        let isize = match indices.index_type() {
+        let width = match indices.index_type() {
             IndexType::U8 => 1,
             IndexType::U16 => 2,
             IndexType::U32 => 4,
         };
         let ipath = format!("{path}.sparse.indices");
-        let (ib, istart, _) = place(ctx, bufs, &indices.view(), indices.offset(), n, isize, true, &ipath)?;
+        let (ib, istart, _) = place(ctx, bufs, &indices.view(), indices.offset(), n, width, true, &ipath)?;
         let vpath = format!("{path}.sparse.values");
         let (vb, vstart, _) = place(ctx, bufs, &values.view(), values.offset(), n, elem, true, &vpath)?;
         for k in 0..n {
-            let ib = bufs.bytes(ib).get(istart + k * isize..istart + (k + 1) * isize).ok_or_else(short)?;
+            let ib = bufs.bytes(ib).get(istart + k * width..istart + (k + 1) * width).ok_or_else(short)?;
             let i = match ib {
                 [a] => u32::from(*a),
                 [a, b] => u32::from(u16::from_le_bytes([*a, *b])),

@@ -347,7 +347,6 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::model::{load_bytes, Limits};
     use crate::render::scene::{MaterialJson, SurfaceJson};
 

@@ -189,7 +189,12 @@ impl Src<'_> {
                 let Ok(text) = std::str::from_utf8(line) else {
                     return (at, Err(Failed::Bad("not text".to_owned())));
                 };
-                let r = parser.read_ascii_element(text, def).map_err(|e| Failed::Bad(one_line(&e.to_string())));
+                let r = parser.read_ascii_element(text, def).map_err(|e| {
+                    // The crate's message quotes the line, then "Error: why".
+                    let msg = e.to_string();
+                    let why = msg.rsplit("Error: ").next().unwrap_or(&msg);
+                    Failed::Bad(format!("cannot read {:?} ({})", text.trim(), one_line(why)))
+                });
                 (at, r)
             }
             _ => {

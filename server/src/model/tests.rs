@@ -1,1 +1,0 @@
-//! Loaders tested together on generated models.
