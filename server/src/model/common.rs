@@ -132,7 +132,11 @@ pub(super) struct Parts {
 pub(super) fn albedo(what: &str, c: [f64; 3], notes: &mut Vec<String>) -> [f64; 3] {
     let clamped = c.map(|x| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) });
     if clamped != c {
-        notes.push(format!("{what} {} is outside [0, 1]: clamped to {}", fmt3(c), fmt3(clamped)));
+        notes.push(format!(
+            "{what} {} is outside [0, 1]: clamped to {}",
+            fmt3(c),
+            fmt3(clamped)
+        ));
     }
     clamped
 }
@@ -142,7 +146,10 @@ pub(super) fn albedo(what: &str, c: [f64; 3], notes: &mut Vec<String>) -> [f64; 
 pub(super) fn emission(what: &str, c: [f64; 3], notes: &mut Vec<String>) -> Option<[f64; 3]> {
     let fixed = c.map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 });
     if fixed != c && c.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-        notes.push(format!("{what} {} is negative or not finite: those components are 0", fmt3(c)));
+        notes.push(format!(
+            "{what} {} is negative or not finite: those components are 0",
+            fmt3(c)
+        ));
     }
     (fixed != [0.0; 3]).then_some(fixed)
 }
@@ -153,7 +160,9 @@ pub(super) fn ior(what: &str, value: Option<f64>, notes: &mut Vec<String>) -> f6
     match value {
         Some(v) if (1.0..=MAX_IOR).contains(&v) => v,
         Some(v) => {
-            notes.push(format!("{what} {v} is not an index of refraction in [1, {MAX_IOR}]: ior {DEFAULT_IOR}"));
+            notes.push(format!(
+                "{what} {v} is not an index of refraction in [1, {MAX_IOR}]: ior {DEFAULT_IOR}"
+            ));
             DEFAULT_IOR
         }
         None => {
@@ -227,14 +236,23 @@ pub(super) fn clean_normals(
 
 /// How many triangles have zero area (a repeated index, or collinear corners).
 pub(super) fn degenerate_count(mesh: &MeshData) -> usize {
-    let p = |i: u32| mesh.positions.get(i as usize).map(|v| v.map(f64::from)).unwrap_or_default();
+    let p = |i: u32| {
+        mesh.positions
+            .get(i as usize)
+            .map(|v| v.map(f64::from))
+            .unwrap_or_default()
+    };
     mesh.triangles
         .iter()
         .filter(|t| {
             let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
             let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
             let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let cross = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+            let cross = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
             cross == [0.0; 3]
         })
         .count()
@@ -291,7 +309,8 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
                 mesh.positions.len()
             )));
         }
-        if mesh.materials.len() != mesh.triangles.len() || mesh.materials.iter().any(|&m| m as usize >= materials.len()) {
+        if mesh.materials.len() != mesh.triangles.len() || mesh.materials.iter().any(|&m| m as usize >= materials.len())
+        {
             return Err(ctx.err(format!("mesh {name:?}: triangle materials do not match (a loader bug)")));
         }
         if let Some(n) = &mesh.normals {
@@ -346,7 +365,10 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
             continue;
         };
         if !inst.transform.iter().flatten().all(|x| x.is_finite()) {
-            return Err(ctx.err(format!("an instance of mesh {:?} has a transform that is not finite", kept[mesh].name)));
+            return Err(ctx.err(format!(
+                "an instance of mesh {:?} has a transform that is not finite",
+                kept[mesh].name
+            )));
         }
         out_instances.push(Instance { mesh, ..inst });
     }
@@ -384,7 +406,10 @@ mod tests {
         assert_eq!(albedo("Kd", [0.5, 1.5, f64::NAN], &mut notes), [0.5, 1.0, 0.0]);
         assert_eq!(albedo("Kd", [0.0, 0.5, 1.0], &mut notes), [0.0, 0.5, 1.0]);
         assert_eq!(emission("Ke", [0.0; 3], &mut notes), None);
-        assert_eq!(emission("Ke", [2.0, -1.0, f64::INFINITY], &mut notes), Some([2.0, 0.0, 0.0]));
+        assert_eq!(
+            emission("Ke", [2.0, -1.0, f64::INFINITY], &mut notes),
+            Some([2.0, 0.0, 0.0])
+        );
         assert_eq!(ior("Ni", Some(1.33), &mut notes), 1.33);
         assert_eq!(ior("Ni", Some(0.5), &mut notes), DEFAULT_IOR);
         assert_eq!(ior("Ni", None, &mut notes), DEFAULT_IOR);

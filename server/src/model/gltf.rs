@@ -32,7 +32,12 @@ use ::gltf::{Document, Node};
 use std::path::Path;
 
 type M4 = [[f64; 4]; 4];
-const ID4: M4 = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+const ID4: M4 = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
 
 /// Extensions whose content is read.
 const SUPPORTED: [&str; 4] = [
@@ -75,7 +80,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         }
     }
     if doc.animations().len() > 0 {
-        ctx.warn(format!("{} animations ignored (the scene is read at rest)", doc.animations().len()));
+        ctx.warn(format!(
+            "{} animations ignored (the scene is read at rest)",
+            doc.animations().len()
+        ));
     }
 
     let (placed, camera) = walk(ctx, &doc)?;
@@ -92,7 +100,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
     let mut meshes = Vec::with_capacity(ids.len());
     let mut totals = (0u64, 0u64);
     for &id in &ids {
-        let mesh = doc.meshes().nth(id).ok_or_else(|| ctx.err_at(format!("meshes[{id}]"), "no such mesh"))?;
+        let mesh = doc
+            .meshes()
+            .nth(id)
+            .ok_or_else(|| ctx.err_at(format!("meshes[{id}]"), "no such mesh"))?;
         mesh_of[id] = meshes.len();
         meshes.push(read_mesh(ctx, &mut bufs, &mesh, &mut table, &mut totals)?);
     }
@@ -143,9 +154,21 @@ fn local(t: Transform) -> M4 {
             let n = (x * x + y * y + z * z + w * w).sqrt();
             let (x, y, z, w) = (x / n, y / n, z / n, w / n);
             let r = [
-                [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
-                [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
-                [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
+                [
+                    1.0 - 2.0 * (y * y + z * z),
+                    2.0 * (x * y - z * w),
+                    2.0 * (x * z + y * w),
+                ],
+                [
+                    2.0 * (x * y + z * w),
+                    1.0 - 2.0 * (x * x + z * z),
+                    2.0 * (y * z - x * w),
+                ],
+                [
+                    2.0 * (x * z - y * w),
+                    2.0 * (y * z + x * w),
+                    1.0 - 2.0 * (x * x + y * y),
+                ],
             ];
             let (t, s) = (t.map(widen), s.map(widen));
             let mut m = ID4;
@@ -165,7 +188,11 @@ fn walk(ctx: &mut Ctx, doc: &Document) -> Result<(Vec<(usize, M4)>, Option<Model
     let roots: Vec<Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(scene) => {
             if scenes > 1 {
-                ctx.warn(format!("{} other scenes ignored (scene {} is read)", scenes - 1, scene.index()));
+                ctx.warn(format!(
+                    "{} other scenes ignored (scene {} is read)",
+                    scenes - 1,
+                    scene.index()
+                ));
             }
             scene.nodes().collect()
         }
@@ -221,7 +248,9 @@ fn walk(ctx: &mut Ctx, doc: &Document) -> Result<(Vec<(usize, M4)>, Option<Model
         ctx.warn(format!("{orthographic} orthographic cameras ignored"));
     }
     if more_cameras > 0 {
-        ctx.warn(format!("{more_cameras} more perspective cameras ignored (the first one is used)"));
+        ctx.warn(format!(
+            "{more_cameras} more perspective cameras ignored (the first one is used)"
+        ));
     }
     Ok((placed, camera))
 }
@@ -233,7 +262,8 @@ fn perspective(world: &M4, yfov: f32) -> Result<ModelCamera, String> {
         let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
         (len > 0.0 && len.is_finite()).then(|| v.map(|x| x / len))
     };
-    let forward = unit([-world[0][2], -world[1][2], -world[2][2]]).ok_or("its node's transform has no view direction")?;
+    let forward =
+        unit([-world[0][2], -world[1][2], -world[2][2]]).ok_or("its node's transform has no view direction")?;
     let up = unit([world[0][1], world[1][1], world[2][1]]).ok_or("its node's transform has no up direction")?;
     let yfov = widen(yfov);
     if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
@@ -286,7 +316,10 @@ impl Materials {
 
 /// The scene material for a glTF material (rules in the module doc).
 fn material(m: &::gltf::Material, index: usize) -> Mat {
-    let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material{index}"));
+    let name = m
+        .name()
+        .map(str::to_owned)
+        .unwrap_or_else(|| format!("material{index}"));
     let (mut notes, mut ignored) = (Vec::new(), Vec::new());
     let pbr = m.pbr_metallic_roughness();
     let base = pbr.base_color_factor();
@@ -303,12 +336,20 @@ fn material(m: &::gltf::Material, index: usize) -> Mat {
         (m.normal_texture().is_some(), "normal map"),
         (m.occlusion_texture().is_some(), "occlusion map"),
         (m.emissive_texture().is_some(), "emissive texture"),
-        (transmission.as_ref().is_some_and(|t| t.transmission_texture().is_some()), "transmission texture"),
+        (
+            transmission
+                .as_ref()
+                .is_some_and(|t| t.transmission_texture().is_some()),
+            "transmission texture",
+        ),
     ];
     ignored.extend(textures.iter().filter(|t| t.0).map(|t| t.1.to_owned()));
     match m.alpha_mode() {
         AlphaMode::Opaque => {}
-        AlphaMode::Mask => ignored.push(format!("alpha mode MASK (cutoff {})", m.alpha_cutoff().map_or(0.5, widen))),
+        AlphaMode::Mask => ignored.push(format!(
+            "alpha mode MASK (cutoff {})",
+            m.alpha_cutoff().map_or(0.5, widen)
+        )),
         AlphaMode::Blend => ignored.push("alpha mode BLEND".to_owned()),
     }
 
@@ -399,7 +440,9 @@ fn read_mesh(
                 Mode::LineLoop => "LINE_LOOP",
                 _ => "LINE_STRIP",
             };
-            ctx.warn(format!("{path} (mesh {name:?}): {mode} primitive skipped (only triangles are rendered)"));
+            ctx.warn(format!(
+                "{path} (mesh {name:?}): {mode} primitive skipped (only triangles are rendered)"
+            ));
             continue;
         }
         let Some(pos) = prim.get(&Semantic::Positions) else {
@@ -418,7 +461,10 @@ fn read_mesh(
         if let Some(v) = common::first_non_finite(&positions) {
             return Err(ctx.err_at(
                 &path,
-                format!("vertex {v}: position {} is not finite", common::fmt3(positions[v].map(f64::from))),
+                format!(
+                    "vertex {v}: position {} is not finite",
+                    common::fmt3(positions[v].map(f64::from))
+                ),
             ));
         }
         let vertex_count = u32::try_from(n).map_err(|_| ctx.err_at(&path, "too many vertices"))?;
@@ -436,11 +482,16 @@ fn read_mesh(
         let mut tris = Vec::new();
         let left = triangles(mode, &indices, &mut tris);
         if left > 0 {
-            ctx.warn(format!("{path} (mesh {name:?}): {left} indices after the last whole triangle ignored"));
+            ctx.warn(format!(
+                "{path} (mesh {name:?}): {left} indices after the last whole triangle ignored"
+            ));
         }
         ctx.check_triangles(totals.1 + tris.len() as u64, Some(&path))?;
         if let Some((t, i)) = common::first_bad_index(&tris, n) {
-            return Err(ctx.err_at(&path, format!("triangle {t}: vertex index {i} out of range ({n} vertices)")));
+            return Err(ctx.err_at(
+                &path,
+                format!("triangle {t}: vertex index {i} out of range ({n} vertices)"),
+            ));
         }
         match prim.get(&Semantic::Normals) {
             Some(acc) if acc.count() == n => {
@@ -460,7 +511,9 @@ fn read_mesh(
         (0, _) => None,
         (_, 0) => common::clean_normals(ctx, &name, normals, out.positions.len()),
         _ => {
-            ctx.warn(format!("mesh {name:?}: some primitives have no normals: normals dropped (flat shading)"));
+            ctx.warn(format!(
+                "mesh {name:?}: some primitives have no normals: normals dropped (flat shading)"
+            ));
             None
         }
     };

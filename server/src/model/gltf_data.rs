@@ -37,7 +37,10 @@ pub(super) fn split_glb<'a>(ctx: &Ctx, bytes: &'a [u8]) -> Result<Glb<'a>, Model
     if length > bytes.len() {
         return Err(ctx.err_at(
             "byte 8",
-            format!("truncated: the GLB header says {length} bytes, the file has {}", bytes.len()),
+            format!(
+                "truncated: the GLB header says {length} bytes, the file has {}",
+                bytes.len()
+            ),
         ));
     }
     let bytes = &bytes[..length];
@@ -45,7 +48,10 @@ pub(super) fn split_glb<'a>(ctx: &Ctx, bytes: &'a [u8]) -> Result<Glb<'a>, Model
     let (mut json, mut bin) = (None, None);
     while at < length {
         let (Some(len), Some(kind)) = (u32_at(bytes, at), bytes.get(at + 4..at + 8)) else {
-            return Err(ctx.err_at(format!("byte {at}"), format!("truncated: chunk {index} has no complete header")));
+            return Err(ctx.err_at(
+                format!("byte {at}"),
+                format!("truncated: chunk {index} has no complete header"),
+            ));
         };
         let start = at + 8;
         let Some(end) = start.checked_add(len as usize).filter(|&e| e <= length) else {
@@ -89,15 +95,20 @@ pub(super) fn parse_document(ctx: &Ctx, json: &[u8]) -> Result<Document, ModelEr
         }
     }
     let mut problems = Vec::new();
-    root.validate(&root, ::gltf::json::Path::new, &mut |path: &dyn Fn() -> ::gltf::json::Path, e| {
-        let path = path().to_string();
-        // Accessor bounds are not used (the spec's required POSITION min/max
-        // are missing from some exporters' files).
-        let unused = path.ends_with(".min") || path.ends_with(".max");
-        if !unused && !(e == Invalid::Unsupported && path.starts_with("extensionsRequired")) {
-            problems.push((path, e));
-        }
-    });
+    root.validate(
+        &root,
+        ::gltf::json::Path::new,
+        &mut |path: &dyn Fn() -> ::gltf::json::Path, e| {
+            let path = path().to_string();
+            // Accessor bounds are not used (the spec's required POSITION min/max
+            // are missing from some exporters' files).
+            let unused = path.ends_with(".min") || path.ends_with(".max");
+            let extension = e == Invalid::Unsupported && path.starts_with("extensionsRequired");
+            if !(unused || extension) {
+                problems.push((path, e));
+            }
+        },
+    );
     if let Some((path, e)) = problems.first() {
         let what = match e {
             Invalid::IndexOutOfBounds => "index out of range",
@@ -137,7 +148,12 @@ impl<'a> Buffers<'a> {
             })
             .collect();
         let loaded = vec![None; sources.len()];
-        Self { bin, dir, sources, loaded }
+        Self {
+            bin,
+            dir,
+            sources,
+            loaded,
+        }
     }
 
     /// Reads buffer `index` if not yet read; checks it holds its byteLength.
@@ -146,7 +162,10 @@ impl<'a> Buffers<'a> {
             return Ok(());
         }
         let path = format!("buffers[{index}]");
-        let (uri, length) = self.sources.get(index).ok_or_else(|| ctx.err_at(&path, "no such buffer"))?;
+        let (uri, length) = self
+            .sources
+            .get(index)
+            .ok_or_else(|| ctx.err_at(&path, "no such buffer"))?;
         let data = match uri.as_deref() {
             None if index == 0 => self
                 .bin
@@ -188,7 +207,10 @@ fn percent_decode(s: &str) -> Vec<u8> {
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
     while i < b.len() {
-        let hex = b.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok()).and_then(|h| u8::from_str_radix(h, 16).ok());
+        let hex = b
+            .get(i + 1..i + 3)
+            .and_then(|h| std::str::from_utf8(h).ok())
+            .and_then(|h| u8::from_str_radix(h, 16).ok());
         match (b[i], hex) {
             (b'%', Some(v)) => {
                 out.push(v);
@@ -207,7 +229,9 @@ fn percent_decode(s: &str) -> Vec<u8> {
 fn data_uri(uri: &str) -> Result<Vec<u8>, String> {
     use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
     use base64::Engine;
-    let (meta, payload) = uri["data:".len()..].split_once(',').ok_or("a data: URI without a comma")?;
+    let (meta, payload) = uri["data:".len()..]
+        .split_once(',')
+        .ok_or("a data: URI without a comma")?;
     if meta.ends_with(";base64") {
         let engine = GeneralPurpose::new(
             &base64::alphabet::STANDARD,
@@ -238,7 +262,10 @@ fn place(
 ) -> Result<(usize, usize, usize), ModelError> {
     let stride = if packed { elem } else { view.stride().unwrap_or(elem) };
     if stride < elem {
-        return Err(ctx.err_at(path, format!("byteStride {stride} is less than the element size {elem}")));
+        return Err(ctx.err_at(
+            path,
+            format!("byteStride {stride} is less than the element size {elem}"),
+        ));
     }
     let needed = match count {
         0 => Some(0),
@@ -309,14 +336,20 @@ fn read<T: Copy + Default>(
         let vpath = format!("{path}.sparse.values");
         let (vb, vstart, _) = place(ctx, bufs, &values.view(), values.offset(), n, elem, true, &vpath)?;
         for k in 0..n {
-            let ib = bufs.bytes(ib).get(istart + k * width..istart + (k + 1) * width).ok_or_else(short)?;
+            let ib = bufs
+                .bytes(ib)
+                .get(istart + k * width..istart + (k + 1) * width)
+                .ok_or_else(short)?;
             let i = match ib {
                 [a] => u32::from(*a),
                 [a, b] => u32::from(u16::from_le_bytes([*a, *b])),
                 [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
                 _ => return Err(short()),
             } as usize;
-            let value = bufs.bytes(vb).get(vstart + k * elem..vstart + (k + 1) * elem).ok_or_else(short)?;
+            let value = bufs
+                .bytes(vb)
+                .get(vstart + k * elem..vstart + (k + 1) * elem)
+                .ok_or_else(short)?;
             let slot = out
                 .get_mut(i)
                 .ok_or_else(|| ctx.err_at(&ipath, format!("index {i} out of range (count {count})")))?;
@@ -349,12 +382,21 @@ fn component(ty: DataType, normalized: bool) -> Option<fn(&[u8]) -> f32> {
 }
 
 /// A VEC3 attribute (POSITION, NORMAL).
-pub(super) fn read_vec3(ctx: &Ctx, bufs: &mut Buffers, acc: &Accessor, path: &str) -> Result<Vec<[f32; 3]>, ModelError> {
+pub(super) fn read_vec3(
+    ctx: &Ctx,
+    bufs: &mut Buffers,
+    acc: &Accessor,
+    path: &str,
+) -> Result<Vec<[f32; 3]>, ModelError> {
     let ty = acc.data_type();
     let (Dimensions::Vec3, Some(c)) = (acc.dimensions(), component(ty, acc.normalized())) else {
         return Err(ctx.err_at(
             path,
-            format!("accessors[{}] is {:?} of {ty:?}, not a VEC3 of floats or small integers", acc.index(), acc.dimensions()),
+            format!(
+                "accessors[{}] is {:?} of {ty:?}, not a VEC3 of floats or small integers",
+                acc.index(),
+                acc.dimensions()
+            ),
         ));
     };
     let s = ty.size();
@@ -371,7 +413,10 @@ pub(super) fn read_indices(ctx: &Ctx, bufs: &mut Buffers, acc: &Accessor, path: 
         (dims, _) => {
             return Err(ctx.err_at(
                 path,
-                format!("accessors[{}] is {dims:?} of {ty:?}, not unsigned integer indices", acc.index()),
+                format!(
+                    "accessors[{}] is {dims:?} of {ty:?}, not unsigned integer indices",
+                    acc.index()
+                ),
             ))
         }
     };
@@ -384,8 +429,14 @@ mod tests {
 
     #[test]
     fn data_uris_and_percent_encoding() {
-        assert_eq!(data_uri("data:application/octet-stream;base64,AAEC/w=="), Ok(vec![0, 1, 2, 255]));
-        assert_eq!(data_uri("data:application/gltf-buffer;base64,AAEC/w"), Ok(vec![0, 1, 2, 255]));
+        assert_eq!(
+            data_uri("data:application/octet-stream;base64,AAEC/w=="),
+            Ok(vec![0, 1, 2, 255])
+        );
+        assert_eq!(
+            data_uri("data:application/gltf-buffer;base64,AAEC/w"),
+            Ok(vec![0, 1, 2, 255])
+        );
         assert_eq!(data_uri("data:,a%20b"), Ok(b"a b".to_vec()));
         assert!(data_uri("data:;base64,@@@").is_err_and(|e| e.starts_with("the data: URI is not valid base64")));
         assert_eq!(data_uri("data:nothing"), Err("a data: URI without a comma".to_owned()));
@@ -402,13 +453,19 @@ mod tests {
         glb.extend(b"JSON{}  ");
         glb.extend(0u32.to_le_bytes());
         let e = split_glb(&ctx, &glb).err().map(|e| e.to_string());
-        assert_eq!(e.as_deref(), Some("m.glb: byte 24: truncated: chunk 1 has no complete header"));
+        assert_eq!(
+            e.as_deref(),
+            Some("m.glb: byte 24: truncated: chunk 1 has no complete header")
+        );
         glb.truncate(24);
         glb[8] = 24;
         let g = split_glb(&ctx, &glb).expect("a JSON chunk alone");
         assert_eq!((g.json, g.bin), (&b"{}  "[..], None));
         glb[12] = 40;
         let e = split_glb(&ctx, &glb).err().map(|e| e.to_string());
-        assert_eq!(e.as_deref(), Some("m.glb: byte 12: truncated: chunk 0 says 40 bytes, 4 remain"));
+        assert_eq!(
+            e.as_deref(),
+            Some("m.glb: byte 12: truncated: chunk 0 says 40 bytes, 4 remain")
+        );
     }
 }

@@ -68,7 +68,8 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
         match lower.as_str() {
             "kd" | "ks" | "ke" | "ka" | "tf" => {
                 let Some(c) = color(key, &args).map_err(err)? else {
-                    m.ignored.push(format!("{key} {}", args.first().copied().unwrap_or_default()));
+                    m.ignored
+                        .push(format!("{key} {}", args.first().copied().unwrap_or_default()));
                     continue;
                 };
                 let slot = match lower.as_str() {
@@ -118,7 +119,11 @@ fn color(key: &str, args: &[&str]) -> Result<Option<[f64; 3]>, String> {
             let r = number(key, Some(r))?;
             Ok(Some([r; 3]))
         }
-        [r, g, b, ..] => Ok(Some([number(key, Some(r))?, number(key, Some(g))?, number(key, Some(b))?])),
+        [r, g, b, ..] => Ok(Some([
+            number(key, Some(r))?,
+            number(key, Some(g))?,
+            number(key, Some(b))?,
+        ])),
         _ => Err(format!("{key}: expected one or three numbers, got {}", args.len())),
     }
 }
@@ -231,8 +236,14 @@ mod tests {
                 reason: "Kd: \"x\" is not a number".into()
             })
         );
-        assert_eq!(parse("newmtl a\nKd 1 1\n").map_err(|e| e.reason), Err("Kd: expected one or three numbers, got 2".into()));
+        assert_eq!(
+            parse("newmtl a\nKd 1 1\n").map_err(|e| e.reason),
+            Err("Kd: expected one or three numbers, got 2".into())
+        );
         assert_eq!(parse("newmtl a\nillum x\n").map_err(|e| e.line), Err(2));
-        assert_eq!(parse("newmtl\n").map_err(|e| e.reason), Err("newmtl without a name".into()));
+        assert_eq!(
+            parse("newmtl\n").map_err(|e| e.reason),
+            Err("newmtl without a name".into())
+        );
     }
 }

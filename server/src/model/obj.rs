@@ -140,11 +140,16 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
     let loaded: HashSet<&str> = libs.iter().map(|m| m.name.as_str()).collect();
     for name in &scan.usemtl {
         if !loaded.contains(name.as_str()) {
-            ctx.warn(format!("usemtl {name:?}: no material of that name was loaded: default material"));
+            ctx.warn(format!(
+                "usemtl {name:?}: no material of that name was loaded: default material"
+            ));
         }
     }
     if scan.lines_and_points > 0 {
-        ctx.warn(format!("{} line and point statements (l, p) ignored", scan.lines_and_points));
+        ctx.warn(format!(
+            "{} line and point statements (l, p) ignored",
+            scan.lines_and_points
+        ));
     }
     if scan.free_form {
         ctx.warn("free-form curves and surfaces (curv, surf) ignored");
@@ -163,7 +168,8 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         let offset = u32::try_from(mesh.positions.len()).map_err(|_| ctx.err("too many vertices"))?;
         ctx.check_vertices((mesh.positions.len() + m.positions.len() / 3) as u64, None)?;
         ctx.check_triangles((mesh.triangles.len() + m.indices.len() / 3) as u64, None)?;
-        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+        mesh.positions
+            .extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
         if !m.positions.is_empty() && m.normals.len() == m.positions.len() {
             normals.extend(m.normals.chunks_exact(3).map(|n| [n[0], n[1], n[2]]));
             with_normals += 1;
@@ -198,9 +204,15 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         return Err(match find_vertex_line(text, bad) {
             Some((line, k)) => ctx.err_at(
                 format!("line {line}"),
-                format!("vertex {k}: position {} is not finite", common::fmt3(bad.map(f64::from))),
+                format!(
+                    "vertex {k}: position {} is not finite",
+                    common::fmt3(bad.map(f64::from))
+                ),
             ),
-            None => ctx.err(format!("a vertex position {} is not finite", common::fmt3(bad.map(f64::from)))),
+            None => ctx.err(format!(
+                "a vertex position {} is not finite",
+                common::fmt3(bad.map(f64::from))
+            )),
         });
     }
     mesh.normals = match (with_normals, without_normals) {
@@ -235,7 +247,9 @@ fn vertex(args: &[&str]) -> Result<[f32; 3], String> {
     match args.len() {
         3 | 6 => Ok(p),
         4 => {
-            let w: f32 = args[3].parse().map_err(|_| format!("v: w {:?} is not a number", args[3]))?;
+            let w: f32 = args[3]
+                .parse()
+                .map_err(|_| format!("v: w {:?} is not a number", args[3]))?;
             if w == 0.0 {
                 return Err("v: w is 0".to_owned());
             }
@@ -289,7 +303,11 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
         }
     }
     let mut counts = [0usize; 3];
-    let names = [("vertex", "vertices"), ("texture coordinate", "texture coordinates"), ("normal", "normals")];
+    let names = [
+        ("vertex", "vertices"),
+        ("texture coordinate", "texture coordinates"),
+        ("normal", "normals"),
+    ];
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let key = words.next();
@@ -305,7 +323,11 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
                 }
             }
             Some(k @ ("vt" | "vn")) => {
-                let (slot, n, err) = if k == "vt" { (1, 2, E::TexcoordParseError) } else { (2, 3, E::NormalParseError) };
+                let (slot, n, err) = if k == "vt" {
+                    (1, 2, E::TexcoordParseError)
+                } else {
+                    (2, 3, E::NormalParseError)
+                };
                 counts[slot] += 1;
                 let ok = args.len() >= n && args[..n].iter().all(|w| w.parse::<f32>().is_ok());
                 if *e == err && !ok {
@@ -316,11 +338,15 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
                 for word in &args {
                     let parts: Vec<&str> = word.split('/').collect();
                     if parts.len() > 3 {
-                        return found(format!("{k}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"));
+                        return found(format!(
+                            "{k}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"
+                        ));
                     }
                     for (slot, part) in parts.iter().enumerate().filter(|(_, p)| !p.is_empty()) {
                         let Ok(resolved) = resolve(part, counts[slot], totals[slot]) else {
-                            return found(format!("{k}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"));
+                            return found(format!(
+                                "{k}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"
+                            ));
                         };
                         // tobj checks vt and vn only where the file has some.
                         let checked = k == "f" && (slot == 0 || totals[slot] > 0);
@@ -360,16 +386,40 @@ mod tests {
     #[test]
     fn errors_name_the_line() {
         let head = "# test\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
-        assert_eq!(err(&format!("{head}f 1 2 9\n")), "t.obj: line 5: face: vertex index 9 out of range (3 vertices)");
-        assert_eq!(err(&format!("{head}f 1 2 -4\n")), "t.obj: line 5: face: vertex index -4 out of range (3 vertices)");
-        assert_eq!(err(&format!("{head}f 0 1 2\n")), "t.obj: line 5: face: vertex index 0 out of range (3 vertices)");
-        assert_eq!(err(&format!("{head}f 1 2 x\n")), "t.obj: line 5: f: \"x\" is not a vertex reference (v, v/vt, v//vn or v/vt/vn)");
-        assert_eq!(err(&format!("{head}vn 0 0 1\nf 1//1 2//1 3//2\n")), "t.obj: line 6: face: normal index 2 out of range (1 normals)");
-        assert_eq!(err("v 0 0 0\nv 1 0\nf 1 1 1\n"), "t.obj: line 2: v: expected three numbers x y z");
+        assert_eq!(
+            err(&format!("{head}f 1 2 9\n")),
+            "t.obj: line 5: face: vertex index 9 out of range (3 vertices)"
+        );
+        assert_eq!(
+            err(&format!("{head}f 1 2 -4\n")),
+            "t.obj: line 5: face: vertex index -4 out of range (3 vertices)"
+        );
+        assert_eq!(
+            err(&format!("{head}f 0 1 2\n")),
+            "t.obj: line 5: face: vertex index 0 out of range (3 vertices)"
+        );
+        assert_eq!(
+            err(&format!("{head}f 1 2 x\n")),
+            "t.obj: line 5: f: \"x\" is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"
+        );
+        assert_eq!(
+            err(&format!("{head}vn 0 0 1\nf 1//1 2//1 3//2\n")),
+            "t.obj: line 6: face: normal index 2 out of range (1 normals)"
+        );
+        assert_eq!(
+            err("v 0 0 0\nv 1 0\nf 1 1 1\n"),
+            "t.obj: line 2: v: expected three numbers x y z"
+        );
         assert_eq!(err("v 0 0 0\nv 1 0 0 0\n"), "t.obj: line 2: v: w is 0");
         assert_eq!(err("v 0 0 0\nvn 1 0\n"), "t.obj: line 2: vn: expected 3 numbers");
-        assert_eq!(err("v 0 0 0\nv nan 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 4\nf 2 3 4\n"), "t.obj: line 2: vertex 2: position [NaN, 0, 0] is not finite");
-        assert_eq!(err("v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n"), "t.obj: line 2: vertex 2: position [inf, 0, 0] is not finite");
+        assert_eq!(
+            err("v 0 0 0\nv nan 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 4\nf 2 3 4\n"),
+            "t.obj: line 2: vertex 2: position [NaN, 0, 0] is not finite"
+        );
+        assert_eq!(
+            err("v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n"),
+            "t.obj: line 2: vertex 2: position [inf, 0, 0] is not finite"
+        );
         assert_eq!(err("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n"), "t.obj: no triangles");
         let e = load_bytes(b"v 0 0 0\n\xff\n", "t.obj", &Limits::default()).expect_err("not text");
         assert_eq!(e.to_string(), "t.obj: line 2: not UTF-8 text");
@@ -382,7 +432,16 @@ mod tests {
         let m = load_bytes(text.as_bytes(), "pent.obj", &Limits::default()).expect("loads");
         let mesh = &m.meshes[0];
         assert_eq!(mesh.name, "pent");
-        assert_eq!(mesh.positions, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 1.0, 0.0]]);
+        assert_eq!(
+            mesh.positions,
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [2.0, 1.0, 0.0],
+                [1.0, 2.0, 0.0],
+                [0.0, 1.0, 0.0]
+            ]
+        );
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 1, 4]]);
         assert_eq!(mesh.normals, None);
         assert_eq!(mesh.materials, vec![0; 4]);
@@ -398,7 +457,10 @@ mod tests {
         );
         assert_eq!(
             m.warnings,
-            vec!["1 line and point statements (l, p) ignored", "4 triangles have no material: default diffuse (albedo 0.8)"]
+            vec![
+                "1 line and point statements (l, p) ignored",
+                "4 triangles have no material: default diffuse (albedo 0.8)"
+            ]
         );
     }
 

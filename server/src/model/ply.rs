@@ -231,7 +231,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
     let mut reader = Reader::new(Cursor::new(bytes));
     let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| {
         let text = e.to_string();
-        let text = text.split_once(": ").filter(|_| e.line().is_some()).map_or(text.as_str(), |(_, m)| m);
+        let text = text
+            .split_once(": ")
+            .filter(|_| e.line().is_some())
+            .map_or(text.as_str(), |(_, m)| m);
         let reason = format!("bad header: {}", one_line(text));
         match e.line() {
             Some(line) => ctx.err_at(format!("line {line}"), reason),
@@ -239,13 +242,14 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
         }
     })?;
     let payload = reader.get_ref().position() as usize;
-    let header_lines = bytes[..payload.min(bytes.len())].iter().filter(|&&b| b == b'\n').count();
+    let header_lines = bytes[..payload.min(bytes.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count();
     let binary = header.encoding != Encoding::Ascii;
 
     // What the header declares: checked before anything is read.
-    let scalar = |def: &ElementDef, name: &str| {
-        matches!(def.properties.get(name), Some(p) if matches!(p.data_type, PropertyType::Scalar(_)))
-    };
+    let scalar = |def: &ElementDef, name: &str| matches!(def.properties.get(name), Some(p) if matches!(p.data_type, PropertyType::Scalar(_)));
     let (mut has_vertices, mut has_faces, mut has_normals) = (false, false, false);
     let remaining = bytes.len().saturating_sub(payload) as u128;
     let mut need = 0u128;
@@ -261,7 +265,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                     .properties
                     .keys()
                     .map(String::as_str)
-                    .filter(|p| !["x", "y", "z"].contains(p) && !(has_normals && ["nx", "ny", "nz"].contains(p)))
+                    .filter(|p| !(["x", "y", "z"].contains(p) || has_normals && ["nx", "ny", "nz"].contains(p)))
                     .collect();
                 if !other.is_empty() {
                     ctx.warn(format!("vertex properties ignored: {}", other.join(", ")));
@@ -286,7 +290,12 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                         ))
                     }
                 }
-                let other: Vec<&str> = def.properties.keys().map(String::as_str).filter(|p| !is_index(p)).collect();
+                let other: Vec<&str> = def
+                    .properties
+                    .keys()
+                    .map(String::as_str)
+                    .filter(|p| !is_index(p))
+                    .collect();
                 if !other.is_empty() {
                     ctx.warn(format!("face properties ignored: {}", other.join(", ")));
                 }
@@ -354,10 +363,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                     let v = r.map_err(|e| fail(ctx, at.clone(), i, e))?;
                     let p = v.p.map(|x| x as f32);
                     if !p.iter().all(|x| x.is_finite()) {
-                        return Err(ctx.err_at(
-                            at,
-                            format!("vertex {i}: position {} is not finite", common::fmt3(v.p)),
-                        ));
+                        return Err(ctx.err_at(at, format!("vertex {i}: position {} is not finite", common::fmt3(v.p))));
                     }
                     mesh.positions.push(p);
                     if has_normals {
@@ -372,19 +378,15 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                 for i in 0..count {
                     let (at, r) = src.read(&parser, def);
                     let face = r.map_err(|e| fail(ctx, at.clone(), i, e))?;
-                    face.indices(&mut poly).map_err(|bad| {
-                        ctx.err_at(at.clone(), format!("face {i}: vertex index {bad} out of range"))
-                    })?;
+                    face.indices(&mut poly)
+                        .map_err(|bad| ctx.err_at(at.clone(), format!("face {i}: vertex index {bad} out of range")))?;
                     if poly.len() < 3 {
                         short_faces += 1;
                         continue;
                     }
                     let n = mesh.positions.len();
                     if let Some(&bad) = poly.iter().find(|&&x| vertices_read && x as usize >= n) {
-                        return Err(ctx.err_at(
-                            at,
-                            format!("face {i}: vertex index {bad} out of range ({n} vertices)"),
-                        ));
+                        return Err(ctx.err_at(at, format!("face {i}: vertex index {bad} out of range ({n} vertices)")));
                     }
                     ctx.check_triangles((mesh.triangles.len() + poly.len() - 2) as u64, Some(&at))?;
                     common::fan(&poly, &mut mesh.triangles);
@@ -412,7 +414,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
     if has_normals {
         mesh.normals = common::clean_normals(ctx, &mesh.name, normals, mesh.positions.len());
     }
-    ctx.warn(format!("no materials: default diffuse (albedo {})", common::DEFAULT_ALBEDO));
+    ctx.warn(format!(
+        "no materials: default diffuse (albedo {})",
+        common::DEFAULT_ALBEDO
+    ));
     Ok(Parts {
         meshes: vec![mesh],
         materials: vec![Mat::default_diffuse("default")],

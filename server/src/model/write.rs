@@ -31,7 +31,8 @@ pub fn write_ply_binary(mesh: &MeshData, out: &mut impl Write) -> io::Result<()>
     for t in &mesh.triangles {
         w.write_all(&[3])?;
         for &i in t {
-            let i = i32::try_from(i).map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "vertex index over i32::MAX"))?;
+            let i = i32::try_from(i)
+                .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "vertex index over i32::MAX"))?;
             w.write_all(&i.to_le_bytes())?;
         }
     }
@@ -82,7 +83,10 @@ mod tests {
     fn written_files_read_back_exactly() {
         let m = mesh();
         for (name, write) in [
-            ("quad.ply", write_ply_binary as fn(&MeshData, &mut Vec<u8>) -> io::Result<()>),
+            (
+                "quad.ply",
+                write_ply_binary as fn(&MeshData, &mut Vec<u8>) -> io::Result<()>,
+            ),
             ("quad.obj", write_obj),
         ] {
             let mut bytes = Vec::new();

@@ -7,6 +7,7 @@ use crate::model::{load_bytes, load_file, Instance, Limits, MeshData, Model, Mod
 use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
 use base64::Engine;
 use serde_json::{json, Value};
+use std::f32::consts::FRAC_1_SQRT_2;
 
 /// The binary buffer and the views and accessors into it.
 #[derive(Default)]
@@ -18,7 +19,7 @@ struct Bin {
 
 impl Bin {
     fn view(&mut self, bytes: &[u8]) -> usize {
-        while self.data.len() % 4 != 0 {
+        while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
         self.views
@@ -50,11 +51,11 @@ impl Bin {
 
 fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
     let mut json = serde_json::to_vec(doc).expect("json");
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
@@ -72,8 +73,20 @@ fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
     out
 }
 
-const STRIP: [[f32; 3]; 5] = [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [2.0, 0.0, 0.0]];
-const FAN: [[f32; 3]; 5] = [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.5, 1.0, 1.0], [0.5, 1.5, 1.0], [-0.5, 1.0, 1.0]];
+const STRIP: [[f32; 3]; 5] = [
+    [0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [2.0, 0.0, 0.0],
+];
+const FAN: [[f32; 3]; 5] = [
+    [0.0, 0.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [1.5, 1.0, 1.0],
+    [0.5, 1.5, 1.0],
+    [-0.5, 1.0, 1.0],
+];
 const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
 /// The scene document (without `buffers`) and its binary data.
@@ -84,9 +97,19 @@ fn scene() -> (Value, Vec<u8>) {
     // Mesh 0, the cube: sides indexed (u16), top and bottom unrolled.
     let p0 = b.vec3(&g.positions[..16]);
     let n0 = b.vec3(&g.normals[..16]);
-    let side: Vec<u32> = tris.iter().zip(&mats).filter(|(_, &m)| m == 0).flat_map(|(t, _)| *t).collect();
+    let side: Vec<u32> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 0)
+        .flat_map(|(t, _)| *t)
+        .collect();
     let i0 = b.indices(&side, 5123);
-    let caps: Vec<u32> = tris.iter().zip(&mats).filter(|(_, &m)| m == 1).flat_map(|(t, _)| *t).collect();
+    let caps: Vec<u32> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 1)
+        .flat_map(|(t, _)| *t)
+        .collect();
     let p1 = b.vec3(&caps.iter().map(|&i| g.positions[i as usize]).collect::<Vec<_>>());
     let n1 = b.vec3(&caps.iter().map(|&i| g.normals[i as usize]).collect::<Vec<_>>());
     // Mesh 1: a strip (u32 indices), a fan from a sparse accessor, points, lines.
@@ -99,7 +122,9 @@ fn scene() -> (Value, Vec<u8>) {
                    "values": {"bufferView": fan_val}}}));
     // Mesh 2: one shared triangle, four materials.
     let t = b.vec3(&TRI);
-    let tri_prims: Vec<Value> = (2..6).map(|m| json!({"attributes": {"POSITION": t}, "material": m})).collect();
+    let tri_prims: Vec<Value> = (2..6)
+        .map(|m| json!({"attributes": {"POSITION": t}, "material": m}))
+        .collect();
     let doc = json!({
         "asset": {"version": "2.0", "generator": "pathstream tests"},
         "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_emissive_strength",
@@ -110,10 +135,10 @@ fn scene() -> (Value, Vec<u8>) {
         "nodes": [
             {"name": "root", "translation": [10, 0, 0], "children": [1, 2, 5]},
             {"name": "cubeA", "mesh": 0, "scale": [2, 2, 2]},
-            {"name": "cubeB", "mesh": 0, "rotation": [0, 0.7071068, 0, 0.7071068], "children": [3]},
+            {"name": "cubeB", "mesh": 0, "rotation": [0, FRAC_1_SQRT_2, 0, FRAC_1_SQRT_2], "children": [3]},
             {"name": "strips", "mesh": 1, "translation": [0, 0, 1]},
             {"name": "tri", "mesh": 2, "matrix": [1, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1, 0, 0, 5, 0, 1]},
-            {"name": "eye", "translation": [0, 1, 5], "rotation": [0, 0.7071068, 0, 0.7071068], "camera": 0},
+            {"name": "eye", "translation": [0, 1, 5], "rotation": [0, FRAC_1_SQRT_2, 0, FRAC_1_SQRT_2], "camera": 0},
             {"name": "ortho", "camera": 1},
             {"name": "eye2", "camera": 0},
             {"name": "elsewhere", "mesh": 2}
@@ -172,8 +197,18 @@ fn surface(albedo: [f64; 3], emission: Option<[f64; 3]>) -> SurfaceJson {
 fn expected() -> Model {
     let g = cube();
     let (tris, mats) = g.triangles();
-    let side: Vec<[u32; 3]> = tris.iter().zip(&mats).filter(|(_, &m)| m == 0).map(|(t, _)| *t).collect();
-    let caps: Vec<u32> = tris.iter().zip(&mats).filter(|(_, &m)| m == 1).flat_map(|(t, _)| *t).collect();
+    let side: Vec<[u32; 3]> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 0)
+        .map(|(t, _)| *t)
+        .collect();
+    let caps: Vec<u32> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 1)
+        .flat_map(|(t, _)| *t)
+        .collect();
     let mut cube_mesh = MeshData {
         name: "cube".into(),
         positions: g.positions[..16].to_vec(),
@@ -181,9 +216,15 @@ fn expected() -> Model {
         triangles: side,
         materials: vec![0; 8],
     };
-    cube_mesh.positions.extend(caps.iter().map(|&i| g.positions[i as usize]));
-    cube_mesh.normals.as_mut().map(|n| n.extend(caps.iter().map(|&i| g.normals[i as usize])));
-    cube_mesh.triangles.extend((0..4).map(|t| [16 + 3 * t, 17 + 3 * t, 18 + 3 * t]));
+    cube_mesh
+        .positions
+        .extend(caps.iter().map(|&i| g.positions[i as usize]));
+    if let Some(n) = cube_mesh.normals.as_mut() {
+        n.extend(caps.iter().map(|&i| g.normals[i as usize]));
+    }
+    cube_mesh
+        .triangles
+        .extend((0..4).map(|t| [16 + 3 * t, 17 + 3 * t, 18 + 3 * t]));
     cube_mesh.materials.extend([1; 4]);
     let strips = MeshData {
         name: "strips".into(),
@@ -270,7 +311,10 @@ fn assert_model(got: &Model, want: &Model) {
     assert_eq!(got.instances.len(), want.instances.len());
     for (g, w) in got.instances.iter().zip(&want.instances) {
         assert_eq!(g.mesh, w.mesh);
-        assert!(close(g.transform.as_flattened(), w.transform.as_flattened()), "{g:?} != {w:?}");
+        assert!(
+            close(g.transform.as_flattened(), w.transform.as_flattened()),
+            "{g:?} != {w:?}"
+        );
     }
     let (gc, wc) = (got.camera.expect("camera"), want.camera.expect("camera"));
     let flat = |c: ModelCamera| [c.position, c.look_at, c.up].concat();
@@ -287,7 +331,10 @@ fn assert_model(got: &Model, want: &Model) {
 #[test]
 fn gltf_with_a_data_uri_loads_exactly() {
     let (doc, bin) = scene();
-    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
     let text = serde_json::to_vec(&with_buffer(doc, bin.len(), Some(uri))).expect("json");
     let m = load_bytes(&text, "scene.gltf", &Limits::default()).expect("loads");
     assert_model(&m, &expected());
@@ -311,7 +358,10 @@ fn gltf_with_an_external_bin_loads_exactly_from_a_file_only() {
     );
     std::fs::remove_file(dir.path().join("scene data.bin")).expect("rm");
     let e = load_file(&path, &Limits::default()).expect_err("no bin");
-    assert!(e.to_string().contains("buffers[0]: cannot read \"scene data.bin\": "), "{e}");
+    assert!(
+        e.to_string().contains("buffers[0]: cannot read \"scene data.bin\": "),
+        "{e}"
+    );
 }
 
 #[test]
@@ -325,7 +375,11 @@ fn glb_loads_exactly() {
 /// A one-triangle GLB: u16 positions and i8 normalised normals
 /// (KHR_mesh_quantization), u16 indices; `edit` changes it first.
 fn mini(edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> Result<Model, String> {
-    let mut bin: Vec<u8> = [[0u16, 0, 0], [1, 0, 0], [0, 1, 0]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let mut bin: Vec<u8> = [[0u16, 0, 0], [1, 0, 0], [0, 1, 0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
     bin.extend([0i8, 0, 127, 0, 0, 0, 127, 0, 0, 0, 127, 0].map(|x| x as u8));
     bin.extend([0u16, 1, 2, 0].iter().flat_map(|x| x.to_le_bytes()));
     let mut doc = json!({
@@ -360,13 +414,18 @@ fn quantized_attributes_and_no_scene() {
     assert_eq!(m.meshes[0].triangles, vec![[0, 1, 2]]);
     assert_eq!(m.camera, None);
     let m = mini(|d, _| {
-        d.as_object_mut().map(|o| o.remove("scenes"));
+        if let Some(o) = d.as_object_mut() {
+            o.remove("scenes");
+        }
     })
     .expect("loads");
     assert_eq!(m.instances.len(), 1);
     assert_eq!(
         m.warnings,
-        ["no scene: every root node is placed", "primitives without a material use the glTF default material: white diffuse (albedo 1)"]
+        [
+            "no scene: every root node is placed",
+            "primitives without a material use the glTF default material: white diffuse (albedo 1)"
+        ]
     );
 }
 
@@ -378,12 +437,19 @@ fn malformed_gltf_errors_name_the_problem() {
         d["bufferViews"][1]["byteOffset"] = json!(36);
         d["bufferViews"][2]["byteOffset"] = json!(48);
         d["buffers"][0]["byteLength"] = json!(56);
-        let mut floats: Vec<u8> = [0.0f32, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+        let mut floats: Vec<u8> = [0.0f32, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 1.0, 0.0]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
         floats.extend(&bin[18..]);
         *bin = floats;
     });
-    assert_eq!(nan, Err("m.glb: meshes[0].primitives[0]: vertex 1: position [NaN, 0, 0] is not finite".into()));
-    let cases: Vec<(Box<dyn FnOnce(&mut Value, &mut Vec<u8>)>, &str)> = vec![
+    assert_eq!(
+        nan,
+        Err("m.glb: meshes[0].primitives[0]: vertex 1: position [NaN, 0, 0] is not finite".into())
+    );
+    type Edit = Box<dyn FnOnce(&mut Value, &mut Vec<u8>)>;
+    let cases: Vec<(Edit, &str)> = vec![
         (Box::new(|_, bin| bin[32] = 7), "m.glb: meshes[0].primitives[0]: triangle 0: vertex index 7 out of range (3 vertices)"),
         (Box::new(|d, _| d["meshes"][0]["primitives"][0]["mode"] = json!(0)), "m.glb: no triangles"),
         (
@@ -415,8 +481,16 @@ fn malformed_gltf_errors_name_the_problem() {
     for (edit, want) in cases {
         assert_eq!(mini(edit).err().as_deref(), Some(want));
     }
-    let e = load_bytes(b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [", "m.gltf", &Limits::default()).expect_err("json");
-    assert_eq!(e.to_string(), "m.gltf: JSON line 1, column 40: EOF while parsing a list");
+    let e = load_bytes(
+        b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [",
+        "m.gltf",
+        &Limits::default(),
+    )
+    .expect_err("json");
+    assert_eq!(
+        e.to_string(),
+        "m.gltf: JSON line 1, column 40: EOF while parsing a list"
+    );
 }
 
 #[test]
@@ -425,7 +499,13 @@ fn truncated_glb() {
     let mut bytes = glb(&with_buffer(doc, bin.len(), None), &bin);
     let n = bytes.len();
     let e = load_bytes(&bytes[..n - 10], "s.glb", &Limits::default()).expect_err("cut");
-    assert_eq!(e.to_string(), format!("s.glb: byte 8: truncated: the GLB header says {n} bytes, the file has {}", n - 10));
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "s.glb: byte 8: truncated: the GLB header says {n} bytes, the file has {}",
+            n - 10
+        )
+    );
     // The header fixed to the cut length: the BIN chunk is cut.
     bytes.truncate(n - 10);
     bytes[8..12].copy_from_slice(&((n - 10) as u32).to_le_bytes());
@@ -434,7 +514,11 @@ fn truncated_glb() {
     let bin_len = bin.len().div_ceil(4) * 4;
     assert_eq!(
         e.to_string(),
-        format!("s.glb: byte {}: truncated: chunk 1 says {bin_len} bytes, {} remain", 20 + json_len, bin_len - 10)
+        format!(
+            "s.glb: byte {}: truncated: chunk 1 says {bin_len} bytes, {} remain",
+            20 + json_len,
+            bin_len - 10
+        )
     );
     bytes[4] = 1;
     let e = load_bytes(&bytes, "s.glb", &Limits::default()).expect_err("v1");

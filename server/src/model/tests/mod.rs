@@ -39,7 +39,8 @@ pub(super) fn cube() -> Gen {
     for (f, (n, u, v)) in frames.iter().enumerate() {
         let first = g.positions.len() as u32;
         for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-            g.positions.push([0, 1, 2].map(|k| centre[k] + 0.5 * (n[k] + su * u[k] + sv * v[k])));
+            g.positions
+                .push([0, 1, 2].map(|k| centre[k] + 0.5 * (n[k] + su * u[k] + sv * v[k])));
             g.normals.push(*n);
         }
         g.faces.push(((first..first + 4).collect(), u32::from(f >= 4)));
@@ -80,7 +81,11 @@ pub(super) fn assert_guarantees(m: &Model) {
     for mesh in &m.meshes {
         assert!(!mesh.triangles.is_empty(), "mesh {} has no triangles", mesh.name);
         assert!(mesh.positions.iter().flatten().all(|x| x.is_finite()));
-        assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < mesh.positions.len()));
+        assert!(mesh
+            .triangles
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < mesh.positions.len()));
         assert_eq!(mesh.materials.len(), mesh.triangles.len());
         assert!(mesh.materials.iter().all(|&i| (i as usize) < m.materials.len()));
         if let Some(n) = &mesh.normals {
@@ -121,7 +126,10 @@ fn detect_reads_magic_then_extension() {
     assert_eq!(detect("a.obj", b"glTF\x02\0\0\0"), Some(Format::Glb));
     assert_eq!(detect("x", b"ply\nformat ascii 1.0\n"), Some(Format::Ply));
     assert_eq!(detect("x", b"ply\r\nformat ascii 1.0\r\n"), Some(Format::Ply));
-    assert_eq!(detect("upload", b" \n{\"asset\": {\"version\": \"2.0\"}}"), Some(Format::Gltf));
+    assert_eq!(
+        detect("upload", b" \n{\"asset\": {\"version\": \"2.0\"}}"),
+        Some(Format::Gltf)
+    );
     assert_eq!(detect("upload", b"\xEF\xBB\xBF{\"asset\": {}}"), Some(Format::Gltf));
     assert_eq!(detect("M.OBJ", b"v 0 0 0"), Some(Format::Obj));
     assert_eq!(detect("m.GlTf", b"{}"), Some(Format::Gltf));
@@ -136,7 +144,10 @@ fn detect_reads_magic_then_extension() {
 fn unknown_and_unreadable_files_are_errors() {
     let limits = super::Limits::default();
     let e = super::load_bytes(b"solid cube\nendsolid\n", "cube.stl", &limits).expect_err("stl");
-    assert_eq!(e.to_string(), "cube.stl: unknown format: expected an .obj, .gltf, .glb or .ply file");
+    assert_eq!(
+        e.to_string(),
+        "cube.stl: unknown format: expected an .obj, .gltf, .glb or .ply file"
+    );
     let e = super::load_file(std::path::Path::new("/nonexistent/x.obj"), &limits).expect_err("missing");
     assert!(e.to_string().starts_with("/nonexistent/x.obj: cannot read: "), "{e}");
 }

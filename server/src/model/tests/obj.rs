@@ -124,8 +124,12 @@ fn shared_vertices_are_split_per_normal() {
     let m = load_bytes(text.as_bytes(), "shared.obj", &Limits::default()).expect("loads");
     assert_guarantees(&m);
     assert_eq!(m.meshes[0].positions.len(), 24);
-    let expected = load_bytes(cube_obj(&g, ["default", "default"], None).as_bytes(), "c.obj", &Limits::default())
-        .expect("loads");
+    let expected = load_bytes(
+        cube_obj(&g, ["default", "default"], None).as_bytes(),
+        "c.obj",
+        &Limits::default(),
+    )
+    .expect("loads");
     assert_eq!(soup(&m), soup(&expected));
     assert_eq!(soup(&m).len(), 12);
 }
@@ -181,7 +185,16 @@ fn mtl_rules_map_every_material() {
     std::fs::write(dir.path().join("rules.mtl"), RULES_MTL).expect("write");
     let mut obj = String::from("mtllib rules.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     for name in [
-        "red", "lamp", "chrome", "polished", "water", "glass_no_ni", "glass_bad_ni", "hot", "textured", "nosuch",
+        "red",
+        "lamp",
+        "chrome",
+        "polished",
+        "water",
+        "glass_no_ni",
+        "glass_bad_ni",
+        "hot",
+        "textured",
+        "nosuch",
     ] {
         let _ = writeln!(obj, "usemtl {name}\nf 1 2 3");
     }
@@ -192,7 +205,18 @@ fn mtl_rules_map_every_material() {
     let names: Vec<&str> = m.materials.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(
         names,
-        ["red", "lamp", "chrome", "polished", "water", "glass_no_ni", "glass_bad_ni", "hot", "textured", "default"]
+        [
+            "red",
+            "lamp",
+            "chrome",
+            "polished",
+            "water",
+            "glass_no_ni",
+            "glass_bad_ni",
+            "hot",
+            "textured",
+            "default"
+        ]
     );
     let json: Vec<&MaterialJson> = m.materials.iter().map(|(_, j)| j).collect();
     assert_eq!(
@@ -213,8 +237,14 @@ fn mtl_rules_map_every_material() {
     let mesh = &m.meshes[0];
     assert_eq!(mesh.materials, vec![9, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
     assert_eq!(mesh.positions.len(), 33);
-    assert!(mesh.positions.chunks(3).all(|c| c == [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]));
-    assert_eq!(mesh.triangles, (0..11).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect::<Vec<_>>());
+    assert!(mesh
+        .positions
+        .chunks(3)
+        .all(|c| c == [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]));
+    assert_eq!(
+        mesh.triangles,
+        (0..11).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect::<Vec<_>>()
+    );
     assert_eq!(
         m.warnings,
         [
@@ -256,7 +286,10 @@ fn mtl_problems() {
     std::fs::write(&path, "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n").expect("write");
     std::fs::write(dir.path().join("bad.mtl"), "newmtl a\nKd 1 x 1\n").expect("write");
     let e = load_file(&path, &Limits::default()).expect_err("bad mtl");
-    assert_eq!(e.to_string(), format!("{}: bad.mtl: line 2: Kd: \"x\" is not a number", path.display()));
+    assert_eq!(
+        e.to_string(),
+        format!("{}: bad.mtl: line 2: Kd: \"x\" is not a number", path.display())
+    );
 
     std::fs::write(dir.path().join("bad.mtl"), "newmtl a\nKd 0.5\n").expect("write");
     let m = load_file(&path, &Limits::default()).expect("Kd with one number");
@@ -264,7 +297,11 @@ fn mtl_problems() {
 
     std::fs::remove_file(dir.path().join("bad.mtl")).expect("rm");
     let m = load_file(&path, &Limits::default()).expect("loads without the mtl");
-    assert!(m.warnings[0].starts_with("mtllib \"bad.mtl\": cannot be read ("), "{:?}", m.warnings);
+    assert!(
+        m.warnings[0].starts_with("mtllib \"bad.mtl\": cannot be read ("),
+        "{:?}",
+        m.warnings
+    );
     assert!(m.warnings[0].ends_with("): its materials fall back to the default"));
 }
 
@@ -285,11 +322,19 @@ fn normals_and_colours() {
         ]
     );
     // A normal of length 2 is normalised; a zero normal drops them all.
-    let m = load_bytes(format!("{tri}vn 0 0 2\nf 1//1 2//1 3//1\n").as_bytes(), "n.obj", &Limits::default())
-        .expect("loads");
+    let m = load_bytes(
+        format!("{tri}vn 0 0 2\nf 1//1 2//1 3//1\n").as_bytes(),
+        "n.obj",
+        &Limits::default(),
+    )
+    .expect("loads");
     assert_eq!(m.meshes[0].normals, Some(vec![[0.0, 0.0, 1.0]; 3]));
-    let m = load_bytes(format!("{tri}vn 0 0 0\nf 1//1 2//1 3//1\n").as_bytes(), "z.obj", &Limits::default())
-        .expect("loads");
+    let m = load_bytes(
+        format!("{tri}vn 0 0 0\nf 1//1 2//1 3//1\n").as_bytes(),
+        "z.obj",
+        &Limits::default(),
+    )
+    .expect("loads");
     assert_eq!(m.meshes[0].normals, None);
     assert!(m.warnings.contains(
         &"mesh \"z\": the normal of vertex 0 is [0, 0, 0] (zero or not finite): the mesh's normals are dropped (flat shading)"
@@ -302,5 +347,7 @@ fn degenerate_triangles_are_kept_and_counted() {
     let text = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\nf 1 1 4\n";
     let m = load_bytes(text.as_bytes(), "d.obj", &Limits::default()).expect("loads");
     assert_eq!(m.meshes[0].triangles.len(), 3);
-    assert!(m.warnings.contains(&"mesh \"d\": 2 of 3 triangles have zero area (kept)".to_owned()));
+    assert!(m
+        .warnings
+        .contains(&"mesh \"d\": 2 of 3 triangles have zero area (kept)".to_owned()));
 }

@@ -49,7 +49,13 @@ fn ply_binary(g: &Gen, big: bool) -> (Vec<u8>, usize) {
     let (format, pos, nor, list, name) = if big {
         ("binary_big_endian", "float", "double", "ushort ushort", "vertex_index")
     } else {
-        ("binary_little_endian", "double", "float", "uchar uint", "vertex_indices")
+        (
+            "binary_little_endian",
+            "double",
+            "float",
+            "uchar uint",
+            "vertex_indices",
+        )
     };
     let mut out = format!(
         "ply\nformat {format} 1.0\nelement vertex {}\nproperty {pos} x\nproperty {pos} y\nproperty {pos} z\n\
@@ -135,7 +141,10 @@ fn err(bytes: &[u8]) -> String {
 fn ascii_loads_exactly() {
     let g = cube();
     let text = ply_ascii(&g);
-    assert_eq!(text.lines().position(|l| l == "end_header"), Some(ASCII_HEADER_LINES - 1));
+    assert_eq!(
+        text.lines().position(|l| l == "end_header"),
+        Some(ASCII_HEADER_LINES - 1)
+    );
     let m = load_bytes(text.as_bytes(), "cube.ply", &Limits::default()).expect("loads");
     assert_guarantees(&m);
     assert_eq!(m, expected(&g, &["vertex properties ignored: u, v", NO_MATERIALS]));
@@ -156,7 +165,14 @@ fn binary_little_and_big_endian_load_exactly() {
     assert_guarantees(&m);
     assert_eq!(
         m,
-        expected(&g, &["vertex properties ignored: red", "element edge (2 entries) ignored", NO_MATERIALS])
+        expected(
+            &g,
+            &[
+                "vertex properties ignored: red",
+                "element edge (2 entries) ignored",
+                NO_MATERIALS
+            ]
+        )
     );
     let (be, _) = ply_binary(&g, true);
     let m = load_bytes(&be, "cube.ply", &Limits::default()).expect("loads");
@@ -168,7 +184,13 @@ fn binary_nan_is_an_error() {
     let g = cube();
     let (mut le, header) = ply_binary(&g, false);
     le[header + 3 * 37..header + 3 * 37 + 8].copy_from_slice(&f64::NAN.to_le_bytes());
-    assert_eq!(err(&le), format!("c.ply: byte {}: vertex 3: position [NaN, 1.5, 3.5] is not finite", header + 3 * 37));
+    assert_eq!(
+        err(&le),
+        format!(
+            "c.ply: byte {}: vertex 3: position [NaN, 1.5, 3.5] is not finite",
+            header + 3 * 37
+        )
+    );
 }
 
 #[test]
@@ -186,7 +208,13 @@ fn truncated_binary_files() {
     // Cut in the last face (whose list is longer than the minimum).
     let (be, header) = ply_binary(&g, true);
     let cut = &be[..be.len() - 3];
-    assert_eq!(err(cut), format!("c.ply: byte {}: truncated: the file ends in face 5 of 6", header + 24 * 36 + 5 * 10));
+    assert_eq!(
+        err(cut),
+        format!(
+            "c.ply: byte {}: truncated: the file ends in face 5 of 6",
+            header + 24 * 36 + 5 * 10
+        )
+    );
 }
 
 #[test]
@@ -218,11 +246,17 @@ fn ascii_errors_name_the_line() {
         format!("c.ply: line {v3}: vertex 3: cannot read \"1.5 abc 3.5 1 0 0 0 0\" (error at 1:5: expected one of \"\\r\\n\", EOF, [' '|'\\t'], ['-'|'+'], ['0'..='9'], ['\\n'|'\\r'])")
     );
     let e = err(with(v3, "nan 1.5 3.5 1 0 0 0 0").as_bytes());
-    assert!(e.starts_with(&format!("c.ply: line {v3}: vertex 3: cannot read \"nan 1.5")), "{e}");
+    assert!(
+        e.starts_with(&format!("c.ply: line {v3}: vertex 3: cannot read \"nan 1.5")),
+        "{e}"
+    );
     let short = lines[..ASCII_HEADER_LINES + 29].join("\n") + "\n";
     assert_eq!(
         err(short.as_bytes()),
-        format!("c.ply: line {}: truncated: the file ends in face 5 of 6", ASCII_HEADER_LINES + 30)
+        format!(
+            "c.ply: line {}: truncated: the file ends in face 5 of 6",
+            ASCII_HEADER_LINES + 30
+        )
     );
 }
 
@@ -243,7 +277,10 @@ fn header_problems() {
         format!("c.ply: byte {header}: truncated (or a wrong count): element vertex with 1000000 entries needs at least 6000000 bytes after the header, the file has 26")
     );
     assert_eq!(
-        err(ply(&format!("element vertex 3\n{xyz}element face 0\nproperty list uchar int vertex_indices\n")).as_bytes()),
+        err(ply(&format!(
+            "element vertex 3\n{xyz}element face 0\nproperty list uchar int vertex_indices\n"
+        ))
+        .as_bytes()),
         "c.ply: no triangles"
     );
     assert_eq!(
@@ -255,7 +292,10 @@ fn header_problems() {
         "c.ply: header: element vertex has no x, y and z properties"
     );
     assert_eq!(
-        err(ply(&format!("element vertex 3\n{xyz}element face 1\nproperty list uchar float vertex_indices\n")).as_bytes()),
+        err(ply(&format!(
+            "element vertex 3\n{xyz}element face 1\nproperty list uchar float vertex_indices\n"
+        ))
+        .as_bytes()),
         "c.ply: header: face property vertex_indices is not a list of integers"
     );
     let e = err(ply(&format!("elemnt vertex 3\n{xyz}{face}")).as_bytes());
@@ -267,7 +307,9 @@ fn header_problems() {
         max_vertices: 100,
         max_triangles: 2,
     };
-    let quad = format!("ply\nformat ascii 1.0\nelement vertex 4\n{xyz}{face}end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n5 0 1 2 3 0\n");
+    let quad = format!(
+        "ply\nformat ascii 1.0\nelement vertex 4\n{xyz}{face}end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n5 0 1 2 3 0\n"
+    );
     let e = load_bytes(quad.as_bytes(), "q.ply", &limits).expect_err("over");
     assert_eq!(e.to_string(), "q.ply: line 14: 3 triangles, more than the limit of 2");
 }

@@ -21,7 +21,8 @@ fn samples() -> Vec<(&'static str, Vec<u8>)> {
     write_ply_binary(&mesh, &mut ply).expect("write");
     let mut obj = Vec::new();
     write_obj(&mesh, &mut obj).expect("write");
-    let ascii = String::from("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+    let ascii = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
            element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
     );
     let gltf = br#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "translation": [1, 2, 3]}],
@@ -33,10 +34,13 @@ fn samples() -> Vec<(&'static str, Vec<u8>)> {
     let mut glb = b"glTF".to_vec();
     let json = br#"{"asset":{"version":"2.0"},"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}],"bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36}]}"#;
     let mut json = json.to_vec();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    let bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
     glb.extend(2u32.to_le_bytes());
     glb.extend(((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
     glb.extend((json.len() as u32).to_le_bytes());
@@ -93,7 +97,16 @@ fn mutate(rng: &mut Rng, bytes: &[u8]) -> Vec<u8> {
             let starts: Vec<usize> = (0..b.len()).filter(|&i| b[i].is_ascii_digit()).collect();
             if let Some(&s) = starts.get(rng.below(starts.len())) {
                 let e = (s..b.len()).find(|&i| !b[i].is_ascii_digit()).unwrap_or(b.len());
-                let pick = ["0", "4294967295", "4294967296", "18446744073709551615", "99999999999999999999", "-1", "1e39", "nan"];
+                let pick = [
+                    "0",
+                    "4294967295",
+                    "4294967296",
+                    "18446744073709551615",
+                    "99999999999999999999",
+                    "-1",
+                    "1e39",
+                    "nan",
+                ];
                 b.splice(s..e, pick[rng.below(pick.len())].bytes());
             }
         }
@@ -156,12 +169,18 @@ fn garbage_is_an_error() {
                 _ => b"{\"asset\": ".to_vec(),
             };
             magic.extend(&bytes);
-            assert!(load_bytes(&magic, name, &Limits::default()).is_err(), "{name} {len} after magic");
+            assert!(
+                load_bytes(&magic, name, &Limits::default()).is_err(),
+                "{name} {len} after magic"
+            );
         }
     }
     let e = load_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n", "big.ply", &Limits::default())
         .expect_err("absurd");
-    assert_eq!(e.to_string(), "big.ply: header: element vertex: 4000000000 vertices, more than the limit of 16000000");
+    assert_eq!(
+        e.to_string(),
+        "big.ply: header: element vertex: 4000000000 vertices, more than the limit of 16000000"
+    );
     let e = load_bytes(b"\x00\x01garbage", "g.bin", &Limits::default()).expect_err("unknown");
     assert!(e.reason.starts_with("unknown format"));
 }
@@ -175,8 +194,11 @@ fn grid(n: u32) -> MeshData {
     };
     for y in 0..=n {
         for x in 0..=n {
-            m.positions.push([x as f32 / n as f32, y as f32 / n as f32, ((x * y) % 7) as f32 * 1e-3]);
-            m.normals.as_mut().map(|v| v.push([0.0, 0.0, 1.0]));
+            m.positions
+                .push([x as f32 / n as f32, y as f32 / n as f32, ((x * y) % 7) as f32 * 1e-3]);
+            if let Some(v) = m.normals.as_mut() {
+                v.push([0.0, 0.0, 1.0]);
+            }
         }
     }
     for y in 0..n {
@@ -199,7 +221,10 @@ fn time_large_files() {
     let mesh = grid(708);
     println!("{} vertices, {} triangles", mesh.positions.len(), mesh.triangles.len());
     for (name, write) in [
-        ("grid.ply", write_ply_binary as fn(&MeshData, &mut std::fs::File) -> std::io::Result<()>),
+        (
+            "grid.ply",
+            write_ply_binary as fn(&MeshData, &mut std::fs::File) -> std::io::Result<()>,
+        ),
         ("grid.obj", write_obj),
     ] {
         let path = dir.path().join(name);
