@@ -501,7 +501,8 @@ fn read_mesh(
             _ => without_normals += 1,
         }
         let material = table.index(ctx, &prim.material());
-        let offset = u32::try_from(out.positions.len()).map_err(|_| ctx.err_at(&path, "too many vertices"))?;
+        let offset = out.positions.len() as u32;
+        u32::try_from(out.positions.len() + n).map_err(|_| ctx.err_at(&path, "too many vertices"))?;
         out.positions.extend(positions);
         out.triangles.extend(tris.iter().map(|t| t.map(|i| i + offset)));
         out.materials.resize(out.triangles.len(), material);

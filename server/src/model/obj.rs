@@ -15,22 +15,35 @@ use std::path::Path;
 /// What a quick pass over the text finds before `tobj` runs.
 #[derive(Default)]
 struct Scan {
-    vertices: u64,
+    /// `v`, `vt` and `vn` statements.
+    counts: [usize; 3],
     faces: u64,
     lines_and_points: u64,
     free_form: bool,
     usemtl: Vec<String>,
+    /// `f` lines with a negative (relative) or very long index, whose
+    /// arithmetic in tobj can overflow: (line, its text, counts so far).
+    unusual: Vec<(usize, String, [usize; 3])>,
 }
 
 fn scan(bytes: &[u8]) -> Scan {
     let mut s = Scan::default();
     let mut seen = HashSet::new();
-    for line in bytes.split(|&b| b == b'\n') {
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
         let line = line.trim_ascii();
         let end = line.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(line.len());
         match &line[..end] {
-            b"v" => s.vertices += 1,
-            b"f" => s.faces += 1,
+            b"v" => s.counts[0] += 1,
+            b"vt" => s.counts[1] += 1,
+            b"vn" => s.counts[2] += 1,
+            b"f" => {
+                s.faces += 1;
+                let long = line.split(|b| !b.is_ascii_digit()).any(|run| run.len() > 15);
+                if long || line.contains(&b'-') {
+                    s.unusual
+                        .push((i + 1, String::from_utf8_lossy(line).into_owned(), s.counts));
+                }
+            }
             b"l" | b"p" => s.lines_and_points += 1,
             b"curv" | b"curv2" | b"surf" | b"cstype" => s.free_form = true,
             b"usemtl" => {
@@ -45,6 +58,36 @@ fn scan(bytes: &[u8]) -> Scan {
     s
 }
 
+const KINDS: [(&str, &str); 3] = [
+    ("vertex", "vertices"),
+    ("texture coordinate", "texture coordinates"),
+    ("normal", "normals"),
+];
+
+/// The references of an `f` (or `l`) statement checked as tobj resolves
+/// them: `Err` when one is not a reference, `Ok(Some(why))` when one is out
+/// of range (`vt` and `vn` only where the file has some, as tobj checks).
+fn face_refs(key: &str, args: &[&str], counts: [usize; 3], totals: [usize; 3]) -> Result<Option<String>, String> {
+    for word in args {
+        let parts: Vec<&str> = word.split('/').collect();
+        let not_ref = || format!("{key}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)");
+        if parts.len() > 3 {
+            return Err(not_ref());
+        }
+        for (slot, part) in parts.iter().enumerate().filter(|(_, p)| !p.is_empty()) {
+            let resolved = resolve(part, counts[slot], totals[slot]).map_err(|_| not_ref())?;
+            if resolved.is_none() && (slot == 0 || totals[slot] > 0) {
+                let (one, many) = KINDS[slot];
+                return Ok(Some(format!(
+                    "face: {one} index {part} out of range ({} {many})",
+                    totals[slot]
+                )));
+            }
+        }
+    }
+    Ok(None)
+}
+
 /// Reads an OBJ. `dir` is the file's directory (`None` for an upload, whose
 /// `mtllib` cannot be followed).
 pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Parts, ModelError> {
@@ -53,8 +96,14 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         ctx.err_at(format!("line {line}"), "not UTF-8 text")
     })?;
     let scan = scan(bytes);
-    ctx.check_vertices(scan.vertices, None)?;
+    ctx.check_vertices(scan.counts[0] as u64, None)?;
     ctx.check_triangles(scan.faces, None)?;
+    for (line, text, counts) in &scan.unusual {
+        let args: Vec<&str> = text.split_whitespace().skip(1).collect();
+        if let Ok(Some(why)) = face_refs("f", &args, *counts, scan.counts) {
+            return Err(ctx.err_at(format!("line {line}"), why));
+        }
+    }
 
     let libs: RefCell<Vec<mtl::MtlMaterial>> = RefCell::new(Vec::new());
     let notes: RefCell<Vec<String>> = RefCell::new(Vec::new());
@@ -165,7 +214,8 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
     let mut untyped = 0usize;
     for model in &models {
         let m = &model.mesh;
-        let offset = u32::try_from(mesh.positions.len()).map_err(|_| ctx.err("too many vertices"))?;
+        let offset = mesh.positions.len() as u32;
+        u32::try_from(mesh.positions.len() + m.positions.len() / 3).map_err(|_| ctx.err("too many vertices"))?;
         ctx.check_vertices((mesh.positions.len() + m.positions.len() / 3) as u64, None)?;
         ctx.check_triangles((mesh.triangles.len() + m.indices.len() / 3) as u64, None)?;
         mesh.positions
@@ -303,11 +353,6 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
         }
     }
     let mut counts = [0usize; 3];
-    let names = [
-        ("vertex", "vertices"),
-        ("texture coordinate", "texture coordinates"),
-        ("normal", "normals"),
-    ];
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let key = words.next();
@@ -335,28 +380,10 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
                 }
             }
             Some(k @ ("f" | "l")) => {
-                for word in &args {
-                    let parts: Vec<&str> = word.split('/').collect();
-                    if parts.len() > 3 {
-                        return found(format!(
-                            "{k}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"
-                        ));
-                    }
-                    for (slot, part) in parts.iter().enumerate().filter(|(_, p)| !p.is_empty()) {
-                        let Ok(resolved) = resolve(part, counts[slot], totals[slot]) else {
-                            return found(format!(
-                                "{k}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"
-                            ));
-                        };
-                        // tobj checks vt and vn only where the file has some.
-                        let checked = k == "f" && (slot == 0 || totals[slot] > 0);
-                        if resolved.is_none() && checked && !matches!(e, E::FaceParseError) {
-                            return found(format!(
-                                "face: {} index {part} out of range ({} {})",
-                                names[slot].0, totals[slot], names[slot].1
-                            ));
-                        }
-                    }
+                match face_refs(k, &args, counts, totals) {
+                    Err(why) => return found(why),
+                    Ok(Some(why)) if k == "f" && !matches!(e, E::FaceParseError) => return found(why),
+                    _ => {}
                 }
                 if k == "f" && args.is_empty() && matches!(e, E::InvalidPolygon) {
                     return found("f: a face without vertices".to_owned());
@@ -421,6 +448,15 @@ mod tests {
             "t.obj: line 2: vertex 2: position [inf, 0, 0] is not finite"
         );
         assert_eq!(err("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n"), "t.obj: no triangles");
+        // Indices whose arithmetic overflows in tobj are caught first.
+        assert_eq!(
+            err(&format!("{head}vt 0 0\nf 1/1 2/1 3/9223372036854775807\n")),
+            "t.obj: line 6: face: texture coordinate index 9223372036854775807 out of range (1 texture coordinates)"
+        );
+        assert_eq!(
+            err(&format!("{head}vn 0 0 1\nf 1//1 2//1 3//-9223372036854775807\n")),
+            "t.obj: line 6: face: normal index -9223372036854775807 out of range (1 normals)"
+        );
         let e = load_bytes(b"v 0 0 0\n\xff\n", "t.obj", &Limits::default()).expect_err("not text");
         assert_eq!(e.to_string(), "t.obj: line 2: not UTF-8 text");
     }

@@ -524,3 +524,39 @@ fn truncated_glb() {
     let e = load_bytes(&bytes, "s.glb", &Limits::default()).expect_err("v1");
     assert_eq!(e.to_string(), "s.glb: byte 4: GLB version 1 (only version 2 is read)");
 }
+
+#[test]
+fn animation_skins_morph_targets_and_maps_are_warned() {
+    let m = mini(|d, _| {
+        d["animations"] = json!([{"channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
+                                  "samplers": [{"input": 2, "output": 0}]}]);
+        d["skins"] = json!([{"joints": [0]}]);
+        d["nodes"][0]["skin"] = json!(0);
+        d["meshes"][0]["weights"] = json!([0.5]);
+        let prim = &mut d["meshes"][0]["primitives"][0];
+        prim["targets"] = json!([{"POSITION": 0}]);
+        prim["attributes"]["COLOR_0"] = json!(1);
+        prim["material"] = json!(0);
+        d["materials"] = json!([{"occlusionTexture": {"index": 0}, "emissiveTexture": {"index": 0},
+            "alphaMode": "MASK", "alphaCutoff": 0.25,
+            "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}}]);
+        d["textures"] = json!([{"source": 0}]);
+        d["images"] = json!([{"uri": "x.png"}]);
+    })
+    .expect("loads");
+    assert_guarantees(&m);
+    assert_eq!(
+        m.materials,
+        vec![("material0".to_owned(), MaterialJson::Diffuse(surface([1.0; 3], None)))]
+    );
+    assert_eq!(
+        m.warnings,
+        [
+            "1 animations ignored (the scene is read at rest)",
+            "skins ignored (skinned meshes are placed by their node's transform)",
+            "mesh \"mesh0\": morph targets ignored (the base shape is used)",
+            "vertex colours ignored",
+            "material \"material0\": not modelled, ignored: metallic-roughness texture, occlusion map, emissive texture, alpha mode MASK (cutoff 0.25), metallic 1 / roughness 1 (roughness and metalness are not modelled: rendered diffuse)",
+        ]
+    );
+}

@@ -133,10 +133,19 @@ fn mutated_files_never_panic() {
         max_triangles: 100_000,
         max_vertices: 100_000,
     };
-    let mut rng = Rng(0x5eed_1234_abcd_0001);
+    // MODEL_FUZZ_ROUNDS=100000 (and MODEL_FUZZ_SEED) for a longer run.
+    let rounds = std::env::var("MODEL_FUZZ_ROUNDS")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(400);
+    let seed = std::env::var("MODEL_FUZZ_SEED")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(0x5eed_1234_abcd_0001);
+    let mut rng = Rng(seed);
     let (mut ok, mut failed) = (0, 0);
     for (name, bytes) in samples() {
-        for round in 0..400 {
+        for round in 0..rounds {
             let m = mutate(&mut rng, &bytes);
             let r = catch_unwind(AssertUnwindSafe(|| load_bytes(&m, name, &limits)));
             match r {
