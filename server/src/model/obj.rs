@@ -20,6 +20,8 @@ struct Scan {
     faces: u64,
     lines_and_points: u64,
     free_form: bool,
+    /// Smoothing groups other than `s off` / `s 0`.
+    smoothing: bool,
     usemtl: Vec<String>,
     /// `f` lines with a negative (relative) or very long index, whose
     /// arithmetic in tobj can overflow: (line, its text, counts so far).
@@ -45,7 +47,8 @@ fn scan(bytes: &[u8]) -> Scan {
                 }
             }
             b"l" | b"p" => s.lines_and_points += 1,
-            b"curv" | b"curv2" | b"surf" | b"cstype" => s.free_form = true,
+            b"curv" | b"curv2" | b"surf" | b"cstype" | b"vp" => s.free_form = true,
+            b"s" => s.smoothing |= !matches!(line[end..].trim_ascii(), b"off" | b"0" | b""),
             b"usemtl" => {
                 let name = String::from_utf8_lossy(line[end..].trim_ascii()).into_owned();
                 if seen.insert(name.clone()) {
@@ -266,7 +269,12 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         });
     }
     mesh.normals = match (with_normals, without_normals) {
-        (0, _) => None,
+        (0, _) => {
+            if scan.smoothing {
+                ctx.warn("smoothing groups (s) ignored: without vn normals the mesh is flat shaded");
+            }
+            None
+        }
         (_, 0) => common::clean_normals(ctx, &mesh.name, normals, mesh.positions.len()),
         _ => {
             ctx.warn(format!(
@@ -464,7 +472,7 @@ mod tests {
     #[test]
     fn polygons_shared_vertices_and_relative_indices() {
         // A pentagon (fan), and a triangle by relative indices sharing vertices.
-        let text = "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\nf -5 -4 -1\np 1\n";
+        let text = "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\ns 1\nf 1 2 3 4 5\nf -5 -4 -1\np 1\n";
         let m = load_bytes(text.as_bytes(), "pent.obj", &Limits::default()).expect("loads");
         let mesh = &m.meshes[0];
         assert_eq!(mesh.name, "pent");
@@ -495,7 +503,8 @@ mod tests {
             m.warnings,
             vec![
                 "1 line and point statements (l, p) ignored",
-                "4 triangles have no material: default diffuse (albedo 0.8)"
+                "4 triangles have no material: default diffuse (albedo 0.8)",
+                "smoothing groups (s) ignored: without vn normals the mesh is flat shaded",
             ]
         );
     }

@@ -276,6 +276,13 @@ fn header_problems() {
         err(big.as_bytes()),
         format!("c.ply: byte {header}: truncated (or a wrong count): element vertex with 1000000 entries needs at least 6000000 bytes after the header, the file has 26")
     );
+    // The last line without its newline: still enough bytes.
+    let m = load_bytes(
+        ply(&format!("element vertex 3\n{xyz}{face}")).trim_end().as_bytes(),
+        "c.ply",
+        &Limits::default(),
+    );
+    assert_eq!(m.map(|m| m.meshes[0].triangles.clone()), Ok(vec![[0, 1, 2]]));
     assert_eq!(
         err(ply(&format!(
             "element vertex 3\n{xyz}element face 0\nproperty list uchar int vertex_indices\n"
