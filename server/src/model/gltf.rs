@@ -6,7 +6,10 @@
 //!   nodes is stored once.
 //! - Each mesh is ONE [`MeshData`]: its TRIANGLES, TRIANGLE_STRIP and
 //!   TRIANGLE_FAN primitives merged (indexed or not), per-triangle material;
-//!   POINTS and LINES primitives are skipped with a warning.
+//!   strips as the spec orders them, fans as (v0, vi, vi+1) (the spec's
+//!   triangles, corners rotated); POINTS and LINES primitives are skipped
+//!   with a warning. A mesh's normals are kept only if every primitive has
+//!   them.
 //! - Materials: transmission > 0 (KHR_materials_transmission) -> glass, ior
 //!   from KHR_materials_ior (1.5 when absent); else metallic 1 and roughness
 //!   0 -> mirror; else diffuse (metallic/roughness other than 0/1 noted). The
