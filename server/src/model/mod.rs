@@ -14,8 +14,30 @@
 //!
 //! Errors name the file and, where known, the line, byte offset or JSON
 //! element: `bunny.ply: line 12: vertex 3: x is not a number`.
+//!
+//! Entry points: [`load_file`], [`load_bytes`], [`detect`]; [`write`] saves
+//! meshes as PLY or OBJ (tests, benchmarks). The mapping of each format's
+//! materials is in its module's doc (`obj`/`mtl`, `gltf`, `ply`). Shared
+//! rules: albedo is clamped to [0, 1] and emission made finite and
+//! non-negative (with a warning naming the material); an ior outside
+//! [1, 10] becomes 1.5 (with a warning); normals that are not finite or zero
+//! drop the whole mesh's normals with a warning (the mesh is flat shaded),
+//! other normals are normalised; zero-area triangles are kept (a warning
+//! says how many). Limits are checked against what a header or a scan says
+//! before the data is read.
 
 use crate::render::scene::MaterialJson;
+use std::path::Path;
+
+mod common;
+mod gltf;
+mod gltf_data;
+mod mtl;
+mod obj;
+mod ply;
+#[cfg(test)]
+mod tests;
+pub mod write;
 
 pub mod generate;
 
@@ -110,5 +132,62 @@ pub fn is_model_name(name: &str) -> bool {
     [".obj", ".gltf", ".glb", ".ply"].iter().any(|e| lower.ends_with(e))
 }
 
-mod pending;
-pub use pending::{detect, load_bytes, load_file};
+/// Reads a model file; references to other files (OBJ's `mtllib`, a
+/// `.gltf`'s external buffers) resolve relative to its directory (absolute
+/// paths and URLs are not followed).
+pub fn load_file(path: &Path, limits: &Limits) -> Result<Model, ModelError> {
+    let shown = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| ModelError {
+        file: shown.clone(),
+        location: None,
+        reason: format!("cannot read: {e}"),
+    })?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let dir = path.parent().map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d });
+    load(&shown, &name, &bytes, dir, limits)
+}
+
+/// Reads a model from bytes (an upload). `name` is the upload's name, used
+/// to tell the format when the bytes do not, and in messages. References to
+/// other files cannot be followed: an OBJ's `mtllib` becomes a warning (its
+/// materials fall back to the default), a `.gltf` with an external buffer is
+/// an error that says to upload a `.glb` (`data:` URIs work).
+pub fn load_bytes(bytes: &[u8], name: &str, limits: &Limits) -> Result<Model, ModelError> {
+    load(name, name, bytes, None, limits)
+}
+
+fn load(shown: &str, name: &str, bytes: &[u8], dir: Option<&Path>, limits: &Limits) -> Result<Model, ModelError> {
+    let mut ctx = common::Ctx::new(shown, limits);
+    let parts = match detect(name, bytes) {
+        Some(Format::Obj) => obj::load(&mut ctx, bytes, dir)?,
+        Some(Format::Gltf | Format::Glb) => gltf::load(&mut ctx, bytes, dir)?,
+        Some(Format::Ply) => ply::load(&mut ctx, bytes)?,
+        None => return Err(ctx.err("unknown format: expected an .obj, .gltf, .glb or .ply file")),
+    };
+    common::finish(ctx, parts)
+}
+
+/// The format, from magic bytes first (`glTF` -> GLB; `ply\n` or `ply\r\n`
+/// -> PLY; a JSON object with an `"asset"` member -> glTF), then from the
+/// name's extension (`.obj`, `.gltf`, `.glb`, `.ply`, any case); `None` when
+/// neither tells.
+pub fn detect(name: &str, bytes: &[u8]) -> Option<Format> {
+    if bytes.starts_with(b"glTF") {
+        return Some(Format::Glb);
+    }
+    if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
+        return Some(Format::Ply);
+    }
+    let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes).trim_ascii_start();
+    if text.starts_with(b"{") && text.windows(7).any(|w| w == b"\"asset\"") {
+        return Some(Format::Gltf);
+    }
+    let ext = Path::new(name).extension()?.to_str()?.to_ascii_lowercase();
+    match ext.as_str() {
+        "obj" => Some(Format::Obj),
+        "gltf" => Some(Format::Gltf),
+        "glb" => Some(Format::Glb),
+        "ply" => Some(Format::Ply),
+        _ => None,
+    }
+}

@@ -1,0 +1,525 @@
+//! glTF 2.0 (`.gltf` with `data:` URIs or external buffers, and `.glb`).
+//!
+//! - The default scene (else scene 0; with no scenes, every root node) is
+//!   walked; each node holding a mesh is one [`Instance`] with the node's
+//!   world transform (parent * child; TRS or matrix). A mesh used by several
+//!   nodes is stored once.
+//! - Each mesh is ONE [`MeshData`]: its TRIANGLES, TRIANGLE_STRIP and
+//!   TRIANGLE_FAN primitives merged (indexed or not), per-triangle material;
+//!   strips as the spec orders them, fans as (v0, vi, vi+1) (the spec's
+//!   triangles, corners rotated); POINTS and LINES primitives are skipped
+//!   with a warning. A mesh's normals are kept only if every primitive has
+//!   them.
+//! - Materials: transmission > 0 (KHR_materials_transmission) -> glass, ior
+//!   from KHR_materials_ior (1.5 when absent); else metallic 1 and roughness
+//!   0 -> mirror; else diffuse (metallic/roughness other than 0/1 noted). The
+//!   albedo is the base colour factor's rgb; emission is the emissive factor
+//!   times KHR_materials_emissive_strength. Textures, normal and occlusion
+//!   maps, alpha modes other than OPAQUE: noted.
+//! - The first perspective camera met in the walk (preorder) becomes the
+//!   model's camera, in world space (it looks down -Z, +Y up, in its node's
+//!   frame); orthographic cameras are noted.
+//!
+//! f32 factors are widened to f64 by their shortest decimal form, so a
+//! file's 0.1 reads as 0.1.
+
+use super::common::{self, Ctx, Mat, Parts};
+use super::gltf_data::{self as data, Buffers};
+use super::{Instance, MeshData, ModelCamera, ModelError};
+use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
+use ::gltf::camera::Projection;
+use ::gltf::material::AlphaMode;
+use ::gltf::mesh::{Mode, Semantic};
+use ::gltf::scene::Transform;
+use ::gltf::{Document, Node};
+use std::path::Path;
+
+type M4 = [[f64; 4]; 4];
+const ID4: M4 = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
+
+/// Extensions whose content is read.
+const SUPPORTED: [&str; 4] = [
+    "KHR_materials_emissive_strength",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_mesh_quantization",
+];
+/// Required extensions without which the geometry cannot be read.
+const GEOMETRY: [&str; 2] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression"];
+
+/// An f32 as the f64 of its shortest decimal form.
+fn widen(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
+}
+
+/// Reads a `.gltf` (JSON) or `.glb` (binary). `dir` is the file's directory
+/// (`None` for an upload, which cannot refer to external buffers).
+pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Parts, ModelError> {
+    let (json, bin) = if bytes.starts_with(b"glTF") {
+        let glb = data::split_glb(ctx, bytes)?;
+        (glb.json, glb.bin)
+    } else {
+        (bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes), None)
+    };
+    let doc = data::parse_document(ctx, json)?;
+    for ext in doc.extensions_required() {
+        if GEOMETRY.contains(&ext) {
+            return Err(ctx.err_at(
+                "extensionsRequired",
+                format!("{ext} (compressed geometry) is not supported"),
+            ));
+        }
+    }
+    for ext in doc.extensions_used() {
+        if ext == "KHR_lights_punctual" {
+            ctx.warn("KHR_lights_punctual: lights ignored");
+        } else if !SUPPORTED.contains(&ext) {
+            ctx.warn(format!("extension {ext} not supported: ignored"));
+        }
+    }
+    if doc.animations().len() > 0 {
+        ctx.warn(format!(
+            "{} animations ignored (the scene is read at rest)",
+            doc.animations().len()
+        ));
+    }
+
+    let (placed, camera) = walk(ctx, &doc)?;
+    let mut bufs = Buffers::new(&doc, bin, dir);
+    let mut ids: Vec<usize> = placed.iter().map(|p| p.0).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let mut mesh_of = vec![0usize; doc.meshes().len()];
+    let mut table = Materials {
+        of: vec![None; doc.materials().len()],
+        default: None,
+        list: Vec::new(),
+    };
+    let mut meshes = Vec::with_capacity(ids.len());
+    let mut totals = (0u64, 0u64);
+    for &id in &ids {
+        let mesh = doc
+            .meshes()
+            .nth(id)
+            .ok_or_else(|| ctx.err_at(format!("meshes[{id}]"), "no such mesh"))?;
+        mesh_of[id] = meshes.len();
+        meshes.push(read_mesh(ctx, &mut bufs, &mesh, &mut table, &mut totals)?);
+    }
+    let instances = placed
+        .into_iter()
+        .map(|(id, m)| Instance {
+            mesh: mesh_of[id],
+            transform: [m[0], m[1], m[2]],
+        })
+        .collect();
+    Ok(Parts {
+        meshes,
+        materials: table.list,
+        instances,
+        camera,
+    })
+}
+
+fn mul(a: &M4, b: &M4) -> M4 {
+    let mut out = [[0.0; 4]; 4];
+    for (r, row) in out.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = (0..4).map(|k| a[r][k] * b[k][c]).sum();
+        }
+    }
+    out
+}
+
+/// A node's local transform, row-major (a matrix's projective row is
+/// ignored: glTF requires it to be 0 0 0 1).
+fn local(t: Transform) -> M4 {
+    match t {
+        Transform::Matrix { matrix } => {
+            let mut m = ID4;
+            for (r, row) in m.iter_mut().take(3).enumerate() {
+                for (c, x) in row.iter_mut().enumerate() {
+                    *x = widen(matrix[c][r]);
+                }
+            }
+            m
+        }
+        Transform::Decomposed {
+            translation: t,
+            rotation: q,
+            scale: s,
+        } => {
+            let [x, y, z, w] = q.map(widen);
+            let n = (x * x + y * y + z * z + w * w).sqrt();
+            let (x, y, z, w) = (x / n, y / n, z / n, w / n);
+            let r = [
+                [
+                    1.0 - 2.0 * (y * y + z * z),
+                    2.0 * (x * y - z * w),
+                    2.0 * (x * z + y * w),
+                ],
+                [
+                    2.0 * (x * y + z * w),
+                    1.0 - 2.0 * (x * x + z * z),
+                    2.0 * (y * z - x * w),
+                ],
+                [
+                    2.0 * (x * z - y * w),
+                    2.0 * (y * z + x * w),
+                    1.0 - 2.0 * (x * x + y * y),
+                ],
+            ];
+            let (t, s) = (t.map(widen), s.map(widen));
+            let mut m = ID4;
+            for i in 0..3 {
+                m[i] = [r[i][0] * s[0], r[i][1] * s[1], r[i][2] * s[2], t[i]];
+            }
+            m
+        }
+    }
+}
+
+/// Walks the scene's node hierarchy: (mesh, world transform) per node with a
+/// mesh, in preorder, and the first perspective camera.
+#[allow(clippy::type_complexity)]
+fn walk(ctx: &mut Ctx, doc: &Document) -> Result<(Vec<(usize, M4)>, Option<ModelCamera>), ModelError> {
+    let scenes = doc.scenes().len();
+    let roots: Vec<Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => {
+            if scenes > 1 {
+                ctx.warn(format!(
+                    "{} other scenes ignored (scene {} is read)",
+                    scenes - 1,
+                    scene.index()
+                ));
+            }
+            scene.nodes().collect()
+        }
+        None => {
+            let mut child = vec![false; doc.nodes().len()];
+            for c in doc.nodes().flat_map(|n| n.children()) {
+                child[c.index()] = true;
+            }
+            let roots: Vec<Node> = doc.nodes().filter(|n| !child[n.index()]).collect();
+            if !roots.is_empty() {
+                ctx.warn("no scene: every root node is placed");
+            }
+            roots
+        }
+    };
+    let mut visited = vec![false; doc.nodes().len()];
+    let mut stack: Vec<(Node, M4)> = roots.into_iter().rev().map(|n| (n, ID4)).collect();
+    let (mut placed, mut camera) = (Vec::new(), None);
+    let (mut more_cameras, mut orthographic, mut skinned) = (0, 0, false);
+    while let Some((node, parent)) = stack.pop() {
+        let i = node.index();
+        if std::mem::replace(&mut visited[i], true) {
+            return Err(ctx.err_at(
+                format!("nodes[{i}]"),
+                "is reached twice in the scene's node hierarchy (a cycle, or a node with two parents)",
+            ));
+        }
+        let world = mul(&parent, &local(node.transform()));
+        if !world.iter().flatten().all(|x| x.is_finite()) {
+            return Err(ctx.err_at(format!("nodes[{i}]"), "transform is not finite"));
+        }
+        if let Some(mesh) = node.mesh() {
+            placed.push((mesh.index(), world));
+            skinned |= node.skin().is_some();
+        }
+        if let Some(cam) = node.camera() {
+            match cam.projection() {
+                Projection::Perspective(p) if camera.is_none() => match perspective(&world, p.yfov()) {
+                    Ok(c) => camera = Some(c),
+                    Err(why) => ctx.warn(format!("cameras[{}] on nodes[{i}] ignored: {why}", cam.index())),
+                },
+                Projection::Perspective(_) => more_cameras += 1,
+                Projection::Orthographic(_) => orthographic += 1,
+            }
+        }
+        let children: Vec<Node> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    }
+    if skinned {
+        ctx.warn("skins ignored (skinned meshes are placed by their node's transform)");
+    }
+    if orthographic > 0 {
+        ctx.warn(format!("{orthographic} orthographic cameras ignored"));
+    }
+    if more_cameras > 0 {
+        ctx.warn(format!(
+            "{more_cameras} more perspective cameras ignored (the first one is used)"
+        ));
+    }
+    Ok((placed, camera))
+}
+
+/// A camera at `world`'s origin looking down its -Z, +Y up.
+fn perspective(world: &M4, yfov: f32) -> Result<ModelCamera, String> {
+    let position = [world[0][3], world[1][3], world[2][3]];
+    let unit = |v: [f64; 3]| {
+        let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        (len > 0.0 && len.is_finite()).then(|| v.map(|x| x / len))
+    };
+    let forward =
+        unit([-world[0][2], -world[1][2], -world[2][2]]).ok_or("its node's transform has no view direction")?;
+    let up = unit([world[0][1], world[1][1], world[2][1]]).ok_or("its node's transform has no up direction")?;
+    let yfov = widen(yfov);
+    if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
+        return Err(format!("yfov {yfov} is not between 0 and pi"));
+    }
+    Ok(ModelCamera {
+        position,
+        look_at: [0, 1, 2].map(|k| position[k] + forward[k]),
+        up,
+        vfov_deg: yfov.to_degrees(),
+    })
+}
+
+/// glTF materials converted when first used, in that order.
+struct Materials {
+    of: Vec<Option<u32>>,
+    default: Option<u32>,
+    list: Vec<Mat>,
+}
+
+impl Materials {
+    fn index(&mut self, ctx: &mut Ctx, m: &::gltf::Material) -> u32 {
+        let next = self.list.len() as u32;
+        match m.index() {
+            Some(i) => match self.of.get(i).copied().flatten() {
+                Some(k) => k,
+                None => {
+                    self.list.push(material(m, i));
+                    if let Some(slot) = self.of.get_mut(i) {
+                        *slot = Some(next);
+                    }
+                    next
+                }
+            },
+            None => *self.default.get_or_insert_with(|| {
+                ctx.warn("primitives without a material use the glTF default material: white diffuse (albedo 1)");
+                self.list.push(Mat {
+                    name: "default".to_owned(),
+                    json: MaterialJson::Diffuse(SurfaceJson {
+                        albedo: [1.0; 3],
+                        emission: None,
+                    }),
+                    notes: Vec::new(),
+                });
+                next
+            }),
+        }
+    }
+}
+
+/// The scene material for a glTF material (rules in the module doc).
+fn material(m: &::gltf::Material, index: usize) -> Mat {
+    let name = m
+        .name()
+        .map(str::to_owned)
+        .unwrap_or_else(|| format!("material{index}"));
+    let (mut notes, mut ignored) = (Vec::new(), Vec::new());
+    let pbr = m.pbr_metallic_roughness();
+    let base = pbr.base_color_factor();
+    let rgb = [base[0], base[1], base[2]].map(widen);
+    let strength = m.emissive_strength().map_or(1.0, widen);
+    let emission = common::emission("emission", m.emissive_factor().map(|e| widen(e) * strength), &mut notes);
+    let (metallic, roughness) = (widen(pbr.metallic_factor()), widen(pbr.roughness_factor()));
+    let transmission = m.transmission();
+    let t = transmission.as_ref().map_or(0.0, |t| widen(t.transmission_factor()));
+
+    let textures = [
+        (pbr.base_color_texture().is_some(), "base colour texture"),
+        (pbr.metallic_roughness_texture().is_some(), "metallic-roughness texture"),
+        (m.normal_texture().is_some(), "normal map"),
+        (m.occlusion_texture().is_some(), "occlusion map"),
+        (m.emissive_texture().is_some(), "emissive texture"),
+        (
+            transmission
+                .as_ref()
+                .is_some_and(|t| t.transmission_texture().is_some()),
+            "transmission texture",
+        ),
+    ];
+    ignored.extend(textures.iter().filter(|t| t.0).map(|t| t.1.to_owned()));
+    match m.alpha_mode() {
+        AlphaMode::Opaque => {}
+        AlphaMode::Mask => ignored.push(format!(
+            "alpha mode MASK (cutoff {})",
+            m.alpha_cutoff().map_or(0.5, widen)
+        )),
+        AlphaMode::Blend => ignored.push("alpha mode BLEND".to_owned()),
+    }
+
+    let json = if t > 0.0 {
+        if t < 1.0 {
+            notes.push(format!("transmission {t} is rendered as fully transmissive glass"));
+        }
+        if roughness != 0.0 {
+            ignored.push(format!("roughness {roughness} (the glass is smooth)"));
+        }
+        let ior = match m.ior() {
+            None => common::DEFAULT_IOR,
+            Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
+        };
+        MaterialJson::Glass(GlassJson {
+            ior,
+            albedo: Some(common::albedo("base colour", rgb, &mut notes)),
+            fresnel: FresnelJson::Exact,
+            emission,
+        })
+    } else if metallic == 1.0 && roughness == 0.0 {
+        MaterialJson::Mirror(SurfaceJson {
+            albedo: common::albedo("base colour", rgb, &mut notes),
+            emission,
+        })
+    } else {
+        if !(metallic == 0.0 && roughness == 1.0) {
+            ignored.push(format!(
+                "metallic {metallic} / roughness {roughness} (roughness and metalness are not modelled: rendered diffuse)"
+            ));
+        }
+        MaterialJson::Diffuse(SurfaceJson {
+            albedo: common::albedo("base colour", rgb, &mut notes),
+            emission,
+        })
+    };
+    if !ignored.is_empty() {
+        notes.push(format!("not modelled, ignored: {}", ignored.join(", ")));
+    }
+    Mat { name, json, notes }
+}
+
+/// Triangles of one primitive's vertex list; the count of indices left over.
+fn triangles(mode: Mode, idx: &[u32], out: &mut Vec<[u32; 3]>) -> usize {
+    match mode {
+        Mode::TriangleStrip => {
+            for i in 0..idx.len().saturating_sub(2) {
+                out.push(if i % 2 == 0 {
+                    [idx[i], idx[i + 1], idx[i + 2]]
+                } else {
+                    [idx[i], idx[i + 2], idx[i + 1]]
+                });
+            }
+            0
+        }
+        Mode::TriangleFan => {
+            common::fan(idx, out);
+            0
+        }
+        _ => {
+            out.extend(idx.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+            idx.len() % 3
+        }
+    }
+}
+
+fn read_mesh(
+    ctx: &mut Ctx,
+    bufs: &mut Buffers,
+    mesh: &::gltf::Mesh,
+    table: &mut Materials,
+    totals: &mut (u64, u64),
+) -> Result<MeshData, ModelError> {
+    let mi = mesh.index();
+    let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh{mi}"));
+    let mut out = MeshData {
+        name: name.clone(),
+        ..Default::default()
+    };
+    let (mut normals, mut with_normals, mut without_normals) = (Vec::new(), 0, 0);
+    for prim in mesh.primitives() {
+        let path = format!("meshes[{mi}].primitives[{}]", prim.index());
+        let mode = prim.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            let mode = match mode {
+                Mode::Points => "POINTS",
+                Mode::Lines => "LINES",
+                Mode::LineLoop => "LINE_LOOP",
+                _ => "LINE_STRIP",
+            };
+            ctx.warn(format!(
+                "{path} (mesh {name:?}): {mode} primitive skipped (only triangles are rendered)"
+            ));
+            continue;
+        }
+        let Some(pos) = prim.get(&Semantic::Positions) else {
+            ctx.warn(format!("{path} (mesh {name:?}): no POSITION: skipped"));
+            continue;
+        };
+        if prim.morph_targets().len() > 0 {
+            ctx.warn(format!("mesh {name:?}: morph targets ignored (the base shape is used)"));
+        }
+        if prim.get(&Semantic::Colors(0)).is_some() {
+            ctx.warn("vertex colours ignored");
+        }
+        let n = pos.count();
+        ctx.check_vertices(totals.0 + n as u64, Some(&path))?;
+        let positions = data::read_vec3(ctx, bufs, &pos, &format!("{path}.attributes.POSITION"))?;
+        if let Some(v) = common::first_non_finite(&positions) {
+            return Err(ctx.err_at(
+                &path,
+                format!(
+                    "vertex {v}: position {} is not finite",
+                    common::fmt3(positions[v].map(f64::from))
+                ),
+            ));
+        }
+        let vertex_count = u32::try_from(n).map_err(|_| ctx.err_at(&path, "too many vertices"))?;
+        let indices = match prim.indices() {
+            Some(acc) => {
+                let most = match mode {
+                    Mode::Triangles => acc.count() / 3,
+                    _ => acc.count().saturating_sub(2),
+                };
+                ctx.check_triangles(totals.1 + most as u64, Some(&path))?;
+                data::read_indices(ctx, bufs, &acc, &format!("{path}.indices"))?
+            }
+            None => (0..vertex_count).collect(),
+        };
+        let mut tris = Vec::new();
+        let left = triangles(mode, &indices, &mut tris);
+        if left > 0 {
+            ctx.warn(format!(
+                "{path} (mesh {name:?}): {left} indices after the last whole triangle ignored"
+            ));
+        }
+        ctx.check_triangles(totals.1 + tris.len() as u64, Some(&path))?;
+        if let Some((t, i)) = common::first_bad_index(&tris, n) {
+            return Err(ctx.err_at(
+                &path,
+                format!("triangle {t}: vertex index {i} out of range ({n} vertices)"),
+            ));
+        }
+        match prim.get(&Semantic::Normals) {
+            Some(acc) if acc.count() == n => {
+                normals.extend(data::read_vec3(ctx, bufs, &acc, &format!("{path}.attributes.NORMAL"))?);
+                with_normals += 1;
+            }
+            _ => without_normals += 1,
+        }
+        let material = table.index(ctx, &prim.material());
+        let offset = out.positions.len() as u32;
+        u32::try_from(out.positions.len() + n).map_err(|_| ctx.err_at(&path, "too many vertices"))?;
+        out.positions.extend(positions);
+        out.triangles.extend(tris.iter().map(|t| t.map(|i| i + offset)));
+        out.materials.resize(out.triangles.len(), material);
+        *totals = (totals.0 + n as u64, totals.1 + tris.len() as u64);
+    }
+    out.normals = match (with_normals, without_normals) {
+        (0, _) => None,
+        (_, 0) => common::clean_normals(ctx, &name, normals, out.positions.len()),
+        _ => {
+            ctx.warn(format!(
+                "mesh {name:?}: some primitives have no normals: normals dropped (flat shading)"
+            ));
+            None
+        }
+    };
+    Ok(out)
+}

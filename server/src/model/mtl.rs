@@ -1,0 +1,249 @@
+//! MTL material libraries (read here rather than by `tobj`, which panics on
+//! `Kd 0.5` and reports no line numbers), and their mapping to scene
+//! materials:
+//!
+//! - `Kd` -> diffuse albedo (0.8 when missing, with a note); `Ke` -> emission;
+//! - `illum 3` -> mirror, albedo `Ks` if nonzero, else `Kd`;
+//! - `illum 4` to `7` -> glass, ior `Ni` (1.5 with a note when missing or
+//!   outside [1, 10]), albedo `Tf` when given (else clear);
+//! - `illum 0` to `2` (or none) -> diffuse; other `illum` values -> diffuse
+//!   with a note;
+//! - whatever else changes the look (textures `map_*`, `bump`, `disp`,
+//!   `decal`, `refl`, `norm`; `Ks`/`Ns` of non-mirrors; `Ka`; `d`/`Tr`
+//!   transparency; `Tf` of non-glass; PBR and unknown statements) is listed in
+//!   one note per material.
+
+use super::common::{self, Mat};
+use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
+
+/// One `newmtl` block, as written.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct MtlMaterial {
+    pub name: String,
+    pub kd: Option<[f64; 3]>,
+    pub ks: Option<[f64; 3]>,
+    pub ke: Option<[f64; 3]>,
+    pub ka: Option<[f64; 3]>,
+    pub tf: Option<[f64; 3]>,
+    pub ns: Option<f64>,
+    pub ni: Option<f64>,
+    pub d: Option<f64>,
+    pub tr: Option<f64>,
+    pub illum: Option<i64>,
+    /// Statements not modelled, as keywords (`map_Kd`, `Kd spectral`, ...).
+    pub ignored: Vec<String>,
+}
+
+/// An error in an MTL file: its 1-based line and what is wrong.
+#[derive(Debug, PartialEq)]
+pub(super) struct MtlError {
+    pub line: usize,
+    pub reason: String,
+}
+
+/// Reads an MTL file's text. Statements before the first `newmtl` are
+/// skipped; an unreadable number is an error.
+pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
+    let mut out: Vec<MtlMaterial> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let stmt = raw.split('#').next().unwrap_or_default().trim();
+        let mut words = stmt.split_whitespace();
+        let Some(key) = words.next() else { continue };
+        let err = |reason: String| MtlError { line, reason };
+        if key == "newmtl" {
+            let name = stmt[key.len()..].trim();
+            if name.is_empty() {
+                return Err(err("newmtl without a name".to_owned()));
+            }
+            out.push(MtlMaterial {
+                name: name.to_owned(),
+                ..Default::default()
+            });
+            continue;
+        }
+        let Some(m) = out.last_mut() else { continue };
+        let args: Vec<&str> = words.collect();
+        let lower = key.to_ascii_lowercase();
+        match lower.as_str() {
+            "kd" | "ks" | "ke" | "ka" | "tf" => {
+                let Some(c) = color(key, &args).map_err(err)? else {
+                    m.ignored
+                        .push(format!("{key} {}", args.first().copied().unwrap_or_default()));
+                    continue;
+                };
+                let slot = match lower.as_str() {
+                    "kd" => &mut m.kd,
+                    "ks" => &mut m.ks,
+                    "ke" => &mut m.ke,
+                    "ka" => &mut m.ka,
+                    _ => &mut m.tf,
+                };
+                *slot = Some(c);
+            }
+            "ns" | "ni" | "d" | "tr" => {
+                let v = number(key, args.last().copied()).map_err(err)?;
+                let slot = match lower.as_str() {
+                    "ns" => &mut m.ns,
+                    "ni" => &mut m.ni,
+                    "d" => &mut m.d,
+                    _ => &mut m.tr,
+                };
+                *slot = Some(v);
+            }
+            "illum" => {
+                let word = args.first().copied().unwrap_or_default();
+                m.illum = Some(
+                    word.parse()
+                        .map_err(|_| err(format!("illum: {word:?} is not an integer")))?,
+                );
+            }
+            _ => m.ignored.push(key.to_owned()),
+        }
+    }
+    Ok(out)
+}
+
+fn number(key: &str, word: Option<&str>) -> Result<f64, String> {
+    let word = word.ok_or_else(|| format!("{key}: a number is missing"))?;
+    word.parse().map_err(|_| format!("{key}: {word:?} is not a number"))
+}
+
+/// `K r [g b]` (g and b default to r); `None` for the `spectral` and `xyz`
+/// forms, which are not read.
+fn color(key: &str, args: &[&str]) -> Result<Option<[f64; 3]>, String> {
+    match args {
+        [] => Err(format!("{key}: a colour is missing")),
+        [form, ..] if matches!(*form, "spectral" | "xyz") => Ok(None),
+        [r] => {
+            let r = number(key, Some(r))?;
+            Ok(Some([r; 3]))
+        }
+        [r, g, b, ..] => Ok(Some([
+            number(key, Some(r))?,
+            number(key, Some(g))?,
+            number(key, Some(b))?,
+        ])),
+        _ => Err(format!("{key}: expected one or three numbers, got {}", args.len())),
+    }
+}
+
+fn nonzero(c: Option<[f64; 3]>) -> bool {
+    c.is_some_and(|c| c.iter().any(|&x| x != 0.0))
+}
+
+/// The scene material for an MTL material, following the rules of the
+/// module doc; what is not modelled goes into the material's notes.
+pub(super) fn to_material(m: &MtlMaterial) -> Mat {
+    let mut notes = Vec::new();
+    let mut ignored = m.ignored.clone();
+    let illum = m.illum.unwrap_or(if nonzero(m.ks) { 2 } else { 1 });
+    let mirror = illum == 3;
+    let glass = (4..=7).contains(&illum);
+    let emission = common::emission("Ke", m.ke.unwrap_or_default(), &mut notes);
+
+    if nonzero(m.ka) {
+        ignored.push("Ka (ambient)".to_owned());
+    }
+    if let Some(d) = m.d.filter(|&d| d != 1.0) {
+        ignored.push(format!("d {d} (transparency)"));
+    }
+    if let Some(tr) = m.tr.filter(|&tr| tr != 0.0) {
+        ignored.push(format!("Tr {tr} (transparency)"));
+    }
+    if !(0..=7).contains(&illum) {
+        ignored.push(format!("illum {illum} (rendered diffuse)"));
+    }
+    if !mirror && !glass && nonzero(m.ks) {
+        ignored.push("Ks/Ns (specular highlight)".to_owned());
+    }
+    if mirror && m.ns.is_some() {
+        ignored.push("Ns (the mirror is perfect)".to_owned());
+    }
+    if !glass && m.tf.is_some() {
+        ignored.push("Tf (only glass transmits)".to_owned());
+    }
+    if glass && nonzero(m.kd) {
+        ignored.push("Kd (glass is tinted by Tf)".to_owned());
+    }
+
+    let kd = || match m.kd {
+        Some(kd) => kd,
+        None => [common::DEFAULT_ALBEDO; 3],
+    };
+    let json = if glass {
+        let ior = common::ior("Ni", m.ni, &mut notes);
+        let albedo = m.tf.map(|tf| common::albedo("Tf", tf, &mut notes));
+        MaterialJson::Glass(GlassJson {
+            ior,
+            albedo,
+            fresnel: FresnelJson::Exact,
+            emission,
+        })
+    } else if mirror {
+        let (what, c) = if nonzero(m.ks) {
+            ("Ks", m.ks.unwrap_or_default())
+        } else {
+            ("Kd", kd())
+        };
+        MaterialJson::Mirror(SurfaceJson {
+            albedo: common::albedo(what, c, &mut notes),
+            emission,
+        })
+    } else {
+        if m.kd.is_none() {
+            notes.push(format!("no Kd: albedo {}", common::DEFAULT_ALBEDO));
+        }
+        MaterialJson::Diffuse(SurfaceJson {
+            albedo: common::albedo("Kd", kd(), &mut notes),
+            emission,
+        })
+    };
+    if !ignored.is_empty() {
+        notes.push(format!("not modelled, ignored: {}", ignored.join(", ")));
+    }
+    Mat {
+        name: m.name.clone(),
+        json,
+        notes,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_statements_and_reports_lines() {
+        let text = "# lib\nKd 1 1 1\nnewmtl a b\n  Kd 0.5\nKs 0.1 0.2 0.3 # trailing\nNi 1.4\nillum 7\nmap_Kd -s 1 1 1 t.png\nKa spectral x.rfl\n";
+        let mats = parse(text).expect("parses");
+        assert_eq!(
+            mats,
+            vec![MtlMaterial {
+                name: "a b".into(),
+                kd: Some([0.5; 3]),
+                ks: Some([0.1, 0.2, 0.3]),
+                ni: Some(1.4),
+                illum: Some(7),
+                ignored: vec!["map_Kd".into(), "Ka spectral".into()],
+                ..Default::default()
+            }]
+        );
+        assert_eq!(
+            parse("newmtl a\nKd 1 x 1\n"),
+            Err(MtlError {
+                line: 2,
+                reason: "Kd: \"x\" is not a number".into()
+            })
+        );
+        assert_eq!(
+            parse("newmtl a\nKd 1 1\n").map_err(|e| e.reason),
+            Err("Kd: expected one or three numbers, got 2".into())
+        );
+        assert_eq!(parse("newmtl a\nillum x\n").map_err(|e| e.line), Err(2));
+        assert_eq!(
+            parse("newmtl\n").map_err(|e| e.reason),
+            Err("newmtl without a name".into())
+        );
+    }
+}

@@ -1,0 +1,562 @@
+//! glTF: one document (three meshes, a 2-level node hierarchy, a mesh used
+//! by two nodes, cameras, every material rule) written three ways; then
+//! malformed variants of a one-triangle document.
+
+use super::{assert_guarantees, cube};
+use crate::model::{load_bytes, load_file, Instance, Limits, MeshData, Model, ModelCamera};
+use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
+use base64::Engine;
+use serde_json::{json, Value};
+use std::f32::consts::FRAC_1_SQRT_2;
+
+/// The binary buffer and the views and accessors into it.
+#[derive(Default)]
+struct Bin {
+    data: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Bin {
+    fn view(&mut self, bytes: &[u8]) -> usize {
+        while !self.data.len().is_multiple_of(4) {
+            self.data.push(0);
+        }
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": self.data.len(), "byteLength": bytes.len()}));
+        self.data.extend(bytes);
+        self.views.len() - 1
+    }
+    fn accessor(&mut self, a: Value) -> usize {
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+    fn vec3(&mut self, v: &[[f32; 3]]) -> usize {
+        let bytes: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        let min = [0, 1, 2].map(|k| v.iter().map(|p| p[k]).fold(f32::INFINITY, f32::min));
+        let max = [0, 1, 2].map(|k| v.iter().map(|p| p[k]).fold(f32::NEG_INFINITY, f32::max));
+        self.accessor(json!({"bufferView": view, "componentType": 5126, "count": v.len(), "type": "VEC3", "min": min, "max": max}))
+    }
+    fn indices(&mut self, idx: &[u32], component: u32) -> usize {
+        let bytes: Vec<u8> = match component {
+            5121 => idx.iter().map(|&i| i as u8).collect(),
+            5123 => idx.iter().flat_map(|&i| (i as u16).to_le_bytes()).collect(),
+            _ => idx.iter().flat_map(|&i| i.to_le_bytes()).collect(),
+        };
+        let view = self.view(&bytes);
+        self.accessor(json!({"bufferView": view, "componentType": component, "count": idx.len(), "type": "SCALAR"}))
+    }
+}
+
+fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut json = serde_json::to_vec(doc).expect("json");
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    if !bin.is_empty() {
+        out.extend((bin.len() as u32).to_le_bytes());
+        out.extend(b"BIN\0");
+        out.extend(bin);
+    }
+    out
+}
+
+const STRIP: [[f32; 3]; 5] = [
+    [0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [2.0, 0.0, 0.0],
+];
+const FAN: [[f32; 3]; 5] = [
+    [0.0, 0.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [1.5, 1.0, 1.0],
+    [0.5, 1.5, 1.0],
+    [-0.5, 1.0, 1.0],
+];
+const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+/// The scene document (without `buffers`) and its binary data.
+fn scene() -> (Value, Vec<u8>) {
+    let g = cube();
+    let (tris, mats) = g.triangles();
+    let mut b = Bin::default();
+    // Mesh 0, the cube: sides indexed (u16), top and bottom unrolled.
+    let p0 = b.vec3(&g.positions[..16]);
+    let n0 = b.vec3(&g.normals[..16]);
+    let side: Vec<u32> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 0)
+        .flat_map(|(t, _)| *t)
+        .collect();
+    let i0 = b.indices(&side, 5123);
+    let caps: Vec<u32> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 1)
+        .flat_map(|(t, _)| *t)
+        .collect();
+    let p1 = b.vec3(&caps.iter().map(|&i| g.positions[i as usize]).collect::<Vec<_>>());
+    let n1 = b.vec3(&caps.iter().map(|&i| g.normals[i as usize]).collect::<Vec<_>>());
+    // Mesh 1: a strip (u32 indices), a fan from a sparse accessor, points, lines.
+    let s = b.vec3(&STRIP);
+    let si = b.indices(&[0, 1, 2, 3, 4], 5125);
+    let fan_idx = b.view(&[0, 1, 2, 3, 4]);
+    let fan_val = b.view(&FAN.iter().flatten().flat_map(|x| x.to_le_bytes()).collect::<Vec<_>>());
+    let f = b.accessor(json!({"componentType": 5126, "count": 5, "type": "VEC3",
+        "sparse": {"count": 5, "indices": {"bufferView": fan_idx, "componentType": 5121},
+                   "values": {"bufferView": fan_val}}}));
+    // Mesh 2: one shared triangle, four materials.
+    let t = b.vec3(&TRI);
+    let tri_prims: Vec<Value> = (2..6)
+        .map(|m| json!({"attributes": {"POSITION": t}, "material": m}))
+        .collect();
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "pathstream tests"},
+        "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_emissive_strength",
+                           "KHR_lights_punctual", "KHR_materials_clearcoat"],
+        "extensionsRequired": ["KHR_materials_clearcoat"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 4, 6, 7]}, {"nodes": [8]}],
+        "nodes": [
+            {"name": "root", "translation": [10, 0, 0], "children": [1, 2, 5]},
+            {"name": "cubeA", "mesh": 0, "scale": [2, 2, 2]},
+            {"name": "cubeB", "mesh": 0, "rotation": [0, FRAC_1_SQRT_2, 0, FRAC_1_SQRT_2], "children": [3]},
+            {"name": "strips", "mesh": 1, "translation": [0, 0, 1]},
+            {"name": "tri", "mesh": 2, "matrix": [1, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1, 0, 0, 5, 0, 1]},
+            {"name": "eye", "translation": [0, 1, 5], "rotation": [0, FRAC_1_SQRT_2, 0, FRAC_1_SQRT_2], "camera": 0},
+            {"name": "ortho", "camera": 1},
+            {"name": "eye2", "camera": 0},
+            {"name": "elsewhere", "mesh": 2}
+        ],
+        "cameras": [
+            {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}},
+            {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "zfar": 10, "znear": 0.1}}
+        ],
+        "meshes": [
+            {"name": "cube", "primitives": [
+                {"attributes": {"POSITION": p0, "NORMAL": n0}, "indices": i0, "material": 0},
+                {"attributes": {"POSITION": p1, "NORMAL": n1}, "material": 1}
+            ]},
+            {"name": "strips", "primitives": [
+                {"attributes": {"POSITION": s}, "indices": si, "mode": 5},
+                {"attributes": {"POSITION": f}, "mode": 6},
+                {"attributes": {"POSITION": s}, "mode": 0},
+                {"attributes": {"POSITION": s}, "indices": si, "mode": 1}
+            ]},
+            {"primitives": tri_prims}
+        ],
+        "materials": [
+            {"name": "paint", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.2, 0.1, 1], "metallicFactor": 0, "roughnessFactor": 1}},
+            {"name": "glass", "pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_ior": {"ior": 1.4}}},
+            {"name": "chrome", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.9, 0.9, 1], "metallicFactor": 1, "roughnessFactor": 0}},
+            {"name": "lamp", "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0},
+             "emissiveFactor": [1, 0.5, 0.25], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4}}},
+            {"name": "paint", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0.5,
+             "roughnessFactor": 0.5, "baseColorTexture": {"index": 0}}, "normalTexture": {"index": 0}, "alphaMode": "BLEND"},
+            {"name": "partial", "pbrMetallicRoughness": {"baseColorFactor": [2, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 0},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5}}},
+            {"name": "unused", "emissiveTexture": {"index": 0}}
+        ],
+        "textures": [{"source": 0}],
+        "images": [{"uri": "never-read.png"}],
+        "accessors": b.accessors,
+        "bufferViews": b.views,
+    });
+    (doc, b.data)
+}
+
+fn with_buffer(mut doc: Value, len: usize, uri: Option<String>) -> Value {
+    doc["buffers"] = match uri {
+        Some(uri) => json!([{"byteLength": len, "uri": uri}]),
+        None => json!([{"byteLength": len}]),
+    };
+    doc
+}
+
+fn surface(albedo: [f64; 3], emission: Option<[f64; 3]>) -> SurfaceJson {
+    SurfaceJson { albedo, emission }
+}
+
+/// What every encoding of [`scene`] must load as.
+fn expected() -> Model {
+    let g = cube();
+    let (tris, mats) = g.triangles();
+    let side: Vec<[u32; 3]> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 0)
+        .map(|(t, _)| *t)
+        .collect();
+    let caps: Vec<u32> = tris
+        .iter()
+        .zip(&mats)
+        .filter(|(_, &m)| m == 1)
+        .flat_map(|(t, _)| *t)
+        .collect();
+    let mut cube_mesh = MeshData {
+        name: "cube".into(),
+        positions: g.positions[..16].to_vec(),
+        normals: Some(g.normals[..16].to_vec()),
+        triangles: side,
+        materials: vec![0; 8],
+    };
+    cube_mesh
+        .positions
+        .extend(caps.iter().map(|&i| g.positions[i as usize]));
+    if let Some(n) = cube_mesh.normals.as_mut() {
+        n.extend(caps.iter().map(|&i| g.normals[i as usize]));
+    }
+    cube_mesh
+        .triangles
+        .extend((0..4).map(|t| [16 + 3 * t, 17 + 3 * t, 18 + 3 * t]));
+    cube_mesh.materials.extend([1; 4]);
+    let strips = MeshData {
+        name: "strips".into(),
+        positions: STRIP.iter().chain(&FAN).copied().collect(),
+        normals: None,
+        triangles: vec![[0, 1, 2], [1, 3, 2], [2, 3, 4], [5, 6, 7], [5, 7, 8], [5, 8, 9]],
+        materials: vec![2; 6],
+    };
+    let tri = MeshData {
+        name: "mesh2".into(),
+        positions: TRI.repeat(4),
+        normals: None,
+        triangles: (0..4).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
+        materials: vec![3, 4, 5, 6],
+    };
+    let glass = |ior, albedo| {
+        MaterialJson::Glass(GlassJson {
+            ior,
+            albedo: Some(albedo),
+            fresnel: FresnelJson::Exact,
+            emission: None,
+        })
+    };
+    let r = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]];
+    let rt = |t: [f64; 3]| [0, 1, 2].map(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
+    Model {
+        meshes: vec![cube_mesh, strips, tri],
+        materials: vec![
+            ("paint".into(), MaterialJson::Diffuse(surface([0.8, 0.2, 0.1], None))),
+            ("glass".into(), glass(1.4, [1.0; 3])),
+            ("default".into(), MaterialJson::Diffuse(surface([1.0; 3], None))),
+            ("chrome".into(), MaterialJson::Mirror(surface([0.9; 3], None))),
+            ("lamp".into(), MaterialJson::Diffuse(surface([0.0; 3], Some([4.0, 2.0, 1.0])))),
+            ("paint-2".into(), MaterialJson::Diffuse(surface([0.5; 3], None))),
+            ("partial".into(), glass(1.5, [1.0, 0.5, 0.5])),
+        ],
+        instances: vec![
+            Instance {
+                mesh: 0,
+                transform: [[2.0, 0.0, 0.0, 10.0], [0.0, 2.0, 0.0, 0.0], [0.0, 0.0, 2.0, 0.0]],
+            },
+            Instance {
+                mesh: 0,
+                transform: rt([10.0, 0.0, 0.0]),
+            },
+            Instance {
+                mesh: 1,
+                transform: rt([11.0, 0.0, 0.0]),
+            },
+            Instance {
+                mesh: 2,
+                transform: [[1.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 5.0], [0.0, 0.0, 1.0, 0.0]],
+            },
+        ],
+        camera: Some(ModelCamera {
+            position: [10.0, 1.0, 5.0],
+            look_at: [9.0, 1.0, 5.0],
+            up: [0.0, 1.0, 0.0],
+            vfov_deg: 0.8f64.to_degrees(),
+        }),
+        warnings: [
+            "KHR_lights_punctual: lights ignored",
+            "extension KHR_materials_clearcoat not supported: ignored",
+            "1 other scenes ignored (scene 0 is read)",
+            "1 orthographic cameras ignored",
+            "1 more perspective cameras ignored (the first one is used)",
+            "primitives without a material use the glTF default material: white diffuse (albedo 1)",
+            "meshes[1].primitives[2] (mesh \"strips\"): POINTS primitive skipped (only triangles are rendered)",
+            "meshes[1].primitives[3] (mesh \"strips\"): LINES primitive skipped (only triangles are rendered)",
+            "material \"paint-2\": not modelled, ignored: base colour texture, normal map, alpha mode BLEND, metallic 0.5 / roughness 0.5 (roughness and metalness are not modelled: rendered diffuse)",
+            "material \"partial\": transmission 0.5 is rendered as fully transmissive glass",
+            "material \"partial\": base colour [2, 0.5, 0.5] is outside [0, 1]: clamped to [1, 0.5, 0.5]",
+        ]
+        .map(str::to_owned)
+        .to_vec(),
+    }
+}
+
+/// Compares exactly, except transforms and the camera (rotations from a
+/// quaternion in f32): within 1e-12.
+fn assert_model(got: &Model, want: &Model) {
+    assert_guarantees(got);
+    let close = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+    assert_eq!(got.instances.len(), want.instances.len());
+    for (g, w) in got.instances.iter().zip(&want.instances) {
+        assert_eq!(g.mesh, w.mesh);
+        assert!(
+            close(g.transform.as_flattened(), w.transform.as_flattened()),
+            "{g:?} != {w:?}"
+        );
+    }
+    let (gc, wc) = (got.camera.expect("camera"), want.camera.expect("camera"));
+    let flat = |c: ModelCamera| [c.position, c.look_at, c.up].concat();
+    assert!(close(&flat(gc), &flat(wc)), "{gc:?} != {wc:?}");
+    assert_eq!(gc.vfov_deg, wc.vfov_deg);
+    let strip = |m: &Model| Model {
+        instances: vec![],
+        camera: None,
+        ..m.clone()
+    };
+    assert_eq!(strip(got), strip(want));
+}
+
+#[test]
+fn gltf_with_a_data_uri_loads_exactly() {
+    let (doc, bin) = scene();
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let text = serde_json::to_vec(&with_buffer(doc, bin.len(), Some(uri))).expect("json");
+    let m = load_bytes(&text, "scene.gltf", &Limits::default()).expect("loads");
+    assert_model(&m, &expected());
+    // Told by its content: the name does not matter.
+    assert_eq!(load_bytes(&text, "upload", &Limits::default()), Ok(m));
+}
+
+#[test]
+fn gltf_with_an_external_bin_loads_exactly_from_a_file_only() {
+    let (doc, bin) = scene();
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("scene data.bin"), &bin).expect("write");
+    let text = serde_json::to_vec(&with_buffer(doc, bin.len(), Some("scene%20data.bin".into()))).expect("json");
+    let path = dir.path().join("scene.gltf");
+    std::fs::write(&path, &text).expect("write");
+    assert_model(&load_file(&path, &Limits::default()).expect("loads"), &expected());
+    let e = load_bytes(&text, "scene.gltf", &Limits::default()).expect_err("an upload");
+    assert_eq!(
+        e.to_string(),
+        "scene.gltf: buffers[0]: refers to the external file \"scene%20data.bin\", which an upload cannot include: upload a .glb instead (or embed the buffer as a data: URI)"
+    );
+    std::fs::remove_file(dir.path().join("scene data.bin")).expect("rm");
+    let e = load_file(&path, &Limits::default()).expect_err("no bin");
+    assert!(
+        e.to_string().contains("buffers[0]: cannot read \"scene data.bin\": "),
+        "{e}"
+    );
+}
+
+#[test]
+fn glb_loads_exactly() {
+    let (doc, bin) = scene();
+    let bytes = glb(&with_buffer(doc, bin.len(), None), &bin);
+    let m = load_bytes(&bytes, "scene.glb", &Limits::default()).expect("loads");
+    assert_model(&m, &expected());
+}
+
+/// A one-triangle GLB: u16 positions and i8 normalised normals
+/// (KHR_mesh_quantization), u16 indices; `edit` changes it first.
+fn mini(edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> Result<Model, String> {
+    let mut bin: Vec<u8> = [[0u16, 0, 0], [1, 0, 0], [0, 1, 0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    bin.extend([0i8, 0, 127, 0, 0, 0, 127, 0, 0, 0, 127, 0].map(|x| x as u8));
+    bin.extend([0u16, 1, 2, 0].iter().flat_map(|x| x.to_le_bytes()));
+    let mut doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5123, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": 18},
+            {"buffer": 0, "byteOffset": 18, "byteLength": 12, "byteStride": 4},
+            {"buffer": 0, "byteOffset": 30, "byteLength": 6}
+        ],
+        "buffers": [{"byteLength": 38}]
+    });
+    edit(&mut doc, &mut bin);
+    load_bytes(&glb(&doc, &bin), "m.glb", &Limits::default()).map_err(|e| e.to_string())
+}
+
+#[test]
+fn quantized_attributes_and_no_scene() {
+    let m = mini(|_, _| {}).expect("loads");
+    assert_guarantees(&m);
+    assert_eq!(m.meshes[0].positions, TRI.to_vec());
+    assert_eq!(m.meshes[0].normals, Some(vec![[0.0, 0.0, 1.0]; 3]));
+    assert_eq!(m.meshes[0].triangles, vec![[0, 1, 2]]);
+    assert_eq!(m.camera, None);
+    let m = mini(|d, _| {
+        if let Some(o) = d.as_object_mut() {
+            o.remove("scenes");
+        }
+    })
+    .expect("loads");
+    assert_eq!(m.instances.len(), 1);
+    assert_eq!(
+        m.warnings,
+        [
+            "no scene: every root node is placed",
+            "primitives without a material use the glTF default material: white diffuse (albedo 1)"
+        ]
+    );
+}
+
+#[test]
+fn malformed_gltf_errors_name_the_problem() {
+    let nan = mini(|d, bin| {
+        d["accessors"][0]["componentType"] = json!(5126);
+        d["bufferViews"][0]["byteLength"] = json!(36);
+        d["bufferViews"][1]["byteOffset"] = json!(36);
+        d["bufferViews"][2]["byteOffset"] = json!(48);
+        d["buffers"][0]["byteLength"] = json!(56);
+        let mut floats: Vec<u8> = [0.0f32, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 1.0, 0.0]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        floats.extend(&bin[18..]);
+        *bin = floats;
+    });
+    assert_eq!(
+        nan,
+        Err("m.glb: meshes[0].primitives[0]: vertex 1: position [NaN, 0, 0] is not finite".into())
+    );
+    type Edit = Box<dyn FnOnce(&mut Value, &mut Vec<u8>)>;
+    let cases: Vec<(Edit, &str)> = vec![
+        (Box::new(|_, bin| bin[32] = 7), "m.glb: meshes[0].primitives[0]: triangle 0: vertex index 7 out of range (3 vertices)"),
+        (Box::new(|d, _| d["meshes"][0]["primitives"][0]["mode"] = json!(0)), "m.glb: no triangles"),
+        (
+            Box::new(|d, _| d["accessors"][0]["count"] = json!(4_000_000_000u64)),
+            "m.glb: meshes[0].primitives[0]: 4000000000 vertices, more than the limit of 16000000",
+        ),
+        (
+            Box::new(|d, _| d["accessors"][0]["count"] = json!(1000)),
+            "m.glb: meshes[0].primitives[0].attributes.POSITION: 1000 elements of 6 bytes from byte 0 do not fit in bufferViews[0] (18 bytes)",
+        ),
+        (
+            Box::new(|d, _| d["buffers"][0]["byteLength"] = json!(1000)),
+            "m.glb: buffers[0]: holds 40 bytes, but its byteLength is 1000 (truncated)",
+        ),
+        (Box::new(|d, _| d["nodes"][0]["mesh"] = json!(5)), "m.glb: nodes[0].mesh: index out of range"),
+        (
+            Box::new(|d, _| d["nodes"] = json!([{"children": [1]}, {"mesh": 0, "children": [0]}])),
+            "m.glb: nodes[0]: is reached twice in the scene's node hierarchy (a cycle, or a node with two parents)",
+        ),
+        (
+            Box::new(|d, _| d["extensionsRequired"] = json!(["KHR_draco_mesh_compression"])),
+            "m.glb: extensionsRequired: KHR_draco_mesh_compression (compressed geometry) is not supported",
+        ),
+        (
+            Box::new(|d, _| d["accessors"][2]["componentType"] = json!(5126)),
+            "m.glb: meshes[0].primitives[0].indices: accessors[2] is Scalar of F32, not unsigned integer indices",
+        ),
+    ];
+    for (edit, want) in cases {
+        assert_eq!(mini(edit).err().as_deref(), Some(want));
+    }
+    let e = load_bytes(
+        b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [",
+        "m.gltf",
+        &Limits::default(),
+    )
+    .expect_err("json");
+    assert_eq!(
+        e.to_string(),
+        "m.gltf: JSON line 1, column 40: EOF while parsing a list"
+    );
+}
+
+#[test]
+fn truncated_glb() {
+    let (doc, bin) = scene();
+    let mut bytes = glb(&with_buffer(doc, bin.len(), None), &bin);
+    let n = bytes.len();
+    let e = load_bytes(&bytes[..n - 10], "s.glb", &Limits::default()).expect_err("cut");
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "s.glb: byte 8: truncated: the GLB header says {n} bytes, the file has {}",
+            n - 10
+        )
+    );
+    // The header fixed to the cut length: the BIN chunk is cut.
+    bytes.truncate(n - 10);
+    bytes[8..12].copy_from_slice(&((n - 10) as u32).to_le_bytes());
+    let json_len = u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize;
+    let e = load_bytes(&bytes, "s.glb", &Limits::default()).expect_err("cut");
+    let bin_len = bin.len().div_ceil(4) * 4;
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "s.glb: byte {}: truncated: chunk 1 says {bin_len} bytes, {} remain",
+            20 + json_len,
+            bin_len - 10
+        )
+    );
+    bytes[4] = 1;
+    let e = load_bytes(&bytes, "s.glb", &Limits::default()).expect_err("v1");
+    assert_eq!(e.to_string(), "s.glb: byte 4: GLB version 1 (only version 2 is read)");
+}
+
+#[test]
+fn animation_skins_morph_targets_and_maps_are_warned() {
+    let m = mini(|d, _| {
+        d["animations"] = json!([{"channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
+                                  "samplers": [{"input": 2, "output": 0}]}]);
+        d["skins"] = json!([{"joints": [0]}]);
+        d["nodes"][0]["skin"] = json!(0);
+        d["meshes"][0]["weights"] = json!([0.5]);
+        let prim = &mut d["meshes"][0]["primitives"][0];
+        prim["targets"] = json!([{"POSITION": 0}]);
+        prim["attributes"]["COLOR_0"] = json!(1);
+        prim["material"] = json!(0);
+        d["materials"] = json!([{"occlusionTexture": {"index": 0}, "emissiveTexture": {"index": 0},
+            "alphaMode": "MASK", "alphaCutoff": 0.25,
+            "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}}]);
+        d["textures"] = json!([{"source": 0}]);
+        d["images"] = json!([{"uri": "x.png"}]);
+    })
+    .expect("loads");
+    assert_guarantees(&m);
+    assert_eq!(
+        m.materials,
+        vec![("material0".to_owned(), MaterialJson::Diffuse(surface([1.0; 3], None)))]
+    );
+    assert_eq!(
+        m.warnings,
+        [
+            "1 animations ignored (the scene is read at rest)",
+            "skins ignored (skinned meshes are placed by their node's transform)",
+            "mesh \"mesh0\": morph targets ignored (the base shape is used)",
+            "vertex colours ignored",
+            "material \"material0\": not modelled, ignored: metallic-roughness texture, occlusion map, emissive texture, alpha mode MASK (cutoff 0.25), metallic 1 / roughness 1 (roughness and metalness are not modelled: rendered diffuse)",
+        ]
+    );
+}
