@@ -3,6 +3,7 @@
 # runs every test in release mode (renders are heavy; debug is 30x slower).
 #   - an OpenCL loader and PoCL (a real OpenCL CPU device) for the OpenCL suite;
 #     where CI is set, that suite fails rather than skips without a device;
+#   - the Stanford bunny (npm package `bunny`) for the model-file tests;
 #   - Chromium and playwright-core for the browser client's tests
 #     (scripts/browser-tests.sh), which run after the Rust tests.
 set -euo pipefail
@@ -24,6 +25,16 @@ if ! have_opencl; then
     export DEBIAN_FRONTEND=noninteractive
     $sudo apt-get update -qq
     $sudo apt-get install -y -qq ocl-icd-libopencl1 pocl-opencl-icd >/dev/null
+fi
+
+# Real models for the tests (the Stanford bunny, from the npm registry).
+if [ ! -f tests/models/node_modules/bunny/index.js ]; then
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "test.sh: npm is needed for the test models (Node 20 or later)" >&2
+        exit 1
+    fi
+    echo "test.sh: npm ci in tests/models (the Stanford bunny)" >&2
+    (cd tests/models && npm ci --no-audit --no-fund --loglevel=error)
 fi
 
 cargo test --release --workspace --locked "$@"

@@ -168,3 +168,32 @@ pub fn assert_region(r: &Region, expected: f64, z_max: f64, floor: f64, what: &s
         );
     }
 }
+
+/// The Stanford bunny from the npm package `bunny` (installed into
+/// tests/models by scripts/test.sh): 1,839 vertices, 3,674 triangles. None
+/// when it is not installed, except under CI, where that is a failure.
+pub fn bunny() -> Option<pathstream::model::MeshData> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/models/node_modules/bunny/index.js");
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if std::env::var_os("CI").is_some() => panic!("{}: {e} (scripts/test.sh installs it)", path.display()),
+        Err(e) => {
+            eprintln!("skipping: no bunny at {} ({e}); scripts/test.sh installs it", path.display());
+            return None;
+        }
+    };
+    // Two lines: `exports.positions=[[x,y,z],...]` and `exports.cells=[[a,b,c],...]`.
+    let value = |key: &str| -> serde_json::Value {
+        let line = text.lines().find(|l| l.starts_with(&format!("exports.{key}="))).expect("bunny line");
+        serde_json::from_str(&line[line.find('=').expect("=") + 1..]).expect("bunny JSON")
+    };
+    let positions: Vec<[f32; 3]> = serde_json::from_value(value("positions")).expect("positions");
+    let triangles: Vec<[u32; 3]> = serde_json::from_value(value("cells")).expect("cells");
+    Some(pathstream::model::MeshData {
+        name: "bunny".into(),
+        materials: vec![0; triangles.len()],
+        positions,
+        normals: None,
+        triangles,
+    })
+}
