@@ -105,7 +105,7 @@ impl Importer<'_> {
             }
             (None, None) => return Err(SceneError::new(path, "give exactly one of file, asset or data")),
         };
-        let world_from_json = placement::world_from_object(path, json.transform.as_ref())?;
+        let world_from_json = placement::world_from_object(&format!("{path}.transform"), json.transform.as_ref())?;
         let map: Arc<[u32]> = match &json.material {
             Some(name) => {
                 let Some(&m) = self.index_of.get(name) else {
