@@ -67,15 +67,43 @@ impl Client {
         self.runtime.block_on(self.inner.set_scene(id, scene))
     }
 
-    pub fn frame_png(&self, id: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
-        self.runtime.block_on(self.inner.frame_png(id, min_spp, timeout))
+    pub fn frame_png(
+        &self,
+        id: &str,
+        min_spp: Option<u64>,
+        timeout: Option<Duration>,
+    ) -> Result<Vec<u8>> {
+        self.runtime
+            .block_on(self.inner.frame_png(id, min_spp, timeout))
     }
 
-    pub fn frame_pfm(&self, id: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
-        self.runtime.block_on(self.inner.frame_pfm(id, min_spp, timeout))
+    pub fn frame_pfm(
+        &self,
+        id: &str,
+        min_spp: Option<u64>,
+        timeout: Option<Duration>,
+    ) -> Result<Vec<u8>> {
+        self.runtime
+            .block_on(self.inner.frame_pfm(id, min_spp, timeout))
     }
 
     pub fn delete_session(&self, id: &str) -> Result<()> {
         self.runtime.block_on(self.inner.delete_session(id))
+    }
+
+    pub fn upload_asset(&self, name: &str, bytes: Vec<u8>) -> Result<Uploaded> {
+        self.runtime.block_on(self.inner.upload_asset(name, bytes))
+    }
+
+    pub fn assets(&self) -> Result<AssetList> {
+        self.runtime.block_on(self.inner.assets())
+    }
+
+    pub fn asset(&self, id: &str) -> Result<Asset> {
+        self.runtime.block_on(self.inner.asset(id))
+    }
+
+    pub fn delete_asset(&self, id: &str) -> Result<()> {
+        self.runtime.block_on(self.inner.delete_asset(id))
     }
 }

@@ -45,14 +45,20 @@ impl Client {
     pub fn with_timeout(base: &str, timeout: Duration) -> Result<Self> {
         let base = base.trim_end_matches('/').to_owned();
         if !(base.starts_with("http://") || base.starts_with("https://")) {
-            return Err(ClientError::Input(format!("server URL '{base}' must start with http:// or https://")));
+            return Err(ClientError::Input(format!(
+                "server URL '{base}' must start with http:// or https://"
+            )));
         }
         let http = reqwest::Client::builder()
             .timeout(timeout)
             .connect_timeout(Duration::from_secs(5))
             .build()
             .map_err(|e| ClientError::Input(e.to_string()))?;
-        Ok(Self { base, token: None, http })
+        Ok(Self {
+            base,
+            token: None,
+            http,
+        })
     }
 
     /// Sends `Authorization: Bearer token` with every request.
@@ -107,24 +113,35 @@ impl Client {
     }
 
     pub async fn scenes(&self) -> Result<Vec<String>> {
-        Ok(self.json::<Scenes>(self.request(Method::GET, "/api/scenes")).await?.scenes)
+        Ok(self
+            .json::<Scenes>(self.request(Method::GET, "/api/scenes"))
+            .await?
+            .scenes)
     }
 
     pub async fn create_session(&self, req: &CreateSession) -> Result<SessionStatus> {
-        self.json(self.request(Method::POST, "/api/sessions").json(req)).await
+        self.json(self.request(Method::POST, "/api/sessions").json(req))
+            .await
     }
 
     pub async fn sessions(&self) -> Result<Vec<SessionStatus>> {
-        Ok(self.json::<SessionList>(self.request(Method::GET, "/api/sessions")).await?.sessions)
+        Ok(self
+            .json::<SessionList>(self.request(Method::GET, "/api/sessions"))
+            .await?
+            .sessions)
     }
 
     pub async fn session(&self, id: &str) -> Result<SessionStatus> {
-        self.json(self.request(Method::GET, &format!("/api/sessions/{id}"))).await
+        self.json(self.request(Method::GET, &format!("/api/sessions/{id}")))
+            .await
     }
 
     async fn patch<B: Serialize>(&self, id: &str, what: &str, body: &B) -> Result<SessionStatus> {
-        self.json(self.request(Method::PATCH, &format!("/api/sessions/{id}/{what}")).json(body))
-            .await
+        self.json(
+            self.request(Method::PATCH, &format!("/api/sessions/{id}/{what}"))
+                .json(body),
+        )
+        .await
     }
 
     pub async fn set_camera(&self, id: &str, patch: &CameraPatch) -> Result<SessionStatus> {
@@ -140,34 +157,93 @@ impl Client {
     }
 
     pub async fn set_scene(&self, id: &str, scene: &SceneSpec) -> Result<SessionStatus> {
-        self.json(self.request(Method::PUT, &format!("/api/sessions/{id}/scene")).json(scene))
-            .await
+        self.json(
+            self.request(Method::PUT, &format!("/api/sessions/{id}/scene"))
+                .json(scene),
+        )
+        .await
     }
 
-    async fn frame(&self, id: &str, kind: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
+    async fn frame(
+        &self,
+        id: &str,
+        kind: &str,
+        min_spp: Option<u64>,
+        timeout: Option<Duration>,
+    ) -> Result<Vec<u8>> {
         let wait = timeout.unwrap_or(Duration::from_secs(30));
-        let mut path = format!("/api/sessions/{id}/frame.{kind}?timeout_ms={}", wait.as_millis());
+        let mut path = format!(
+            "/api/sessions/{id}/frame.{kind}?timeout_ms={}",
+            wait.as_millis()
+        );
         if let Some(n) = min_spp {
             path.push_str(&format!("&min_spp={n}"));
         }
-        let r = self.request(Method::GET, &path).timeout(wait + Duration::from_secs(30));
+        let r = self
+            .request(Method::GET, &path)
+            .timeout(wait + Duration::from_secs(30));
         let response = self.send(r).await?;
-        Ok(response.bytes().await.map_err(ClientError::from_reqwest)?.to_vec())
+        Ok(response
+            .bytes()
+            .await
+            .map_err(ClientError::from_reqwest)?
+            .to_vec())
     }
 
     /// The current image as PNG; with `min_spp`, once it has that many
     /// samples per pixel (waiting at most `timeout`, default 30 s).
-    pub async fn frame_png(&self, id: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
+    pub async fn frame_png(
+        &self,
+        id: &str,
+        min_spp: Option<u64>,
+        timeout: Option<Duration>,
+    ) -> Result<Vec<u8>> {
         self.frame(id, "png", min_spp, timeout).await
     }
 
     /// The same as linear PFM.
-    pub async fn frame_pfm(&self, id: &str, min_spp: Option<u64>, timeout: Option<Duration>) -> Result<Vec<u8>> {
+    pub async fn frame_pfm(
+        &self,
+        id: &str,
+        min_spp: Option<u64>,
+        timeout: Option<Duration>,
+    ) -> Result<Vec<u8>> {
         self.frame(id, "pfm", min_spp, timeout).await
     }
 
+    /// `POST /api/assets`: uploads a model file's bytes under `name` (its
+    /// extension tells the format where the bytes do not). The same bytes
+    /// uploaded twice are one asset.
+    pub async fn upload_asset(&self, name: &str, bytes: Vec<u8>) -> Result<Uploaded> {
+        let query: String = form_urlencoded::Serializer::new(String::new())
+            .append_pair("name", name)
+            .finish();
+        let r = self
+            .request(Method::POST, &format!("/api/assets?{query}"))
+            .header(reqwest::header::CONTENT_TYPE, "application/octet-stream")
+            .body(bytes)
+            .timeout(Duration::from_secs(600));
+        self.json(r).await
+    }
+
+    pub async fn assets(&self) -> Result<AssetList> {
+        self.json(self.request(Method::GET, "/api/assets")).await
+    }
+
+    pub async fn asset(&self, id: &str) -> Result<Asset> {
+        self.json(self.request(Method::GET, &format!("/api/assets/{id}")))
+            .await
+    }
+
+    pub async fn delete_asset(&self, id: &str) -> Result<()> {
+        self.send(self.request(Method::DELETE, &format!("/api/assets/{id}")))
+            .await?;
+        Ok(())
+    }
+
     pub async fn delete_session(&self, id: &str) -> Result<()> {
-        self.send(self.request(Method::DELETE, &format!("/api/sessions/{id}"))).await?;
+        self.send(self.request(Method::DELETE, &format!("/api/sessions/{id}")))
+            .await?;
         Ok(())
     }
 

@@ -22,18 +22,20 @@ pub struct FrameStream {
 
 impl FrameStream {
     pub(crate) async fn connect(url: &str) -> Result<Self> {
-        let (socket, _) = tokio_tungstenite::connect_async(url).await.map_err(|e| match e {
-            tokio_tungstenite::tungstenite::Error::Http(r) => ClientError::Server {
-                status: r.status().as_u16(),
-                message: r
-                    .body()
-                    .as_deref()
-                    .and_then(|b| serde_json::from_slice::<Value>(b).ok())
-                    .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
-                    .unwrap_or_else(|| "WebSocket upgrade refused".into()),
-            },
-            other => ClientError::Unreachable(other.to_string()),
-        })?;
+        let (socket, _) = tokio_tungstenite::connect_async(url)
+            .await
+            .map_err(|e| match e {
+                tokio_tungstenite::tungstenite::Error::Http(r) => ClientError::Server {
+                    status: r.status().as_u16(),
+                    message: r
+                        .body()
+                        .as_deref()
+                        .and_then(|b| serde_json::from_slice::<Value>(b).ok())
+                        .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
+                        .unwrap_or_else(|| "WebSocket upgrade refused".into()),
+                },
+                other => ClientError::Unreachable(other.to_string()),
+            })?;
         Ok(Self { socket, png: None })
     }
 
@@ -47,13 +49,19 @@ impl FrameStream {
     }
 
     pub async fn close(mut self) -> Result<()> {
-        self.socket.close(None).await.map_err(|e| ClientError::Unreachable(e.to_string()))
+        self.socket
+            .close(None)
+            .await
+            .map_err(|e| ClientError::Unreachable(e.to_string()))
     }
 }
 
 fn parse_stats(text: &str) -> Result<(SessionStatus, u64)> {
-    let mut v: Value = serde_json::from_str(text).map_err(|e| ClientError::Protocol(e.to_string()))?;
-    let map = v.as_object_mut().ok_or_else(|| ClientError::Protocol("stats: not an object".into()))?;
+    let mut v: Value =
+        serde_json::from_str(text).map_err(|e| ClientError::Protocol(e.to_string()))?;
+    let map = v
+        .as_object_mut()
+        .ok_or_else(|| ClientError::Protocol("stats: not an object".into()))?;
     map.remove("type");
     let seq = map.remove("frame").and_then(|f| f.as_u64()).unwrap_or(0);
     let status = serde_json::from_value(v).map_err(|e| ClientError::Protocol(e.to_string()))?;
@@ -68,7 +76,9 @@ impl Stream for FrameStream {
             let message = match self.socket.poll_next_unpin(cx) {
                 Poll::Pending => return Poll::Pending,
                 Poll::Ready(None) => return Poll::Ready(None),
-                Poll::Ready(Some(Err(e))) => return Poll::Ready(Some(Err(ClientError::Unreachable(e.to_string())))),
+                Poll::Ready(Some(Err(e))) => {
+                    return Poll::Ready(Some(Err(ClientError::Unreachable(e.to_string()))))
+                }
                 Poll::Ready(Some(Ok(m))) => m,
             };
             match message {
@@ -80,12 +90,23 @@ impl Stream for FrameStream {
                     if kind.as_deref() == Some("error") {
                         let message = serde_json::from_str::<Value>(text.as_str())
                             .ok()
-                            .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
+                            .and_then(|v| {
+                                v.get("error").and_then(|e| e.as_str()).map(str::to_owned)
+                            })
                             .unwrap_or_default();
-                        return Poll::Ready(Some(Err(ClientError::Server { status: 400, message })));
+                        return Poll::Ready(Some(Err(ClientError::Server {
+                            status: 400,
+                            message,
+                        })));
                     }
                     let Some(png) = self.png.take() else { continue };
-                    return Poll::Ready(Some(parse_stats(text.as_str()).map(|(status, seq)| StreamFrame { png, status, seq })));
+                    return Poll::Ready(Some(
+                        parse_stats(text.as_str()).map(|(status, seq)| StreamFrame {
+                            png,
+                            status,
+                            seq,
+                        }),
+                    ));
                 }
                 Message::Close(_) => return Poll::Ready(None),
                 _ => {}

@@ -113,12 +113,51 @@ pub struct SessionStatus {
     pub generation: u64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
+    /// What the scene holds that is not rendered as given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 impl SessionStatus {
     pub fn halted(&self) -> bool {
         self.state == "halted"
     }
+}
+
+/// An uploaded model file (`POST /api/assets`).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+pub struct Asset {
+    /// SHA-256 of the file: what scenes name as `"asset"`.
+    pub id: String,
+    pub name: String,
+    /// `obj`, `gltf`, `glb` or `ply`.
+    pub format: String,
+    pub bytes: u64,
+    pub memory_bytes: u64,
+    pub triangles: u64,
+    pub meshes: u64,
+    pub instances: u64,
+    pub materials: Vec<String>,
+    pub has_camera: bool,
+    /// What the file holds that the renderer does not model.
+    pub warnings: Vec<String>,
+}
+
+/// The answer to an upload: the asset, and whether the same bytes were
+/// uploaded before (then nothing new was stored).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+pub struct Uploaded {
+    #[serde(flatten)]
+    pub asset: Asset,
+    pub deduplicated: bool,
+}
+
+/// `GET /api/assets`: the stored assets and the memory they hold.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+pub struct AssetList {
+    pub assets: Vec<Asset>,
+    pub memory_bytes: u64,
+    pub memory_limit_bytes: u64,
 }
 
 /// A scene: a built-in name, or scene JSON.

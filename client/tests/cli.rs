@@ -23,7 +23,11 @@ impl Drop for Server {
 fn server_binary() -> PathBuf {
     let cli = PathBuf::from(env!("CARGO_BIN_EXE_pathstream-client"));
     let server = cli.with_file_name("pathstream");
-    assert!(server.exists(), "{} is missing: build the workspace (cargo test --workspace)", server.display());
+    assert!(
+        server.exists(),
+        "{} is missing: build the workspace (cargo test --workspace)",
+        server.display()
+    );
     server
 }
 
@@ -44,7 +48,11 @@ fn start_server() -> Server {
         .find(|w| w.starts_with("http://"))
         .map(|u| u.trim_end_matches('/').to_owned())
         .unwrap_or_else(|| panic!("no URL in: {line}"));
-    Server { child, url, _stdout: stdout }
+    Server {
+        child,
+        url,
+        _stdout: stdout,
+    }
 }
 
 fn client(server: &Server, args: &[&str]) -> Output {
@@ -68,10 +76,26 @@ fn render_saves_a_png_and_a_pfm_and_deletes_its_session() {
         let out = dir.path().join(name);
         let run = client(
             &server,
-            &["render", "--scene", "cornell", "--width", "24", "--height", "16", "--spp", "16", "-o", out.to_str().expect("utf-8")],
+            &[
+                "render",
+                "--scene",
+                "cornell",
+                "--width",
+                "24",
+                "--height",
+                "16",
+                "--spp",
+                "16",
+                "-o",
+                out.to_str().expect("utf-8"),
+            ],
         );
         assert!(run.status.success(), "{}", text(&run.stderr));
-        assert!(text(&run.stdout).contains("16 spp"), "{}", text(&run.stdout));
+        assert!(
+            text(&run.stdout).contains("16 spp"),
+            "{}",
+            text(&run.stdout)
+        );
         let bytes = std::fs::read(&out).expect("file");
         if name.ends_with("png") {
             let img = image::load_from_memory(&bytes).expect("a PNG");
@@ -83,7 +107,11 @@ fn render_saves_a_png_and_a_pfm_and_deletes_its_session() {
     }
     let sessions = client(&server, &["sessions"]);
     assert!(sessions.status.success());
-    assert_eq!(text(&sessions.stdout).trim(), "", "render deleted its sessions");
+    assert_eq!(
+        text(&sessions.stdout).trim(),
+        "",
+        "render deleted its sessions"
+    );
 }
 
 #[test]
@@ -108,7 +136,21 @@ fn orbit_renders_n_distinct_frames() {
     let out = dir.path().join("frames");
     let run = client(
         &server,
-        &["orbit", "--scene", scene.to_str().expect("utf-8"), "--frames", "4", "--spp", "4", "--width", "24", "--height", "24", "--out-dir", out.to_str().expect("utf-8")],
+        &[
+            "orbit",
+            "--scene",
+            scene.to_str().expect("utf-8"),
+            "--frames",
+            "4",
+            "--spp",
+            "4",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--out-dir",
+            out.to_str().expect("utf-8"),
+        ],
     );
     assert!(run.status.success(), "{}", text(&run.stderr));
     let frames: Vec<Vec<u8>> = (0..4)
@@ -130,7 +172,20 @@ fn ctrl_c_during_render_deletes_the_session() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("never.png");
     let mut render = Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
-        .args(["--server", &server.url, "render", "--scene", "cornell-glass", "--width", "64", "--height", "64", "--spp", "1000000", "-o"])
+        .args([
+            "--server",
+            &server.url,
+            "render",
+            "--scene",
+            "cornell-glass",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--spp",
+            "1000000",
+            "-o",
+        ])
         .arg(&out)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -146,7 +201,10 @@ fn ctrl_c_during_render_deletes_the_session() {
         assert!(Instant::now() < deadline, "no session appeared");
         std::thread::sleep(Duration::from_millis(100));
     }
-    let kill = Command::new("kill").args(["-INT", &render.id().to_string()]).status().expect("kill");
+    let kill = Command::new("kill")
+        .args(["-INT", &render.id().to_string()])
+        .status()
+        .expect("kill");
     assert!(kill.success());
     let status = render.wait().expect("exits");
     assert_eq!(status.code(), Some(130), "interrupted");
@@ -158,34 +216,81 @@ fn ctrl_c_during_render_deletes_the_session() {
 #[test]
 fn commands_for_one_session_and_exit_codes() {
     let server = start_server();
-    let created = client(&server, &["create", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "4"]);
+    let created = client(
+        &server,
+        &[
+            "create", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "4",
+        ],
+    );
     assert!(created.status.success(), "{}", text(&created.stderr));
     let status: serde_json::Value = serde_json::from_slice(&created.stdout).expect("status JSON");
     let id = status["id"].as_str().expect("id").to_owned();
-    let camera = client(&server, &["camera", &id, "--vfov-deg", "45", "--position", "0,0.1,0"]);
+    let camera = client(
+        &server,
+        &["camera", &id, "--vfov-deg", "45", "--position", "0,0.1,0"],
+    );
     assert!(camera.status.success(), "{}", text(&camera.stderr));
     let light = client(&server, &["light", &id, "--intensity", "2"]);
     assert!(light.status.success(), "{}", text(&light.stderr));
-    let quality = client(&server, &["quality", &id, "--max-depth", "3", "--nee", "off"]);
+    let quality = client(
+        &server,
+        &["quality", &id, "--max-depth", "3", "--nee", "off"],
+    );
     let q: serde_json::Value = serde_json::from_slice(&quality.stdout).expect("status JSON");
     assert_eq!(q["quality"]["max_depth"], 3);
     assert_eq!(q["quality"]["nee"], false);
-    let preset = client(&server, &["quality", &id, "--preset", "reference", "--rr-depth", "2"]);
+    let preset = client(
+        &server,
+        &["quality", &id, "--preset", "reference", "--rr-depth", "2"],
+    );
     let q: serde_json::Value = serde_json::from_slice(&preset.stdout).expect("status JSON");
-    assert_eq!((q["quality"]["max_depth"].as_u64(), q["quality"]["nee"].as_bool()), (Some(0), Some(true)));
-    assert_eq!(q["quality"]["rr_depth"], 2, "a setting beside the preset wins");
+    assert_eq!(
+        (
+            q["quality"]["max_depth"].as_u64(),
+            q["quality"]["nee"].as_bool()
+        ),
+        (Some(0), Some(true))
+    );
+    assert_eq!(
+        q["quality"]["rr_depth"], 2,
+        "a setting beside the preset wins"
+    );
     let bad = client(&server, &["quality", &id, "--preset", "fast"]);
     assert_eq!(bad.status.code(), Some(3));
-    assert!(text(&bad.stderr).contains("quality.preset"), "{}", text(&bad.stderr));
+    assert!(
+        text(&bad.stderr).contains("quality.preset"),
+        "{}",
+        text(&bad.stderr)
+    );
     let dir = tempfile::tempdir().expect("tempdir");
     let frame = dir.path().join("f.png");
-    let run = client(&server, &["frame", &id, "--min-spp", "4", "-o", frame.to_str().expect("utf-8")]);
+    let run = client(
+        &server,
+        &[
+            "frame",
+            &id,
+            "--min-spp",
+            "4",
+            "-o",
+            frame.to_str().expect("utf-8"),
+        ],
+    );
     assert!(run.status.success(), "{}", text(&run.stderr));
     assert!(image::open(&frame).is_ok());
     let stream_dir = dir.path().join("stream");
     let run = client(&server, &["quality", &id, "--spp", "100000"]);
     assert!(run.status.success());
-    let run = client(&server, &["stream", &id, "--frames", "3", "--out-dir", stream_dir.to_str().expect("utf-8")]);
+    let run = client(
+        &server,
+        &[
+            "stream",
+            &id,
+            "--frames",
+            "3",
+            "--out-dir",
+            stream_dir.to_str().expect("utf-8"),
+        ],
+    );
     assert!(run.status.success(), "{}", text(&run.stderr));
     assert_eq!(std::fs::read_dir(&stream_dir).expect("dir").count(), 3);
     assert!(client(&server, &["status", &id]).status.success());
@@ -194,7 +299,11 @@ fn commands_for_one_session_and_exit_codes() {
     // 3: the server said no, and its message is shown.
     let gone = client(&server, &["status", &id]);
     assert_eq!(gone.status.code(), Some(3));
-    assert!(text(&gone.stderr).contains(&format!("no session '{id}'")), "{}", text(&gone.stderr));
+    assert!(
+        text(&gone.stderr).contains(&format!("no session '{id}'")),
+        "{}",
+        text(&gone.stderr)
+    );
     let bad = client(&server, &["camera", "x", "--position", "1,2"]);
     assert_eq!(bad.status.code(), Some(2), "bad arguments");
     let bad_out = client(&server, &["frame", "x", "-o", "f.jpg"]);
@@ -233,7 +342,11 @@ fn read_request(stream: &mut std::net::TcpStream) -> Option<String> {
     let head = String::from_utf8_lossy(&data[..head_end]).into_owned();
     let length: usize = head
         .lines()
-        .find_map(|l| l.to_ascii_lowercase().strip_prefix("content-length:").map(|v| v.trim().parse().unwrap_or(0)))
+        .find_map(|l| {
+            l.to_ascii_lowercase()
+                .strip_prefix("content-length:")
+                .map(|v| v.trim().parse().unwrap_or(0))
+        })
         .unwrap_or(0);
     while data.len() < head_end + length {
         let n = stream.read(&mut buf).ok().filter(|&n| n > 0)?;
@@ -253,7 +366,9 @@ fn held_server(created: String) -> HeldServer {
     std::thread::spawn(move || {
         for stream in listener.incoming().take(8) {
             let Ok(mut stream) = stream else { continue };
-            let Some(line) = read_request(&mut stream) else { continue };
+            let Some(line) = read_request(&mut stream) else {
+                continue;
+            };
             let _ = seen.send(line.clone());
             let response = if line.starts_with("POST /api/sessions ") {
                 let _ = released.recv_timeout(Duration::from_secs(30));
@@ -264,37 +379,196 @@ fn held_server(created: String) -> HeldServer {
             let _ = stream.write_all(response.as_bytes());
         }
     });
-    HeldServer { url, requests, release }
+    HeldServer {
+        url,
+        requests,
+        release,
+    }
 }
 
 #[test]
 fn ctrl_c_while_the_session_is_created_still_deletes_it() {
     // A real session status for the stand-in to answer with.
     let real = start_server();
-    let created = client(&real, &["create", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "1"]);
+    let created = client(
+        &real,
+        &[
+            "create", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "1",
+        ],
+    );
     assert!(created.status.success(), "{}", text(&created.stderr));
     let status: serde_json::Value = serde_json::from_slice(&created.stdout).expect("status JSON");
     let id = status["id"].as_str().expect("id").to_owned();
     let held = held_server(status.to_string());
     let dir = tempfile::tempdir().expect("tempdir");
     let mut render = Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
-        .args(["--server", &held.url, "render", "--scene", "furnace", "--width", "8", "--height", "8", "-o"])
+        .args([
+            "--server", &held.url, "render", "--scene", "furnace", "--width", "8", "--height", "8",
+            "-o",
+        ])
         .arg(dir.path().join("never.png"))
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .expect("runs");
-    let first = held.requests.recv_timeout(Duration::from_secs(20)).expect("the create request");
+    let first = held
+        .requests
+        .recv_timeout(Duration::from_secs(20))
+        .expect("the create request");
     assert!(first.starts_with("POST /api/sessions "), "{first}");
     // Ctrl-C while the server has not answered yet.
-    let kill = Command::new("kill").args(["-INT", &render.id().to_string()]).status().expect("kill");
+    let kill = Command::new("kill")
+        .args(["-INT", &render.id().to_string()])
+        .status()
+        .expect("kill");
     assert!(kill.success());
     std::thread::sleep(Duration::from_millis(300));
     held.release.send(()).expect("release the answer");
     let status = render.wait().expect("exits");
     let mut stderr = String::new();
-    std::io::Read::read_to_string(&mut render.stderr.take().expect("stderr"), &mut stderr).expect("stderr");
-    assert_eq!(status.code(), Some(130), "interrupted, not killed by the signal: {status:?} {stderr}");
+    std::io::Read::read_to_string(&mut render.stderr.take().expect("stderr"), &mut stderr)
+        .expect("stderr");
+    assert_eq!(
+        status.code(),
+        Some(130),
+        "interrupted, not killed by the signal: {status:?} {stderr}"
+    );
     let rest: Vec<String> = held.requests.try_iter().collect();
-    assert_eq!(rest, [format!("DELETE /api/sessions/{id} HTTP/1.1")], "the session made meanwhile was deleted");
+    assert_eq!(
+        rest,
+        [format!("DELETE /api/sessions/{id} HTTP/1.1")],
+        "the session made meanwhile was deleted"
+    );
+}
+
+/// A closed unit tetrahedron as ASCII PLY.
+const TETRAHEDRON_PLY: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+
+#[test]
+fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
+    let server = start_server();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = dir.path().join("tet.ply");
+    std::fs::write(&model, TETRAHEDRON_PLY).expect("model");
+    let png = |name: &str| dir.path().join(name).to_str().expect("utf-8").to_owned();
+
+    // The file alone: uploaded, framed and lit by the server's defaults.
+    let direct = png("direct.png");
+    let run = client(
+        &server,
+        &[
+            "render",
+            "--scene",
+            model.to_str().expect("utf-8"),
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--spp",
+            "8",
+            "-o",
+            &direct,
+        ],
+    );
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    // No emitter in the file: the server says it lit it by a default sky.
+    assert!(
+        text(&run.stderr).contains("warning:"),
+        "{}",
+        text(&run.stderr)
+    );
+    // Framed: the model covers a good part of the picture, darker than the
+    // white sky around it (the default diffuse albedo is 0.8).
+    let img = image::open(&direct).expect("a PNG").to_rgb8();
+    let sky = img.get_pixel(0, 0).0;
+    assert!(sky.iter().all(|&c| c > 240), "the corner shows the sky: {sky:?}");
+    let covered = img.pixels().filter(|p| p.0[1] < 235).count();
+    assert!(covered * 20 > 24 * 16, "the model covers {covered} of {} pixels", 24 * 16);
+
+    // A scene JSON naming the file relative to itself: uploaded once.
+    let scene = dir.path().join("scene.json");
+    std::fs::write(
+        &scene,
+        r#"{"materials": {"red": {"type": "diffuse", "albedo": [0.8, 0.1, 0.1]}},
+            "environment": [1, 1, 1],
+            "objects": [{"type": "mesh", "file": "tet.ply", "material": "red"},
+                        {"type": "mesh", "file": "tet.ply", "material": "red", "transform": {"translate": [2, 0, 0]}}]}"#,
+    )
+    .expect("scene");
+    let run = client(
+        &server,
+        &[
+            "render",
+            "--scene",
+            scene.to_str().expect("utf-8"),
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--spp",
+            "8",
+            "-o",
+            &png("scene.png"),
+        ],
+    );
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    // The same bytes twice, and the file given alone before: one asset.
+    let assets = client(&server, &["assets"]);
+    assert!(assets.status.success(), "{}", text(&assets.stderr));
+    let listed = text(&assets.stdout);
+    assert_eq!(listed.lines().count(), 1, "{listed}");
+    assert!(listed.contains("4 triangles"), "{listed}");
+    let upload = client(&server, &["upload", model.to_str().expect("utf-8")]);
+    assert!(upload.status.success(), "{}", text(&upload.stderr));
+    let id = text(&upload.stdout).trim().to_owned();
+    assert!(listed.starts_with(&id), "{id} not in {listed}");
+    assert!(client(&server, &["delete-asset", &id]).status.success());
+    assert_eq!(text(&client(&server, &["assets"]).stdout).trim(), "");
+
+    // A file that is not a model: exit 2, the file named.
+    let broken = dir.path().join("broken.ply");
+    std::fs::write(
+        &broken,
+        "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n",
+    )
+    .expect("file");
+    let run = client(
+        &server,
+        &[
+            "render",
+            "--scene",
+            broken.to_str().expect("utf-8"),
+            "-o",
+            &png("x.png"),
+        ],
+    );
+    assert_eq!(run.status.code(), Some(2), "{}", text(&run.stderr));
+    assert!(
+        text(&run.stderr).contains("broken.ply"),
+        "{}",
+        text(&run.stderr)
+    );
+    // A scene naming a missing file: exit 2, the JSON path named.
+    std::fs::write(
+        &scene,
+        r#"{"objects": [{"type": "model", "file": "nowhere.obj"}]}"#,
+    )
+    .expect("scene");
+    let run = client(
+        &server,
+        &[
+            "render",
+            "--scene",
+            scene.to_str().expect("utf-8"),
+            "-o",
+            &png("y.png"),
+        ],
+    );
+    assert_eq!(run.status.code(), Some(2), "{}", text(&run.stderr));
+    assert!(
+        text(&run.stderr).contains("objects[0].file"),
+        "{}",
+        text(&run.stderr)
+    );
 }

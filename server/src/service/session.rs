@@ -6,9 +6,9 @@
 
 use super::change::{patch_quality, Change};
 use super::error::ApiError;
+pub use super::frame::Frame;
 use super::metrics::Metrics;
 use super::worker::{BackendInfo, Waker};
-pub use super::frame::Frame;
 use crate::render::progressive::{self, Progress};
 use crate::render::scene::LightInfo;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
@@ -79,6 +79,10 @@ pub struct Status {
     pub generation: u64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
+    /// What the scene holds that is not rendered as given (unsupported
+    /// material features, a default sky, automatic framing).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -88,9 +92,24 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Session {
-    pub fn new(id: String, scene_name: String, scene: Scene, width: u32, height: u32, quality: Quality, backend: BackendInfo) -> Self {
+    pub fn new(
+        id: String,
+        scene_name: String,
+        scene: Scene,
+        width: u32,
+        height: u32,
+        quality: Quality,
+        backend: BackendInfo,
+    ) -> Self {
         let job = Arc::new(RenderJob::new(&scene, width, height, &quality));
-        let (frames, _) = watch::channel(Arc::new(Frame::empty(0, 0, width, height, backend.backend, backend.device)));
+        let (frames, _) = watch::channel(Arc::new(Frame::empty(
+            0,
+            0,
+            width,
+            height,
+            backend.backend,
+            backend.device,
+        )));
         Self {
             id,
             state: Mutex::new(SessionState {
@@ -174,6 +193,7 @@ impl Session {
             device: frame.device.clone(),
             generation: st.generation,
             failure: st.failure.clone(),
+            warnings: st.scene.warnings.clone(),
         }
     }
 
@@ -193,7 +213,8 @@ impl Session {
         st.job = Arc::new(RenderJob::new(&st.scene, st.width, st.height, &st.quality));
         st.film = Some(Film::new(st.width, st.height));
         st.generation += 1;
-        self.current_generation.store(st.generation, Ordering::Relaxed);
+        self.current_generation
+            .store(st.generation, Ordering::Relaxed);
         tracing::debug!(session = %self.id, generation = st.generation, "changed");
         st.restarted = Instant::now();
         st.halted = false;
@@ -254,7 +275,11 @@ impl Session {
         // The O(pixels) work on the film happens before taking the lock, so
         // that status requests and changes never wait for it.
         let finished = matches!(result, Ok(true));
-        let (pixels, estimate) = if finished { (film.mean(), film.error_estimate()) } else { (Vec::new(), None) };
+        let (pixels, estimate) = if finished {
+            (film.mean(), film.error_estimate())
+        } else {
+            (Vec::new(), None)
+        };
         let mut st = lock(&self.state);
         tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
         if st.generation != generation {
@@ -272,8 +297,13 @@ impl Session {
             self.publish_status_only(name, device);
             return;
         }
-        metrics.add_samples(&name, count * u64::from(film.width()) * u64::from(film.height()));
-        metrics.rejected_samples.fetch_add(film.rejected() - rejected_before, Ordering::Relaxed);
+        metrics.add_samples(
+            &name,
+            count * u64::from(film.width()) * u64::from(film.height()),
+        );
+        metrics
+            .rejected_samples
+            .fetch_add(film.rejected() - rejected_before, Ordering::Relaxed);
         st.per_sample = Some(took / count as u32);
         let progress = Progress::with_estimate(&film, st.restarted.elapsed(), estimate);
         st.halted = quality.halts() && progressive::halted(&quality, &progress);
@@ -320,7 +350,9 @@ impl Session {
     /// latest frame.
     pub async fn frame_with(&self, min_spp: u64, timeout: Duration) -> Arc<Frame> {
         let mut rx = self.subscribe();
-        let ready = |f: &Frame, generation: u64| f.generation == generation && (f.spp >= min_spp || f.halted);
+        let ready = |f: &Frame, generation: u64| {
+            f.generation == generation && (f.spp >= min_spp || f.halted)
+        };
         let wait = async {
             loop {
                 let generation = self.generation();

@@ -2,19 +2,33 @@
 //! Exit codes: 0 success, 2 bad arguments, 3 server error (message shown),
 //! 4 server unreachable.
 
+mod scene;
+
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use futures_util::StreamExt;
 use indicatif::{ProgressBar, ProgressStyle};
-use pathstream_client::{CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SceneSpec, SessionStatus};
+use pathstream_client::{
+    CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SessionStatus,
+};
+use scene::{scene_spec, upload};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
 #[derive(Parser, Debug)]
-#[command(name = "pathstream-client", version, about = "Drive a pathstream render server over HTTP and WebSocket")]
+#[command(
+    name = "pathstream-client",
+    version,
+    about = "Drive a pathstream render server over HTTP and WebSocket"
+)]
 struct Cli {
     /// Server URL.
-    #[arg(long, global = true, env = "PATHSTREAM_URL", default_value = "http://127.0.0.1:8080")]
+    #[arg(
+        long,
+        global = true,
+        env = "PATHSTREAM_URL",
+        default_value = "http://127.0.0.1:8080"
+    )]
     server: String,
     /// Bearer token, when the server requires one.
     #[arg(long, global = true, env = "PATHSTREAM_TOKEN", hide_env_values = true)]
@@ -54,6 +68,13 @@ enum Command {
     },
     /// Delete a session.
     Delete { id: String },
+    /// Upload a model file (.obj, .gltf, .glb, .ply) and print its asset id,
+    /// which scenes name as `{"type": "model", "asset": ID}`.
+    Upload { file: PathBuf },
+    /// List uploaded assets.
+    Assets,
+    /// Delete an uploaded asset.
+    DeleteAsset { id: String },
     /// Save frames from a session's stream as they arrive.
     Stream {
         id: String,
@@ -147,7 +168,8 @@ impl QualityArgs {
 
 #[derive(Args, Debug)]
 struct CreateArgs {
-    /// Built-in scene name or a scene JSON file.
+    /// Built-in scene name, a scene JSON file (its model files are uploaded),
+    /// or a model file (.obj, .gltf, .glb, .ply), uploaded and framed.
     #[arg(long, default_value = "cornell-glass")]
     scene: String,
     #[arg(long, default_value_t = 512)]
@@ -204,7 +226,8 @@ fn vec3(s: &str) -> Result<[f64; 3], String> {
         .split(',')
         .map(|p| p.trim().parse::<f64>().map_err(|e| format!("'{p}': {e}")))
         .collect::<Result<_, _>>()?;
-    <[f64; 3]>::try_from(parts).map_err(|_| "expected three comma-separated numbers, e.g. 50,52,295.6".into())
+    <[f64; 3]>::try_from(parts)
+        .map_err(|_| "expected three comma-separated numbers, e.g. 50,52,295.6".into())
 }
 
 /// A failure with its exit code.
@@ -225,27 +248,25 @@ fn usage(msg: String) -> Failure {
     Failure(2, msg)
 }
 
-fn scene_spec(scene: &str) -> Result<SceneSpec, Failure> {
-    let path = Path::new(scene);
-    if scene.ends_with(".json") || path.is_file() {
-        let text = std::fs::read_to_string(path).map_err(|e| usage(format!("--scene {scene}: {e}")))?;
-        let json = serde_json::from_str(&text).map_err(|e| usage(format!("--scene {scene}: not JSON: {e}")))?;
-        Ok(SceneSpec::Json(json))
-    } else {
-        Ok(SceneSpec::Name(scene.to_owned()))
-    }
-}
-
 fn extension(out: &Path) -> Result<&'static str, Failure> {
-    match out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+    match out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
         Some("png") => Ok("png"),
         Some("pfm") => Ok("pfm"),
-        _ => Err(usage(format!("{}: the output must end in .png or .pfm", out.display()))),
+        _ => Err(usage(format!(
+            "{}: the output must end in .png or .pfm",
+            out.display()
+        ))),
     }
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
-    std::fs::write(path, bytes).map_err(|e| Failure(1, format!("cannot write {}: {e}", path.display())))
+    std::fs::write(path, bytes)
+        .map_err(|e| Failure(1, format!("cannot write {}: {e}", path.display())))
 }
 
 fn print_status(s: &SessionStatus) -> Result<(), Failure> {
@@ -254,13 +275,17 @@ fn print_status(s: &SessionStatus) -> Result<(), Failure> {
     Ok(())
 }
 
-async fn create(client: &Client, args: &CreateArgs, default_spp: bool) -> Result<SessionStatus, Failure> {
+async fn create(
+    client: &Client,
+    args: &CreateArgs,
+    default_spp: bool,
+) -> Result<SessionStatus, Failure> {
     let mut quality = args.quality.patch();
     if default_spp && !args.quality.halts() {
         quality.spp = Some(Some(64));
     }
     let req = CreateSession {
-        scene: Some(scene_spec(&args.scene)?),
+        scene: Some(scene_spec(client, &args.scene).await?),
         width: Some(args.width),
         height: Some(args.height),
         quality: Some(quality),
@@ -301,7 +326,11 @@ const CREATE_GRACE: Duration = Duration::from_secs(10);
 /// Creates a session under `interrupt`: on a Ctrl-C while the request is out,
 /// waits (briefly) for the session the server may have made, deletes it, and
 /// fails with exit code 130.
-async fn create_guarded<F>(client: &Client, interrupt: &mut Interrupt, create: F) -> Result<SessionStatus, Failure>
+async fn create_guarded<F>(
+    client: &Client,
+    interrupt: &mut Interrupt,
+    create: F,
+) -> Result<SessionStatus, Failure>
 where
     F: std::future::Future<Output = Result<SessionStatus, Failure>>,
 {
@@ -319,7 +348,12 @@ where
 
 /// Runs `work` for a session this command created, then deletes the session
 /// whatever happened, Ctrl-C included (exit code 130).
-async fn owning<F>(client: &Client, id: &str, interrupt: &mut Interrupt, work: F) -> Result<(), Failure>
+async fn owning<F>(
+    client: &Client,
+    id: &str,
+    interrupt: &mut Interrupt,
+    work: F,
+) -> Result<(), Failure>
 where
     F: std::future::Future<Output = Result<(), Failure>>,
 {
@@ -337,19 +371,26 @@ where
 async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
     let kind = extension(&args.out)?;
     let mut interrupt = Interrupt::install()?;
-    let session = create_guarded(client, &mut interrupt, create(client, &args.create, true)).await?;
+    let session =
+        create_guarded(client, &mut interrupt, create(client, &args.create, true)).await?;
     let id = session.id.clone();
+    for w in &session.warnings {
+        eprintln!("warning: {w}");
+    }
     let work = async {
         let bar = ProgressBar::new(session.quality.spp.unwrap_or(0)).with_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         let status = loop {
             let s = client.session(&id).await?;
             bar.set_position(s.spp);
             bar.set_message(format!(
                 "error {}  {:.2} M paths/s",
-                s.error_estimate.map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),
+                s.error_estimate
+                    .map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),
                 s.samples_per_sec / 1e6
             ));
             if s.halted() {
@@ -372,7 +413,9 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
             status.width,
             status.height,
             status.spp,
-            status.error_estimate.map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),
+            status
+                .error_estimate
+                .map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),
             status.samples_per_sec / 1e6,
             status.backend,
             status.device,
@@ -395,9 +438,10 @@ async fn orbit(
     if frames == 0 {
         return Err(usage("--frames: must be at least 1".into()));
     }
-    std::fs::create_dir_all(out_dir).map_err(|e| Failure(1, format!("{}: {e}", out_dir.display())))?;
+    std::fs::create_dir_all(out_dir)
+        .map_err(|e| Failure(1, format!("{}: {e}", out_dir.display())))?;
     let req = CreateSession {
-        scene: Some(scene_spec(scene)?),
+        scene: Some(scene_spec(client, scene).await?),
         width: Some(size.0),
         height: Some(size.1),
         quality: Some(QualityPatch {
@@ -407,7 +451,10 @@ async fn orbit(
         backend: None,
     };
     let mut interrupt = Interrupt::install()?;
-    let session = create_guarded(client, &mut interrupt, async { Ok(client.create_session(&req).await?) }).await?;
+    let session = create_guarded(client, &mut interrupt, async {
+        Ok(client.create_session(&req).await?)
+    })
+    .await?;
     let id = session.id.clone();
     let work = async {
         let c = &session.camera;
@@ -421,14 +468,28 @@ async fn orbit(
         for i in 0..frames {
             let a = std::f64::consts::TAU * i as f64 / frames as f64;
             let (s, co) = a.sin_cos();
-            let kxv = [k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]];
+            let kxv = [
+                k[1] * v[2] - k[2] * v[1],
+                k[2] * v[0] - k[0] * v[2],
+                k[0] * v[1] - k[1] * v[0],
+            ];
             let kdv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
-            let r: [f64; 3] = std::array::from_fn(|j| v[j] * co + kxv[j] * s + k[j] * kdv * (1.0 - co));
+            let r: [f64; 3] =
+                std::array::from_fn(|j| v[j] * co + kxv[j] * s + k[j] * kdv * (1.0 - co));
             let position = [t[0] + r[0], t[1] + r[1], t[2] + r[2]];
             client
-                .set_camera(&id, &CameraPatch { position: Some(position), look_at: Some(t), ..CameraPatch::default() })
+                .set_camera(
+                    &id,
+                    &CameraPatch {
+                        position: Some(position),
+                        look_at: Some(t),
+                        ..CameraPatch::default()
+                    },
+                )
                 .await?;
-            let png = client.frame_png(&id, Some(spp), Some(Duration::from_secs(600))).await?;
+            let png = client
+                .frame_png(&id, Some(spp), Some(Duration::from_secs(600)))
+                .await?;
             write(&out_dir.join(format!("frame_{i:04}.png")), &png)?;
             bar.inc(1);
         }
@@ -456,15 +517,33 @@ async fn run(cli: Cli) -> Result<(), Failure> {
         Command::Status { id } => print_status(&client.session(&id).await?),
         Command::Camera(a) => print_status(
             &client
-                .set_camera(&a.id, &CameraPatch { position: a.position, look_at: a.look_at, up: a.up, vfov_deg: a.vfov_deg, near_clip: None })
+                .set_camera(
+                    &a.id,
+                    &CameraPatch {
+                        position: a.position,
+                        look_at: a.look_at,
+                        up: a.up,
+                        vfov_deg: a.vfov_deg,
+                        near_clip: None,
+                    },
+                )
                 .await?,
         ),
         Command::Light(a) => print_status(
             &client
-                .set_light(&a.id, &LightPatch { position: a.position, color: a.color, intensity: a.intensity })
+                .set_light(
+                    &a.id,
+                    &LightPatch {
+                        position: a.position,
+                        color: a.color,
+                        intensity: a.intensity,
+                    },
+                )
                 .await?,
         ),
-        Command::Quality { id, quality } => print_status(&client.set_quality(&id, &quality.patch()).await?),
+        Command::Quality { id, quality } => {
+            print_status(&client.set_quality(&id, &quality.patch()).await?)
+        }
         Command::Frame { id, min_spp, out } => {
             let bytes = match extension(&out)? {
                 "png" => client.frame_png(&id, min_spp, None).await?,
@@ -473,8 +552,31 @@ async fn run(cli: Cli) -> Result<(), Failure> {
             write(&out, &bytes)
         }
         Command::Delete { id } => Ok(client.delete_session(&id).await?),
-        Command::Stream { id, frames, out_dir } => {
-            std::fs::create_dir_all(&out_dir).map_err(|e| Failure(1, format!("{}: {e}", out_dir.display())))?;
+        Command::Upload { file } => {
+            println!(
+                "{}",
+                upload(&client, &file, &file.display().to_string()).await?
+            );
+            Ok(())
+        }
+        Command::Assets => {
+            let list = client.assets().await?;
+            for a in &list.assets {
+                println!(
+                    "{}  {}  {}  {} triangles  {} bytes",
+                    a.id, a.name, a.format, a.triangles, a.memory_bytes
+                );
+            }
+            Ok(())
+        }
+        Command::DeleteAsset { id } => Ok(client.delete_asset(&id).await?),
+        Command::Stream {
+            id,
+            frames,
+            out_dir,
+        } => {
+            std::fs::create_dir_all(&out_dir)
+                .map_err(|e| Failure(1, format!("{}: {e}", out_dir.display())))?;
             let mut stream = client.stream(&id).await?;
             let mut saved = 0;
             while saved < frames {
@@ -485,20 +587,42 @@ async fn run(cli: Cli) -> Result<(), Failure> {
                         saved += 1;
                     }
                     Some(Err(e)) => return Err(e.into()),
-                    None => return Err(Failure(3, format!("the stream ended after {saved} frames"))),
+                    None => {
+                        return Err(Failure(3, format!("the stream ended after {saved} frames")))
+                    }
                 }
             }
             Ok(())
         }
-        Command::Orbit { scene, center, frames, spp, width, height, out_dir } => {
-            orbit(&client, &scene, center, frames, spp, (width, height), &out_dir).await
+        Command::Orbit {
+            scene,
+            center,
+            frames,
+            spp,
+            width,
+            height,
+            out_dir,
+        } => {
+            orbit(
+                &client,
+                &scene,
+                center,
+                frames,
+                spp,
+                (width, height),
+                &out_dir,
+            )
+            .await
         }
     }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+    {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: {e}");
