@@ -11,6 +11,7 @@
 //   camera.js    camera and light input (moves, turns, colours)
 //   input.js     keys, mouse and touch
 //   panels.js    quality and light panels;  export.js  downloads, curl
+//   models.js    model files: picked or dropped, uploaded, rendered
 //   messages.js  the message bar and connection badge
 //   vec.js, format.js  small helpers
 
@@ -20,6 +21,7 @@ import "./js/export.js";
 import "./js/hud.js";
 import "./js/input.js";
 import { showMessage } from "./js/messages.js";
+import "./js/models.js";
 import "./js/panels.js";
 import { connect, resize, setScene } from "./js/session.js";
 import { intParam, state } from "./js/state.js";
@@ -29,7 +31,9 @@ import { drawChart } from "./js/chart.js";
 // ---------------------------------------------------------------- top bar
 
 el.scene.addEventListener("change", () => {
-  setScene(el.scene.value);
+  const w = state.want;
+  if (el.scene.value === "custom" && w.sceneJson) setScene(w.sceneJson, w.sceneLabel);
+  else setScene(el.scene.value);
   el.scene.blur(); // keys drive the view again
 });
 $("btn-resize").addEventListener("click", resize);

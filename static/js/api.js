@@ -42,18 +42,20 @@ export function authHeaders() {
   return state.token ? { authorization: `Bearer ${state.token}` } : {};
 }
 
-/** One API call; JSON in and out (or a Blob with as: "blob"). Asks for the
- *  token and retries on 401; throws ApiError with the server's message. */
+/** One API call; JSON in and out (or a Blob with as: "blob"); a Blob or File
+ *  body goes as raw bytes. Asks for the token and retries on 401; throws
+ *  ApiError with the server's message. */
 export async function api(method, path, body, { as = "json" } = {}) {
+  const raw = body instanceof Blob;
   for (;;) {
     const headers = authHeaders();
-    if (body !== undefined) headers["content-type"] = "application/json";
+    if (body !== undefined) headers["content-type"] = raw ? "application/octet-stream" : "application/json";
     let res;
     try {
       res = await fetch(`/api${path}`, {
         method,
         headers,
-        body: body === undefined ? undefined : JSON.stringify(body),
+        body: body === undefined || raw ? body : JSON.stringify(body),
         cache: "no-store",
       });
     } catch (e) {

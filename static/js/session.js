@@ -19,7 +19,20 @@ export function applyScene(status) {
   // Cornell box), at least 0.05 (the unit-sphere furnace).
   state.moveStep = Math.max(0.05, 0.02 * length(status.camera.position));
   state.want.scene = status.scene;
-  el.scene.value = status.scene;
+  showScene(status.scene);
+}
+
+/** Shows the scene in the scene picker; an uploaded model ("custom") under
+ *  its file name. */
+export function showScene(name) {
+  let option = [...el.scene.options].find((o) => o.value === name);
+  if (!option) {
+    option = document.createElement("option");
+    option.value = name;
+    el.scene.append(option);
+  }
+  if (name === "custom") option.textContent = state.want.sceneLabel || "custom";
+  el.scene.value = name;
 }
 
 export function pickLight(l) {
@@ -30,7 +43,7 @@ export function pickLight(l) {
  *  it replaces a lost one. */
 export async function createSession({ restore = false } = {}) {
   const w = state.want;
-  const body = { scene: w.scene, width: w.width, height: w.height };
+  const body = { scene: w.scene === "custom" && w.sceneJson ? w.sceneJson : w.scene, width: w.width, height: w.height };
   if (w.quality) body.quality = w.quality;
   const camera = restore ? clone(state.camera) : null;
   const light = restore ? clone(state.light) : null;
@@ -189,18 +202,28 @@ export async function resize() {
   });
 }
 
-export function setScene(name) {
-  if (!state.sessionId) return;
+/** Switches the session to a built-in scene (a name) or to scene JSON (an
+ *  object, shown as `label`). Resolves to the new status, or null when the
+ *  server refused it (its message is shown). */
+export function setScene(scene, label = null) {
+  if (!state.sessionId) return Promise.resolve(null);
   return replacing(async () => {
     try {
-      const status = await api("PUT", `/sessions/${state.sessionId}/scene`, name);
+      const status = await api("PUT", `/sessions/${state.sessionId}/scene`, scene);
       state.cameraDirty = false;
       state.lightDirty = false;
+      if (typeof scene !== "string") {
+        // The last model stays in the picker as "custom".
+        state.want.sceneJson = scene;
+        state.want.sceneLabel = label;
+      }
       applyScene(status);
       applyAnswer(status);
+      return status;
     } catch (e) {
       showMessage(e.message);
       if (state.status) el.scene.value = state.status.scene;
+      return null;
     }
   });
 }
@@ -255,7 +278,7 @@ export function applyStatus(s, fromStream = false) {
     if (!same(s.camera, state.camera)) state.camera = clone(s.camera);
     const l = s.light ? pickLight(s.light) : null;
     if (!same(l, state.light)) state.light = l;
-    if (s.scene !== el.scene.value && document.activeElement !== el.scene) el.scene.value = s.scene;
+    if (s.scene !== el.scene.value && document.activeElement !== el.scene) showScene(s.scene);
   }
   emit("settings", s);
 }

@@ -26,6 +26,9 @@ export const state = {
   /** What a new session is opened with (also after the server lost ours). */
   want: {
     scene: params.get("scene") || "cornell-glass",
+    /** The last uploaded model's scene JSON and file name (scene "custom"). */
+    sceneJson: null,
+    sceneLabel: null,
     width: intParam("width"),
     height: intParam("height"),
     quality: null,

@@ -1,0 +1,83 @@
+// Model files (.obj, .gltf, .glb, .ply): picked with the "open model" button
+// or dropped on the page, uploaded as an asset (POST /api/assets), and the
+// session switched to them; the server frames a model without a camera and
+// lights one without emitters by a default sky. What the server does not
+// render as given comes back as warnings, shown in the message bar.
+
+import { api } from "./api.js";
+import { $, el } from "./dom.js";
+import { showMessage } from "./messages.js";
+import { setScene } from "./session.js";
+
+const MODEL = /\.(obj|gltf|glb|ply)$/i;
+const picker = $("model-file");
+
+function size(bytes) {
+  if (bytes < 1024 * 1024) return `${(bytes / 1024).toFixed(1)} KiB`;
+  return `${(bytes / 1024 / 1024).toFixed(1)} MiB`;
+}
+
+/** Uploads one model file and renders it; resolves to the session status
+ *  (null when refused: the server's message is shown). */
+export async function openModel(file) {
+  if (!MODEL.test(file.name)) {
+    showMessage(`${file.name}: not a model file (.obj, .gltf, .glb or .ply)`);
+    return null;
+  }
+  el.body.dataset.upload = "uploading";
+  showMessage(`uploading ${file.name} (${size(file.size)})…`, "info", 0);
+  let asset;
+  try {
+    asset = await api("POST", `/assets?name=${encodeURIComponent(file.name)}`, file);
+  } catch (e) {
+    el.body.dataset.upload = "failed";
+    showMessage(`${file.name}: ${e.message}`);
+    return null;
+  }
+  const status = await setScene({ objects: [{ type: "model", asset: asset.id }] }, file.name);
+  el.body.dataset.upload = status ? "done" : "failed";
+  if (!status) return null;
+  const warnings = [...new Set([...(asset.warnings || []), ...(status.warnings || [])])];
+  const what = `${file.name}: ${asset.triangles.toLocaleString("en")} triangles`;
+  if (warnings.length) showMessage(`${what}. ${warnings.join("; ")}`, "info", 15000);
+  else showMessage(what, "info", 4000);
+  return status;
+}
+
+$("btn-model").addEventListener("click", () => picker.click());
+picker.addEventListener("change", () => {
+  const file = picker.files[0];
+  picker.value = ""; // the same file again is a new pick
+  if (file) openModel(file);
+});
+
+// Drop anywhere on the page; the render area shows where it goes.
+const hasFiles = (e) => [...(e.dataTransfer?.types || [])].includes("Files");
+let depth = 0;
+document.addEventListener("dragenter", (e) => {
+  if (!hasFiles(e)) return;
+  depth += 1;
+  el.viewport.classList.add("dropping");
+});
+document.addEventListener("dragleave", (e) => {
+  if (!hasFiles(e)) return;
+  depth = Math.max(0, depth - 1);
+  if (!depth) el.viewport.classList.remove("dropping");
+});
+document.addEventListener("dragover", (e) => {
+  if (!hasFiles(e)) return;
+  e.preventDefault();
+  e.dataTransfer.dropEffect = "copy";
+});
+document.addEventListener("drop", (e) => {
+  if (!hasFiles(e)) return;
+  e.preventDefault();
+  depth = 0;
+  el.viewport.classList.remove("dropping");
+  const files = [...e.dataTransfer.files];
+  const file = files.find((f) => MODEL.test(f.name)) || files[0];
+  if (files.length > 1) {
+    showMessage(`${files.length} files dropped: opening ${file.name} (one model file at a time; its textures and .mtl are not read)`, "info", 6000);
+  }
+  if (file) openModel(file);
+});

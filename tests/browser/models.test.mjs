@@ -1,0 +1,111 @@
+// Model files in the browser: an OBJ dropped on the page is uploaded, the
+// session switches to it and frames it, and the frame shows it at the
+// radiance a closed form gives; a broken file picked with the button is
+// refused with the server's message and leaves the session as it was.
+//
+//   node --test tests/browser/models.test.mjs
+
+import assert from "node:assert/strict";
+import { after, before, describe, it } from "node:test";
+import { canvasStats, freePort, launchBrowser, session, startServer, waitFor, waitFrame, watchConsole } from "./harness.mjs";
+
+const T = { timeout: 90000 };
+
+/** A closed cube of side 2 about the origin, 12 outward-facing triangles. */
+function cubeObj() {
+  const v = [];
+  for (let i = 0; i < 8; i++) v.push(`v ${i & 1 ? 1 : -1} ${i & 2 ? 1 : -1} ${i & 4 ? 1 : -1}`);
+  // Faces as corner quads (1-based), counter-clockwise seen from outside.
+  const quads = [[1, 3, 4, 2], [5, 6, 8, 7], [1, 2, 6, 5], [3, 7, 8, 4], [1, 5, 7, 3], [2, 4, 8, 6]];
+  const f = quads.flatMap(([a, b, c, d]) => [`f ${a} ${b} ${c}`, `f ${a} ${c} ${d}`]);
+  return [...v, ...f].join("\n") + "\n";
+}
+
+/** sRGB of linear radiance, as the server's PNG encodes it. */
+const srgb = (v) => 255 * (v <= 0.0031308 ? 12.92 * v : 1.055 * v ** (1 / 2.4) - 0.055);
+
+describe("model files in the browser", { timeout: 300000 }, () => {
+  let server;
+  let browser;
+  let page;
+  let errors;
+
+  before(async () => {
+    server = await startServer(await freePort());
+    browser = await launchBrowser();
+    page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+    page.setDefaultTimeout(30000);
+    errors = watchConsole(page);
+  });
+
+  after(async () => {
+    await browser?.close();
+    await server?.stop();
+  });
+
+  const id = () => page.evaluate(() => window.pathstream.sessionId);
+
+  it("an OBJ dropped on the page renders, framed, at the closed-form radiance", T, async () => {
+    await page.goto(`${server.base}/?scene=cornell&width=64&height=48`);
+    const first = await waitFrame(page, { spp: 2 });
+    const before = await id();
+    await page.evaluate((text) => {
+      const dt = new DataTransfer();
+      dt.items.add(new File([text], "cube.obj", { type: "model/obj" }));
+      const target = document.getElementById("view");
+      for (const type of ["dragenter", "dragover", "drop"]) {
+        target.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+      }
+    }, cubeObj());
+    await waitFor("the upload to finish", async () => (await page.evaluate(() => document.body.dataset.upload)) === "done");
+    assert.equal(await id(), before, "the same session switched scene");
+    const s = await session(server.base, before);
+    assert.equal(s.scene, "custom");
+    assert.ok(s.warnings.some((w) => /environment/.test(w)), JSON.stringify(s.warnings));
+    assert.ok(s.warnings.some((w) => /framed/.test(w)), JSON.stringify(s.warnings));
+    assert.equal(await page.$eval("#scene", (e) => e.selectedOptions[0].textContent), "cube.obj");
+    assert.match(await page.textContent("#message-text"), /cube\.obj: 12 triangles/);
+    const assets = await (await fetch(`${server.base}/api/assets`)).json();
+    assert.equal(assets.assets.length, 1);
+    assert.equal(assets.assets[0].name, "cube.obj");
+
+    // A convex diffuse object under a uniform sky of radiance 1 sees only
+    // sky: its radiance is its albedo (0.8, the default material), the
+    // sky's 1. The frame's centre shows the cube, its corner the sky.
+    await waitFrame(page, { spp: 16, after: first.generation });
+    const img = await canvasStats(page, 8);
+    const bw = img.width / 8;
+    const centre = (img.blocks[2 * bw + 3] + img.blocks[2 * bw + 4] + img.blocks[3 * bw + 3] + img.blocks[3 * bw + 4]) / 4;
+    const corner = img.blocks[0];
+    assert.ok(Math.abs(centre - srgb(0.8)) < 4, `centre ${centre.toFixed(1)}, expected ${srgb(0.8).toFixed(1)} (albedo 0.8)`);
+    assert.ok(corner > 254, `corner ${corner.toFixed(1)}, expected the sky (255)`);
+    assert.deepEqual(errors, []);
+  });
+
+  it("a broken file picked with the button is refused by name; the session keeps its scene", T, async () => {
+    const gen = Number(await page.evaluate(() => document.body.dataset.generation));
+    await page.setInputFiles("#model-file", {
+      name: "broken.ply",
+      mimeType: "application/octet-stream",
+      buffer: Buffer.from("ply\nformat ascii 1.0\nelement vertex 1\nend_header\n"),
+    });
+    await waitFor("the refusal", async () => (await page.evaluate(() => document.body.dataset.upload)) === "failed");
+    assert.match(await page.textContent("#message-text"), /broken\.ply/);
+    assert.equal(await page.isVisible("#message"), true);
+    const s = await session(server.base, await id());
+    assert.equal(s.scene, "custom");
+    assert.equal(s.generation, gen, "nothing changed");
+    // The console shows the refused request (400); nothing else.
+    const unexpected = errors.filter((e) => !/status of 400/.test(e));
+    assert.deepEqual(unexpected, []);
+  });
+
+  it("back to a built-in scene and to the model again from the scene picker", T, async () => {
+    const before = await id();
+    await page.selectOption("#scene", "cornell");
+    await waitFor("cornell", async () => (await session(server.base, before)).scene === "cornell");
+    await page.selectOption("#scene", "custom");
+    await waitFor("the model again", async () => (await session(server.base, before)).scene === "custom");
+    assert.equal(await page.$eval("#scene", (e) => e.selectedOptions[0].textContent), "cube.obj");
+  });
+});
