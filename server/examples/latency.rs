@@ -28,7 +28,9 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 #[tokio::main]
 async fn main() -> anyhow::Result<()> {
     if std::env::var_os("RUST_LOG").is_some() {
-        tracing_subscriber::fmt().with_env_filter(tracing_subscriber::EnvFilter::from_default_env()).init();
+        tracing_subscriber::fmt()
+            .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+            .init();
     }
     let size: u32 = arg("--size", "256").parse()?;
     let updates: usize = arg("--updates", "100").parse()?;
@@ -54,7 +56,9 @@ async fn main() -> anyhow::Result<()> {
         .await?;
     let id = created["id"].as_str().unwrap_or_default().to_owned();
     println!("session on {} ({})", created["backend"], created["device"]);
-    let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{}/api/sessions/{id}/ws", running.addr)).await?;
+    let (mut ws, _) =
+        tokio_tungstenite::connect_async(format!("ws://{}/api/sessions/{id}/ws", running.addr))
+            .await?;
 
     // Warm up: a few frames.
     let mut seen = 0;
@@ -67,13 +71,21 @@ async fn main() -> anyhow::Result<()> {
     for i in 0..updates {
         let z = 250.0 + (i % 2) as f64 * 20.0;
         let sent = Instant::now();
-        ws.send(Message::Text(json!({"camera": {"position": [50, 52, z]}}).to_string().into())).await?;
+        ws.send(Message::Text(
+            json!({"camera": {"position": [50, 52, z]}})
+                .to_string()
+                .into(),
+        ))
+        .await?;
         let target = i as u64 + 1; // generation after this update
         loop {
             match tokio::time::timeout(Duration::from_secs(30), ws.next()).await {
                 Ok(Some(Ok(Message::Text(t)))) => {
                     let v: Value = serde_json::from_str(t.as_str())?;
-                    if v["type"] == "stats" && v["generation"].as_u64() >= Some(target) && v["spp"].as_u64() > Some(0) {
+                    if v["type"] == "stats"
+                        && v["generation"].as_u64() >= Some(target)
+                        && v["spp"].as_u64() > Some(0)
+                    {
                         latencies.push(sent.elapsed().as_secs_f64() * 1e3);
                         break;
                     }
@@ -94,20 +106,30 @@ async fn main() -> anyhow::Result<()> {
     let t0 = Instant::now();
     let mut frames = 0;
     while t0.elapsed() < Duration::from_secs(3) {
-        if let Ok(Some(Ok(Message::Binary(_)))) = tokio::time::timeout(Duration::from_secs(3), ws.next()).await {
+        if let Ok(Some(Ok(Message::Binary(_)))) =
+            tokio::time::timeout(Duration::from_secs(3), ws.next()).await
+        {
             frames += 1;
         }
     }
-    println!("frames delivered: {:.1} per second", frames as f64 / t0.elapsed().as_secs_f64());
+    println!(
+        "frames delivered: {:.1} per second",
+        frames as f64 / t0.elapsed().as_secs_f64()
+    );
 
     // PNG encode time of one frame of this size (fast compression).
-    let pixels: Vec<[f32; 3]> = (0..size * size).map(|i| [(i % 7) as f32 / 7.0, 0.5, 0.25]).collect();
+    let pixels: Vec<[f32; 3]> = (0..size * size)
+        .map(|i| [(i % 7) as f32 / 7.0, 0.5, 0.25])
+        .collect();
     let t = Instant::now();
     let n = 20;
     for _ in 0..n {
         std::hint::black_box(encode_png(size, size, &pixels, &Tonemap::default())?);
     }
-    println!("PNG encode at {size}x{size}: {:.2} ms per frame", t.elapsed().as_secs_f64() * 1e3 / f64::from(n));
+    println!(
+        "PNG encode at {size}x{size}: {:.2} ms per frame",
+        t.elapsed().as_secs_f64() * 1e3 / f64::from(n)
+    );
     running.shutdown().await?;
     Ok(())
 }

@@ -3,7 +3,10 @@
 use pathstream::bench::meshes;
 
 fn main() {
-    let n: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(1_000_000);
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(1_000_000);
     if std::env::args().nth(2).as_deref() == Some("trace") {
         let set = meshes::ray_set(n);
         for _ in 0..3 {

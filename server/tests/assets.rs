@@ -71,12 +71,40 @@ async fn uploaded_meshes_and_models_render_in_sessions() {
     assert_eq!(status, 201, "{a}");
     let id = a["id"].as_str().expect("id").to_owned();
     assert_eq!(id, asset_id(&ply), "content-addressed");
-    assert_eq!((a["format"].as_str(), a["triangles"].as_u64(), a["deduplicated"].as_bool()), (Some("ply"), Some(320), Some(false)));
-    assert!(a["warnings"].as_array().expect("warnings").iter().any(|w| w.as_str().is_some_and(|w| w.contains("no materials"))), "{a}");
+    assert_eq!(
+        (
+            a["format"].as_str(),
+            a["triangles"].as_u64(),
+            a["deduplicated"].as_bool()
+        ),
+        (Some("ply"), Some(320), Some(false))
+    );
+    assert!(
+        a["warnings"]
+            .as_array()
+            .expect("warnings")
+            .iter()
+            .any(|w| w.as_str().is_some_and(|w| w.contains("no materials"))),
+        "{a}"
+    );
     // The same bytes again: the same asset.
     let (status, again) = upload(&base, "other-name.ply", ply).await;
-    assert_eq!((status, again["id"].as_str(), again["deduplicated"].as_bool()), (200, Some(id.as_str()), Some(true)));
-    let list: Value = client().get(format!("{base}/api/assets")).send().await.expect("req").json().await.expect("json");
+    assert_eq!(
+        (
+            status,
+            again["id"].as_str(),
+            again["deduplicated"].as_bool()
+        ),
+        (200, Some(id.as_str()), Some(true))
+    );
+    let list: Value = client()
+        .get(format!("{base}/api/assets"))
+        .send()
+        .await
+        .expect("req")
+        .json()
+        .await
+        .expect("json");
     assert_eq!(list["assets"].as_array().map(Vec::len), Some(1));
     assert!(list["memory_bytes"].as_u64().is_some_and(|m| m > 0));
 
@@ -98,16 +126,34 @@ async fn uploaded_meshes_and_models_render_in_sessions() {
     assert_eq!(s2["camera"]["position"], json!([0.3, 0.3, 3.0]), "{s2}");
 
     // Deleted: gone for new scenes, still rendered by the sessions using it.
-    let r = client().delete(format!("{base}/api/assets/{id}")).send().await.expect("req");
+    let r = client()
+        .delete(format!("{base}/api/assets/{id}"))
+        .send()
+        .await
+        .expect("req");
     assert_eq!(r.status(), 204);
-    let r = client().get(format!("{base}/api/assets/{id}")).send().await.expect("req");
+    let r = client()
+        .get(format!("{base}/api/assets/{id}"))
+        .send()
+        .await
+        .expect("req");
     assert_eq!(r.status(), 404);
     let r = patch(&base, &sid, "camera", json!({"vfov_deg": 50})).await;
     assert_eq!(r.status(), 200, "{:?}", r.text().await);
-    let r = client().post(format!("{base}/api/sessions")).json(&json!({"scene": {"objects": [{"type": "mesh", "asset": id, "material": "x"}]}})).send().await.expect("req");
+    let r = client()
+        .post(format!("{base}/api/sessions"))
+        .json(&json!({"scene": {"objects": [{"type": "mesh", "asset": id, "material": "x"}]}}))
+        .send()
+        .await
+        .expect("req");
     assert_eq!(r.status(), 400);
     let e: Value = r.json().await.expect("json");
-    assert!(e["error"].as_str().is_some_and(|e| e.contains("objects[0].asset") && e.contains("no asset")), "{e}");
+    assert!(
+        e["error"]
+            .as_str()
+            .is_some_and(|e| e.contains("objects[0].asset") && e.contains("no asset")),
+        "{e}"
+    );
     running.shutdown().await;
 }
 
@@ -123,10 +169,20 @@ async fn every_bad_upload_or_reference_is_a_4xx_naming_the_problem() {
     let cases: Vec<(&str, Vec<u8>, u16, &str)> = vec![
         ("big.ply", vec![b'x'; 70 * 1024], 413, "limit"),
         ("empty.ply", Vec::new(), 400, "empty"),
-        ("notes.txt", b"hello, world".to_vec(), 400, "not a model file"),
+        (
+            "notes.txt",
+            b"hello, world".to_vec(),
+            400,
+            "not a model file",
+        ),
         ("cut.ply", cut, 400, "truncated"),
         ("nan.obj", nan_obj, 400, "line 2"),
-        ("garbage.glb", b"glTF\x02\0\0\0\xff\xff\xff\x7f".to_vec(), 400, "garbage.glb"),
+        (
+            "garbage.glb",
+            b"glTF\x02\0\0\0\xff\xff\xff\x7f".to_vec(),
+            400,
+            "garbage.glb",
+        ),
     ];
     for (name, bytes, code, expect) in cases {
         let (status, body) = upload(&base, name, bytes).await;
@@ -137,30 +193,65 @@ async fn every_bad_upload_or_reference_is_a_4xx_naming_the_problem() {
     // Refused from Content-Length alone, before any of the body is sent.
     let addr = base.trim_start_matches("http://");
     let mut tcp = std::net::TcpStream::connect(addr).expect("connect");
-    tcp.set_read_timeout(Some(Duration::from_secs(10))).expect("timeout");
+    tcp.set_read_timeout(Some(Duration::from_secs(10)))
+        .expect("timeout");
     write!(tcp, "POST /api/assets?name=x.ply HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\nContent-Length: 1000000000\r\n\r\n").expect("write");
     let mut head = [0u8; 64];
     let n = tcp.read(&mut head).expect("an answer without the body");
-    assert!(String::from_utf8_lossy(&head[..n]).starts_with("HTTP/1.1 413"), "{}", String::from_utf8_lossy(&head[..n]));
+    assert!(
+        String::from_utf8_lossy(&head[..n]).starts_with("HTTP/1.1 413"),
+        "{}",
+        String::from_utf8_lossy(&head[..n])
+    );
 
     // Scenes: files are never read, unknown assets and too many triangles refused.
     let (_, ball) = upload(&base, "ball.ply", ball_ply()).await;
     let scenes = [
-        (json!({"objects": [{"type": "mesh", "file": "/etc/passwd", "material": "m"}], "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}), "objects[0].file"),
-        (json!({"objects": [{"type": "mesh", "asset": "0123", "material": "m"}], "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}), "objects[0].asset"),
-        (json!({"objects": [{"type": "mesh", "data": {"positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]}}]}), "objects[0].material"),
-        (json!({"objects": [{"type": "mesh", "data": {"positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 7]]}, "material": "m"}],
-            "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}), "objects[0].data: triangle 0: vertex index 7"),
-        (json!({"objects": [{"type": "mesh", "asset": ball["id"], "material": "m"}], "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}), "320 triangles"),
-        (json!({"objects": [{"type": "model", "asset": ball["id"], "transform": {"scale": 0}}]}), "objects[0].transform.scale"),
+        (
+            json!({"objects": [{"type": "mesh", "file": "/etc/passwd", "material": "m"}], "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}),
+            "objects[0].file",
+        ),
+        (
+            json!({"objects": [{"type": "mesh", "asset": "0123", "material": "m"}], "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}),
+            "objects[0].asset",
+        ),
+        (
+            json!({"objects": [{"type": "mesh", "data": {"positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]}}]}),
+            "objects[0].material",
+        ),
+        (
+            json!({"objects": [{"type": "mesh", "data": {"positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 7]]}, "material": "m"}],
+            "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}),
+            "objects[0].data: triangle 0: vertex index 7",
+        ),
+        (
+            json!({"objects": [{"type": "mesh", "asset": ball["id"], "material": "m"}], "materials": {"m": {"type": "diffuse", "albedo": [1, 1, 1]}}}),
+            "320 triangles",
+        ),
+        (
+            json!({"objects": [{"type": "model", "asset": ball["id"], "transform": {"scale": 0}}]}),
+            "objects[0].transform.scale",
+        ),
     ];
     for (scene, expect) in scenes {
-        let r = client().post(format!("{base}/api/sessions")).json(&json!({"scene": scene})).send().await.expect("req");
+        let r = client()
+            .post(format!("{base}/api/sessions"))
+            .json(&json!({"scene": scene}))
+            .send()
+            .await
+            .expect("req");
         assert_eq!(r.status(), 400, "{scene}");
         let e: Value = r.json().await.expect("json");
-        assert!(e["error"].as_str().is_some_and(|e| e.contains(expect)), "expected '{expect}' in {e}");
+        assert!(
+            e["error"].as_str().is_some_and(|e| e.contains(expect)),
+            "expected '{expect}' in {e}"
+        );
     }
-    let r = client().delete(format!("{base}/api/assets/nothing")).send().await.expect("req");
+    let r = client()
+        .delete(format!("{base}/api/assets/nothing"))
+        .send()
+        .await
+        .expect("req");
     assert_eq!(r.status(), 404);
     running.shutdown().await;
 }
@@ -172,6 +263,11 @@ async fn a_full_asset_store_answers_507() {
     let (running, base) = server(cfg).await;
     let (status, body) = upload(&base, "ball.ply", ball_ply()).await;
     assert_eq!(status, 507, "{body}");
-    assert!(body["error"].as_str().is_some_and(|e| e.contains("DELETE /api/assets")), "{body}");
+    assert!(
+        body["error"]
+            .as_str()
+            .is_some_and(|e| e.contains("DELETE /api/assets")),
+        "{body}"
+    );
     running.shutdown().await;
 }

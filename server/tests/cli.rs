@@ -17,7 +17,9 @@ fn text(bytes: &[u8]) -> String {
 
 fn render(dir: &Path, file: &str, extra: &[&str]) -> (Output, std::path::PathBuf) {
     let out = dir.join(file);
-    let mut args = vec!["render", "--scene", "cornell", "--width", "16", "--height", "12"];
+    let mut args = vec![
+        "render", "--scene", "cornell", "--width", "16", "--height", "12",
+    ];
     args.extend_from_slice(extra);
     let out_str = out.to_str().expect("utf-8 path").to_owned();
     args.extend_from_slice(&["--out", &out_str]);
@@ -29,13 +31,26 @@ fn scenes_lists_every_builtin_and_prints_json() {
     let out = pathstream(&["scenes"]);
     assert!(out.status.success());
     let listing = text(&out.stdout);
-    for name in ["cornell", "cornell-glass", "cornell-quads", "smallpt", "furnace"] {
-        assert!(listing.lines().any(|l| l.starts_with(name)), "{name} missing:\n{listing}");
+    for name in [
+        "cornell",
+        "cornell-glass",
+        "cornell-quads",
+        "smallpt",
+        "furnace",
+    ] {
+        assert!(
+            listing.lines().any(|l| l.starts_with(name)),
+            "{name} missing:\n{listing}"
+        );
     }
     let out = pathstream(&["scenes", "--json", "smallpt"]);
     assert!(out.status.success());
-    let scene = pathstream::render::Scene::from_json_str(&text(&out.stdout)).expect("valid scene JSON");
-    assert_eq!(scene, pathstream::render::Scene::load("smallpt").expect("smallpt"));
+    let scene =
+        pathstream::render::Scene::from_json_str(&text(&out.stdout)).expect("valid scene JSON");
+    assert_eq!(
+        scene,
+        pathstream::render::Scene::load("smallpt").expect("smallpt")
+    );
 }
 
 #[test]
@@ -47,7 +62,11 @@ fn render_writes_a_png_and_prints_one_summary_line() {
     assert_eq!((img.width(), img.height()), (16, 12));
     let summary = text(&out.stdout);
     assert_eq!(summary.lines().count(), 1, "{summary}");
-    for part in ["cornell 16x12: 8 spp in ", " M paths/s, error estimate ", "%, backend cpu (rayon, "] {
+    for part in [
+        "cornell 16x12: 8 spp in ",
+        " M paths/s, error estimate ",
+        "%, backend cpu (rayon, ",
+    ] {
         assert!(summary.contains(part), "'{part}' missing from: {summary}");
     }
 }
@@ -55,7 +74,11 @@ fn render_writes_a_png_and_prints_one_summary_line() {
 #[test]
 fn render_writes_a_linear_pfm() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (out, path) = render(dir.path(), "a.pfm", &["--spp", "4", "--nee", "off", "--filter", "box"]);
+    let (out, path) = render(
+        dir.path(),
+        "a.pfm",
+        &["--spp", "4", "--nee", "off", "--filter", "box"],
+    );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let bytes = std::fs::read(path).expect("file");
     let (w, h, rgb) = pathstream::render::output::decode_pfm(&bytes).expect("PFM");
@@ -85,9 +108,12 @@ fn time_and_error_halts_end_the_render() {
 fn bad_input_exits_2_with_a_message_naming_the_problem() {
     let dir = tempfile::tempdir().expect("tempdir");
     let bad_scene = dir.path().join("bad.json");
-    std::fs::write(&bad_scene, r#"{"camera": {"position": [0,0,1], "look_at": [0,0,0], "vfov_deg": 40},
+    std::fs::write(
+        &bad_scene,
+        r#"{"camera": {"position": [0,0,1], "look_at": [0,0,0], "vfov_deg": 40},
         "materials": {"m": {"type": "diffuse", "albedo": [1,1,1]}},
-        "objects": [{"type": "sphere", "center": [0,0,0], "radius": -1, "material": "m"}]}"#)
+        "objects": [{"type": "sphere", "center": [0,0,0], "radius": -1, "material": "m"}]}"#,
+    )
     .expect("write");
     let bad_scene = bad_scene.to_str().expect("utf-8").to_owned();
     let cases: Vec<(Vec<&str>, &str)> = vec![
@@ -108,9 +134,18 @@ fn bad_input_exits_2_with_a_message_naming_the_problem() {
         assert!(err.contains(needle), "{extra:?}: '{needle}' not in: {err}");
     }
     let scene_cases = [
-        (vec!["render", "--scene", "nope", "--out", "x.png"], "'nope' is neither a built-in scene"),
-        (vec!["render", "--scene", &bad_scene, "--out", "x.png"], "objects[0].radius: must be > 0"),
-        (vec!["render", "--scene", "cornell", "--out", "x.jpg"], "--out: unsupported output format"),
+        (
+            vec!["render", "--scene", "nope", "--out", "x.png"],
+            "'nope' is neither a built-in scene",
+        ),
+        (
+            vec!["render", "--scene", &bad_scene, "--out", "x.png"],
+            "objects[0].radius: must be > 0",
+        ),
+        (
+            vec!["render", "--scene", "cornell", "--out", "x.jpg"],
+            "--out: unsupported output format",
+        ),
         (vec!["render", "--scene", "cornell"], "--out"),
         (vec!["scenes", "--json", "nope"], "unknown scene 'nope'"),
     ];
@@ -128,16 +163,40 @@ fn help_documents_every_render_flag() {
     let out = pathstream(&["render", "--help"]);
     let help = text(&out.stdout);
     for flag in [
-        "--scene", "--width", "--height", "--spp", "--time-ms", "--target-error", "--max-depth", "--rr-depth",
-        "--nee", "--filter", "--clamp", "--seed", "--backend", "--exposure", "--out", "--preset",
+        "--scene",
+        "--width",
+        "--height",
+        "--spp",
+        "--time-ms",
+        "--target-error",
+        "--max-depth",
+        "--rr-depth",
+        "--nee",
+        "--filter",
+        "--clamp",
+        "--seed",
+        "--backend",
+        "--exposure",
+        "--out",
+        "--preset",
     ] {
         assert!(help.contains(flag), "{flag} missing from render --help");
     }
     let out = pathstream(&["bench", "--help"]);
     let help = text(&out.stdout);
     for flag in [
-        "--backend", "--device", "--sections", "--scenes", "--quick", "--out", "--cache", "--trade-size",
-        "--trade-seconds", "--throughput-seconds", "--reference-error", "--reference-seconds",
+        "--backend",
+        "--device",
+        "--sections",
+        "--scenes",
+        "--quick",
+        "--out",
+        "--cache",
+        "--trade-size",
+        "--trade-seconds",
+        "--throughput-seconds",
+        "--reference-error",
+        "--reference-seconds",
     ] {
         assert!(help.contains(flag), "{flag} missing from bench --help");
     }
@@ -154,7 +213,11 @@ fn diff_measures_relative_error_against_a_reference() {
     assert_eq!(text(&same.stdout).trim(), "relative RMS error 0.0000%");
     let other = pathstream(&["diff", pa, pb]);
     assert!(other.status.success());
-    assert!(!text(&other.stdout).contains(" 0.0000%"), "{}", text(&other.stdout));
+    assert!(
+        !text(&other.stdout).contains(" 0.0000%"),
+        "{}",
+        text(&other.stdout)
+    );
     let missing = pathstream(&["diff", pa, "/nonexistent.pfm"]);
     assert_eq!(missing.status.code(), Some(2));
     assert!(text(&missing.stderr).contains("/nonexistent.pfm"));
@@ -170,14 +233,26 @@ fn serve_prints_its_url_and_survives_a_closed_stdout() {
         .spawn()
         .expect("starts");
     let mut line = String::new();
-    BufReader::new(child.stdout.take().expect("stdout")).read_line(&mut line).expect("a line");
+    BufReader::new(child.stdout.take().expect("stdout"))
+        .read_line(&mut line)
+        .expect("a line");
     // The reader is gone now: later writes to stdout fail, and must not kill the server.
-    let url = line.split_whitespace().find(|w| w.starts_with("http://")).expect("a URL").to_owned();
-    let addr = url.trim_start_matches("http://").trim_end_matches('/').to_owned();
+    let url = line
+        .split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .expect("a URL")
+        .to_owned();
+    let addr = url
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_owned();
     std::thread::sleep(std::time::Duration::from_millis(500));
     let mut stream = std::net::TcpStream::connect(&addr).expect("still listening");
     stream
-        .write_all(format!("GET /api/health HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").as_bytes())
+        .write_all(
+            format!("GET /api/health HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n")
+                .as_bytes(),
+        )
         .expect("request");
     let mut answer = String::new();
     stream.read_to_string(&mut answer).expect("answer");
@@ -198,16 +273,61 @@ fn a_preset_sets_the_path_knobs_and_flags_override_it() {
     };
     for preset in Preset::ALL {
         let q = Preset::apply(preset, Quality::default());
-        let (depth, rr, clamp) = (q.max_depth.to_string(), q.rr_depth.to_string(), q.clamp.to_string());
-        let explicit =
-            ["--spp", "3", "--max-depth", &depth, "--rr-depth", &rr, "--clamp", &clamp, "--nee", "on", "--filter", "tent2x2"];
+        let (depth, rr, clamp) = (
+            q.max_depth.to_string(),
+            q.rr_depth.to_string(),
+            q.clamp.to_string(),
+        );
+        let explicit = [
+            "--spp",
+            "3",
+            "--max-depth",
+            &depth,
+            "--rr-depth",
+            &rr,
+            "--clamp",
+            &clamp,
+            "--nee",
+            "on",
+            "--filter",
+            "tent2x2",
+        ];
         let a = bytes("a.pfm", &["--spp", "3", "--preset", preset.name()]);
-        assert_eq!(a, bytes("b.pfm", &explicit), "{} = its settings", preset.name());
+        assert_eq!(
+            a,
+            bytes("b.pfm", &explicit),
+            "{} = its settings",
+            preset.name()
+        );
     }
     // A flag beside the preset wins over it.
-    let a = bytes("c.pfm", &["--spp", "3", "--preset", "reference", "--max-depth", "1"]);
-    assert_eq!(a, bytes("d.pfm", &["--spp", "3", "--max-depth", "1", "--rr-depth", "5", "--clamp", "0"]));
-    let out = pathstream(&["render", "--scene", "cornell", "--preset", "fast", "--out", "x.png"]);
+    let a = bytes(
+        "c.pfm",
+        &["--spp", "3", "--preset", "reference", "--max-depth", "1"],
+    );
+    assert_eq!(
+        a,
+        bytes(
+            "d.pfm",
+            &[
+                "--spp",
+                "3",
+                "--max-depth",
+                "1",
+                "--rr-depth",
+                "5",
+                "--clamp",
+                "0"
+            ]
+        )
+    );
+    let out = pathstream(&[
+        "render", "--scene", "cornell", "--preset", "fast", "--out", "x.png",
+    ]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(text(&out.stderr).contains("preview, interactive, final, reference"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("preview, interactive, final, reference"),
+        "{}",
+        text(&out.stderr)
+    );
 }

@@ -11,9 +11,15 @@ use pathstream::render::Quality;
 #[test]
 fn same_seed_gives_identical_bytes_with_one_and_two_threads() {
     let s = scene("cornell-glass");
-    let q = Quality { seed: 42, ..Quality::default() };
+    let q = Quality {
+        seed: 42,
+        ..Quality::default()
+    };
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
         pool.install(|| {
             let film = render(&s, 24, 16, &q, 16);
             encode_pfm(24, 16, &film.mean())
@@ -23,7 +29,11 @@ fn same_seed_gives_identical_bytes_with_one_and_two_threads() {
     assert_eq!(one, run(2), "1 vs 2 threads");
     assert_eq!(one, run(2), "run to run");
     let other = render(&s, 24, 16, &Quality { seed: 43, ..q }, 16);
-    assert_ne!(one, encode_pfm(24, 16, &other.mean()), "another seed changes the image");
+    assert_ne!(
+        one,
+        encode_pfm(24, 16, &other.mean()),
+        "another seed changes the image"
+    );
 }
 
 #[test]
@@ -46,14 +56,27 @@ fn splitting_samples_into_passes_does_not_change_the_image() {
 fn the_wide_kernels_give_the_portable_image_bit_for_bit() {
     use pathstream::render::backend::CpuBackend;
     use pathstream::render::{Film, RenderJob};
-    for (name, max_depth, nee) in [("smallpt", 0, false), ("cornell-glass", 6, true), ("cornell", 6, true)] {
+    for (name, max_depth, nee) in [
+        ("smallpt", 0, false),
+        ("cornell-glass", 6, true),
+        ("cornell", 6, true),
+    ] {
         let s = scene(name);
-        let q = Quality { max_depth, nee, ..Quality::default() };
+        let q = Quality {
+            max_depth,
+            nee,
+            ..Quality::default()
+        };
         let job = RenderJob::new(&s, 32, 24, &q);
         let (mut wide, mut portable) = (Film::new(32, 24), Film::new(32, 24));
         CpuBackend::default().render(&job, &mut wide, 16);
-        CpuBackend::default().portable_only().render(&job, &mut portable, 16);
-        assert!(wide.pixels() == portable.pixels(), "{name}: the images differ");
+        CpuBackend::default()
+            .portable_only()
+            .render(&job, &mut portable, 16);
+        assert!(
+            wide.pixels() == portable.pixels(),
+            "{name}: the images differ"
+        );
     }
 }
 
@@ -69,7 +92,10 @@ fn error_estimate_tracks_the_true_error() {
     // either direction, while staying unbiased).
     for name in ["cornell", "cornell-glass", "smallpt"] {
         let s = scene(name);
-        let q = Quality { clamp: 4.0, ..Quality::default() };
+        let q = Quality {
+            clamp: 4.0,
+            ..Quality::default()
+        };
         let reference = render(&s, 32, 32, &Quality { seed: 1, ..q }, 8192).mean();
         for spp in [16u64, 64, 256] {
             let (mut estimate2, mut truth2) = (0.0, 0.0);

@@ -17,13 +17,21 @@ fn depth_capped_furnace_is_exact_with_and_without_nee() {
         for depth in [1u32, 2, 3, 5, 8] {
             let expected = e * (1.0 - a.powi(depth as i32 + 1)) / (1.0 - a);
             for nee in [true, false] {
-                let q = Quality { max_depth: depth, rr_depth: 1000, nee, ..Quality::default() };
+                let q = Quality {
+                    max_depth: depth,
+                    rr_depth: 1000,
+                    nee,
+                    ..Quality::default()
+                };
                 let film = render(&s, 8, 8, &q, 8);
                 assert_clean(&film, "furnace");
                 for px in film.mean() {
                     for v in px {
                         let rel = (f64::from(v) - expected).abs() / expected;
-                        assert!(rel < 1e-5, "a {a} E {e} depth {depth} nee {nee}: {v} vs {expected}");
+                        assert!(
+                            rel < 1e-5,
+                            "a {a} E {e} depth {depth} nee {nee}: {v} vs {expected}"
+                        );
                     }
                 }
             }
@@ -35,10 +43,23 @@ fn depth_capped_furnace_is_exact_with_and_without_nee() {
 fn unbounded_furnace_converges_to_e_over_one_minus_a() {
     for nee in [true, false] {
         let s = furnace(0.5, 0.5);
-        let q = Quality { max_depth: 0, rr_depth: 2, nee, filter: Filter::Box, ..Quality::default() };
+        let q = Quality {
+            max_depth: 0,
+            rr_depth: 2,
+            nee,
+            filter: Filter::Box,
+            ..Quality::default()
+        };
         let film = render(&s, 16, 16, &q, 256);
         assert_clean(&film, "furnace");
-        assert_mean(&film, 4, 1.0, 4.5, 0.0, &format!("unbounded furnace, nee {nee}"));
+        assert_mean(
+            &film,
+            4,
+            1.0,
+            4.5,
+            0.0,
+            &format!("unbounded furnace, nee {nee}"),
+        );
         // The estimate must also be noisy only as much as RR makes it.
         let e = film.error_estimate().expect("estimate");
         assert!(e < 0.05, "error estimate {e}");
@@ -52,7 +73,12 @@ fn an_albedo_one_glass_sphere_in_the_furnace_is_invisible() {
         let mut json = furnace(0.5, 0.5).to_json();
         json.materials.insert(
             "clear".into(),
-            MaterialJson::Glass(GlassJson { ior: 1.5, albedo: None, fresnel, emission: None }),
+            MaterialJson::Glass(GlassJson {
+                ior: 1.5,
+                albedo: None,
+                fresnel,
+                emission: None,
+            }),
         );
         json.objects.push(ObjectJson::Sphere(SphereJson {
             center: [0.1, -0.05, -0.5],
@@ -61,10 +87,22 @@ fn an_albedo_one_glass_sphere_in_the_furnace_is_invisible() {
         }));
         let s = Scene::from_json(&json).expect("valid");
         for nee in [true, false] {
-            let q = Quality { max_depth: 0, rr_depth: 4, nee, ..Quality::default() };
+            let q = Quality {
+                max_depth: 0,
+                rr_depth: 4,
+                nee,
+                ..Quality::default()
+            };
             let film = render(&s, 16, 16, &q, 256);
             assert_clean(&film, "glass furnace");
-            assert_mean(&film, 4, 1.0, 4.5, 0.0, &format!("glass ({fresnel:?}) in furnace, nee {nee}"));
+            assert_mean(
+                &film,
+                4,
+                1.0,
+                4.5,
+                0.0,
+                &format!("glass ({fresnel:?}) in furnace, nee {nee}"),
+            );
         }
     }
 }

@@ -27,10 +27,18 @@ fn soup(n: usize, seed: u64) -> MeshData {
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
     for i in 0..n {
-        let c = [s.next_f32() * 80.0 + 10.0, s.next_f32() * 60.0 + 10.0, s.next_f32() * 120.0 + 20.0];
+        let c = [
+            s.next_f32() * 80.0 + 10.0,
+            s.next_f32() * 60.0 + 10.0,
+            s.next_f32() * 120.0 + 20.0,
+        ];
         let base = positions.len() as u32;
         for _ in 0..3 {
-            positions.push([c[0] + s.next_f32() * 12.0 - 6.0, c[1] + s.next_f32() * 12.0 - 6.0, c[2] + s.next_f32() * 12.0 - 6.0]);
+            positions.push([
+                c[0] + s.next_f32() * 12.0 - 6.0,
+                c[1] + s.next_f32() * 12.0 - 6.0,
+                c[2] + s.next_f32() * 12.0 - 6.0,
+            ]);
         }
         // Every fourth triangle reuses two vertices of the one before.
         if i % 4 == 3 {
@@ -39,7 +47,13 @@ fn soup(n: usize, seed: u64) -> MeshData {
             triangles.push([base, base + 1, base + 2]);
         }
     }
-    MeshData { name: "soup".into(), positions, normals: None, triangles, materials: vec![0; n] }
+    MeshData {
+        name: "soup".into(),
+        positions,
+        normals: None,
+        triangles,
+        materials: vec![0; n],
+    }
 }
 
 /// cornell-glass with a soup of triangles and an icosphere placed twice
@@ -47,11 +61,26 @@ fn soup(n: usize, seed: u64) -> MeshData {
 fn mixed_scene() -> Scene {
     let mut j = scene_json("cornell-glass");
     let objects = j["objects"].as_array_mut().expect("objects");
-    objects.push(mesh_object(&soup(300, 1), "white", serde_json::Value::Null, false));
+    objects.push(mesh_object(
+        &soup(300, 1),
+        "white",
+        serde_json::Value::Null,
+        false,
+    ));
     let ball = icosphere(2);
-    objects.push(mesh_object(&ball, "mirror", json!({"translate": [30, 50, 100], "scale": [8, 5, 11],
-        "rotate": {"axis": [1, 2, 3], "deg": 40}}), true));
-    objects.push(mesh_object(&ball, "white", json!({"translate": [70, 60, 40], "scale": 6}), false));
+    objects.push(mesh_object(
+        &ball,
+        "mirror",
+        json!({"translate": [30, 50, 100], "scale": [8, 5, 11],
+        "rotate": {"axis": [1, 2, 3], "deg": 40}}),
+        true,
+    ));
+    objects.push(mesh_object(
+        &ball,
+        "white",
+        json!({"translate": [70, 60, 40], "scale": 6}),
+        false,
+    ));
     Scene::from_json_value(j).expect("valid")
 }
 
@@ -62,7 +91,11 @@ fn agree(world: &World, (lo, hi): (DVec3, DVec3), rays: u64, seed: u64, what: &s
     let (mut hits, mut on_surface) = (0u64, 0u64);
     for i in 0..rays {
         let mut s = Sampler::new(seed, i, 0);
-        let u = DVec3::new(f64::from(s.next_f32()), f64::from(s.next_f32()), f64::from(s.next_f32()));
+        let u = DVec3::new(
+            f64::from(s.next_f32()),
+            f64::from(s.next_f32()),
+            f64::from(s.next_f32()),
+        );
         let world_point = lo + (hi - lo) * u;
         let o = Vec3A::from((world_point - world.origin).as_vec3());
         let ray = Ray::new(o, unit(&mut s));
@@ -74,14 +107,25 @@ fn agree(world: &World, (lo, hi): (DVec3, DVec3), rays: u64, seed: u64, what: &s
         // A ray leaving that surface, into a random direction.
         let surface = world.surface(&hit, &ray);
         let dir = unit(&mut s);
-        let from = Origin { object: hit.object, prim: hit.prim, entering: dir.dot(surface.ng) < 0.0 };
+        let from = Origin {
+            object: hit.object,
+            prim: hit.prim,
+            entering: dir.dot(surface.ng) < 0.0,
+        };
         let next = world.spawn(&surface, dir);
         let fast = world.intersect(Portable, &next, from);
         let slow = world.intersect_brute(&next, from);
-        assert_eq!(fast, slow, "{what}: ray {i} leaving object {} prim {}", hit.object, hit.prim);
+        assert_eq!(
+            fast, slow,
+            "{what}: ray {i} leaving object {} prim {}",
+            hit.object, hit.prim
+        );
         on_surface += u64::from(fast.is_some());
     }
-    assert!(hits > rays / 4, "{what}: only {hits} of {rays} rays hit anything");
+    assert!(
+        hits > rays / 4,
+        "{what}: only {hits} of {rays} rays hit anything"
+    );
     eprintln!("{what}: {hits} hits, {on_surface} secondary hits, all equal to brute force");
 }
 
@@ -96,9 +140,21 @@ fn bvh_nearest_hit_equals_brute_force_on_random_meshes() {
     let offset = DVec3::new(1e4, -3e4, 2e4);
     let far = s.translated(offset);
     let world = World::new(&far, far.camera.position);
-    agree(&world, (the_box.0 + offset, the_box.1 + offset), 100_000, 2, "mixed scene moved 4e4 away");
+    agree(
+        &world,
+        (the_box.0 + offset, the_box.1 + offset),
+        100_000,
+        2,
+        "mixed scene moved 4e4 away",
+    );
     // And rays from far outside the box, meeting the walls from behind.
-    agree(&world, (the_box.0, the_box.1), 100_000, 4, "mixed scene seen from 4e4 away");
+    agree(
+        &world,
+        (the_box.0, the_box.1),
+        100_000,
+        4,
+        "mixed scene seen from 4e4 away",
+    );
 }
 
 #[test]
@@ -109,7 +165,11 @@ fn bvh_nearest_hit_equals_brute_force_on_every_built_in_scene() {
         assert!(bvh.uses_bvh());
         let c = s.camera.position;
         let around = if name == "furnace" { 0.5 } else { 60.0 };
-        let region = (c - DVec3::splat(around) - DVec3::new(0.0, 0.0, if name == "furnace" { 0.0 } else { 150.0 }), c + DVec3::splat(around));
+        let region = (
+            c - DVec3::splat(around)
+                - DVec3::new(0.0, 0.0, if name == "furnace" { 0.0 } else { 150.0 }),
+            c + DVec3::splat(around),
+        );
         agree(&bvh, region, 100_000, 3, &format!("{name} through the BVH"));
         let scan = World::new(&s, s.camera.position);
         assert!(!scan.uses_bvh(), "{name} is scanned");
@@ -125,9 +185,18 @@ fn rays_at_shared_edges_and_vertices_never_escape_a_closed_mesh() {
         "materials": {"m": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}, "objects": []});
     j["objects"] = json!([mesh_object(&ball, "m", serde_json::Value::Null, false)]);
     let identity = Scene::from_json_value(j.clone()).expect("valid");
-    j["objects"] = json!([mesh_object(&ball, "m", json!({"scale": [3, 0.7, 1.3], "rotate": {"axis": [1, 1, 0], "deg": 33}}), false)]);
+    j["objects"] = json!([mesh_object(
+        &ball,
+        "m",
+        json!({"scale": [3, 0.7, 1.3], "rotate": {"axis": [1, 1, 0], "deg": 33}}),
+        false
+    )]);
     let transformed = Scene::from_json_value(j).expect("valid");
-    let edges: Vec<(u32, u32)> = ball.triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
+    let edges: Vec<(u32, u32)> = ball
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .collect();
     for (scene, exact) in [(&identity, true), (&transformed, false)] {
         // The camera, hence the render origin, is the world origin: with the
         // identity placement object space is camera space exactly, so the
@@ -143,7 +212,10 @@ fn rays_at_shared_edges_and_vertices_never_escape_a_closed_mesh() {
                 Vec3A::from(ball.positions[(i / 5) as usize % ball.positions.len()])
             } else {
                 let (a, b) = edges[(s.next_u64() % edges.len() as u64) as usize];
-                let (a, b) = (Vec3A::from(ball.positions[a as usize]), Vec3A::from(ball.positions[b as usize]));
+                let (a, b) = (
+                    Vec3A::from(ball.positions[a as usize]),
+                    Vec3A::from(ball.positions[b as usize]),
+                );
                 a + (b - a) * s.next_f32()
             };
             let (o, target) = if exact {
@@ -157,7 +229,10 @@ fn rays_at_shared_edges_and_vertices_never_escape_a_closed_mesh() {
                 escaped += 1;
             }
         }
-        assert_eq!(escaped, 0, "{escaped} of {rays} rays escaped (exact aims: {exact})");
+        assert_eq!(
+            escaped, 0,
+            "{escaped} of {rays} rays escaped (exact aims: {exact})"
+        );
     }
 }
 
@@ -183,7 +258,9 @@ fn spawned_origins_lie_on_the_side_they_leave_to() {
             let target = inst.cam_from_obj.transform_point3a(unit(&mut smp) * 0.9);
             let o = target + unit(&mut smp) * (3.0 * scale as f32);
             let ray = Ray::new(o, (target - o).normalize());
-            let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else { continue };
+            let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else {
+                continue;
+            };
             let surface = world.surface(&hit, &ray);
             let dir = unit(&mut smp);
             let next = world.spawn(&surface, dir);
@@ -193,7 +270,10 @@ fn spawned_origins_lie_on_the_side_they_leave_to() {
             let side = |p: Vec3A| n.dot(inst.obj_from_cam.transform_point3a(p).as_dvec3() - v[0]);
             let leaving_front = inst.obj_from_cam.transform_vector3a(dir).as_dvec3().dot(n) > 0.0;
             let d = side(next.origin);
-            assert!(d != 0.0 && (d > 0.0) == leaving_front, "scale {scale} at {at}: ray {i} starts on the wrong side ({d:e})");
+            assert!(
+                d != 0.0 && (d > 0.0) == leaving_front,
+                "scale {scale} at {at}: ray {i} starts on the wrong side ({d:e})"
+            );
             tried += 1;
             let bare = side(surface.p);
             wrong_without_offset += usize::from(bare == 0.0 || (bare > 0.0) != leaving_front);

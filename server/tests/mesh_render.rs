@@ -3,7 +3,10 @@
 
 mod common;
 
-use common::{assert_agree, assert_clean, assert_mean, mesh_object, regions, render, render_on, scene, scene_json};
+use common::{
+    assert_agree, assert_clean, assert_mean, mesh_object, regions, render, render_on, scene,
+    scene_json,
+};
 use pathstream::model::generate::icosphere;
 use pathstream::model::MeshData;
 use pathstream::render::light::LightSampling;
@@ -11,7 +14,10 @@ use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJo
 use serde_json::{json, Value};
 
 fn q(seed: u64) -> Quality {
-    Quality { seed, ..Quality::default() }
+    Quality {
+        seed,
+        ..Quality::default()
+    }
 }
 
 /// The camera at the centre of a closed icosphere of radius `scale`.
@@ -33,11 +39,19 @@ fn a_closed_triangle_furnace_is_exact_at_every_depth_without_nee() {
         let s = triangle_furnace(3, scale, false);
         for depth in [1u32, 4, 9] {
             let expected = 0.5 * (1.0 - 0.5f64.powi(depth as i32 + 1)) / 0.5;
-            let qq = Quality { max_depth: depth, rr_depth: 1000, nee: false, ..q(1) };
+            let qq = Quality {
+                max_depth: depth,
+                rr_depth: 1000,
+                nee: false,
+                ..q(1)
+            };
             let film = render(&s, 12, 12, &qq, 16);
             assert_clean(&film, "triangle furnace");
             for v in film.mean().into_iter().flatten() {
-                assert!((f64::from(v) - expected).abs() < 1e-5, "scale {scale} depth {depth}: {v} vs {expected}");
+                assert!(
+                    (f64::from(v) - expected).abs() < 1e-5,
+                    "scale {scale} depth {depth}: {v} vs {expected}"
+                );
             }
         }
     }
@@ -49,7 +63,13 @@ fn a_closed_triangle_furnace_has_radiance_one_with_and_without_shading_normals()
         for smooth in [false, true] {
             let s = triangle_furnace(4, scale, smooth);
             for nee in [true, false] {
-                let qq = Quality { max_depth: 0, rr_depth: 2, nee, filter: Filter::Box, ..q(2) };
+                let qq = Quality {
+                    max_depth: 0,
+                    rr_depth: 2,
+                    nee,
+                    filter: Filter::Box,
+                    ..q(2)
+                };
                 let film = render(&s, 16, 16, &qq, 256);
                 assert_clean(&film, "triangle furnace");
                 let what = format!("scale {scale}, normals {smooth}, nee {nee}");
@@ -69,8 +89,16 @@ fn tessellated_cornell() -> Scene {
     let ball = icosphere(6);
     assert!(ball.triangles.len() >= 80_000);
     let objects = j["objects"].as_array_mut().expect("objects");
-    let right = objects.iter().position(|o| o["center"] == json!([73.0, 16.5, 78.0])).expect("right ball");
-    objects[right] = mesh_object(&ball, "white", json!({"translate": [73, 16.5, 78], "scale": 16.5}), true);
+    let right = objects
+        .iter()
+        .position(|o| o["center"] == json!([73.0, 16.5, 78.0]))
+        .expect("right ball");
+    objects[right] = mesh_object(
+        &ball,
+        "white",
+        json!({"translate": [73, 16.5, 78], "scale": 16.5}),
+        true,
+    );
     Scene::from_json_value(j).expect("valid")
 }
 
@@ -79,11 +107,21 @@ fn a_finely_tessellated_sphere_renders_as_the_analytic_sphere() {
     // Icosphere level 6 deviates from the sphere by at most r (1 - cos(0.6
     // deg)) ~ 1e-3 units: far below a pixel here (~0.6 units), so the two
     // images agree within noise.
-    let qq = Quality { max_depth: 4, ..q(3) };
+    let qq = Quality {
+        max_depth: 4,
+        ..q(3)
+    };
     let analytic = render(&scene("cornell"), 32, 32, &qq, 512);
     let mesh = render(&tessellated_cornell(), 32, 32, &qq, 512);
     assert_clean(&mesh, "tessellated");
-    assert_agree(&analytic, &mesh, 4, 4.5, 0.005, "tessellated vs analytic sphere");
+    assert_agree(
+        &analytic,
+        &mesh,
+        4,
+        4.5,
+        0.005,
+        "tessellated vs analytic sphere",
+    );
 }
 
 #[test]
@@ -91,15 +129,28 @@ fn a_quad_as_two_triangles_renders_as_the_quad() {
     // cornell-quads' floor as a two-triangle mesh.
     let mut j = scene_json("cornell-quads");
     let objects = j["objects"].as_array_mut().expect("objects");
-    let floor = objects.iter().position(|o| o["corner"] == json!([1.0, 0.0, 0.0]) && o["edge_v"] == json!([0.0, 0.0, 170.0]));
+    let floor = objects.iter().position(|o| {
+        o["corner"] == json!([1.0, 0.0, 0.0]) && o["edge_v"] == json!([0.0, 0.0, 170.0])
+    });
     let floor = floor.expect("the floor quad");
     let o = objects[floor].clone();
     let (c, u, v) = (&o["corner"], &o["edge_u"], &o["edge_v"]);
-    let p = |a: f64, b: f64| (0..3).map(|k| c[k].as_f64().unwrap_or(0.0) + a * u[k].as_f64().unwrap_or(0.0) + b * v[k].as_f64().unwrap_or(0.0)).collect::<Vec<_>>();
+    let p = |a: f64, b: f64| {
+        (0..3)
+            .map(|k| {
+                c[k].as_f64().unwrap_or(0.0)
+                    + a * u[k].as_f64().unwrap_or(0.0)
+                    + b * v[k].as_f64().unwrap_or(0.0)
+            })
+            .collect::<Vec<_>>()
+    };
     objects[floor] = json!({"type": "mesh", "material": o["material"],
         "data": {"positions": [p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)], "triangles": [[0, 1, 2], [0, 2, 3]]}});
     let two = Scene::from_json_value(j).expect("valid");
-    let qq = Quality { max_depth: 4, ..q(4) };
+    let qq = Quality {
+        max_depth: 4,
+        ..q(4)
+    };
     let a = render(&scene("cornell-quads"), 32, 32, &qq, 256);
     let b = render(&two, 32, 32, &qq, 256);
     assert_agree(&a, &b, 4, 4.5, 0.002, "two triangles vs the quad");
@@ -110,8 +161,16 @@ fn a_quad_as_two_triangles_renders_as_the_quad() {
 fn mesh_lit_cornell() -> Scene {
     let mut j = scene_json("cornell");
     let objects = j["objects"].as_array_mut().expect("objects");
-    let lamp = objects.iter().position(|o| o["material"] == "lamp").expect("lamp");
-    objects[lamp] = mesh_object(&icosphere(2), "lamp", json!({"translate": [50, 66.6, 81.6], "scale": 7}), false);
+    let lamp = objects
+        .iter()
+        .position(|o| o["material"] == "lamp")
+        .expect("lamp");
+    objects[lamp] = mesh_object(
+        &icosphere(2),
+        "lamp",
+        json!({"translate": [50, 66.6, 81.6], "scale": 7}),
+        false,
+    );
     Scene::from_json_value(j).expect("valid")
 }
 
@@ -128,8 +187,28 @@ fn render_sampling(s: &Scene, qq: &Quality, sampling: LightSampling, spp: u64) -
 fn an_emissive_mesh_converges_to_the_same_image_with_and_without_nee() {
     let s = mesh_lit_cornell();
     assert_eq!(s.light, Some(8), "the emissive mesh is the scene's light");
-    let on = render(&s, 24, 24, &Quality { max_depth: 3, nee: true, ..q(5) }, 1024);
-    let off = render(&s, 24, 24, &Quality { max_depth: 3, nee: false, ..q(6) }, 4096);
+    let on = render(
+        &s,
+        24,
+        24,
+        &Quality {
+            max_depth: 3,
+            nee: true,
+            ..q(5)
+        },
+        1024,
+    );
+    let off = render(
+        &s,
+        24,
+        24,
+        &Quality {
+            max_depth: 3,
+            nee: false,
+            ..q(6)
+        },
+        4096,
+    );
     assert_agree(&on, &off, 6, 4.5, 0.0, "emissive mesh, NEE on vs off");
 }
 
@@ -137,12 +216,25 @@ fn an_emissive_mesh_converges_to_the_same_image_with_and_without_nee() {
 fn power_proportional_light_picking_agrees_with_a_ray_to_every_emitter() {
     // 320 emissive triangles plus a second, spherical light.
     let mut j = serde_json::to_value(mesh_lit_cornell().to_json()).expect("json");
-    j["objects"].as_array_mut().expect("objects").push(json!({"type": "sphere", "center": [20, 40, 60], "radius": 2, "material": "lamp"}));
+    j["objects"]
+        .as_array_mut()
+        .expect("objects")
+        .push(json!({"type": "sphere", "center": [20, 40, 60], "radius": 2, "material": "lamp"}));
     let s = Scene::from_json_value(j).expect("valid");
-    let qq = Quality { max_depth: 3, ..q(7) };
+    let qq = Quality {
+        max_depth: 3,
+        ..q(7)
+    };
     let power = render_sampling(&s, &qq, LightSampling::Power, 1024);
     let all = render_sampling(&s, &qq, LightSampling::All, 64);
-    assert_agree(&power, &all, 6, 4.5, 0.0, "one emitter by power vs every emitter");
+    assert_agree(
+        &power,
+        &all,
+        6,
+        4.5,
+        0.0,
+        "one emitter by power vs every emitter",
+    );
 }
 
 /// A diffuse ball (albedo 0.5) under a uniform environment of radiance 1:
@@ -164,9 +256,17 @@ fn ball_under_the_sky(mesh: Option<&MeshData>) -> Scene {
 
 #[test]
 fn a_convex_ball_under_a_uniform_sky_reflects_albedo_times_sky() {
-    for (what, s) in [("sphere", ball_under_the_sky(None)), ("icosphere", ball_under_the_sky(Some(&icosphere(3))))] {
+    for (what, s) in [
+        ("sphere", ball_under_the_sky(None)),
+        ("icosphere", ball_under_the_sky(Some(&icosphere(3)))),
+    ] {
         for nee in [true, false] {
-            let qq = Quality { max_depth: 0, nee, filter: Filter::Box, ..q(8) };
+            let qq = Quality {
+                max_depth: 0,
+                nee,
+                filter: Filter::Box,
+                ..q(8)
+            };
             let film = render(&s, 32, 32, &qq, 256);
             assert_clean(&film, what);
             let r = regions(&film, 4);
@@ -174,11 +274,19 @@ fn a_convex_ball_under_a_uniform_sky_reflects_albedo_times_sky() {
             for &i in &[27usize, 28, 35, 36] {
                 for c in 0..3 {
                     let z = (r[i].mean[c] - 0.5).abs() / r[i].var[c].sqrt().max(1e-9);
-                    assert!(z < 4.5, "{what}, nee {nee}: ball block {i}: {} vs 0.5", r[i].mean[c]);
+                    assert!(
+                        z < 4.5,
+                        "{what}, nee {nee}: ball block {i}: {} vs 0.5",
+                        r[i].mean[c]
+                    );
                 }
             }
             for &i in &[0usize, 7, 56, 63] {
-                assert!((r[i].mean[0] - 1.0).abs() < 1e-6, "{what}: sky block {i}: {}", r[i].mean[0]);
+                assert!(
+                    (r[i].mean[0] - 1.0).abs() < 1e-6,
+                    "{what}: sky block {i}: {}",
+                    r[i].mean[0]
+                );
             }
         }
     }
@@ -192,13 +300,30 @@ fn a_mesh_without_emitters_or_camera_is_framed_and_lit_by_default() {
     }))
     .expect("valid");
     assert_eq!(s.environment.to_array(), [1.0, 1.0, 1.0]);
-    assert!(s.warnings.iter().any(|w| w.contains("no emitters")), "{:?}", s.warnings);
-    assert!(s.warnings.iter().any(|w| w.contains("framed")), "{:?}", s.warnings);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("no emitters")),
+        "{:?}",
+        s.warnings
+    );
+    assert!(
+        s.warnings.iter().any(|w| w.contains("framed")),
+        "{:?}",
+        s.warnings
+    );
     // Framed: looking at the mesh's centre, which is then in the middle of
     // the image and lit: the centre block is the ball (0.5), not the sky (1).
     let d = s.camera.look_at - glam::DVec3::new(10.0, 20.0, 30.0);
     assert!(d.length() < 0.5, "look_at {:?}", s.camera.look_at);
-    let film = render(&s, 16, 16, &Quality { max_depth: 0, ..q(9) }, 128);
+    let film = render(
+        &s,
+        16,
+        16,
+        &Quality {
+            max_depth: 0,
+            ..q(9)
+        },
+        128,
+    );
     let centre = regions(&film, 8)[0].mean[0].min(regions(&film, 8)[3].mean[0]);
     assert!(centre < 0.9, "the mesh does not show: {centre}");
     // Round trip: the default environment is now explicit, no new warning.
@@ -211,17 +336,39 @@ fn a_mesh_without_emitters_or_camera_is_framed_and_lit_by_default() {
 fn smallpt_top_row_is_no_brighter_than_the_row_below() {
     // near_clip along each ray (a sphere), as smallpt: on a plane, the top
     // row's rays would start above the ceiling and see the light.
-    let film = render(&scene("smallpt"), 64, 48, &Quality { max_depth: 0, nee: false, ..q(10) }, 64);
+    let film = render(
+        &scene("smallpt"),
+        64,
+        48,
+        &Quality {
+            max_depth: 0,
+            nee: false,
+            ..q(10)
+        },
+        64,
+    );
     let m = film.mean();
-    let row = |y: usize| (0..64).map(|x| m[y * 64 + x].iter().map(|v| f64::from(*v)).sum::<f64>()).sum::<f64>() / 64.0;
-    assert!(row(0) <= row(1) * 1.15, "top row {} vs next {}", row(0), row(1));
+    let row = |y: usize| {
+        (0..64)
+            .map(|x| m[y * 64 + x].iter().map(|v| f64::from(*v)).sum::<f64>())
+            .sum::<f64>()
+            / 64.0
+    };
+    assert!(
+        row(0) <= row(1) * 1.15,
+        "top row {} vs next {}",
+        row(0),
+        row(1)
+    );
 }
 
 #[test]
 fn mesh_scenes_render_on_the_cpu_when_opencl_is_asked_for_automatically() {
     // `auto` may pick an OpenCL device; a mesh scene must still render (on
     // rayon) rather than fail.
-    let Ok(mut b) = Backend::choose(BackendChoice::Auto) else { return };
+    let Ok(mut b) = Backend::choose(BackendChoice::Auto) else {
+        return;
+    };
     let s = mesh_lit_cornell();
     let film = render_on(&mut b, &s, 8, 8, &q(11), 4);
     assert_eq!(film.spp(), 4);

@@ -13,7 +13,10 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 
 fn pathstream(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pathstream")).args(args).output().expect("runs")
+    Command::new(env!("CARGO_BIN_EXE_pathstream"))
+        .args(args)
+        .output()
+        .expect("runs")
 }
 
 fn path_str(p: &Path) -> &str {
@@ -34,11 +37,27 @@ fn the_stanford_bunny_loads_and_renders_framed_under_the_default_sky() {
     assert_eq!(scene.unique_triangles(), 3674);
 
     let out_file = dir.path().join("bunny.pfm");
-    let out = pathstream(&["render", "--scene", path_str(&ply), "--width", "48", "--height", "48", "--spp", "32",
-        "--backend", "cpu", "--out", path_str(&out_file)]);
+    let out = pathstream(&[
+        "render",
+        "--scene",
+        path_str(&ply),
+        "--width",
+        "48",
+        "--height",
+        "48",
+        "--spp",
+        "32",
+        "--backend",
+        "cpu",
+        "--out",
+        path_str(&out_file),
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "render failed: {stderr}");
-    assert!(stderr.contains("warning: ") && stderr.contains("no emitters") && stderr.contains("framed"), "{stderr}");
+    assert!(
+        stderr.contains("warning: ") && stderr.contains("no emitters") && stderr.contains("framed"),
+        "{stderr}"
+    );
     let (w, h, img) = decode_pfm(&std::fs::read(&out_file).expect("pfm")).expect("decode");
     assert_eq!((w, h), (48, 48));
     // The corners see the sky (radiance exactly 1); the middle sees the
@@ -46,7 +65,11 @@ fn the_stanford_bunny_loads_and_renders_framed_under_the_default_sky() {
     for (x, y) in [(0, 0), (47, 0), (0, 47), (47, 47)] {
         assert_eq!(img[y * 48 + x], [1.0, 1.0, 1.0], "corner ({x}, {y})");
     }
-    let centre: f64 = (20..28).flat_map(|y| (20..28).map(move |x| (x, y))).map(|(x, y)| f64::from(img[y * 48 + x][1])).sum::<f64>() / 64.0;
+    let centre: f64 = (20..28)
+        .flat_map(|y| (20..28).map(move |x| (x, y)))
+        .map(|(x, y)| f64::from(img[y * 48 + x][1]))
+        .sum::<f64>()
+        / 64.0;
     assert!(centre > 0.1 && centre < 0.85, "centre radiance {centre}");
 }
 
@@ -102,7 +125,10 @@ fn a_scene_file_places_a_model_file_twice_and_stores_it_once() {
     .expect("scene");
     let scene = Scene::load(path_str(&scene_file)).expect("loads");
     assert_eq!(scene.imports.len(), 2);
-    let (a, b) = (&scene.imports[0].instances[0].mesh, &scene.imports[1].instances[0].mesh);
+    let (a, b) = (
+        &scene.imports[0].instances[0].mesh,
+        &scene.imports[1].instances[0].mesh,
+    );
     assert!(Arc::ptr_eq(a, b), "one mesh, two placements");
     assert_eq!(scene.unique_triangles(), 12);
     let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
@@ -112,12 +138,30 @@ fn a_scene_file_places_a_model_file_twice_and_stores_it_once() {
     assert_eq!(scene.environment.to_array(), [0.0; 3]);
     // Written back, the files' materials stay out of the JSON.
     let json = serde_json::to_value(scene.to_json()).expect("json");
-    assert!(json["materials"].as_object().is_some_and(|m| m.is_empty()), "{json}");
+    assert!(
+        json["materials"].as_object().is_some_and(|m| m.is_empty()),
+        "{json}"
+    );
 
     let out_file = dir.path().join("two.png");
-    let out = pathstream(&["render", "--scene", path_str(&scene_file), "--width", "32", "--height", "24", "--spp", "4",
-        "--out", path_str(&out_file)]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = pathstream(&[
+        "render",
+        "--scene",
+        path_str(&scene_file),
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--spp",
+        "4",
+        "--out",
+        path_str(&out_file),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// A glTF file with a triangle and a camera node 3 units along +z.
@@ -131,9 +175,16 @@ fn gltf_with_camera() -> String {
     const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut b64 = String::new();
     for chunk in bin.chunks(3) {
-        let n = chunk.iter().enumerate().fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
+        let n = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
         for i in 0..4 {
-            b64.push(if i <= chunk.len() { char::from(B64[(n >> (18 - 6 * i) & 63) as usize]) } else { '=' });
+            b64.push(if i <= chunk.len() {
+                char::from(B64[(n >> (18 - 6 * i) & 63) as usize])
+            } else {
+                '='
+            });
         }
     }
     serde_json::json!({
@@ -158,11 +209,21 @@ fn a_gltf_model_brings_its_camera() {
     std::fs::write(&file, gltf_with_camera()).expect("gltf");
     let scene = Scene::load(path_str(&file)).expect("loads");
     let c = scene.camera;
-    assert!((c.position - glam::DVec3::new(0.25, 0.25, 3.0)).length() < 1e-9, "{c:?}");
+    assert!(
+        (c.position - glam::DVec3::new(0.25, 0.25, 3.0)).length() < 1e-9,
+        "{c:?}"
+    );
     let forward = (c.look_at - c.position).normalize();
-    assert!((forward - glam::DVec3::new(0.0, 0.0, -1.0)).length() < 1e-9, "{c:?}");
+    assert!(
+        (forward - glam::DVec3::new(0.0, 0.0, -1.0)).length() < 1e-9,
+        "{c:?}"
+    );
     assert!((c.vfov_deg - 0.8f64.to_degrees()).abs() < 1e-9);
-    assert!(!scene.warnings.iter().any(|w| w.contains("framed")), "{:?}", scene.warnings);
+    assert!(
+        !scene.warnings.iter().any(|w| w.contains("framed")),
+        "{:?}",
+        scene.warnings
+    );
 }
 
 #[test]
@@ -184,16 +245,42 @@ fn malformed_model_files_exit_2_naming_the_problem() {
     for (name, bytes, expect) in &cases {
         let file = dir.path().join(name);
         std::fs::write(&file, bytes).expect("write");
-        let r = pathstream(&["render", "--scene", path_str(&file), "--width", "8", "--height", "8", "--out", path_str(&out)]);
+        let r = pathstream(&[
+            "render",
+            "--scene",
+            path_str(&file),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            path_str(&out),
+        ]);
         let stderr = String::from_utf8_lossy(&r.stderr);
         assert_eq!(r.status.code(), Some(2), "{name}: {stderr}");
-        assert!(stderr.contains(name.as_str()) && stderr.contains(expect), "{name}: expected '{expect}' in: {stderr}");
+        assert!(
+            stderr.contains(name.as_str()) && stderr.contains(expect),
+            "{name}: expected '{expect}' in: {stderr}"
+        );
     }
     // A scene file naming a file that is not there.
     let scene_file = dir.path().join("missing.json");
-    std::fs::write(&scene_file, r#"{"objects": [{"type": "model", "file": "nowhere.glb"}]}"#).expect("write");
-    let r = pathstream(&["render", "--scene", path_str(&scene_file), "--out", path_str(&out)]);
+    std::fs::write(
+        &scene_file,
+        r#"{"objects": [{"type": "model", "file": "nowhere.glb"}]}"#,
+    )
+    .expect("write");
+    let r = pathstream(&[
+        "render",
+        "--scene",
+        path_str(&scene_file),
+        "--out",
+        path_str(&out),
+    ]);
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("objects[0].file") && stderr.contains("nowhere.glb"), "{stderr}");
+    assert!(
+        stderr.contains("objects[0].file") && stderr.contains("nowhere.glb"),
+        "{stderr}"
+    );
 }

@@ -14,7 +14,9 @@ use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJo
 fn opencl() -> Option<Backend> {
     match Backend::choose(BackendChoice::OpenCl { device: None }) {
         Ok(b) => Some(b),
-        Err(e) if std::env::var_os("CI").is_some() => panic!("CI is set but there is no OpenCL device: {e}"),
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("CI is set but there is no OpenCL device: {e}")
+        }
         Err(e) => {
             eprintln!("skipping: {e}");
             None
@@ -25,7 +27,9 @@ fn opencl() -> Option<Backend> {
 fn device() -> Option<OpenClBackend> {
     match OpenClBackend::new(None) {
         Ok(b) => Some(b),
-        Err(e) if std::env::var_os("CI").is_some() => panic!("CI is set but there is no OpenCL device: {e}"),
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("CI is set but there is no OpenCL device: {e}")
+        }
         Err(e) => {
             eprintln!("skipping: {e}");
             None
@@ -37,7 +41,11 @@ fn device() -> Option<OpenClBackend> {
 fn shared_structs_have_the_same_size_on_the_device() {
     let Some(d) = device() else { return };
     let sizes = d.device_layout_sizes().expect("layout kernel");
-    assert_eq!(sizes, [96, 48, 96], "Object, Material, Params as the device compiler sees them");
+    assert_eq!(
+        sizes,
+        [96, 48, 96],
+        "Object, Material, Params as the device compiler sees them"
+    );
 }
 
 #[test]
@@ -45,9 +53,16 @@ fn a_broken_kernel_fails_with_its_build_log() {
     let Some(d) = device() else { return };
     let mut sources = SOURCES.to_vec();
     sources.push("__kernel void broken(__global float *x) { x[0] = undefined_name; }\n");
-    let err = d.build_sources(&sources, "-cl-std=CL1.2").expect_err("must not build");
-    let OpenClError::Build { log, .. } = &err else { panic!("not a build error: {err}") };
-    assert!(log.contains("undefined_name"), "the log names the error: {log}");
+    let err = d
+        .build_sources(&sources, "-cl-std=CL1.2")
+        .expect_err("must not build");
+    let OpenClError::Build { log, .. } = &err else {
+        panic!("not a build error: {err}")
+    };
+    assert!(
+        log.contains("undefined_name"),
+        "the log names the error: {log}"
+    );
     assert!(err.to_string().contains("failed to build"), "{err}");
 }
 
@@ -59,12 +74,20 @@ fn depth_capped_furnace_is_exact() {
         for depth in [1u32, 2, 5] {
             let expected = e * (1.0 - a.powi(depth as i32 + 1)) / (1.0 - a);
             for nee in [true, false] {
-                let q = Quality { max_depth: depth, rr_depth: 1000, nee, ..Quality::default() };
+                let q = Quality {
+                    max_depth: depth,
+                    rr_depth: 1000,
+                    nee,
+                    ..Quality::default()
+                };
                 let film = render_on(&mut cl, &s, 8, 8, &q, 8);
                 assert_clean(&film, "furnace");
                 for v in film.mean().into_iter().flatten() {
                     let rel = (f64::from(v) - expected).abs() / expected;
-                    assert!(rel < 1e-5, "a {a} E {e} depth {depth} nee {nee}: {v} vs {expected}");
+                    assert!(
+                        rel < 1e-5,
+                        "a {a} E {e} depth {depth} nee {nee}: {v} vs {expected}"
+                    );
                 }
             }
         }
@@ -76,15 +99,33 @@ fn unbounded_furnace_and_invisible_glass() {
     let Some(mut cl) = opencl() else { return };
     let s = furnace(0.5, 0.5);
     for nee in [true, false] {
-        let q = Quality { max_depth: 0, rr_depth: 2, nee, filter: Filter::Box, ..Quality::default() };
+        let q = Quality {
+            max_depth: 0,
+            rr_depth: 2,
+            nee,
+            filter: Filter::Box,
+            ..Quality::default()
+        };
         let film = render_on(&mut cl, &s, 16, 16, &q, 256);
         assert_clean(&film, "furnace");
-        assert_mean(&film, 4, 1.0, 4.5, 0.0, &format!("opencl unbounded furnace, nee {nee}"));
+        assert_mean(
+            &film,
+            4,
+            1.0,
+            4.5,
+            0.0,
+            &format!("opencl unbounded furnace, nee {nee}"),
+        );
     }
     let mut json = s.to_json();
     json.materials.insert(
         "clear".into(),
-        MaterialJson::Glass(GlassJson { ior: 1.5, albedo: None, fresnel: FresnelJson::Schlick, emission: None }),
+        MaterialJson::Glass(GlassJson {
+            ior: 1.5,
+            albedo: None,
+            fresnel: FresnelJson::Schlick,
+            emission: None,
+        }),
     );
     json.objects.push(ObjectJson::Sphere(SphereJson {
         center: [0.1, -0.05, -0.5],
@@ -92,7 +133,11 @@ fn unbounded_furnace_and_invisible_glass() {
         material: "clear".into(),
     }));
     let glass = Scene::from_json(&json).expect("valid");
-    let q = Quality { max_depth: 0, rr_depth: 4, ..Quality::default() };
+    let q = Quality {
+        max_depth: 0,
+        rr_depth: 4,
+        ..Quality::default()
+    };
     let film = render_on(&mut cl, &glass, 16, 16, &q, 256);
     assert_clean(&film, "glass furnace");
     assert_mean(&film, 4, 1.0, 4.5, 0.0, "opencl glass in furnace");
@@ -102,8 +147,30 @@ fn unbounded_furnace_and_invisible_glass() {
 fn nee_on_and_off_agree() {
     let Some(mut cl) = opencl() else { return };
     let s = scene("cornell");
-    let a = render_on(&mut cl, &s, 24, 24, &Quality { nee: true, seed: 1, ..Quality::default() }, 256);
-    let b = render_on(&mut cl, &s, 24, 24, &Quality { nee: false, seed: 2, ..Quality::default() }, 2048);
+    let a = render_on(
+        &mut cl,
+        &s,
+        24,
+        24,
+        &Quality {
+            nee: true,
+            seed: 1,
+            ..Quality::default()
+        },
+        256,
+    );
+    let b = render_on(
+        &mut cl,
+        &s,
+        24,
+        24,
+        &Quality {
+            nee: false,
+            seed: 2,
+            ..Quality::default()
+        },
+        2048,
+    );
     assert_agree(&a, &b, 8, 4.5, 0.0, "opencl cornell: NEE on vs off");
 }
 
@@ -112,9 +179,21 @@ fn cpu_and_opencl_agree_on_every_scene_and_setting() {
     let Some(mut cl) = opencl() else { return };
     let grid = [
         Quality::default(),
-        Quality { max_depth: 1, ..Quality::default() },
-        Quality { max_depth: 0, nee: false, ..Quality::default() },
-        Quality { filter: Filter::Box, clamp: 2.0, rr_depth: 1, ..Quality::default() },
+        Quality {
+            max_depth: 1,
+            ..Quality::default()
+        },
+        Quality {
+            max_depth: 0,
+            nee: false,
+            ..Quality::default()
+        },
+        Quality {
+            filter: Filter::Box,
+            clamp: 2.0,
+            rr_depth: 1,
+            ..Quality::default()
+        },
     ];
     for name in pathstream::render::scene::BUILTIN_NAMES {
         let s = scene(name);
@@ -123,7 +202,14 @@ fn cpu_and_opencl_agree_on_every_scene_and_setting() {
             let cpu = render(&s, 16, 16, &Quality { seed: 10, ..*q }, spp);
             let gpu = render_on(&mut cl, &s, 16, 16, &Quality { seed: 11, ..*q }, spp);
             assert_clean(&gpu, name);
-            assert_agree(&cpu, &gpu, 8, 4.5, 1e-4, &format!("{name}, setting {i}: CPU vs OpenCL"));
+            assert_agree(
+                &cpu,
+                &gpu,
+                8,
+                4.5,
+                1e-4,
+                &format!("{name}, setting {i}: CPU vs OpenCL"),
+            );
         }
     }
 }
@@ -132,7 +218,10 @@ fn cpu_and_opencl_agree_on_every_scene_and_setting() {
 fn same_seed_same_image_however_samples_are_split() {
     let Some(mut cl) = opencl() else { return };
     let s = scene("cornell-glass");
-    let q = Quality { seed: 5, ..Quality::default() };
+    let q = Quality {
+        seed: 5,
+        ..Quality::default()
+    };
     let job = RenderJob::new(&s, 20, 12, &q);
     let mut once = Film::new(20, 12);
     cl.render(&job, &mut once, 12).expect("render");
@@ -142,7 +231,8 @@ fn same_seed_same_image_however_samples_are_split() {
     }
     assert_eq!(once.pixels(), split.pixels(), "split into passes");
     let mut again = Film::new(20, 12);
-    cl.render(&RenderJob::new(&s, 20, 12, &q), &mut again, 12).expect("render");
+    cl.render(&RenderJob::new(&s, 20, 12, &q), &mut again, 12)
+        .expect("render");
     assert_eq!(once.pixels(), again.pixels(), "run to run");
 }
 
@@ -151,15 +241,41 @@ fn invariant_under_scale_and_translation_including_smallpt_walls() {
     let Some(mut cl) = opencl() else { return };
     for name in ["cornell-glass", "smallpt"] {
         let base = scene(name);
-        let reference = render(&base, 24, 24, &Quality { seed: 20, ..Quality::default() }, 256);
+        let reference = render(
+            &base,
+            24,
+            24,
+            &Quality {
+                seed: 20,
+                ..Quality::default()
+            },
+            256,
+        );
         for (what, s) in [
             ("scaled 1e-3", base.scaled(1e-3)),
             ("scaled 1e3", base.scaled(1e3)),
             ("moved 1e4", base.translated(DVec3::new(1e4, -1e4, 1e4))),
         ] {
-            let film = render_on(&mut cl, &s, 24, 24, &Quality { seed: 21, ..Quality::default() }, 256);
+            let film = render_on(
+                &mut cl,
+                &s,
+                24,
+                24,
+                &Quality {
+                    seed: 21,
+                    ..Quality::default()
+                },
+                256,
+            );
             assert_clean(&film, what);
-            assert_agree(&reference, &film, 8, 4.5, 0.0, &format!("{name} {what}: CPU vs OpenCL"));
+            assert_agree(
+                &reference,
+                &film,
+                8,
+                4.5,
+                0.0,
+                &format!("{name} {what}: CPU vs OpenCL"),
+            );
         }
     }
 }
@@ -196,8 +312,13 @@ fn every_feature_combination_builds() {
     let mut keys = Vec::new();
     for shapes in [(true, false), (false, true), (true, true)] {
         for materials in 1u8..8 {
-            let (diffuse, mirror, glass) = (materials & 1 != 0, materials & 2 != 0, materials & 4 != 0);
-            let fresnels: &[(bool, bool)] = if glass { &[(true, false), (false, true), (true, true)] } else { &[(false, false)] };
+            let (diffuse, mirror, glass) =
+                (materials & 1 != 0, materials & 2 != 0, materials & 4 != 0);
+            let fresnels: &[(bool, bool)] = if glass {
+                &[(true, false), (false, true), (true, true)]
+            } else {
+                &[(false, false)]
+            };
             for &(schlick, exact) in fresnels {
                 for lights in 0u8..4 {
                     keys.push(ProgramKey::Specialised(Features {
@@ -221,7 +342,9 @@ fn every_feature_combination_builds() {
             }
         }
     }
-    keys.push(ProgramKey::Generic { inject_nan_every: None });
+    keys.push(ProgramKey::Generic {
+        inject_nan_every: None,
+    });
     assert_eq!(keys.len(), 3 * 15 * 4 + 1);
     // Two threads, each with its own context: the compiler is the slow part.
     let failures: Vec<String> = std::thread::scope(|scope| {
@@ -232,14 +355,26 @@ fn every_feature_combination_builds() {
                     let d = OpenClBackend::new(None).expect("device");
                     chunk
                         .iter()
-                        .filter_map(|k| d.build_sources(&SOURCES, &k.build_options()).err().map(|e| format!("{k:?}: {e}")))
+                        .filter_map(|k| {
+                            d.build_sources(&SOURCES, &k.build_options())
+                                .err()
+                                .map(|e| format!("{k:?}: {e}"))
+                        })
                         .collect::<Vec<_>>()
                 })
             })
             .collect();
-        halves.into_iter().flat_map(|h| h.join().expect("thread")).collect()
+        halves
+            .into_iter()
+            .flat_map(|h| h.join().expect("thread"))
+            .collect()
     });
-    assert!(failures.is_empty(), "{} programs failed to build:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} programs failed to build:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -247,15 +382,35 @@ fn auto_falls_back_to_rayon_and_says_so_when_there_is_no_platform() {
     let empty = tempfile::tempdir().expect("tempdir");
     let out = empty.path().join("x.png");
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_pathstream"))
-        .args(["render", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "2", "--backend", "auto", "--out"])
+        .args([
+            "render",
+            "--scene",
+            "furnace",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "2",
+            "--backend",
+            "auto",
+            "--out",
+        ])
         .arg(&out)
         .env("OCL_ICD_VENDORS", empty.path())
         .output()
         .expect("runs");
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let summary = String::from_utf8_lossy(&run.stdout);
     assert!(summary.contains("backend cpu (rayon"), "{summary}");
-    assert!(summary.contains("no OpenCL platform found"), "says why: {summary}");
+    assert!(
+        summary.contains("no OpenCL platform found"),
+        "says why: {summary}"
+    );
     let devices = std::process::Command::new(env!("CARGO_BIN_EXE_pathstream"))
         .arg("devices")
         .env("OCL_ICD_VENDORS", empty.path())
@@ -269,7 +424,21 @@ fn auto_falls_back_to_rayon_and_says_so_when_there_is_no_platform() {
 fn explicit_opencl_with_a_bad_device_number_is_a_clear_error() {
     let Some(_) = device() else { return };
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_pathstream"))
-        .args(["render", "--scene", "furnace", "--width", "8", "--height", "8", "--spp", "2", "--device", "99", "--out", "/tmp/x.png"])
+        .args([
+            "render",
+            "--scene",
+            "furnace",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "2",
+            "--device",
+            "99",
+            "--out",
+            "/tmp/x.png",
+        ])
         .output()
         .expect("runs");
     assert_eq!(run.status.code(), Some(1));
@@ -283,21 +452,29 @@ fn a_device_that_fails_mid_render_loses_no_samples() {
     let s = scene("cornell");
     let job = RenderJob::new(&s, 8, 8, &Quality::default());
     // Asked for by name: the error comes back and the film is untouched.
-    let mut named = Backend::OpenCl { backend: Box::new(first), fallback: false };
+    let mut named = Backend::OpenCl {
+        backend: Box::new(first),
+        fallback: false,
+    };
     let mut film = Film::new(8, 8);
     named.render(&job, &mut film, 4).expect("render");
     let before = film.pixels().to_vec();
     if let Backend::OpenCl { backend, .. } = &mut named {
         backend.fail_launches = true;
     }
-    let err = named.render(&job, &mut film, 4).expect_err("injected failure");
+    let err = named
+        .render(&job, &mut film, 4)
+        .expect_err("injected failure");
     assert!(err.to_string().contains("kernel launch failed"), "{err}");
     assert_eq!(film.spp(), 4);
     assert_eq!(film.pixels(), &before[..]);
     // Chosen by auto: a logged fall back to rayon that carries on from sample 4.
     let mut failing = OpenClBackend::new(None).expect("device");
     failing.fail_launches = true;
-    let mut auto = Backend::OpenCl { backend: Box::new(failing), fallback: true };
+    let mut auto = Backend::OpenCl {
+        backend: Box::new(failing),
+        fallback: true,
+    };
     auto.render(&job, &mut film, 4).expect("falls back");
     assert_eq!(auto.name(), "cpu");
     assert!(auto.device().contains("OpenCL failed"), "{}", auto.device());
@@ -308,13 +485,30 @@ fn a_device_that_fails_mid_render_loses_no_samples() {
     let (mut first4, mut all8) = (Film::new(8, 8), Film::new(8, 8));
     cpu.render(&job, &mut first4, 4).expect("render");
     cpu.render(&job, &mut all8, 8).expect("render");
-    for (i, ((after, opencl), (c8, c4))) in film.pixels().iter().zip(&before).zip(all8.pixels().iter().zip(first4.pixels())).enumerate() {
+    for (i, ((after, opencl), (c8, c4))) in film
+        .pixels()
+        .iter()
+        .zip(&before)
+        .zip(all8.pixels().iter().zip(first4.pixels()))
+        .enumerate()
+    {
         for c in 0..3 {
             for (added, cpu_added, scale) in [
-                (after.even[c] - opencl.even[c], c8.even[c] - c4.even[c], after.even[c].abs() + c8.even[c].abs()),
-                (after.odd[c] - opencl.odd[c], c8.odd[c] - c4.odd[c], after.odd[c].abs() + c8.odd[c].abs()),
+                (
+                    after.even[c] - opencl.even[c],
+                    c8.even[c] - c4.even[c],
+                    after.even[c].abs() + c8.even[c].abs(),
+                ),
+                (
+                    after.odd[c] - opencl.odd[c],
+                    c8.odd[c] - c4.odd[c],
+                    after.odd[c].abs() + c8.odd[c].abs(),
+                ),
             ] {
-                assert!((added - cpu_added).abs() <= 1e-12 * scale, "pixel {i} channel {c}: fallback added {added}, the CPU adds {cpu_added}");
+                assert!(
+                    (added - cpu_added).abs() <= 1e-12 * scale,
+                    "pixel {i} channel {c}: fallback added {added}, the CPU adds {cpu_added}"
+                );
             }
         }
     }
@@ -322,21 +516,44 @@ fn a_device_that_fails_mid_render_loses_no_samples() {
 
 #[test]
 fn the_generic_program_renders_what_the_specialised_one_does() {
-    let Some(mut specialised) = device() else { return };
+    let Some(mut specialised) = device() else {
+        return;
+    };
     let mut generic = OpenClBackend::new(None).expect("device");
     generic.generic = true;
     for name in ["cornell", "cornell-glass", "cornell-quads"] {
-        let job = RenderJob::new(&scene(name), 16, 16, &Quality { seed: 5, ..Quality::default() });
+        let job = RenderJob::new(
+            &scene(name),
+            16,
+            16,
+            &Quality {
+                seed: 5,
+                ..Quality::default()
+            },
+        );
         let (mut a, mut b) = (Film::new(16, 16), Film::new(16, 16));
         specialised.render(&job, &mut a, 16).expect("render");
         generic.render(&job, &mut b, 16).expect("render");
         // The same samples along the same paths: pixel for pixel equal, to
         // the rounding that compiling two programs may differ in.
         let (ma, mb) = (a.mean(), b.mean());
-        let close = ma.iter().zip(&mb).filter(|(x, y)| (0..3).all(|c| (x[c] - y[c]).abs() <= 1e-4 * x[c].abs().max(y[c].abs()).max(1e-3))).count();
+        let close = ma
+            .iter()
+            .zip(&mb)
+            .filter(|(x, y)| {
+                (0..3).all(|c| (x[c] - y[c]).abs() <= 1e-4 * x[c].abs().max(y[c].abs()).max(1e-3))
+            })
+            .count();
         eprintln!("{name}: {close} of 256 pixels equal to 1e-4");
         assert!(close >= 240, "{name}: only {close} of 256 pixels agree between the specialised and the generic program");
-        assert_agree(&a, &b, 8, 4.5, 1e-4, &format!("{name}: specialised vs generic program"));
+        assert_agree(
+            &a,
+            &b,
+            8,
+            4.5,
+            1e-4,
+            &format!("{name}: specialised vs generic program"),
+        );
     }
 }
 
@@ -347,9 +564,21 @@ fn launches_split_into_pixel_ranges_give_the_same_image() {
     // A target no launch can meet: one sample per launch.
     tiled.launch_target = std::time::Duration::from_nanos(1);
     // Taller than one launch's worth of pixels: several launches per sample.
-    let (w, h) = (64, (pathstream::render::backend::opencl::TILE / 64 + 3) as u32);
+    let (w, h) = (
+        64,
+        (pathstream::render::backend::opencl::TILE / 64 + 3) as u32,
+    );
     let s = scene("cornell-glass");
-    let job = RenderJob::new(&s, w, h, &Quality { seed: 3, max_depth: 2, ..Quality::default() });
+    let job = RenderJob::new(
+        &s,
+        w,
+        h,
+        &Quality {
+            seed: 3,
+            max_depth: 2,
+            ..Quality::default()
+        },
+    );
     let (mut a, mut b) = (Film::new(w, h), Film::new(w, h));
     whole.render(&job, &mut a, 3).expect("render");
     for n in [1, 2] {
@@ -363,7 +592,10 @@ fn launches_split_into_pixel_ranges_give_the_same_image() {
 fn sessions_taking_turns_on_one_device_keep_their_films() {
     let Some(mut shared) = device() else { return };
     let (a, b) = (scene("cornell"), scene("cornell-glass"));
-    let (ja, jb) = (RenderJob::new(&a, 16, 12, &Quality::default()), RenderJob::new(&b, 16, 12, &Quality::default()));
+    let (ja, jb) = (
+        RenderJob::new(&a, 16, 12, &Quality::default()),
+        RenderJob::new(&b, 16, 12, &Quality::default()),
+    );
     let (mut fa, mut fb) = (Film::new(16, 12), Film::new(16, 12));
     for n in [3, 5] {
         shared.render(&ja, &mut fa, n).expect("render");

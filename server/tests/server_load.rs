@@ -29,7 +29,11 @@ async fn eight_sessions_share_the_device_fairly() {
     let (running, base) = server(config()).await;
     let mut ids = Vec::new();
     for i in 0..8 {
-        let s = create(&base, json!({"scene": "cornell", "width": 32, "height": 32, "quality": {"seed": i}})).await;
+        let s = create(
+            &base,
+            json!({"scene": "cornell", "width": 32, "height": 32, "quality": {"seed": i}}),
+        )
+        .await;
         ids.push(s["id"].as_str().expect("id").to_owned());
     }
     let mut streams = Vec::new();
@@ -38,7 +42,11 @@ async fn eight_sessions_share_the_device_fairly() {
     }
     let readers: Vec<_> = streams
         .into_iter()
-        .map(|mut ws| tokio::spawn(async move { read_frames(&mut ws, Instant::now() + Duration::from_secs(600)).await }))
+        .map(|mut ws| {
+            tokio::spawn(async move {
+                read_frames(&mut ws, Instant::now() + Duration::from_secs(600)).await
+            })
+        })
         .collect();
     // Let the first passes size themselves, then count PASSES rounds.
     let wait_for = |at_least: u64| {
@@ -50,7 +58,10 @@ async fn eight_sessions_share_the_device_fairly() {
                 if c.iter().all(|(p, _)| *p >= at_least) {
                     return c;
                 }
-                assert!(Instant::now() < deadline, "some session got fewer than {at_least} passes in 120 s: {c:?}");
+                assert!(
+                    Instant::now() < deadline,
+                    "some session got fewer than {at_least} passes in 120 s: {c:?}"
+                );
                 tokio::time::sleep(Duration::from_millis(20)).await;
             }
         }
@@ -65,11 +76,17 @@ async fn eight_sessions_share_the_device_fairly() {
     eprintln!("eight sessions over {PASSES}+ rounds: passes {passes:?}, spp gained {spp:?}");
     // Round robin: at any moment the counts differ by at most one pass
     // (two, as the eight are read one after the other).
-    let (p_lo, p_hi) = (passes.iter().min().copied().unwrap_or(0), passes.iter().max().copied().unwrap_or(0));
+    let (p_lo, p_hi) = (
+        passes.iter().min().copied().unwrap_or(0),
+        passes.iter().max().copied().unwrap_or(0),
+    );
     assert!(p_hi - p_lo <= 2, "passes in turn: {passes:?}");
     // Equal time per pass: samples within 2x over ~24 passes each (a starved
     // session falls far below).
-    let (s_lo, s_hi) = (spp.iter().min().copied().unwrap_or(0), spp.iter().max().copied().unwrap_or(0));
+    let (s_lo, s_hi) = (
+        spp.iter().min().copied().unwrap_or(0),
+        spp.iter().max().copied().unwrap_or(0),
+    );
     assert!(s_lo > 0 && s_hi < 2 * s_lo, "samples per session: {spp:?}");
     // And every client got frames meanwhile.
     for id in &ids {
@@ -82,7 +99,11 @@ async fn eight_sessions_share_the_device_fairly() {
 fn rss_kib() -> u64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmRSS:")).and_then(|l| l.split_whitespace().nth(1)?.parse().ok()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
+        })
         .unwrap_or(0)
 }
 
@@ -95,8 +116,22 @@ fn rss_kib() -> u64 {
 async fn a_client_that_never_reads_does_not_slow_the_others() {
     const WINDOW: Duration = Duration::from_secs(4);
     let (running, base) = server(config()).await;
-    let a = create(&base, json!({"scene": "cornell", "width": 96, "height": 96})).await["id"].as_str().expect("id").to_owned();
-    let b = create(&base, json!({"scene": "cornell-glass", "width": 96, "height": 96})).await["id"].as_str().expect("id").to_owned();
+    let a = create(
+        &base,
+        json!({"scene": "cornell", "width": 96, "height": 96}),
+    )
+    .await["id"]
+        .as_str()
+        .expect("id")
+        .to_owned();
+    let b = create(
+        &base,
+        json!({"scene": "cornell-glass", "width": 96, "height": 96}),
+    )
+    .await["id"]
+        .as_str()
+        .expect("id")
+        .to_owned();
     let mut wa = ws_connect(&base, &a).await;
     let mut wb = ws_connect(&base, &b).await;
     let session_b = running.state.session(&b).expect("session");
@@ -122,11 +157,24 @@ async fn a_client_that_never_reads_does_not_slow_the_others() {
     let with = window().await;
     let (fa, fb, _wa, _wb) = reading.await.expect("task");
     eprintln!("session b (passes, spp) per {WINDOW:?}: {without:?} without the stalled client, {with:?} with it; frames {fa} {fb}");
-    assert!(fa > 0 && fb > 0, "both reading clients got frames: {fa} {fb}");
-    assert!(with.0 * 2 >= without.0 && with.0 >= 4, "session b's passes: {} with vs {} without", with.0, without.0);
+    assert!(
+        fa > 0 && fb > 0,
+        "both reading clients got frames: {fa} {fb}"
+    );
+    assert!(
+        with.0 * 2 >= without.0 && with.0 >= 4,
+        "session b's passes: {} with vs {} without",
+        with.0,
+        without.0
+    );
     // Samples per pass also follow whatever else loads the machine (another
     // build on a shared CI box halves them), so this bound is looser.
-    assert!(with.1 * 4 >= without.1, "session b's samples: {} with vs {} without", with.1, without.1);
+    assert!(
+        with.1 * 4 >= without.1,
+        "session b's samples: {} with vs {} without",
+        with.1,
+        without.1
+    );
     let grown = rss_kib().saturating_sub(rss_before);
     assert!(grown < 100 * 1024, "memory grew by {grown} KiB");
     running.shutdown().await.expect("shutdown");

@@ -37,7 +37,9 @@ pub struct Reference {
 
 /// 64-bit FNV-1a: stable across Rust versions, unlike `DefaultHasher`.
 fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 /// File stem of a reference: `ref-<scene>-<w>x<h>-<key>`.
@@ -45,7 +47,16 @@ pub fn stem(name: &str, scene: &Scene, (width, height): (u32, u32), quality: &Qu
     let scene_json = serde_json::to_string(&scene.to_json()).unwrap_or_default();
     let quality_json = serde_json::to_string(quality).unwrap_or_default();
     let key = fnv1a(format!("{scene_json}\n{RENDERER_VERSION}\n{quality_json}").as_bytes());
-    let safe: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+    let safe: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
     format!("ref-{safe}-{width}x{height}-{key:016x}")
 }
 
@@ -54,7 +65,9 @@ pub fn stem(name: &str, scene: &Scene, (width, height): (u32, u32), quality: &Qu
 pub fn load(dir: &Path, stem: &str, max_error: f64, max_seconds: f64) -> Option<Reference> {
     let note = std::fs::read(dir.join(format!("{stem}.json"))).ok()?;
     let info: ReferenceInfo = serde_json::from_slice(&note).ok()?;
-    if !(info.error_estimate <= max_error || info.seconds >= max_seconds) || info.renderer_version != RENDERER_VERSION {
+    if !(info.error_estimate <= max_error || info.seconds >= max_seconds)
+        || info.renderer_version != RENDERER_VERSION
+    {
         return None;
     }
     let (w, h, pixels) = decode_pfm(&std::fs::read(dir.join(format!("{stem}.pfm"))).ok()?).ok()?;
@@ -69,7 +82,14 @@ pub fn load(dir: &Path, stem: &str, max_error: f64, max_seconds: f64) -> Option<
 pub fn store(dir: &Path, stem: &str, reference: &Reference) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
     let pfm = dir.join(format!("{stem}.pfm"));
-    std::fs::write(&pfm, encode_pfm(reference.info.width, reference.info.height, &reference.pixels))?;
+    std::fs::write(
+        &pfm,
+        encode_pfm(
+            reference.info.width,
+            reference.info.height,
+            &reference.pixels,
+        ),
+    )?;
     let note = serde_json::to_vec_pretty(&reference.info).map_err(std::io::Error::other)?;
     std::fs::write(dir.join(format!("{stem}.json")), note)?;
     Ok(pfm)
@@ -79,7 +99,11 @@ pub fn store(dir: &Path, stem: &str, reference: &Reference) -> std::io::Result<P
 /// `$XDG_CACHE_HOME/pathstream`, else `~/.cache/pathstream`, else
 /// `.pathstream-cache` here.
 pub fn default_dir() -> PathBuf {
-    let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
+    let env = |k: &str| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
     env("PATHSTREAM_CACHE_DIR")
         .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("pathstream")))
         .or_else(|| env("HOME").map(|d| d.join(".cache").join("pathstream")))
@@ -99,9 +123,15 @@ mod tests {
         assert_eq!(a, stem("cornell", &s, (64, 64), &q));
         assert!(a.starts_with("ref-cornell-64x64-"));
         assert_ne!(a, stem("cornell", &s, (64, 32), &q));
-        assert_ne!(a, stem("cornell", &s, (64, 64), &Quality { max_depth: 3, ..q }));
+        assert_ne!(
+            a,
+            stem("cornell", &s, (64, 64), &Quality { max_depth: 3, ..q })
+        );
         let glass = builtin("cornell-glass").expect("scene");
-        assert_ne!(a.rsplit('-').next(), stem("cornell", &glass, (64, 64), &q).rsplit('-').next());
+        assert_ne!(
+            a.rsplit('-').next(),
+            stem("cornell", &glass, (64, 64), &q).rsplit('-').next()
+        );
     }
 
     #[test]
@@ -123,9 +153,18 @@ mod tests {
         };
         store(dir.path(), "s", &r).expect("stores");
         let back = load(dir.path(), "s", 0.02, 1e9).expect("loads");
-        assert_eq!((back.info, back.pixels, back.cached), (r.info.clone(), r.pixels.clone(), true));
-        assert!(load(dir.path(), "s", 0.005, 1e9).is_none(), "noisier than asked");
-        assert!(load(dir.path(), "s", 0.005, 1.0).is_some(), "as long as allowed");
+        assert_eq!(
+            (back.info, back.pixels, back.cached),
+            (r.info.clone(), r.pixels.clone(), true)
+        );
+        assert!(
+            load(dir.path(), "s", 0.005, 1e9).is_none(),
+            "noisier than asked"
+        );
+        assert!(
+            load(dir.path(), "s", 0.005, 1.0).is_some(),
+            "as long as allowed"
+        );
         assert!(load(dir.path(), "other", 1.0, 1e9).is_none());
     }
 }

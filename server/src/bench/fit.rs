@@ -23,7 +23,9 @@ pub struct TracePoint {
 
 /// Takes the reference's noise `reference_error` out of a measured error.
 pub fn corrected(measured: f64, reference_error: f64) -> f64 {
-    (measured * measured - reference_error * reference_error).max(0.0).sqrt()
+    (measured * measured - reference_error * reference_error)
+        .max(0.0)
+        .sqrt()
 }
 
 /// `err^2 = bias^2 + variance_constant^2 / seconds`.
@@ -55,7 +57,11 @@ pub fn resolved_bias(fit: &Fit, end_seconds: f64, reference_error: f64) -> Resul
     let noise = (fit.variance_constant * fit.variance_constant / end_seconds.max(1e-12)
         + reference_error * reference_error)
         .sqrt();
-    if fit.bias > 2.0 * noise { Ok(fit.bias) } else { Err(2.0 * noise) }
+    if fit.bias > 2.0 * noise {
+        Ok(fit.bias)
+    } else {
+        Err(2.0 * noise)
+    }
 }
 
 /// Points with fewer samples per pixel than this are left out of fits: the
@@ -76,7 +82,11 @@ pub fn fit(points: &[TracePoint]) -> Option<Fit> {
     }
     // Weight by the relative size of each point; a zero error (the render
     // matched the reference within its noise) gets the largest weight seen.
-    let floor = usable.iter().map(|&(_, y)| y).filter(|&y| y > 0.0).fold(f64::INFINITY, f64::min);
+    let floor = usable
+        .iter()
+        .map(|&(_, y)| y)
+        .filter(|&y| y > 0.0)
+        .fold(f64::INFINITY, f64::min);
     let floor = if floor.is_finite() { floor } else { 1e-12 };
     let w = |y: f64| 1.0 / (y.max(floor) * y.max(floor));
     let (mut sw, mut sx, mut sy, mut sxx, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
@@ -140,9 +150,16 @@ pub fn time_to(points: &[TracePoint], fit: Option<&Fit>, target: f64) -> Reach {
             let Some(prev) = i.checked_sub(1).map(|j| points[j]) else {
                 return Reach::Measured(p.seconds);
             };
-            let (e0, e1) = (prev.true_error.max(1e-300).ln(), p.true_error.max(1e-300).ln());
+            let (e0, e1) = (
+                prev.true_error.max(1e-300).ln(),
+                p.true_error.max(1e-300).ln(),
+            );
             let (t0, t1) = (prev.seconds.ln(), p.seconds.ln());
-            let f = if e0 > e1 { ((e0 - target.ln()) / (e0 - e1)).clamp(0.0, 1.0) } else { 1.0 };
+            let f = if e0 > e1 {
+                ((e0 - target.ln()) / (e0 - e1)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
             return Reach::Measured((t0 + f * (t1 - t0)).exp());
         }
     }
@@ -160,8 +177,14 @@ pub fn calibration_points(
 ) -> impl Iterator<Item = (f64, f64)> + '_ {
     points
         .iter()
-        .filter(move |p| p.spp >= min_spp && p.true_error > 2.0 * reference_error && p.true_error > 0.0)
-        .filter_map(|p| p.estimate.filter(|e| e.is_finite()).map(|e| (p.seconds, e / p.true_error)))
+        .filter(move |p| {
+            p.spp >= min_spp && p.true_error > 2.0 * reference_error && p.true_error > 0.0
+        })
+        .filter_map(|p| {
+            p.estimate
+                .filter(|e| e.is_finite())
+                .map(|e| (p.seconds, e / p.true_error))
+        })
 }
 
 /// How the film's error estimate compares with the true error.
@@ -178,15 +201,24 @@ pub struct Calibration {
 /// Estimate / true error over the points of an unbiased render that have
 /// enough samples for the estimate and an error well above the reference's
 /// noise (`reference_error`), where the true error is known well.
-pub fn calibration(points: &[TracePoint], reference_error: f64, min_spp: u64) -> Option<Calibration> {
-    let mut ratios: Vec<f64> =
-        calibration_points(points, reference_error, min_spp).map(|(_, ratio)| ratio).collect();
+pub fn calibration(
+    points: &[TracePoint],
+    reference_error: f64,
+    min_spp: u64,
+) -> Option<Calibration> {
+    let mut ratios: Vec<f64> = calibration_points(points, reference_error, min_spp)
+        .map(|(_, ratio)| ratio)
+        .collect();
     if ratios.is_empty() {
         return None;
     }
     ratios.sort_by(f64::total_cmp);
     let n = ratios.len();
-    let median = if n % 2 == 1 { ratios[n / 2] } else { 0.5 * (ratios[n / 2 - 1] + ratios[n / 2]) };
+    let median = if n % 2 == 1 {
+        ratios[n / 2]
+    } else {
+        0.5 * (ratios[n / 2 - 1] + ratios[n / 2])
+    };
     Some(Calibration {
         points: n,
         median,
@@ -218,7 +250,11 @@ mod tests {
         for (bias, c) in [(0.0, 0.05), (0.02, 0.05), (0.1, 0.001)] {
             let f = fit(&synthetic(bias, c)).expect("fits");
             assert!((f.bias - bias).abs() < 1e-6, "bias {} vs {bias}", f.bias);
-            assert!((f.variance_constant - c).abs() < 1e-6 * c.max(1e-3), "c {} vs {c}", f.variance_constant);
+            assert!(
+                (f.variance_constant - c).abs() < 1e-6 * c.max(1e-3),
+                "c {} vs {c}",
+                f.variance_constant
+            );
         }
     }
 
@@ -227,7 +263,9 @@ mod tests {
         let points = synthetic(0.02, 0.05);
         let f = fit(&points).expect("fits");
         // 5% is reached inside the measured range, close to the model's time.
-        let Reach::Measured(t) = time_to(&points, Some(&f), 0.05) else { panic!("measured") };
+        let Reach::Measured(t) = time_to(&points, Some(&f), 0.05) else {
+            panic!("measured")
+        };
         let exact = f.time_to(0.05).expect("reachable");
         assert!((t / exact - 1.0).abs() < 0.05, "{t} vs {exact}");
         // 1% is below the 2% bias floor.
@@ -235,7 +273,9 @@ mod tests {
         // Without bias, a level past the last point is extrapolated.
         let points = synthetic(0.0, 0.05);
         let f = fit(&points).expect("fits");
-        let Reach::Extrapolated(t) = time_to(&points, Some(&f), 1e-4) else { panic!("extrapolated") };
+        let Reach::Extrapolated(t) = time_to(&points, Some(&f), 1e-4) else {
+            panic!("extrapolated")
+        };
         assert!((t / (0.05f64 / 1e-4).powi(2) - 1.0).abs() < 1e-6);
     }
 
@@ -249,9 +289,15 @@ mod tests {
 
     #[test]
     fn bias_is_reported_only_where_the_run_resolves_it() {
-        let f = Fit { bias: 0.05, variance_constant: 0.03 };
+        let f = Fit {
+            bias: 0.05,
+            variance_constant: 0.03,
+        };
         assert_eq!(resolved_bias(&f, 9.0, 0.0), Ok(0.05));
-        let f = Fit { bias: 0.005, variance_constant: 0.03 };
+        let f = Fit {
+            bias: 0.005,
+            variance_constant: 0.03,
+        };
         let bound = resolved_bias(&f, 9.0, 0.0).expect_err("unresolved");
         assert!((bound - 0.02).abs() < 1e-12);
     }

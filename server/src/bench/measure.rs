@@ -47,7 +47,11 @@ pub fn throughput(
         spp: done.spp,
         seconds: secs,
         paths_per_sec: done.samples_per_sec,
-        spp_per_sec: if secs > 0.0 { done.spp as f64 / secs } else { 0.0 },
+        spp_per_sec: if secs > 0.0 {
+            done.spp as f64 / secs
+        } else {
+            0.0
+        },
     })
 }
 
@@ -62,7 +66,10 @@ pub fn trace(
     reference: (&[[f32; 3]], f64),
     seconds: f64,
 ) -> Result<Vec<TracePoint>, BackendError> {
-    let q = Quality { seed: TRACE_SEED, ..*quality };
+    let q = Quality {
+        seed: TRACE_SEED,
+        ..*quality
+    };
     let job = RenderJob::new(scene, width, height, &q);
     backend.prepare(&job)?;
     let mut film = Film::new(width, height);
@@ -88,7 +95,11 @@ pub fn trace(
         let per_spp = rendering.as_secs_f64() / film.spp() as f64;
         let left = (budget - rendering).as_secs_f64();
         let wanted = (film.spp() / 2).max(1);
-        let fits = if per_spp > 0.0 { (left / per_spp).ceil() as u64 } else { wanted };
+        let fits = if per_spp > 0.0 {
+            (left / per_spp).ceil() as u64
+        } else {
+            wanted
+        };
         count = wanted.min(fits).max(1);
     }
 }

@@ -58,7 +58,10 @@ pub fn ray_set(triangles: usize) -> RaySet {
         camera: None,
         materials: BTreeMap::from([(
             "clay".to_owned(),
-            crate::render::scene::MaterialJson::Diffuse(SurfaceJson { albedo: [0.7; 3], emission: None }),
+            crate::render::scene::MaterialJson::Diffuse(SurfaceJson {
+                albedo: [0.7; 3],
+                emission: None,
+            }),
         )]),
         objects: vec![ObjectJson::Mesh(ImportJson {
             file: None,
@@ -90,11 +93,21 @@ pub fn ray_set(triangles: usize) -> RaySet {
             let nl = if ray.dir.dot(s.ng) < 0.0 { s.ng } else { -s.ng };
             let (u1, u2) = Sampler::new(7, i as u64, 0).next_2d();
             let dir = cosine_hemisphere(nl, u1, u2);
-            let from = Origin { object: hit.object, prim: hit.prim, entering: dir.dot(s.ng) < 0.0 };
+            let from = Origin {
+                object: hit.object,
+                prim: hit.prim,
+                entering: dir.dot(s.ng) < 0.0,
+            };
             Some((world.spawn(&s, dir), from))
         })
         .collect();
-    RaySet { scene, world, camera, bounce, build_seconds }
+    RaySet {
+        scene,
+        world,
+        camera,
+        bounce,
+        build_seconds,
+    }
 }
 
 /// Rays per second through the world, best of `repeats` passes over `rays`.
@@ -117,7 +130,12 @@ pub fn measure(triangles: usize, seconds: f64) -> Result<MeshRow, BackendError> 
     let repeats = if triangles > 2_000_000 { 2 } else { 3 };
     let camera = rays_per_sec(&set.world, &set.camera, repeats);
     let bounce = rays_per_sec(&set.world, &set.bounce, repeats);
-    let quality = Quality { max_depth: 4, rr_depth: 5, time_ms: Some((seconds * 1000.0).max(1.0) as u64), ..Quality::default() };
+    let quality = Quality {
+        max_depth: 4,
+        rr_depth: 5,
+        time_ms: Some((seconds * 1000.0).max(1.0) as u64),
+        ..Quality::default()
+    };
     let mut backend = Backend::choose(BackendChoice::Cpu)?;
     let (w, h) = (RAY_IMAGE.0 / 2, RAY_IMAGE.1 / 2);
     let job = RenderJob::new(&set.scene, w, h, &quality);
@@ -137,5 +155,7 @@ pub fn measure(triangles: usize, seconds: f64) -> Result<MeshRow, BackendError> 
 
 /// Origin and direction of every ray as plain arrays (for other tracers).
 pub fn plain(rays: &[(Ray, Origin)]) -> Vec<([f32; 3], [f32; 3])> {
-    rays.iter().map(|(r, _)| (r.origin.to_array(), r.dir.to_array())).collect()
+    rays.iter()
+        .map(|(r, _)| (r.origin.to_array(), r.dir.to_array()))
+        .collect()
 }

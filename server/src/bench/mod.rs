@@ -85,10 +85,20 @@ impl Config {
             backends: vec![BackendChoice::Cpu, BackendChoice::OpenCl { device: None }],
             optional_opencl: true,
             sections: Sections::ALL,
-            throughput_scenes: ["cornell", "cornell-glass", "cornell-quads", "smallpt", "furnace"].map(String::from).to_vec(),
+            throughput_scenes: [
+                "cornell",
+                "cornell-glass",
+                "cornell-quads",
+                "smallpt",
+                "furnace",
+            ]
+            .map(String::from)
+            .to_vec(),
             throughput_sizes: vec![(512, 512), (1920, 1080)],
             throughput_seconds: 3.0,
-            trade_scenes: ["cornell", "cornell-glass", "smallpt"].map(String::from).to_vec(),
+            trade_scenes: ["cornell", "cornell-glass", "smallpt"]
+                .map(String::from)
+                .to_vec(),
             trade_size: (64, 64),
             trade_seconds: 10.0,
             reference_error: 0.0025,
@@ -206,6 +216,8 @@ pub enum BenchError {
     #[error(transparent)]
     Backend(#[from] BackendError),
     #[error("reference cache {path}: {source}")]
-    Cache { path: PathBuf, source: std::io::Error },
+    Cache {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }
-

@@ -4,10 +4,10 @@
 //! so plotting needs no system fonts.
 
 use super::fit::calibration_points;
-use super::report::LEVELS;
-use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use super::meshes::MeshRow;
+use super::report::LEVELS;
 use super::{CalibrationRow, Results, TradeCurve};
+use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -50,12 +50,17 @@ fn percent_label(v: &f64) -> String {
 }
 
 /// Lines' labels and colours in a panel of their own, so no line is hidden.
-fn legend(area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>, entries: &[(String, RGBColor)]) -> Result<(), String> {
+fn legend(
+    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    entries: &[(String, RGBColor)],
+) -> Result<(), String> {
     let font = ("sans-serif", 15).into_font().color(&BLACK);
     for (i, (label, colour)) in entries.iter().enumerate() {
         let y = 70 + 24 * i as i32;
-        area.draw(&PathElement::new([(6, y), (34, y)], colour.stroke_width(3))).map_err(|e| e.to_string())?;
-        area.draw(&Text::new(label.clone(), (42, y - 8), font.clone())).map_err(|e| e.to_string())?;
+        area.draw(&PathElement::new([(6, y), (34, y)], colour.stroke_width(3)))
+            .map_err(|e| e.to_string())?;
+        area.draw(&Text::new(label.clone(), (42, y - 8), font.clone()))
+            .map_err(|e| e.to_string())?;
     }
     Ok(())
 }
@@ -77,9 +82,15 @@ fn register_font() {
 }
 
 /// Draws with `draw` into an RGB buffer and writes it as PNG at `path`.
-fn png(path: &Path, draw: impl FnOnce(DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<(), String>) -> Result<(), PlotError> {
+fn png(
+    path: &Path,
+    draw: impl FnOnce(DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<(), String>,
+) -> Result<(), PlotError> {
     register_font();
-    let fail = |reason: String| PlotError { path: path.to_owned(), reason };
+    let fail = |reason: String| PlotError {
+        path: path.to_owned(),
+        reason,
+    };
     let mut buf = vec![0u8; SIZE.0 as usize * SIZE.1 as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut buf, SIZE).into_drawing_area();
@@ -87,19 +98,50 @@ fn png(path: &Path, draw: impl FnOnce(DrawingArea<BitMapBackend<'_>, plotters::c
         draw(root.clone()).map_err(fail)?;
         root.present().map_err(|e| fail(e.to_string()))?;
     }
-    image::save_buffer_with_format(path, &buf, SIZE.0, SIZE.1, image::ExtendedColorType::Rgb8, image::ImageFormat::Png)
-        .map_err(|e| fail(e.to_string()))
+    image::save_buffer_with_format(
+        path,
+        &buf,
+        SIZE.0,
+        SIZE.1,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| fail(e.to_string()))
 }
 
 /// Smallest and largest of `values` (positive, finite), widened a little.
 fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
     if !(lo < hi) {
         return 1e-3..1.0;
     }
     lo / 1.2..hi * 1.2
+}
+
+/// Tick values 1, 2 and 5 times the powers of ten inside `range`.
+fn log_ticks(range: &std::ops::Range<f64>) -> Vec<f64> {
+    let first = range.start.log10().floor() as i32;
+    let last = range.end.log10().ceil() as i32;
+    (first..=last)
+        .flat_map(|p| [1.0, 2.0, 5.0].map(|m| m * 10f64.powi(p)))
+        .filter(|v| range.contains(v))
+        .collect()
+}
+
+/// 1500 -> "1.5k", 2e6 -> "2M".
+fn si_label(v: f64) -> String {
+    let (scaled, unit) = match v {
+        v if v >= 1e9 => (v / 1e9, "G"),
+        v if v >= 1e6 => (v / 1e6, "M"),
+        v if v >= 1e3 => (v / 1e3, "k"),
+        v => (v, ""),
+    };
+    let digits = if scaled.fract().abs() < 1e-9 { 0 } else { 1 };
+    format!("{scaled:.digits$}{unit}")
 }
 
 /// Relative error against rendering time, one line per setting, with the
@@ -111,8 +153,11 @@ pub fn trade(path: &Path, title: &str, curves: &[&TradeCurve]) -> Result<(), Plo
     png(path, |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         let (root, side) = root.split_horizontally(SIZE.0 - LEGEND_WIDTH);
-        let entries: Vec<(String, RGBColor)> =
-            curves.iter().enumerate().map(|(i, c)| (c.setting.label.clone(), COLOURS[i % COLOURS.len()])).collect();
+        let entries: Vec<(String, RGBColor)> = curves
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.setting.label.clone(), COLOURS[i % COLOURS.len()]))
+            .collect();
         legend(&side, &entries)?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 24))
@@ -131,13 +176,24 @@ pub fn trade(path: &Path, title: &str, curves: &[&TradeCurve]) -> Result<(), Plo
             .map_err(e)?;
         for level in LEVELS {
             chart
-                .draw_series(DashedLineSeries::new([(x.start, level), (x.end, level)], 6, 6, BLACK.mix(0.35).stroke_width(1)))
+                .draw_series(DashedLineSeries::new(
+                    [(x.start, level), (x.end, level)],
+                    6,
+                    6,
+                    BLACK.mix(0.35).stroke_width(1),
+                ))
                 .map_err(e)?;
         }
         for (i, c) in curves.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
-            let line = c.points.iter().filter(|p| p.true_error > 0.0).map(|p| (p.seconds, p.true_error));
-            chart.draw_series(LineSeries::new(line, colour.stroke_width(2))).map_err(e)?;
+            let line = c
+                .points
+                .iter()
+                .filter(|p| p.true_error > 0.0)
+                .map(|p| (p.seconds, p.true_error));
+            chart
+                .draw_series(LineSeries::new(line, colour.stroke_width(2)))
+                .map_err(e)?;
         }
         Ok(())
     })
@@ -147,12 +203,21 @@ pub fn trade(path: &Path, title: &str, curves: &[&TradeCurve]) -> Result<(), Plo
 /// backend (the points the calibration table uses), with the ideal ratio 1
 /// marked.
 pub fn calibration(path: &Path, rows: &[CalibrationRow]) -> Result<(), PlotError> {
-    let shown = |r: &CalibrationRow| calibration_points(&r.points, r.reference_error, MIN_SPP_FOR_TARGET_ERROR).collect::<Vec<_>>();
-    let x = log_range(rows.iter().flat_map(|r| shown(r).into_iter().map(|(t, _)| t)));
+    let shown = |r: &CalibrationRow| {
+        calibration_points(&r.points, r.reference_error, MIN_SPP_FOR_TARGET_ERROR)
+            .collect::<Vec<_>>()
+    };
+    let x = log_range(
+        rows.iter()
+            .flat_map(|r| shown(r).into_iter().map(|(t, _)| t)),
+    );
     png(path, |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         let mut chart = ChartBuilder::on(&root)
-            .caption("Error estimate / true error (unbiased setting)", ("sans-serif", 24))
+            .caption(
+                "Error estimate / true error (unbiased setting)",
+                ("sans-serif", 24),
+            )
             .margin(16)
             .x_label_area_size(50)
             .y_label_area_size(70)
@@ -166,7 +231,12 @@ pub fn calibration(path: &Path, rows: &[CalibrationRow]) -> Result<(), PlotError
             .draw()
             .map_err(e)?;
         chart
-            .draw_series(DashedLineSeries::new([(x.start, 1.0), (x.end, 1.0)], 6, 6, BLACK.mix(0.5).stroke_width(1)))
+            .draw_series(DashedLineSeries::new(
+                [(x.start, 1.0), (x.end, 1.0)],
+                6,
+                6,
+                BLACK.mix(0.5).stroke_width(1),
+            ))
             .map_err(e)?;
         for (i, row) in rows.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
@@ -175,7 +245,9 @@ pub fn calibration(path: &Path, rows: &[CalibrationRow]) -> Result<(), PlotError
                 .draw_series(LineSeries::new(line, colour.stroke_width(2)))
                 .map_err(e)?
                 .label(format!("{} ({})", row.scene, row.backend))
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 24, y)], colour.stroke_width(3)));
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 24, y)], colour.stroke_width(3))
+                });
         }
         chart
             .configure_series_labels()
@@ -197,33 +269,50 @@ pub fn meshes(path: &Path, rows: &[MeshRow]) -> Result<(), PlotError> {
         ("paths/s", |m| m.paths_per_sec),
     ];
     let x = log_range(rows.iter().map(|m| m.triangles as f64));
-    let y = log_range(rows.iter().flat_map(|m| series.iter().map(move |(_, f)| f(m))));
+    let y = log_range(
+        rows.iter()
+            .flat_map(|m| series.iter().map(move |(_, f)| f(m))),
+    );
     png(path, |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         let (root, side) = root.split_horizontally(SIZE.0 - LEGEND_WIDTH);
-        let entries: Vec<(String, RGBColor)> = series.iter().enumerate().map(|(i, (l, _))| ((*l).to_owned(), COLOURS[i])).collect();
+        let entries: Vec<(String, RGBColor)> = series
+            .iter()
+            .enumerate()
+            .map(|(i, (l, _))| ((*l).to_owned(), COLOURS[i]))
+            .collect();
         legend(&side, &entries)?;
         let mut chart = ChartBuilder::on(&root)
-            .caption("Meshes on the CPU: rays and paths per second", ("sans-serif", 24))
+            .caption(
+                "Meshes on the CPU: rays and paths per second",
+                ("sans-serif", 24),
+            )
             .margin(16)
             .x_label_area_size(50)
             .y_label_area_size(80)
-            .build_cartesian_2d(x.clone().log_scale(), y.clone().log_scale())
+            .build_cartesian_2d(
+                x.clone().log_scale().with_key_points(log_ticks(&x)),
+                y.clone().log_scale().with_key_points(log_ticks(&y)),
+            )
             .map_err(e)?;
         chart
             .configure_mesh()
             .x_desc("triangles")
-            .y_desc("per second (2 cores)")
-            .x_label_formatter(&|v| format!("{v:.0}"))
-            .y_label_formatter(&|v| format!("{:.1}M", v / 1e6))
+            .y_desc("per second (all cores)")
+            .x_label_formatter(&|v| si_label(*v))
+            .y_label_formatter(&|v| si_label(*v))
             .label_style(("sans-serif", 15))
             .draw()
             .map_err(e)?;
         for (i, (_, f)) in series.iter().enumerate() {
             let colour = COLOURS[i];
             let points: Vec<(f64, f64)> = rows.iter().map(|m| (m.triangles as f64, f(m))).collect();
-            chart.draw_series(LineSeries::new(points.clone(), colour.stroke_width(3))).map_err(e)?;
-            chart.draw_series(points.iter().map(|&p| Circle::new(p, 5, colour.filled()))).map_err(e)?;
+            chart
+                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(3)))
+                .map_err(e)?;
+            chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 5, colour.filled())))
+                .map_err(e)?;
         }
         Ok(())
     })
@@ -232,13 +321,25 @@ pub fn meshes(path: &Path, rows: &[MeshRow]) -> Result<(), PlotError> {
 /// Writes every plot of `results` into `dir`; returns their paths.
 pub fn write_all(results: &Results, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let mut files = Vec::new();
-    let mut groups: Vec<(&str, &str)> = results.trade.iter().map(|c| (c.scene.as_str(), c.backend.as_str())).collect();
+    let mut groups: Vec<(&str, &str)> = results
+        .trade
+        .iter()
+        .map(|c| (c.scene.as_str(), c.backend.as_str()))
+        .collect();
     groups.dedup();
     let (w, h) = results.trade_size;
     for (scene, backend) in groups {
-        let curves: Vec<&TradeCurve> = results.trade.iter().filter(|c| c.scene == scene && c.backend == backend).collect();
+        let curves: Vec<&TradeCurve> = results
+            .trade
+            .iter()
+            .filter(|c| c.scene == scene && c.backend == backend)
+            .collect();
         let path = dir.join(format!("trade-{scene}-{backend}.png"));
-        trade(&path, &format!("{scene}, {w}x{h}, {backend}: error against time"), &curves)?;
+        trade(
+            &path,
+            &format!("{scene}, {w}x{h}, {backend}: error against time"),
+            &curves,
+        )?;
         files.push(path);
     }
     if !results.calibration.is_empty() {
@@ -252,4 +353,26 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<Vec<PathBuf>, PlotErro
         files.push(path);
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_ticks_are_1_2_5_per_decade_inside_the_range() {
+        assert_eq!(log_ticks(&(1.5e6..2.1e7)), vec![2e6, 5e6, 1e7, 2e7]);
+        assert_eq!(
+            log_ticks(&(9e3..4.8e6)),
+            vec![1e4, 2e4, 5e4, 1e5, 2e5, 5e5, 1e6, 2e6]
+        );
+    }
+
+    #[test]
+    fn si_labels() {
+        assert_eq!(si_label(2e6), "2M");
+        assert_eq!(si_label(1500.0), "1.5k");
+        assert_eq!(si_label(10_000.0), "10k");
+        assert_eq!(si_label(5.0), "5");
+    }
 }

@@ -71,7 +71,10 @@ fn meshes(w: &mut String, r: &Results) {
          loading the mesh, checks and the BVH.\n"
     );
     let _ = writeln!(w, "| triangles | build | memory | BVH nodes | depth | camera M rays/s | bounce M rays/s | M paths/s |");
-    let _ = writeln!(w, "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let _ = writeln!(
+        w,
+        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+    );
     for m in &r.meshes {
         let _ = writeln!(
             w,
@@ -95,7 +98,10 @@ fn throughput(w: &mut String, r: &Results) {
     }
     let _ = writeln!(w, "## Throughput\n");
     let _ = writeln!(w, "Max depth 6, NEE on, tent filter (the thesis's settings). Thesis: 2016, AMD FX-6300 (OpenMP) and NVIDIA GTX 970 (OpenCL).\n");
-    let _ = writeln!(w, "| backend | scene | size | spp/s | M paths/s | thesis CPU spp/s | thesis GPU spp/s |");
+    let _ = writeln!(
+        w,
+        "| backend | scene | size | spp/s | M paths/s | thesis CPU spp/s | thesis GPU spp/s |"
+    );
     let _ = writeln!(w, "| --- | --- | --- | ---: | ---: | ---: | ---: |");
     for row in &r.throughput {
         let t = thesis::figure(&row.scene, row.size.0, row.size.1);
@@ -117,10 +123,17 @@ fn throughput(w: &mut String, r: &Results) {
 
 fn trade(w: &mut String, r: &Results) {
     let (tw, th) = r.trade_size;
-    let mut groups: Vec<(&str, &str)> = r.trade.iter().map(|c| (c.scene.as_str(), c.backend.as_str())).collect();
+    let mut groups: Vec<(&str, &str)> = r
+        .trade
+        .iter()
+        .map(|c| (c.scene.as_str(), c.backend.as_str()))
+        .collect();
     groups.dedup();
     for (scene, backend) in groups {
-        let _ = writeln!(w, "## Speed/accuracy trade: `{scene}`, {tw}x{th}, {backend}\n");
+        let _ = writeln!(
+            w,
+            "## Speed/accuracy trade: `{scene}`, {tw}x{th}, {backend}\n"
+        );
         let reference = r.references.iter().find(|(i, _)| i.scene == scene);
         let reference_error = reference.map_or(0.0, |(i, _)| i.error_estimate);
         if let Some((info, cached)) = reference {
@@ -135,11 +148,20 @@ fn trade(w: &mut String, r: &Results) {
             );
         }
         let _ = writeln!(w, "| setting | M paths/s | to 10% | to 5% | to 2% | to 1% | bias floor | error x sqrt(s) |");
-        let _ = writeln!(w, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
-        for c in r.trade.iter().filter(|c| c.scene == scene && c.backend == backend) {
+        let _ = writeln!(
+            w,
+            "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        );
+        for c in r
+            .trade
+            .iter()
+            .filter(|c| c.scene == scene && c.backend == backend)
+        {
             let end = c.points.last().map_or(0.0, |p| p.seconds);
             // "never" stands only where the run resolves the bias floor.
-            let resolved = c.fit.is_some_and(|f| fit::resolved_bias(&f, end, reference_error).is_ok());
+            let resolved = c
+                .fit
+                .is_some_and(|f| fit::resolved_bias(&f, end, reference_error).is_ok());
             let [a, b, cc, d] = reaches(c).map(|r| match r {
                 Reach::Never if !resolved => "never?".to_owned(),
                 r => reach(r),
@@ -192,7 +214,10 @@ fn specialisation(w: &mut String, r: &Results) {
         return;
     }
     let _ = writeln!(w, "## OpenCL: scene-specialised vs generic program\n");
-    let _ = writeln!(w, "| device | scene | size | specialised M paths/s | generic M paths/s | ratio |");
+    let _ = writeln!(
+        w,
+        "| device | scene | size | specialised M paths/s | generic M paths/s | ratio |"
+    );
     let _ = writeln!(w, "| --- | --- | --- | ---: | ---: | ---: |");
     for row in &r.specialisation {
         let (s, g) = (row.specialised.paths_per_sec, row.generic.paths_per_sec);
@@ -262,7 +287,10 @@ struct SpecialisationCsv<'a> {
     generic_paths_per_sec: f64,
 }
 
-fn write_rows<T: Serialize>(path: PathBuf, rows: impl IntoIterator<Item = T>) -> std::io::Result<PathBuf> {
+fn write_rows<T: Serialize>(
+    path: PathBuf,
+    rows: impl IntoIterator<Item = T>,
+) -> std::io::Result<PathBuf> {
     let mut w = csv::Writer::from_path(&path)?;
     for row in rows {
         w.serialize(row)?;
@@ -344,7 +372,10 @@ pub fn write_csv(r: &Results, dir: &Path) -> std::io::Result<Vec<PathBuf>> {
         )?);
     }
     if !r.calibration.is_empty() {
-        files.push(write_rows(dir.join("calibration_points.csv"), calib_points)?);
+        files.push(write_rows(
+            dir.join("calibration_points.csv"),
+            calib_points,
+        )?);
     }
     if !r.specialisation.is_empty() {
         files.push(write_rows(

@@ -3,7 +3,10 @@
 
 use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
 use super::settings::{self, Setting};
-use super::{fit, measure, report, BenchError, CalibrationRow, Config, Observer, Results, SpecialisationRow, ThroughputRow, TradeCurve};
+use super::{
+    fit, measure, report, BenchError, CalibrationRow, Config, Observer, Results, SpecialisationRow,
+    ThroughputRow, TradeCurve,
+};
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use crate::render::{Backend, BackendChoice, Quality, RenderJob, Scene};
 
@@ -25,7 +28,9 @@ fn open_backends(config: &Config, observer: &mut dyn Observer) -> Result<Vec<Bac
         }
     }
     if out.is_empty() {
-        return Err(BenchError::Usage("--backend: no backend could start".into()));
+        return Err(BenchError::Usage(
+            "--backend: no backend could start".into(),
+        ));
     }
     Ok(out)
 }
@@ -33,7 +38,10 @@ fn open_backends(config: &Config, observer: &mut dyn Observer) -> Result<Vec<Bac
 /// Runs the benchmark.
 pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, BenchError> {
     let load = |names: &[String]| -> Result<Scenes, BenchError> {
-        names.iter().map(|n| Ok((n.clone(), load_scene(n)?))).collect()
+        names
+            .iter()
+            .map(|n| Ok((n.clone(), load_scene(n)?)))
+            .collect()
     };
     let throughput_scenes = load(&config.throughput_scenes)?;
     let trade_scenes = load(&config.trade_scenes)?;
@@ -42,10 +50,20 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     let settings: Vec<Setting> = if s.trade {
         settings::trade_settings()
     } else {
-        vec![Setting { label: "unbounded".into(), quality: settings::unbiased() }]
+        vec![Setting {
+            label: "unbounded".into(),
+            quality: settings::unbiased(),
+        }]
     };
-    let opencl_count = backends.iter().filter(|b| matches!(b, Backend::OpenCl { .. })).count() as u64;
-    let (nb, nt, nr) = (backends.len() as u64, throughput_scenes.len() as u64, trade_scenes.len() as u64);
+    let opencl_count = backends
+        .iter()
+        .filter(|b| matches!(b, Backend::OpenCl { .. }))
+        .count() as u64;
+    let (nb, nt, nr) = (
+        backends.len() as u64,
+        throughput_scenes.len() as u64,
+        trade_scenes.len() as u64,
+    );
     let traced = s.trade || s.calibration;
     observer.begin(
         u64::from(s.throughput) * nb * nt * config.throughput_sizes.len() as u64
@@ -58,7 +76,10 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         machine: machine(),
         date: humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string(),
         renderer_version: RENDERER_VERSION.into(),
-        backends: backends.iter().map(|b| (b.name().to_owned(), b.device())).collect(),
+        backends: backends
+            .iter()
+            .map(|b| (b.name().to_owned(), b.device()))
+            .collect(),
         trade_size: config.trade_size,
         ..Results::default()
     };
@@ -116,8 +137,19 @@ impl Work<'_> {
         for backend in &mut self.backends {
             for (name, scene) in scenes {
                 for &size in &config.throughput_sizes {
-                    observer.step(&format!("throughput {name} {}x{} on {}", size.0, size.1, backend.name()));
-                    let result = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds)?;
+                    observer.step(&format!(
+                        "throughput {name} {}x{} on {}",
+                        size.0,
+                        size.1,
+                        backend.name()
+                    ));
+                    let result = measure::throughput(
+                        backend,
+                        scene,
+                        size,
+                        &Quality::default(),
+                        config.throughput_seconds,
+                    )?;
                     results.throughput.push(ThroughputRow {
                         backend: backend.name().into(),
                         device: backend.device(),
@@ -134,15 +166,29 @@ impl Work<'_> {
     /// Every setting's trace on every backend, against each scene's reference;
     /// the unbiased setting's traces also go to the calibration.
     fn trade(&mut self, scenes: &Scenes, settings: &[Setting]) -> Result<(), BenchError> {
-        let (config, observer, results, backends) = (self.config, &mut *self.observer, &mut self.results, &mut self.backends);
+        let (config, observer, results, backends) = (
+            self.config,
+            &mut *self.observer,
+            &mut self.results,
+            &mut self.backends,
+        );
         for (name, scene) in scenes {
-            observer.step(&format!("reference {name} {}x{}", config.trade_size.0, config.trade_size.1));
+            observer.step(&format!(
+                "reference {name} {}x{}",
+                config.trade_size.0, config.trade_size.1
+            ));
             let reference = reference(config, backends, name, scene, observer)?;
-            results.references.push((reference.info.clone(), reference.cached));
+            results
+                .references
+                .push((reference.info.clone(), reference.cached));
             let reference_error = reference.info.error_estimate;
             for backend in backends.iter_mut() {
                 for setting in settings {
-                    observer.step(&format!("trade {name}: {} on {}", setting.label, backend.name()));
+                    observer.step(&format!(
+                        "trade {name}: {} on {}",
+                        setting.label,
+                        backend.name()
+                    ));
                     let points = measure::trace(
                         backend,
                         scene,
@@ -155,7 +201,11 @@ impl Work<'_> {
                         results.calibration.push(CalibrationRow {
                             backend: backend.name().into(),
                             scene: name.clone(),
-                            calibration: fit::calibration(&points, reference_error, MIN_SPP_FOR_TARGET_ERROR),
+                            calibration: fit::calibration(
+                                &points,
+                                reference_error,
+                                MIN_SPP_FOR_TARGET_ERROR,
+                            ),
                             points: points.clone(),
                             reference_error,
                         });
@@ -188,7 +238,13 @@ impl Work<'_> {
                     let program = if generic { "generic" } else { "specialised" };
                     observer.step(&format!("specialisation {name}: {program} program"));
                     set_generic(backend, generic);
-                    let rate = measure::throughput(backend, scene, size, &Quality::default(), config.throughput_seconds);
+                    let rate = measure::throughput(
+                        backend,
+                        scene,
+                        size,
+                        &Quality::default(),
+                        config.throughput_seconds,
+                    );
                     set_generic(backend, false);
                     rates.push(rate?);
                 }
@@ -203,7 +259,6 @@ impl Work<'_> {
         }
         Ok(())
     }
-
 }
 
 fn set_generic(backend: &mut Backend, generic: bool) {
@@ -223,18 +278,32 @@ fn reference(
 ) -> Result<Reference, BenchError> {
     /// Seed of the references (the measured renders use another).
     const REFERENCE_SEED: u64 = 0x0005_EED0_F2EF;
-    let quality = Quality { seed: REFERENCE_SEED, ..settings::unbiased() };
+    let quality = Quality {
+        seed: REFERENCE_SEED,
+        ..settings::unbiased()
+    };
     let stem = cache::stem(name, scene, config.trade_size, &quality);
-    if let Some(r) = cache::load(&config.cache_dir, &stem, config.reference_error, config.reference_seconds) {
+    if let Some(r) = cache::load(
+        &config.cache_dir,
+        &stem,
+        config.reference_error,
+        config.reference_seconds,
+    ) {
         observer.detail(&format!("cached: {stem}"));
         return Ok(r);
     }
     let backend = fastest(backends, scene, config.trade_size, &quality, observer)?;
     let job = RenderJob::new(scene, config.trade_size.0, config.trade_size.1, &quality);
-    let (film, done) = measure::render_reference(backend, &job, config.reference_error, config.reference_seconds, |p| {
-        let e = p.error_estimate.map_or_else(|| "n/a".into(), report::pct);
-        observer.detail(&format!("{} spp, error {e}", p.spp));
-    })?;
+    let (film, done) = measure::render_reference(
+        backend,
+        &job,
+        config.reference_error,
+        config.reference_seconds,
+        |p| {
+            let e = p.error_estimate.map_or_else(|| "n/a".into(), report::pct);
+            observer.detail(&format!("{} spp, error {e}", p.spp));
+        },
+    )?;
     let reference = Reference {
         info: ReferenceInfo {
             scene: name.into(),
@@ -280,7 +349,8 @@ fn fastest<'a>(
     if backends.len() > 1 {
         for (i, backend) in backends.iter_mut().enumerate() {
             observer.detail(&format!("timing {} for the reference", backend.name()));
-            let rate = measure::throughput(backend, scene, size, quality, TRIAL_SECONDS)?.paths_per_sec;
+            let rate =
+                measure::throughput(backend, scene, size, quality, TRIAL_SECONDS)?.paths_per_sec;
             if rate > best.1 {
                 best = (i, rate);
             }

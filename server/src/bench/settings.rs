@@ -23,17 +23,47 @@ pub fn trade_settings() -> Vec<Setting> {
     let d = Quality::default();
     let mut raw: Vec<(String, Quality)> = Vec::new();
     for depth in [1u32, 2, 4, 6, 8] {
-        let label = if depth == d.max_depth { format!("depth {depth} (default)") } else { format!("depth {depth}") };
-        raw.push((label, Quality { max_depth: depth, ..d }));
+        let label = if depth == d.max_depth {
+            format!("depth {depth} (default)")
+        } else {
+            format!("depth {depth}")
+        };
+        raw.push((
+            label,
+            Quality {
+                max_depth: depth,
+                ..d
+            },
+        ));
     }
     raw.push(("unbounded".into(), Quality { max_depth: 0, ..d }));
     raw.push(("NEE off".into(), Quality { nee: false, ..d }));
-    raw.push(("NEE off, unbounded".into(), Quality { nee: false, max_depth: 0, ..d }));
+    raw.push((
+        "NEE off, unbounded".into(),
+        Quality {
+            nee: false,
+            max_depth: 0,
+            ..d
+        },
+    ));
     raw.push(("clamp 10".into(), Quality { clamp: 10.0, ..d }));
     raw.push(("clamp 1".into(), Quality { clamp: 1.0, ..d }));
-    raw.push(("box filter".into(), Quality { filter: Filter::Box, ..d }));
+    raw.push((
+        "box filter".into(),
+        Quality {
+            filter: Filter::Box,
+            ..d
+        },
+    ));
     raw.push(("RR from bounce 1".into(), Quality { rr_depth: 1, ..d }));
-    raw.push(("RR from bounce 1, unbounded".into(), Quality { rr_depth: 1, max_depth: 0, ..d }));
+    raw.push((
+        "RR from bounce 1, unbounded".into(),
+        Quality {
+            rr_depth: 1,
+            max_depth: 0,
+            ..d
+        },
+    ));
     for p in Preset::ALL {
         raw.push((p.name().into(), p.apply(d)));
     }
@@ -56,10 +86,19 @@ mod tests {
         let s = trade_settings();
         for (i, a) in s.iter().enumerate() {
             a.quality.validate().expect("valid");
-            assert!(s[i + 1..].iter().all(|b| b.quality != a.quality), "{} twice", a.label);
+            assert!(
+                s[i + 1..].iter().all(|b| b.quality != a.quality),
+                "{} twice",
+                a.label
+            );
         }
         for p in Preset::ALL {
-            assert!(s.iter().any(|x| x.label.split(" = ").any(|l| l == p.name())), "{}", p.name());
+            assert!(
+                s.iter()
+                    .any(|x| x.label.split(" = ").any(|l| l == p.name())),
+                "{}",
+                p.name()
+            );
         }
         assert!(s.iter().any(|x| x.quality == unbiased()));
     }

@@ -25,8 +25,11 @@ pub enum SectionArg {
 }
 
 #[derive(clap::Args, Debug)]
-#[command(allow_negative_numbers = true, after_help = "The first full run renders a reference per trade scene (minutes on a CPU) and \
-caches it (see --cache); reruns reuse it. `--quick` takes seconds.")]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "The first full run renders a reference per trade scene (minutes on a CPU) and \
+caches it (see --cache); reruns reuse it. `--quick` takes seconds."
+)]
 pub struct BenchArgs {
     /// Backends to measure, comma-separated [default: cpu, and opencl when a
     /// device is found].
@@ -76,8 +79,14 @@ pub struct BenchArgs {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WxH, e.g. 64x64 (got {s:?})"))?;
-    let num = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("expected WxH, e.g. 64x64 (got {s:?})"));
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("expected WxH, e.g. 64x64 (got {s:?})"))?;
+    let num = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("expected WxH, e.g. 64x64 (got {s:?})"))
+    };
     let size = (num(w)?, num(h)?);
     check_size(size.0, size.1)?;
     Ok(size)
@@ -87,13 +96,19 @@ fn positive(name: &str, v: Option<f64>, default: f64) -> Result<f64, CliError> {
     match v {
         None => Ok(default),
         Some(x) if x.is_finite() && x > 0.0 => Ok(x),
-        Some(x) => Err(CliError::Usage(format!("--{name}: must be a number > 0 (got {x})"))),
+        Some(x) => Err(CliError::Usage(format!(
+            "--{name}: must be a number > 0 (got {x})"
+        ))),
     }
 }
 
 impl BenchArgs {
     fn config(&self) -> Result<Config, CliError> {
-        let mut c = if self.quick { Config::quick() } else { Config::full() };
+        let mut c = if self.quick {
+            Config::quick()
+        } else {
+            Config::full()
+        };
         if !self.backend.is_empty() {
             c.optional_opencl = false;
             c.backends = Vec::new();
@@ -101,14 +116,21 @@ impl BenchArgs {
                 let choice = match b {
                     BackendArg::Auto => BackendChoice::Auto,
                     BackendArg::Cpu => BackendChoice::Cpu,
-                    BackendArg::Opencl => BackendChoice::OpenCl { device: self.device },
+                    BackendArg::Opencl => BackendChoice::OpenCl {
+                        device: self.device,
+                    },
                 };
                 if !c.backends.contains(&choice) {
                     c.backends.push(choice);
                 }
             }
         } else if self.device.is_some() {
-            c.backends = vec![BackendChoice::Cpu, BackendChoice::OpenCl { device: self.device }];
+            c.backends = vec![
+                BackendChoice::Cpu,
+                BackendChoice::OpenCl {
+                    device: self.device,
+                },
+            ];
             c.optional_opencl = false;
         }
         if !self.sections.is_empty() {
@@ -132,15 +154,29 @@ impl BenchArgs {
             c.trade_size = size;
         }
         if !self.mesh_sizes.is_empty() {
-            if let Some(bad) = self.mesh_sizes.iter().find(|&&n| !(100..=16_000_000).contains(&n)) {
-                return Err(CliError::Usage(format!("--mesh-sizes: {bad} is not between 100 and 16000000 triangles")));
+            if let Some(bad) = self
+                .mesh_sizes
+                .iter()
+                .find(|&&n| !(100..=16_000_000).contains(&n))
+            {
+                return Err(CliError::Usage(format!(
+                    "--mesh-sizes: {bad} is not between 100 and 16000000 triangles"
+                )));
             }
             c.mesh_sizes = self.mesh_sizes.clone();
         }
         c.trade_seconds = positive("trade-seconds", self.trade_seconds, c.trade_seconds)?;
-        c.throughput_seconds = positive("throughput-seconds", self.throughput_seconds, c.throughput_seconds)?;
+        c.throughput_seconds = positive(
+            "throughput-seconds",
+            self.throughput_seconds,
+            c.throughput_seconds,
+        )?;
         c.reference_error = positive("reference-error", self.reference_error, c.reference_error)?;
-        c.reference_seconds = positive("reference-seconds", self.reference_seconds, c.reference_seconds)?;
+        c.reference_seconds = positive(
+            "reference-seconds",
+            self.reference_seconds,
+            c.reference_seconds,
+        )?;
         Ok(c)
     }
 }
@@ -174,13 +210,19 @@ impl Observer for Bar {
 pub fn run(args: BenchArgs) -> Result<(), CliError> {
     let config = args.config()?;
     if let Some(dir) = &args.out {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::Usage(format!("--out {}: {e}", dir.display())))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::Usage(format!("--out {}: {e}", dir.display())))?;
     }
     let bar = ProgressBar::new(0).with_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30.cyan/blue} {pos}/{len}  {wide_msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30.cyan/blue} {pos}/{len}  {wide_msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let mut observer = Bar { bar, step: String::new() };
+    let mut observer = Bar {
+        bar,
+        step: String::new(),
+    };
     let results = bench::run(&config, &mut observer).map_err(|e| match e {
         bench::BenchError::Usage(m) => CliError::Usage(m),
         other => CliError::Failed(other.to_string()),
@@ -188,7 +230,8 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
     observer.bar.finish_and_clear();
     print!("{}", report::markdown(&results));
     if let Some(dir) = &args.out {
-        let mut files = report::write_csv(&results, dir).map_err(|e| CliError::Failed(format!("--out {}: {e}", dir.display())))?;
+        let mut files = report::write_csv(&results, dir)
+            .map_err(|e| CliError::Failed(format!("--out {}: {e}", dir.display())))?;
         files.extend(plot::write_all(&results, dir).map_err(|e| CliError::Failed(e.to_string()))?);
         let _ = std::fs::write(dir.join("bench.md"), report::markdown(&results));
         files.push(dir.join("bench.md"));

@@ -15,7 +15,8 @@ pub struct DiffArgs {
 }
 
 fn read(path: &PathBuf) -> Result<(u32, u32, Vec<[f32; 3]>), CliError> {
-    let bytes = std::fs::read(path).map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
     decode_pfm(&bytes).map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))
 }
 
@@ -28,6 +29,9 @@ pub fn run(args: DiffArgs) -> Result<(), CliError> {
             args.image.display()
         )));
     }
-    println!("relative RMS error {:.4}%", relative_rms_error(&image, &reference) * 100.0);
+    println!(
+        "relative RMS error {:.4}%",
+        relative_rms_error(&image, &reference) * 100.0
+    );
     Ok(())
 }

@@ -134,25 +134,30 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     quality
         .validate()
         .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
-    let scene = Scene::load(&args.scene).map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
+    let scene =
+        Scene::load(&args.scene).map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
 
     let backend_arg = match (args.backend, args.device) {
-        (BackendArg::Cpu, Some(_)) => return Err(usage("--device: only with --backend opencl or auto".into())),
+        (BackendArg::Cpu, Some(_)) => {
+            return Err(usage("--device: only with --backend opencl or auto".into()))
+        }
         (BackendArg::Auto, Some(_)) => BackendArg::Opencl,
         (b, _) => b,
     };
-    let mut backend =
-        Backend::choose(backend_arg.choice(args.device)).map_err(|e| CliError::Failed(e.to_string()))?;
+    let mut backend = Backend::choose(backend_arg.choice(args.device))
+        .map_err(|e| CliError::Failed(e.to_string()))?;
     if let Backend::OpenCl { backend, .. } = &mut backend {
         backend.generic = args.generic_kernel;
     }
     tracing::info!(backend = backend.name(), device = %backend.device(), "rendering");
 
     let job = RenderJob::new(&scene, args.width, args.height, &quality);
-    backend.prepare(&job).map_err(|e| CliError::Failed(e.to_string()))?;
+    backend
+        .prepare(&job)
+        .map_err(|e| CliError::Failed(e.to_string()))?;
     let mut film = Film::new(args.width, args.height);
     let bar = progress_bar(&quality);
     let done = progressive::render(&job, &mut backend, &mut film, &quality, |p| {
@@ -169,8 +174,14 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let tonemap = Tonemap {
         exposure: args.exposure,
     };
-    write_image(&args.out, film.width(), film.height(), &film.mean(), &tonemap)
-        .map_err(|e| CliError::Failed(e.to_string()))?;
+    write_image(
+        &args.out,
+        film.width(),
+        film.height(),
+        &film.mean(),
+        &tonemap,
+    )
+    .map_err(|e| CliError::Failed(e.to_string()))?;
 
     let rejected = if done.rejected > 0 {
         format!(", {} samples rejected (NaN/Inf)", done.rejected)
@@ -201,11 +212,17 @@ fn percent(e: Option<f64>) -> String {
 /// A bar over samples when the spp halt is known, else a spinner; drawn only
 /// on a terminal.
 fn progress_bar(quality: &Quality) -> ProgressBar {
-    let target = if quality.halts() { quality.spp } else { Some(DEFAULT_SPP) };
+    let target = if quality.halts() {
+        quality.spp
+    } else {
+        Some(DEFAULT_SPP)
+    };
     match target {
         Some(n) => ProgressBar::new(n).with_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30.cyan/blue} {pos}/{len} spp  {msg}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30.cyan/blue} {pos}/{len} spp  {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
         ),
         None => ProgressBar::new_spinner().with_style(
             ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} spp  {msg}")

@@ -16,7 +16,9 @@ fn describe(name: &str) -> &'static str {
         "cornell-glass" => "thesis scene 2: mirror ball, glass ball, mirror back wall, small light",
         "cornell-quads" => "cornell-glass with the six walls as quads",
         "smallpt" => "smallpt's scene exactly (radius-1e5 walls, big light, Schlick glass)",
-        "furnace" => "white furnace: closed sphere, albedo 0.5, emission 0.5; radiance 1 everywhere",
+        "furnace" => {
+            "white furnace: closed sphere, albedo 0.5, emission 0.5; radiance 1 everywhere"
+        }
         _ => "",
     }
 }

@@ -10,7 +10,12 @@ use std::time::Duration;
 #[derive(clap::Args, Debug, Default)]
 pub struct ServeArgs {
     /// Address to listen on.
-    #[arg(long, env = "PATHSTREAM_ADDR", value_name = "HOST:PORT", help = "Address to listen on [default: 127.0.0.1:8080]")]
+    #[arg(
+        long,
+        env = "PATHSTREAM_ADDR",
+        value_name = "HOST:PORT",
+        help = "Address to listen on [default: 127.0.0.1:8080]"
+    )]
     addr: Option<SocketAddr>,
     /// Where sessions render by default (a session may ask for another).
     #[arg(long, value_enum)]
@@ -50,7 +55,11 @@ pub struct ServeArgs {
 pub fn run(args: ServeArgs) -> Result<(), CliError> {
     let defaults = ServeConfig::default();
     let backend = match (args.backend.unwrap_or(BackendArg::Auto), args.device) {
-        (BackendArg::Cpu, Some(_)) => return Err(CliError::Usage("--device: only with --backend opencl or auto".into())),
+        (BackendArg::Cpu, Some(_)) => {
+            return Err(CliError::Usage(
+                "--device: only with --backend opencl or auto".into(),
+            ))
+        }
         (BackendArg::Auto, Some(_)) => BackendArg::Opencl,
         (b, _) => b,
     };
@@ -59,7 +68,10 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
     }
     for (flag, v) in [
         ("--max-asset-bytes", args.max_asset_bytes.map(|v| v as u64)),
-        ("--max-asset-memory", args.max_asset_memory.map(|v| v as u64)),
+        (
+            "--max-asset-memory",
+            args.max_asset_memory.map(|v| v as u64),
+        ),
         ("--max-triangles", args.max_triangles),
     ] {
         if v == Some(0) {
@@ -68,8 +80,12 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
     }
     let max_triangles = args.max_triangles.unwrap_or(defaults.max_triangles);
     let assets = service::assets::AssetLimits {
-        max_asset_bytes: args.max_asset_bytes.unwrap_or(defaults.assets.max_asset_bytes),
-        max_total_bytes: args.max_asset_memory.unwrap_or(defaults.assets.max_total_bytes),
+        max_asset_bytes: args
+            .max_asset_bytes
+            .unwrap_or(defaults.assets.max_asset_bytes),
+        max_total_bytes: args
+            .max_asset_memory
+            .unwrap_or(defaults.assets.max_total_bytes),
         max_triangles,
     };
     let config = ServeConfig {
@@ -78,7 +94,9 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         token: args.token.filter(|t| !t.is_empty()),
         max_sessions: args.max_sessions.unwrap_or(defaults.max_sessions),
         max_pixels: args.max_pixels.unwrap_or(defaults.max_pixels),
-        idle_timeout: args.idle_timeout_s.map_or(defaults.idle_timeout, Duration::from_secs),
+        idle_timeout: args
+            .idle_timeout_s
+            .map_or(defaults.idle_timeout, Duration::from_secs),
         max_body_bytes: defaults.max_body_bytes,
         cors: args.cors,
         static_dir: args.static_dir,
@@ -91,15 +109,30 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::Failed(format!("cannot start the async runtime: {e}")))?;
     runtime.block_on(async move {
         let running = service::start(config).await.map_err(CliError::Failed)?;
-        let backends: Vec<String> = running.state.backends().iter().map(|b| format!("{} ({})", b.backend, b.device)).collect();
+        let backends: Vec<String> = running
+            .state
+            .backends()
+            .iter()
+            .map(|b| format!("{} ({})", b.backend, b.device))
+            .collect();
         // A closed stdout must not stop a server: write, and ignore failures.
         let mut out = std::io::stdout();
-        let _ = writeln!(out, "pathstream serving on http://{}/  - open it in a browser", running.addr);
+        let _ = writeln!(
+            out,
+            "pathstream serving on http://{}/  - open it in a browser",
+            running.addr
+        );
         let _ = writeln!(out, "render workers: {}", backends.join("; "));
         if running.state.config.token.is_some() {
-            let _ = writeln!(out, "a bearer token is required on /api (Authorization: Bearer ..., or ?token=...)");
+            let _ = writeln!(
+                out,
+                "a bearer token is required on /api (Authorization: Bearer ..., or ?token=...)"
+            );
         }
         let _ = out.flush();
-        running.until_signal().await.map_err(|e| CliError::Failed(e.to_string()))
+        running
+            .until_signal()
+            .await
+            .map_err(|e| CliError::Failed(e.to_string()))
     })
 }

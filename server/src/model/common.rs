@@ -14,7 +14,11 @@ pub(super) const DEFAULT_IOR: f64 = 1.5;
 /// Largest index of refraction the scene accepts.
 pub(super) const MAX_IOR: f64 = 10.0;
 
-pub(super) const IDENTITY: [[f64; 4]; 3] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];
+pub(super) const IDENTITY: [[f64; 4]; 3] = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
 
 /// The file being read: its name for messages, the limits, the warnings.
 pub(super) struct Ctx {
@@ -61,7 +65,10 @@ impl Ctx {
     /// An error if `n` vertices are more than the limit.
     pub fn check_vertices(&self, n: u64, location: Option<&str>) -> Result<(), ModelError> {
         if n > self.limits.max_vertices {
-            let reason = format!("{n} vertices, more than the limit of {}", self.limits.max_vertices);
+            let reason = format!(
+                "{n} vertices, more than the limit of {}",
+                self.limits.max_vertices
+            );
             return Err(match location {
                 Some(l) => self.err_at(l, reason),
                 None => self.err(reason),
@@ -73,7 +80,10 @@ impl Ctx {
     /// An error if `n` triangles are more than the limit.
     pub fn check_triangles(&self, n: u64, location: Option<&str>) -> Result<(), ModelError> {
         if n > self.limits.max_triangles {
-            let reason = format!("{n} triangles, more than the limit of {}", self.limits.max_triangles);
+            let reason = format!(
+                "{n} triangles, more than the limit of {}",
+                self.limits.max_triangles
+            );
             return Err(match location {
                 Some(l) => self.err_at(l, reason),
                 None => self.err(reason),
@@ -188,7 +198,9 @@ pub(super) fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {
 
 /// The first vertex with a coordinate that is not finite.
 pub(super) fn first_non_finite(positions: &[[f32; 3]]) -> Option<usize> {
-    positions.iter().position(|p| !p.iter().all(|x| x.is_finite()))
+    positions
+        .iter()
+        .position(|p| !p.iter().all(|x| x.is_finite()))
 }
 
 /// The first triangle with an index `>= n`, and that index.
@@ -260,7 +272,11 @@ pub(super) fn degenerate_count(mesh: &MeshData) -> usize {
 
 /// A name not yet in `used` (`name`, else `name-2`, `name-3`, ...), recorded.
 fn unique(used: &mut HashSet<String>, name: &str) -> String {
-    let name = if name.trim().is_empty() { "material" } else { name };
+    let name = if name.trim().is_empty() {
+        "material"
+    } else {
+        name
+    };
     let mut candidate = name.to_owned();
     let mut k = 2;
     while used.contains(&candidate) {
@@ -309,9 +325,15 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
                 mesh.positions.len()
             )));
         }
-        if mesh.materials.len() != mesh.triangles.len() || mesh.materials.iter().any(|&m| m as usize >= materials.len())
+        if mesh.materials.len() != mesh.triangles.len()
+            || mesh
+                .materials
+                .iter()
+                .any(|&m| m as usize >= materials.len())
         {
-            return Err(ctx.err(format!("mesh {name:?}: triangle materials do not match (a loader bug)")));
+            return Err(ctx.err(format!(
+                "mesh {name:?}: triangle materials do not match (a loader bug)"
+            )));
         }
         if let Some(n) = &mesh.normals {
             let ok = n.len() == mesh.positions.len()
@@ -320,7 +342,9 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
                     (l - 1.0).abs() < 1e-5
                 });
             if !ok {
-                return Err(ctx.err(format!("mesh {name:?}: normals are not unit vectors (a loader bug)")));
+                return Err(ctx.err(format!(
+                    "mesh {name:?}: normals are not unit vectors (a loader bug)"
+                )));
             }
         }
         let degenerate = degenerate_count(&mesh);
@@ -403,7 +427,10 @@ mod tests {
     #[test]
     fn values_are_clamped_with_notes() {
         let mut notes = Vec::new();
-        assert_eq!(albedo("Kd", [0.5, 1.5, f64::NAN], &mut notes), [0.5, 1.0, 0.0]);
+        assert_eq!(
+            albedo("Kd", [0.5, 1.5, f64::NAN], &mut notes),
+            [0.5, 1.0, 0.0]
+        );
         assert_eq!(albedo("Kd", [0.0, 0.5, 1.0], &mut notes), [0.0, 0.5, 1.0]);
         assert_eq!(emission("Ke", [0.0; 3], &mut notes), None);
         assert_eq!(
@@ -429,7 +456,10 @@ mod tests {
         let mut ctx = Ctx::new("f", &Limits::default());
         let n = clean_normals(&mut ctx, "m", vec![[0.0, 0.0, 1.0], [0.0, 3.0, 4.0]], 2);
         assert_eq!(n, Some(vec![[0.0, 0.0, 1.0], [0.0, 0.6, 0.8]]));
-        assert_eq!(clean_normals(&mut ctx, "m", vec![[0.0; 3], [1.0, 0.0, 0.0]], 2), None);
+        assert_eq!(
+            clean_normals(&mut ctx, "m", vec![[0.0; 3], [1.0, 0.0, 0.0]], 2),
+            None
+        );
         assert_eq!(clean_normals(&mut ctx, "m", vec![[1.0, 0.0, 0.0]], 2), None);
         assert_eq!(
             ctx.warnings,

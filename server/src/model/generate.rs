@@ -82,14 +82,21 @@ pub fn bumpy_sphere(triangles: usize) -> MeshData {
     // A UV grid of n x 2n quads, 2 triangles each, minus the poles' halves.
     let n = ((triangles as f64 / 4.0).sqrt().round() as usize).max(3);
     let (rings, segments) = (n, 2 * n);
-    let radius = |theta: f64, phi: f64| 1.0 + 0.15 * (5.0 * theta).sin() * (7.0 * phi).cos() + 0.05 * (23.0 * phi + 3.0 * theta).sin();
+    let radius = |theta: f64, phi: f64| {
+        1.0 + 0.15 * (5.0 * theta).sin() * (7.0 * phi).cos()
+            + 0.05 * (23.0 * phi + 3.0 * theta).sin()
+    };
     let mut positions = vec![[0.0f32, 1.0 * radius(0.0, 0.0) as f32, 0.0]];
     for i in 1..rings {
         let theta = std::f64::consts::PI * i as f64 / rings as f64;
         for j in 0..segments {
             let phi = std::f64::consts::TAU * j as f64 / segments as f64;
             let r = radius(theta, phi);
-            positions.push([(r * theta.sin() * phi.cos()) as f32, (r * theta.cos()) as f32, (r * theta.sin() * phi.sin()) as f32]);
+            positions.push([
+                (r * theta.sin() * phi.cos()) as f32,
+                (r * theta.cos()) as f32,
+                (r * theta.sin() * phi.sin()) as f32,
+            ]);
         }
     }
     positions.push([0.0, -(radius(std::f64::consts::PI, 0.0) as f32), 0.0]);
@@ -156,7 +163,11 @@ mod tests {
             let [a, b, c] = t.map(|i| m.positions[i as usize].map(f64::from));
             let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
             let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
             assert!(n[0] * a[0] + n[1] * a[1] + n[2] * a[2] > 0.0);
         }
     }
@@ -165,6 +176,10 @@ mod tests {
     fn bumpy_sphere_is_closed_and_about_the_size_asked() {
         let m = bumpy_sphere(10_000);
         assert_closed(&m);
-        assert!((9_000..11_000).contains(&m.triangles.len()), "{}", m.triangles.len());
+        assert!(
+            (9_000..11_000).contains(&m.triangles.len()),
+            "{}",
+            m.triangles.len()
+        );
     }
 }

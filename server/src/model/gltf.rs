@@ -186,7 +186,10 @@ fn local(t: Transform) -> M4 {
 /// Walks the scene's node hierarchy: (mesh, world transform) per node with a
 /// mesh, in preorder, and the first perspective camera.
 #[allow(clippy::type_complexity)]
-fn walk(ctx: &mut Ctx, doc: &Document) -> Result<(Vec<(usize, M4)>, Option<ModelCamera>), ModelError> {
+fn walk(
+    ctx: &mut Ctx,
+    doc: &Document,
+) -> Result<(Vec<(usize, M4)>, Option<ModelCamera>), ModelError> {
     let scenes = doc.scenes().len();
     let roots: Vec<Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(scene) => {
@@ -233,10 +236,15 @@ fn walk(ctx: &mut Ctx, doc: &Document) -> Result<(Vec<(usize, M4)>, Option<Model
         }
         if let Some(cam) = node.camera() {
             match cam.projection() {
-                Projection::Perspective(p) if camera.is_none() => match perspective(&world, p.yfov()) {
-                    Ok(c) => camera = Some(c),
-                    Err(why) => ctx.warn(format!("cameras[{}] on nodes[{i}] ignored: {why}", cam.index())),
-                },
+                Projection::Perspective(p) if camera.is_none() => {
+                    match perspective(&world, p.yfov()) {
+                        Ok(c) => camera = Some(c),
+                        Err(why) => ctx.warn(format!(
+                            "cameras[{}] on nodes[{i}] ignored: {why}",
+                            cam.index()
+                        )),
+                    }
+                }
                 Projection::Perspective(_) => more_cameras += 1,
                 Projection::Orthographic(_) => orthographic += 1,
             }
@@ -265,9 +273,10 @@ fn perspective(world: &M4, yfov: f32) -> Result<ModelCamera, String> {
         let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
         (len > 0.0 && len.is_finite()).then(|| v.map(|x| x / len))
     };
-    let forward =
-        unit([-world[0][2], -world[1][2], -world[2][2]]).ok_or("its node's transform has no view direction")?;
-    let up = unit([world[0][1], world[1][1], world[2][1]]).ok_or("its node's transform has no up direction")?;
+    let forward = unit([-world[0][2], -world[1][2], -world[2][2]])
+        .ok_or("its node's transform has no view direction")?;
+    let up = unit([world[0][1], world[1][1], world[2][1]])
+        .ok_or("its node's transform has no up direction")?;
     let yfov = widen(yfov);
     if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
         return Err(format!("yfov {yfov} is not between 0 and pi"));
@@ -328,14 +337,23 @@ fn material(m: &::gltf::Material, index: usize) -> Mat {
     let base = pbr.base_color_factor();
     let rgb = [base[0], base[1], base[2]].map(widen);
     let strength = m.emissive_strength().map_or(1.0, widen);
-    let emission = common::emission("emission", m.emissive_factor().map(|e| widen(e) * strength), &mut notes);
+    let emission = common::emission(
+        "emission",
+        m.emissive_factor().map(|e| widen(e) * strength),
+        &mut notes,
+    );
     let (metallic, roughness) = (widen(pbr.metallic_factor()), widen(pbr.roughness_factor()));
     let transmission = m.transmission();
-    let t = transmission.as_ref().map_or(0.0, |t| widen(t.transmission_factor()));
+    let t = transmission
+        .as_ref()
+        .map_or(0.0, |t| widen(t.transmission_factor()));
 
     let textures = [
         (pbr.base_color_texture().is_some(), "base colour texture"),
-        (pbr.metallic_roughness_texture().is_some(), "metallic-roughness texture"),
+        (
+            pbr.metallic_roughness_texture().is_some(),
+            "metallic-roughness texture",
+        ),
         (m.normal_texture().is_some(), "normal map"),
         (m.occlusion_texture().is_some(), "occlusion map"),
         (m.emissive_texture().is_some(), "emissive texture"),
@@ -358,7 +376,9 @@ fn material(m: &::gltf::Material, index: usize) -> Mat {
 
     let json = if t > 0.0 {
         if t < 1.0 {
-            notes.push(format!("transmission {t} is rendered as fully transmissive glass"));
+            notes.push(format!(
+                "transmission {t} is rendered as fully transmissive glass"
+            ));
         }
         if roughness != 0.0 {
             ignored.push(format!("roughness {roughness} (the glass is smooth)"));
@@ -427,7 +447,10 @@ fn read_mesh(
     totals: &mut (u64, u64),
 ) -> Result<MeshData, ModelError> {
     let mi = mesh.index();
-    let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh{mi}"));
+    let name = mesh
+        .name()
+        .map(str::to_owned)
+        .unwrap_or_else(|| format!("mesh{mi}"));
     let mut out = MeshData {
         name: name.clone(),
         ..Default::default()
@@ -436,7 +459,10 @@ fn read_mesh(
     for prim in mesh.primitives() {
         let path = format!("meshes[{mi}].primitives[{}]", prim.index());
         let mode = prim.mode();
-        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
             let mode = match mode {
                 Mode::Points => "POINTS",
                 Mode::Lines => "LINES",
@@ -453,7 +479,9 @@ fn read_mesh(
             continue;
         };
         if prim.morph_targets().len() > 0 {
-            ctx.warn(format!("mesh {name:?}: morph targets ignored (the base shape is used)"));
+            ctx.warn(format!(
+                "mesh {name:?}: morph targets ignored (the base shape is used)"
+            ));
         }
         if prim.get(&Semantic::Colors(0)).is_some() {
             ctx.warn("vertex colours ignored");
@@ -498,16 +526,23 @@ fn read_mesh(
         }
         match prim.get(&Semantic::Normals) {
             Some(acc) if acc.count() == n => {
-                normals.extend(data::read_vec3(ctx, bufs, &acc, &format!("{path}.attributes.NORMAL"))?);
+                normals.extend(data::read_vec3(
+                    ctx,
+                    bufs,
+                    &acc,
+                    &format!("{path}.attributes.NORMAL"),
+                )?);
                 with_normals += 1;
             }
             _ => without_normals += 1,
         }
         let material = table.index(ctx, &prim.material());
         let offset = out.positions.len() as u32;
-        u32::try_from(out.positions.len() + n).map_err(|_| ctx.err_at(&path, "too many vertices"))?;
+        u32::try_from(out.positions.len() + n)
+            .map_err(|_| ctx.err_at(&path, "too many vertices"))?;
         out.positions.extend(positions);
-        out.triangles.extend(tris.iter().map(|t| t.map(|i| i + offset)));
+        out.triangles
+            .extend(tris.iter().map(|t| t.map(|i| i + offset)));
         out.materials.resize(out.triangles.len(), material);
         *totals = (totals.0 + n as u64, totals.1 + tris.len() as u64);
     }

@@ -31,7 +31,10 @@ pub(super) fn split_glb<'a>(ctx: &Ctx, bytes: &'a [u8]) -> Result<Glb<'a>, Model
         return Err(ctx.err_at("byte 0", "truncated: a GLB header has 12 bytes"));
     };
     if version != 2 {
-        return Err(ctx.err_at("byte 4", format!("GLB version {version} (only version 2 is read)")));
+        return Err(ctx.err_at(
+            "byte 4",
+            format!("GLB version {version} (only version 2 is read)"),
+        ));
     }
     let length = length as usize;
     if length > bytes.len() {
@@ -57,7 +60,10 @@ pub(super) fn split_glb<'a>(ctx: &Ctx, bytes: &'a [u8]) -> Result<Glb<'a>, Model
         let Some(end) = start.checked_add(len as usize).filter(|&e| e <= length) else {
             return Err(ctx.err_at(
                 format!("byte {at}"),
-                format!("truncated: chunk {index} says {len} bytes, {} remain", length - start),
+                format!(
+                    "truncated: chunk {index} says {len} bytes, {} remain",
+                    length - start
+                ),
             ));
         };
         match (index, kind) {
@@ -79,13 +85,18 @@ pub(super) fn parse_document(ctx: &Ctx, json: &[u8]) -> Result<Document, ModelEr
     let root: ::gltf::json::Root = serde_json::from_slice(json).map_err(|e| {
         let text = e.to_string();
         let reason = text.split(" at line ").next().unwrap_or(&text).to_owned();
-        ctx.err_at(format!("JSON line {}, column {}", e.line(), e.column()), reason)
+        ctx.err_at(
+            format!("JSON line {}, column {}", e.line(), e.column()),
+            reason,
+        )
     })?;
     // gltf-json's validation indexes `accessors` by each POSITION without a
     // check (and panics): check those first.
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
-            let position = prim.attributes.get(&Checked::Valid(::gltf::Semantic::Positions));
+            let position = prim
+                .attributes
+                .get(&Checked::Valid(::gltf::Semantic::Positions));
             if position.is_some_and(|i| i.value() >= root.accessors.len()) {
                 return Err(ctx.err_at(
                     format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
@@ -171,8 +182,15 @@ impl<'a> Buffers<'a> {
                 .bin
                 .ok_or_else(|| ctx.err_at(&path, "has no uri, and the file has no GLB BIN chunk"))?
                 .to_vec(),
-            None => return Err(ctx.err_at(&path, "has no uri (only buffer 0 of a GLB may use the BIN chunk)")),
-            Some(uri) if uri.starts_with("data:") => data_uri(uri).map_err(|r| ctx.err_at(&path, r))?,
+            None => {
+                return Err(ctx.err_at(
+                    &path,
+                    "has no uri (only buffer 0 of a GLB may use the BIN chunk)",
+                ))
+            }
+            Some(uri) if uri.starts_with("data:") => {
+                data_uri(uri).map_err(|r| ctx.err_at(&path, r))?
+            }
             Some(uri) => {
                 let Some(dir) = self.dir else {
                     return Err(ctx.err_at(
@@ -182,15 +200,22 @@ impl<'a> Buffers<'a> {
                 };
                 let name = String::from_utf8_lossy(&percent_decode(uri)).into_owned();
                 if name.contains("://") || Path::new(&name).is_absolute() {
-                    return Err(ctx.err_at(&path, format!("{uri:?}: only files relative to the glTF file are read")));
+                    return Err(ctx.err_at(
+                        &path,
+                        format!("{uri:?}: only files relative to the glTF file are read"),
+                    ));
                 }
-                std::fs::read(dir.join(&name)).map_err(|e| ctx.err_at(&path, format!("cannot read {name:?}: {e}")))?
+                std::fs::read(dir.join(&name))
+                    .map_err(|e| ctx.err_at(&path, format!("cannot read {name:?}: {e}")))?
             }
         };
         if data.len() < *length {
             return Err(ctx.err_at(
                 &path,
-                format!("holds {} bytes, but its byteLength is {length} (truncated)", data.len()),
+                format!(
+                    "holds {} bytes, but its byteLength is {length} (truncated)",
+                    data.len()
+                ),
             ));
         }
         self.loaded[index] = Some(data);
@@ -198,7 +223,10 @@ impl<'a> Buffers<'a> {
     }
 
     fn bytes(&self, index: usize) -> &[u8] {
-        self.loaded.get(index).and_then(Option::as_deref).unwrap_or_default()
+        self.loaded
+            .get(index)
+            .and_then(Option::as_deref)
+            .unwrap_or_default()
     }
 }
 
@@ -260,7 +288,11 @@ fn place(
     packed: bool,
     path: &str,
 ) -> Result<(usize, usize, usize), ModelError> {
-    let stride = if packed { elem } else { view.stride().unwrap_or(elem) };
+    let stride = if packed {
+        elem
+    } else {
+        view.stride().unwrap_or(elem)
+    };
     if stride < elem {
         return Err(ctx.err_at(
             path,
@@ -269,7 +301,9 @@ fn place(
     }
     let needed = match count {
         0 => Some(0),
-        n => (n - 1).checked_mul(stride).and_then(|x| x.checked_add(elem)),
+        n => (n - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(elem)),
     }
     .and_then(|x| x.checked_add(offset));
     if needed.is_none_or(|n| n > view.length()) {
@@ -285,7 +319,11 @@ fn place(
     let buffer = view.buffer().index();
     bufs.load(ctx, buffer)?;
     let have = bufs.bytes(buffer).len();
-    if view.offset().checked_add(view.length()).is_none_or(|end| end > have) {
+    if view
+        .offset()
+        .checked_add(view.length())
+        .is_none_or(|end| end > have)
+    {
         return Err(ctx.err_at(
             format!("bufferViews[{}]", view.index()),
             format!(
@@ -312,7 +350,8 @@ fn read<T: Copy + Default>(
     let short = || ctx.err_at(path, "data cut short (a loader bug)");
     let mut out = match acc.view() {
         Some(view) => {
-            let (buffer, start, stride) = place(ctx, bufs, &view, acc.offset(), count, elem, false, path)?;
+            let (buffer, start, stride) =
+                place(ctx, bufs, &view, acc.offset(), count, elem, false, path)?;
             let data = bufs.bytes(buffer);
             let mut out = Vec::with_capacity(count);
             for i in 0..count {
@@ -332,9 +371,27 @@ fn read<T: Copy + Default>(
             IndexType::U32 => 4,
         };
         let ipath = format!("{path}.sparse.indices");
-        let (ib, istart, _) = place(ctx, bufs, &indices.view(), indices.offset(), n, width, true, &ipath)?;
+        let (ib, istart, _) = place(
+            ctx,
+            bufs,
+            &indices.view(),
+            indices.offset(),
+            n,
+            width,
+            true,
+            &ipath,
+        )?;
         let vpath = format!("{path}.sparse.values");
-        let (vb, vstart, _) = place(ctx, bufs, &values.view(), values.offset(), n, elem, true, &vpath)?;
+        let (vb, vstart, _) = place(
+            ctx,
+            bufs,
+            &values.view(),
+            values.offset(),
+            n,
+            elem,
+            true,
+            &vpath,
+        )?;
         for k in 0..n {
             let ib = bufs
                 .bytes(ib)
@@ -350,9 +407,9 @@ fn read<T: Copy + Default>(
                 .bytes(vb)
                 .get(vstart + k * elem..vstart + (k + 1) * elem)
                 .ok_or_else(short)?;
-            let slot = out
-                .get_mut(i)
-                .ok_or_else(|| ctx.err_at(&ipath, format!("index {i} out of range (count {count})")))?;
+            let slot = out.get_mut(i).ok_or_else(|| {
+                ctx.err_at(&ipath, format!("index {i} out of range (count {count})"))
+            })?;
             *slot = decode(value);
         }
     }
@@ -404,7 +461,12 @@ pub(super) fn read_vec3(
 }
 
 /// Triangle indices: SCALAR unsigned bytes, shorts or ints.
-pub(super) fn read_indices(ctx: &Ctx, bufs: &mut Buffers, acc: &Accessor, path: &str) -> Result<Vec<u32>, ModelError> {
+pub(super) fn read_indices(
+    ctx: &Ctx,
+    bufs: &mut Buffers,
+    acc: &Accessor,
+    path: &str,
+) -> Result<Vec<u32>, ModelError> {
     let ty = acc.data_type();
     let decode: fn(&[u8]) -> u32 = match (acc.dimensions(), ty) {
         (Dimensions::Scalar, DataType::U8) => |x| u32::from(x[0]),
@@ -438,8 +500,12 @@ mod tests {
             Ok(vec![0, 1, 2, 255])
         );
         assert_eq!(data_uri("data:,a%20b"), Ok(b"a b".to_vec()));
-        assert!(data_uri("data:;base64,@@@").is_err_and(|e| e.starts_with("the data: URI is not valid base64")));
-        assert_eq!(data_uri("data:nothing"), Err("a data: URI without a comma".to_owned()));
+        assert!(data_uri("data:;base64,@@@")
+            .is_err_and(|e| e.starts_with("the data: URI is not valid base64")));
+        assert_eq!(
+            data_uri("data:nothing"),
+            Err("a data: URI without a comma".to_owned())
+        );
         assert_eq!(percent_decode("a%2"), b"a%2".to_vec());
     }
 

@@ -129,7 +129,9 @@ pub enum Format {
 /// `.glb`, `.ply`, any case).
 pub fn is_model_name(name: &str) -> bool {
     let lower = name.to_ascii_lowercase();
-    [".obj", ".gltf", ".glb", ".ply"].iter().any(|e| lower.ends_with(e))
+    [".obj", ".gltf", ".glb", ".ply"]
+        .iter()
+        .any(|e| lower.ends_with(e))
 }
 
 /// Reads a model file; references to other files (OBJ's `mtllib`, a
@@ -142,8 +144,17 @@ pub fn load_file(path: &Path, limits: &Limits) -> Result<Model, ModelError> {
         location: None,
         reason: format!("cannot read: {e}"),
     })?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let dir = path.parent().map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d });
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let dir = path.parent().map(|d| {
+        if d.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            d
+        }
+    });
     load(&shown, &name, &bytes, dir, limits)
 }
 
@@ -156,7 +167,13 @@ pub fn load_bytes(bytes: &[u8], name: &str, limits: &Limits) -> Result<Model, Mo
     load(name, name, bytes, None, limits)
 }
 
-fn load(shown: &str, name: &str, bytes: &[u8], dir: Option<&Path>, limits: &Limits) -> Result<Model, ModelError> {
+fn load(
+    shown: &str,
+    name: &str,
+    bytes: &[u8],
+    dir: Option<&Path>,
+    limits: &Limits,
+) -> Result<Model, ModelError> {
     let mut ctx = common::Ctx::new(shown, limits);
     let parts = match detect(name, bytes) {
         Some(Format::Obj) => obj::load(&mut ctx, bytes, dir)?,
@@ -178,7 +195,10 @@ pub fn detect(name: &str, bytes: &[u8]) -> Option<Format> {
     if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
         return Some(Format::Ply);
     }
-    let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes).trim_ascii_start();
+    let text = bytes
+        .strip_prefix(b"\xEF\xBB\xBF")
+        .unwrap_or(bytes)
+        .trim_ascii_start();
     if text.starts_with(b"{") && text.windows(7).any(|w| w == b"\"asset\"") {
         return Some(Format::Gltf);
     }

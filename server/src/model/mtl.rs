@@ -68,8 +68,10 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
         match lower.as_str() {
             "kd" | "ks" | "ke" | "ka" | "tf" => {
                 let Some(c) = color(key, &args).map_err(err)? else {
-                    m.ignored
-                        .push(format!("{key} {}", args.first().copied().unwrap_or_default()));
+                    m.ignored.push(format!(
+                        "{key} {}",
+                        args.first().copied().unwrap_or_default()
+                    ));
                     continue;
                 };
                 let slot = match lower.as_str() {
@@ -106,7 +108,8 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
 
 fn number(key: &str, word: Option<&str>) -> Result<f64, String> {
     let word = word.ok_or_else(|| format!("{key}: a number is missing"))?;
-    word.parse().map_err(|_| format!("{key}: {word:?} is not a number"))
+    word.parse()
+        .map_err(|_| format!("{key}: {word:?} is not a number"))
 }
 
 /// `K r [g b]` (g and b default to r); `None` for the `spectral` and `xyz`
@@ -124,7 +127,10 @@ fn color(key: &str, args: &[&str]) -> Result<Option<[f64; 3]>, String> {
             number(key, Some(g))?,
             number(key, Some(b))?,
         ])),
-        _ => Err(format!("{key}: expected one or three numbers, got {}", args.len())),
+        _ => Err(format!(
+            "{key}: expected one or three numbers, got {}",
+            args.len()
+        )),
     }
 }
 

@@ -33,14 +33,19 @@ fn scan(bytes: &[u8]) -> Scan {
     let mut seen = HashSet::new();
     for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
         let line = line.trim_ascii();
-        let end = line.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(line.len());
+        let end = line
+            .iter()
+            .position(|b| b.is_ascii_whitespace())
+            .unwrap_or(line.len());
         match &line[..end] {
             b"v" => s.counts[0] += 1,
             b"vt" => s.counts[1] += 1,
             b"vn" => s.counts[2] += 1,
             b"f" => {
                 s.faces += 1;
-                let long = line.split(|b| !b.is_ascii_digit()).any(|run| run.len() > 15);
+                let long = line
+                    .split(|b| !b.is_ascii_digit())
+                    .any(|run| run.len() > 15);
                 if long || line.contains(&b'-') {
                     s.unusual
                         .push((i + 1, String::from_utf8_lossy(line).into_owned(), s.counts));
@@ -70,10 +75,16 @@ const KINDS: [(&str, &str); 3] = [
 /// The references of an `f` (or `l`) statement checked as tobj resolves
 /// them: `Err` when one is not a reference, `Ok(Some(why))` when one is out
 /// of range (`vt` and `vn` only where the file has some, as tobj checks).
-fn face_refs(key: &str, args: &[&str], counts: [usize; 3], totals: [usize; 3]) -> Result<Option<String>, String> {
+fn face_refs(
+    key: &str,
+    args: &[&str],
+    counts: [usize; 3],
+    totals: [usize; 3],
+) -> Result<Option<String>, String> {
     for word in args {
         let parts: Vec<&str> = word.split('/').collect();
-        let not_ref = || format!("{key}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)");
+        let not_ref =
+            || format!("{key}: {word:?} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)");
         if parts.len() > 3 {
             return Err(not_ref());
         }
@@ -95,7 +106,11 @@ fn face_refs(key: &str, args: &[&str], counts: [usize; 3], totals: [usize; 3]) -
 /// `mtllib` cannot be followed).
 pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Parts, ModelError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
+        let line = bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
         ctx.err_at(format!("line {line}"), "not UTF-8 text")
     })?;
     let scan = scan(bytes);
@@ -157,7 +172,11 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         }
         // tobj maps `usemtl` names to indices into the concatenation of what
         // the loader returns; `libs` is that same concatenation.
-        let map = found.iter().enumerate().map(|(i, m)| (m.name.clone(), i)).collect();
+        let map = found
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (m.name.clone(), i))
+            .collect();
         let stubs = found
             .iter()
             .map(|m| tobj::Material {
@@ -218,7 +237,8 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
     for model in &models {
         let m = &model.mesh;
         let offset = mesh.positions.len() as u32;
-        u32::try_from(mesh.positions.len() + m.positions.len() / 3).map_err(|_| ctx.err("too many vertices"))?;
+        u32::try_from(mesh.positions.len() + m.positions.len() / 3)
+            .map_err(|_| ctx.err("too many vertices"))?;
         ctx.check_vertices((mesh.positions.len() + m.positions.len() / 3) as u64, None)?;
         ctx.check_triangles((mesh.triangles.len() + m.indices.len() / 3) as u64, None)?;
         mesh.positions
@@ -240,7 +260,8 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
             }
         };
         for t in m.indices.chunks_exact(3) {
-            mesh.triangles.push([t[0] + offset, t[1] + offset, t[2] + offset]);
+            mesh.triangles
+                .push([t[0] + offset, t[1] + offset, t[2] + offset]);
             mesh.materials.push(material);
         }
     }
@@ -271,7 +292,9 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
     mesh.normals = match (with_normals, without_normals) {
         (0, _) => {
             if scan.smoothing {
-                ctx.warn("smoothing groups (s) ignored: without vn normals the mesh is flat shaded");
+                ctx.warn(
+                    "smoothing groups (s) ignored: without vn normals the mesh is flat shaded",
+                );
             }
             None
         }
@@ -300,7 +323,9 @@ fn vertex(args: &[&str]) -> Result<[f32; 3], String> {
     let mut p = [0f32; 3];
     for (k, slot) in p.iter_mut().enumerate() {
         let word = args.get(k).ok_or("v: expected three numbers x y z")?;
-        *slot = word.parse().map_err(|_| format!("v: {word:?} is not a number"))?;
+        *slot = word
+            .parse()
+            .map_err(|_| format!("v: {word:?} is not a number"))?;
     }
     match args.len() {
         3 | 6 => Ok(p),
@@ -369,7 +394,10 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
         match key {
             Some("v") => {
                 counts[0] += 1;
-                if matches!(e, E::PositionParseError | E::ScalingByZeroError | E::ColorParseError) {
+                if matches!(
+                    e,
+                    E::PositionParseError | E::ScalingByZeroError | E::ColorParseError
+                ) {
                     if let Err(reason) = vertex(&args) {
                         return found(reason);
                     }
@@ -390,7 +418,9 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
             Some(k @ ("f" | "l")) => {
                 match face_refs(k, &args, counts, totals) {
                     Err(why) => return found(why),
-                    Ok(Some(why)) if k == "f" && !matches!(e, E::FaceParseError) => return found(why),
+                    Ok(Some(why)) if k == "f" && !matches!(e, E::FaceParseError) => {
+                        return found(why)
+                    }
                     _ => {}
                 }
                 if k == "f" && args.is_empty() && matches!(e, E::InvalidPolygon) {
@@ -446,7 +476,10 @@ mod tests {
             "t.obj: line 2: v: expected three numbers x y z"
         );
         assert_eq!(err("v 0 0 0\nv 1 0 0 0\n"), "t.obj: line 2: v: w is 0");
-        assert_eq!(err("v 0 0 0\nvn 1 0\n"), "t.obj: line 2: vn: expected 3 numbers");
+        assert_eq!(
+            err("v 0 0 0\nvn 1 0\n"),
+            "t.obj: line 2: vn: expected 3 numbers"
+        );
         assert_eq!(
             err("v 0 0 0\nv nan 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 4\nf 2 3 4\n"),
             "t.obj: line 2: vertex 2: position [NaN, 0, 0] is not finite"
@@ -455,14 +488,19 @@ mod tests {
             err("v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n"),
             "t.obj: line 2: vertex 2: position [inf, 0, 0] is not finite"
         );
-        assert_eq!(err("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n"), "t.obj: no triangles");
+        assert_eq!(
+            err("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n"),
+            "t.obj: no triangles"
+        );
         // Indices whose arithmetic overflows in tobj are caught first.
         assert_eq!(
             err(&format!("{head}vt 0 0\nf 1/1 2/1 3/9223372036854775807\n")),
             "t.obj: line 6: face: texture coordinate index 9223372036854775807 out of range (1 texture coordinates)"
         );
         assert_eq!(
-            err(&format!("{head}vn 0 0 1\nf 1//1 2//1 3//-9223372036854775807\n")),
+            err(&format!(
+                "{head}vn 0 0 1\nf 1//1 2//1 3//-9223372036854775807\n"
+            )),
             "t.obj: line 6: face: normal index -9223372036854775807 out of range (1 normals)"
         );
         let e = load_bytes(b"v 0 0 0\n\xff\n", "t.obj", &Limits::default()).expect_err("not text");
@@ -472,7 +510,8 @@ mod tests {
     #[test]
     fn polygons_shared_vertices_and_relative_indices() {
         // A pentagon (fan), and a triangle by relative indices sharing vertices.
-        let text = "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\ns 1\nf 1 2 3 4 5\nf -5 -4 -1\np 1\n";
+        let text =
+            "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\ns 1\nf 1 2 3 4 5\nf -5 -4 -1\np 1\n";
         let m = load_bytes(text.as_bytes(), "pent.obj", &Limits::default()).expect("loads");
         let mesh = &m.meshes[0];
         assert_eq!(mesh.name, "pent");
@@ -486,7 +525,10 @@ mod tests {
                 [0.0, 1.0, 0.0]
             ]
         );
-        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 1, 4]]);
+        assert_eq!(
+            mesh.triangles,
+            vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 1, 4]]
+        );
         assert_eq!(mesh.normals, None);
         assert_eq!(mesh.materials, vec![0; 4]);
         assert_eq!(
@@ -515,7 +557,8 @@ mod tests {
             max_vertices: 2,
             max_triangles: 10,
         };
-        let e = load_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj", &limits).expect_err("over the limit");
+        let e = load_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj", &limits)
+            .expect_err("over the limit");
         assert_eq!(e.to_string(), "t.obj: 3 vertices, more than the limit of 2");
     }
 }

@@ -16,7 +16,9 @@
 use super::common::{self, Ctx, Mat, Parts};
 use super::{Instance, MeshData, ModelError};
 use ply_rs_bw::parser::{Parser, Reader};
-use ply_rs_bw::ply::{BeginList, ElementDef, Encoding, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType};
+use ply_rs_bw::ply::{
+    BeginList, ElementDef, Encoding, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
+};
 use std::io::{Cursor, ErrorKind};
 
 /// A vertex as read: position and normal components (missing ones 0).
@@ -167,7 +169,11 @@ struct Src<'a> {
 
 impl Src<'_> {
     /// Reads one element; `Ok` and `Err` both carry where it starts.
-    fn read<E: PropertyAccess>(&mut self, parser: &Parser<E>, def: &ElementDef) -> (String, Result<E, Failed>) {
+    fn read<E: PropertyAccess>(
+        &mut self,
+        parser: &Parser<E>,
+        def: &ElementDef,
+    ) -> (String, Result<E, Failed>) {
         match self.encoding {
             Encoding::Ascii => {
                 let bytes = *self.cursor.get_ref();
@@ -200,7 +206,9 @@ impl Src<'_> {
             _ => {
                 let at = format!("byte {}", self.cursor.position());
                 let r = match self.encoding {
-                    Encoding::BinaryBigEndian => parser.read_big_endian_element(&mut self.cursor, def),
+                    Encoding::BinaryBigEndian => {
+                        parser.read_big_endian_element(&mut self.cursor, def)
+                    }
                     _ => parser.read_little_endian_element(&mut self.cursor, def),
                 };
                 let r = r.map_err(|e| match e.kind() {
@@ -229,18 +237,20 @@ fn is_float(t: &ScalarType) -> bool {
 /// Reads a PLY file.
 pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
     let mut reader = Reader::new(Cursor::new(bytes));
-    let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| {
-        let text = e.to_string();
-        let text = text
-            .split_once(": ")
-            .filter(|_| e.line().is_some())
-            .map_or(text.as_str(), |(_, m)| m);
-        let reason = format!("bad header: {}", one_line(text));
-        match e.line() {
-            Some(line) => ctx.err_at(format!("line {line}"), reason),
-            None => ctx.err(reason),
-        }
-    })?;
+    let header = Parser::<Skip>::new()
+        .read_header(&mut reader)
+        .map_err(|e| {
+            let text = e.to_string();
+            let text = text
+                .split_once(": ")
+                .filter(|_| e.line().is_some())
+                .map_or(text.as_str(), |(_, m)| m);
+            let reason = format!("bad header: {}", one_line(text));
+            match e.line() {
+                Some(line) => ctx.err_at(format!("line {line}"), reason),
+                None => ctx.err(reason),
+            }
+        })?;
     let payload = reader.get_ref().position() as usize;
     let header_lines = bytes[..payload.min(bytes.len())]
         .iter()
@@ -265,7 +275,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                     .properties
                     .keys()
                     .map(String::as_str)
-                    .filter(|p| !(["x", "y", "z"].contains(p) || has_normals && ["nx", "ny", "nz"].contains(p)))
+                    .filter(|p| {
+                        !(["x", "y", "z"].contains(p)
+                            || has_normals && ["nx", "ny", "nz"].contains(p))
+                    })
                     .collect();
                 if !other.is_empty() {
                     ctx.warn(format!("vertex properties ignored: {}", other.join(", ")));
@@ -274,7 +287,11 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                 has_vertices = true;
             }
             "face" => {
-                let index: Vec<_> = def.properties.values().filter(|p| is_index(&p.name)).collect();
+                let index: Vec<_> = def
+                    .properties
+                    .values()
+                    .filter(|p| is_index(&p.name))
+                    .collect();
                 let [prop] = index[..] else {
                     return Err(ctx.err_at(
                         "header",
@@ -352,7 +369,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
     for (name, def) in &header.elements {
         let count = def.count;
         let fail = |ctx: &Ctx, at: String, i: usize, e: Failed| match e {
-            Failed::Eof => ctx.err_at(at, format!("truncated: the file ends in {name} {i} of {count}")),
+            Failed::Eof => ctx.err_at(
+                at,
+                format!("truncated: the file ends in {name} {i} of {count}"),
+            ),
             Failed::Bad(why) => ctx.err_at(at, format!("{name} {i}: {why}")),
         };
         match name.as_str() {
@@ -364,7 +384,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                     let v = r.map_err(|e| fail(ctx, at.clone(), i, e))?;
                     let p = v.p.map(|x| x as f32);
                     if !p.iter().all(|x| x.is_finite()) {
-                        return Err(ctx.err_at(at, format!("vertex {i}: position {} is not finite", common::fmt3(v.p))));
+                        return Err(ctx.err_at(
+                            at,
+                            format!("vertex {i}: position {} is not finite", common::fmt3(v.p)),
+                        ));
                     }
                     mesh.positions.push(p);
                     if has_normals {
@@ -379,15 +402,22 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                 for i in 0..count {
                     let (at, r) = src.read(&parser, def);
                     let face = r.map_err(|e| fail(ctx, at.clone(), i, e))?;
-                    face.indices(&mut poly)
-                        .map_err(|bad| ctx.err_at(at.clone(), format!("face {i}: vertex index {bad} out of range")))?;
+                    face.indices(&mut poly).map_err(|bad| {
+                        ctx.err_at(
+                            at.clone(),
+                            format!("face {i}: vertex index {bad} out of range"),
+                        )
+                    })?;
                     if poly.len() < 3 {
                         short_faces += 1;
                         continue;
                     }
                     let n = mesh.positions.len();
                     if let Some(&bad) = poly.iter().find(|&&x| vertices_read && x as usize >= n) {
-                        return Err(ctx.err_at(at, format!("face {i}: vertex index {bad} out of range ({n} vertices)")));
+                        return Err(ctx.err_at(
+                            at,
+                            format!("face {i}: vertex index {bad} out of range ({n} vertices)"),
+                        ));
                     }
                     ctx.check_triangles((mesh.triangles.len() + poly.len() - 2) as u64, Some(&at))?;
                     common::fan(&poly, &mut mesh.triangles);
@@ -409,7 +439,9 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
         )));
     }
     if short_faces > 0 {
-        ctx.warn(format!("{short_faces} faces with fewer than 3 vertices skipped"));
+        ctx.warn(format!(
+            "{short_faces} faces with fewer than 3 vertices skipped"
+        ));
     }
     mesh.materials = vec![0; mesh.triangles.len()];
     if has_normals {

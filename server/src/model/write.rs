@@ -8,9 +8,15 @@ use std::io::{self, Write};
 /// `nx ny nz` when the mesh has normals), faces as `uchar`-counted `int`
 /// `vertex_indices` lists. Materials are not written (PLY has none).
 pub fn write_ply_binary(mesh: &MeshData, out: &mut impl Write) -> io::Result<()> {
-    let normals = mesh.normals.as_deref().filter(|n| n.len() == mesh.positions.len());
+    let normals = mesh
+        .normals
+        .as_deref()
+        .filter(|n| n.len() == mesh.positions.len());
     let mut w = io::BufWriter::new(out);
-    writeln!(w, "ply\nformat binary_little_endian 1.0\ncomment written by pathstream")?;
+    writeln!(
+        w,
+        "ply\nformat binary_little_endian 1.0\ncomment written by pathstream"
+    )?;
     writeln!(w, "element vertex {}", mesh.positions.len())?;
     writeln!(w, "property float x\nproperty float y\nproperty float z")?;
     if normals.is_some() {
@@ -31,8 +37,9 @@ pub fn write_ply_binary(mesh: &MeshData, out: &mut impl Write) -> io::Result<()>
     for t in &mesh.triangles {
         w.write_all(&[3])?;
         for &i in t {
-            let i = i32::try_from(i)
-                .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "vertex index over i32::MAX"))?;
+            let i = i32::try_from(i).map_err(|_| {
+                io::Error::new(io::ErrorKind::InvalidInput, "vertex index over i32::MAX")
+            })?;
             w.write_all(&i.to_le_bytes())?;
         }
     }
@@ -44,7 +51,10 @@ pub fn write_ply_binary(mesh: &MeshData, out: &mut impl Write) -> io::Result<()>
 /// shortest round-trip form, so they read back bit for bit. Materials are
 /// not written (no MTL).
 pub fn write_obj(mesh: &MeshData, out: &mut impl Write) -> io::Result<()> {
-    let normals = mesh.normals.as_deref().filter(|n| n.len() == mesh.positions.len());
+    let normals = mesh
+        .normals
+        .as_deref()
+        .filter(|n| n.len() == mesh.positions.len());
     let mut w = io::BufWriter::new(out);
     writeln!(w, "# written by pathstream\no {}", mesh.name)?;
     for p in &mesh.positions {
@@ -72,7 +82,12 @@ mod tests {
     fn mesh() -> MeshData {
         MeshData {
             name: "quad".into(),
-            positions: vec![[0.1, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 1e-7], [0.0, 1.0, -3.5]],
+            positions: vec![
+                [0.1, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 1e-7],
+                [0.0, 1.0, -3.5],
+            ],
             normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             materials: vec![0, 0],

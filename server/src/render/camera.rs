@@ -51,7 +51,9 @@ impl CameraRays {
     /// The ray through raster position (`x`, `y`).
     #[inline(always)]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let d = (self.forward + self.right * (x * self.inv_width - 0.5) + self.up * (0.5 - y * self.inv_height))
+        let d = (self.forward
+            + self.right * (x * self.inv_width - 0.5)
+            + self.up * (0.5 - y * self.inv_height))
             .normalize();
         Ray::new(d * self.near_clip, d)
     }

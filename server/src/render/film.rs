@@ -32,7 +32,11 @@ impl PixelSums {
         if !is_finite3(l) {
             return false;
         }
-        let half = if sample & 1 == 0 { &mut self.even } else { &mut self.odd };
+        let half = if sample & 1 == 0 {
+            &mut self.even
+        } else {
+            &mut self.odd
+        };
         half[0] += f64::from(l.x);
         half[1] += f64::from(l.y);
         half[2] += f64::from(l.z);
@@ -104,7 +108,11 @@ impl Film {
 
     /// Mean radiance per pixel, row-major, top row first.
     pub fn mean(&self) -> Vec<[f32; 3]> {
-        let inv = if self.spp == 0 { 0.0 } else { 1.0 / self.spp as f64 };
+        let inv = if self.spp == 0 {
+            0.0
+        } else {
+            1.0 / self.spp as f64
+        };
         self.pixels
             .iter()
             .map(|p| std::array::from_fn(|c| ((p.even[c] + p.odd[c]) * inv) as f32))
@@ -173,7 +181,11 @@ mod tests {
         for s in 0..8u64 {
             let row = film.pixels_mut();
             for (i, px) in row.iter_mut().enumerate() {
-                let l = if i == 1 && s < 3 { bad[s as usize] } else { Vec3A::splat(2.0) };
+                let l = if i == 1 && s < 3 {
+                    bad[s as usize]
+                } else {
+                    Vec3A::splat(2.0)
+                };
                 if !px.add(s, l) {
                     rejected += 1;
                 }
@@ -214,14 +226,27 @@ mod tests {
         for (i, px) in film.pixels_mut().iter_mut().enumerate() {
             for s in 0..n {
                 let mut rng = crate::render::sampler::Sampler::new(9, i as u64, s);
-                px.add(s, Vec3A::new(2.0 * rng.next_f32(), 2.0 * rng.next_f32(), 2.0 * rng.next_f32()));
+                px.add(
+                    s,
+                    Vec3A::new(
+                        2.0 * rng.next_f32(),
+                        2.0 * rng.next_f32(),
+                        2.0 * rng.next_f32(),
+                    ),
+                );
             }
         }
         film.commit(n, 0);
         let expected = (1.0 / 3.0 / n as f64).sqrt();
         let estimate = film.error_estimate().expect("estimate");
-        assert!((estimate / expected - 1.0).abs() < 0.05, "{estimate} vs {expected}");
+        assert!(
+            (estimate / expected - 1.0).abs() < 0.05,
+            "{estimate} vs {expected}"
+        );
         let truth = relative_rms_error(&film.mean(), &vec![[1.0; 3]; (w * h) as usize]);
-        assert!((truth / expected - 1.0).abs() < 0.05, "{truth} vs {expected}");
+        assert!(
+            (truth / expected - 1.0).abs() < 0.05,
+            "{truth} vs {expected}"
+        );
     }
 }

@@ -77,7 +77,13 @@ mod tests {
 
     #[test]
     fn exact_reflectance_plus_transmittance_is_one_at_every_angle() {
-        for (n1, n2) in [(1.0, 1.5), (1.5, 1.0), (1.0, 1.0001), (1.0, 4.0), (4.0, 1.0)] {
+        for (n1, n2) in [
+            (1.0, 1.5),
+            (1.5, 1.0),
+            (1.0, 1.0001),
+            (1.0, 4.0),
+            (4.0, 1.0),
+        ] {
             for i in 1..=1000 {
                 let cos_i = i as f32 / 1000.0;
                 let r = f64::from(exact(cos_i, n1, n2).reflectance);

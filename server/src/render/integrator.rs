@@ -72,7 +72,13 @@ impl Path {
     /// (`world.intersect(isa, &self.ray, self.from)`); false once the path
     /// has ended (it must not be advanced again then).
     #[inline(always)]
-    pub fn advance<I: Isa>(&mut self, isa: I, world: &World, settings: &PathSettings, hit: Option<Hit>) -> bool {
+    pub fn advance<I: Isa>(
+        &mut self,
+        isa: I,
+        world: &World,
+        settings: &PathSettings,
+        hit: Option<Hit>,
+    ) -> bool {
         let Some(hit) = hit else {
             // Left the scene: the environment, counted as an emitter's hit.
             if self.specular || !settings.nee {
@@ -100,7 +106,15 @@ impl Path {
             s.ns
         };
         if settings.nee && m.bsdf == Bsdf::Diffuse {
-            let direct = light::direct(isa, world, &s, nl, ns, settings.light_sampling, &mut self.sampler);
+            let direct = light::direct(
+                isa,
+                world,
+                &s,
+                nl,
+                ns,
+                settings.light_sampling,
+                &mut self.sampler,
+            );
             self.l += self.beta * m.albedo * direct * FRAC_1_PI;
             if settings.max_depth != 0 && self.bounces + 1 >= settings.max_depth {
                 return false; // the bounce's own hit would not count its emission
@@ -136,7 +150,12 @@ impl Path {
     /// its radiance.
     #[inline(always)]
     pub fn trace<I: Isa>(mut self, isa: I, world: &World, settings: &PathSettings) -> Vec3A {
-        while self.advance(isa, world, settings, world.intersect(isa, &self.ray, self.from)) {}
+        while self.advance(
+            isa,
+            world,
+            settings,
+            world.intersect(isa, &self.ray, self.from),
+        ) {}
         self.radiance(settings)
     }
 
@@ -156,7 +175,13 @@ impl Path {
 
 /// Sample `sample` of pixel (x, y): its camera ray, as a path about to start.
 #[inline(always)]
-pub fn camera_path(camera: &CameraRays, filter: Filter, seed: u64, (x, y): (u32, u32), sample: u64) -> Path {
+pub fn camera_path(
+    camera: &CameraRays,
+    filter: Filter,
+    seed: u64,
+    (x, y): (u32, u32),
+    sample: u64,
+) -> Path {
     let pixel = u64::from(y) * u64::from(camera.width) + u64::from(x);
     let mut sampler = Sampler::new(seed, pixel, sample);
     let (u1, u2) = sampler.next_2d();

@@ -20,12 +20,16 @@ pub const MAX_PIXELS: u64 = 4096 * 4096;
 pub fn check_size(width: u32, height: u32) -> Result<(), String> {
     for (name, v) in [("width", width), ("height", height)] {
         if !(1..=MAX_SIDE).contains(&v) {
-            return Err(format!("{name}: must be between 1 and {MAX_SIDE} (got {v})"));
+            return Err(format!(
+                "{name}: must be between 1 and {MAX_SIDE} (got {v})"
+            ));
         }
     }
     let pixels = u64::from(width) * u64::from(height);
     if pixels > MAX_PIXELS {
-        return Err(format!("width x height: {pixels} pixels is more than the limit of {MAX_PIXELS}"));
+        return Err(format!(
+            "width x height: {pixels} pixels is more than the limit of {MAX_PIXELS}"
+        ));
     }
     Ok(())
 }
@@ -74,6 +78,7 @@ impl RenderJob {
     /// kernels (the same number whichever it is).
     #[inline(always)]
     pub fn sample<I: Isa>(&self, isa: I, x: u32, y: u32, sample: u64) -> Vec3A {
-        self.camera_path(x, y, sample).trace(isa, &self.world, &self.settings)
+        self.camera_path(x, y, sample)
+            .trace(isa, &self.world, &self.settings)
     }
 }

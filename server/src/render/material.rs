@@ -76,7 +76,13 @@ pub fn cosine_hemisphere(n: Vec3A, u1: f32, u2: f32) -> Vec3A {
 /// surface from outside (`entering`, by the geometric normal) or inside;
 /// `nl` is the unit shading normal turned towards the side `d` came from.
 #[inline(always)]
-pub fn scatter(m: &SurfaceMaterial, d: Vec3A, entering: bool, nl: Vec3A, sampler: &mut Sampler) -> Scattered {
+pub fn scatter(
+    m: &SurfaceMaterial,
+    d: Vec3A,
+    entering: bool,
+    nl: Vec3A,
+    sampler: &mut Sampler,
+) -> Scattered {
     match m.bsdf {
         Bsdf::Diffuse => {
             let (u1, u2) = sampler.next_2d();

@@ -38,7 +38,10 @@ pub fn sincos_turns(u: f32) -> (f32, f32) {
     let s = a * (1.0 + a2 * (-1.0 / 6.0 + a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0))));
     let c = 1.0 + a2 * (-0.5 + a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0))));
     // sin and cos of (a + pi/4), the angle within the quarter turn.
-    let (sin_q, cos_q) = ((s + c) * std::f32::consts::FRAC_1_SQRT_2, (c - s) * std::f32::consts::FRAC_1_SQRT_2);
+    let (sin_q, cos_q) = (
+        (s + c) * std::f32::consts::FRAC_1_SQRT_2,
+        (c - s) * std::f32::consts::FRAC_1_SQRT_2,
+    );
     // The quarter turn by sign and swap, on the bits: the quadrant is random,
     // so branches on it would be mispredicted half the time. Same values as
     // (sin, cos) = odd ? (cos_q, -sin_q) : (sin_q, cos_q), negated if q >= 2.

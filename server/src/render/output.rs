@@ -44,15 +44,16 @@ impl ImageFormat {
 }
 
 /// Tone-mapped 8-bit sRGB PNG of a linear image (row-major, top row first).
-pub fn encode_png(width: u32, height: u32, rgb: &[[f32; 3]], tonemap: &Tonemap) -> Result<Vec<u8>, OutputError> {
+pub fn encode_png(
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+    tonemap: &Tonemap,
+) -> Result<Vec<u8>, OutputError> {
     let bytes: Vec<u8> = rgb.iter().flat_map(|p| tonemap.apply(*p)).collect();
     let mut out = Vec::with_capacity(bytes.len() / 2 + 64);
-    PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Adaptive).write_image(
-        &bytes,
-        width,
-        height,
-        ExtendedColorType::Rgb8,
-    )?;
+    PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Adaptive)
+        .write_image(&bytes, width, height, ExtendedColorType::Rgb8)?;
     Ok(out)
 }
 
@@ -105,7 +106,9 @@ pub fn decode_pfm(data: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), OutputError>
         return Err(bad("data size does not match the header"));
     }
     let pixel = |px: &[u8]| -> [f32; 3] {
-        std::array::from_fn(|c| f32::from_le_bytes([px[4 * c], px[4 * c + 1], px[4 * c + 2], px[4 * c + 3]]))
+        std::array::from_fn(|c| {
+            f32::from_le_bytes([px[4 * c], px[4 * c + 1], px[4 * c + 2], px[4 * c + 3]])
+        })
     };
     // Bottom row first on disk: reverse the rows to get the top row first.
     let rgb = body
@@ -117,7 +120,13 @@ pub fn decode_pfm(data: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), OutputError>
 }
 
 /// Writes PNG or PFM by the path's extension.
-pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]], tonemap: &Tonemap) -> Result<(), OutputError> {
+pub fn write_image(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+    tonemap: &Tonemap,
+) -> Result<(), OutputError> {
     let bytes = match ImageFormat::from_path(path)? {
         ImageFormat::Png => encode_png(width, height, rgb, tonemap)?,
         ImageFormat::Pfm => encode_pfm(width, height, rgb),
@@ -154,8 +163,14 @@ mod tests {
 
     #[test]
     fn format_follows_the_extension() {
-        assert_eq!(ImageFormat::from_path(Path::new("a.PNG")).ok(), Some(ImageFormat::Png));
-        assert_eq!(ImageFormat::from_path(Path::new("a.pfm")).ok(), Some(ImageFormat::Pfm));
+        assert_eq!(
+            ImageFormat::from_path(Path::new("a.PNG")).ok(),
+            Some(ImageFormat::Png)
+        );
+        assert_eq!(
+            ImageFormat::from_path(Path::new("a.pfm")).ok(),
+            Some(ImageFormat::Pfm)
+        );
         assert!(ImageFormat::from_path(Path::new("a.jpg")).is_err());
     }
 }

@@ -29,7 +29,12 @@ pub enum Preset {
 }
 
 impl Preset {
-    pub const ALL: [Preset; 4] = [Preset::Preview, Preset::Interactive, Preset::Final, Preset::Reference];
+    pub const ALL: [Preset; 4] = [
+        Preset::Preview,
+        Preset::Interactive,
+        Preset::Final,
+        Preset::Reference,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {

@@ -52,7 +52,9 @@ pub fn halted(quality: &Quality, p: &Progress) -> bool {
         false => Some(DEFAULT_SPP),
     };
     spp_target.is_some_and(|n| p.spp >= n)
-        || quality.time_ms.is_some_and(|t| p.elapsed >= Duration::from_millis(t))
+        || quality
+            .time_ms
+            .is_some_and(|t| p.elapsed >= Duration::from_millis(t))
         || quality.target_error.is_some_and(|e| {
             p.spp >= MIN_SPP_FOR_TARGET_ERROR && p.error_estimate.is_some_and(|est| est <= e)
         })
@@ -68,7 +70,11 @@ pub fn render(
     mut on_progress: impl FnMut(&Progress),
 ) -> Result<Progress, BackendError> {
     let start = Instant::now();
-    let spp_target = if quality.halts() { quality.spp } else { Some(DEFAULT_SPP) };
+    let spp_target = if quality.halts() {
+        quality.spp
+    } else {
+        Some(DEFAULT_SPP)
+    };
     let mut count = 1u64;
     loop {
         if let Some(n) = spp_target {
@@ -90,7 +96,11 @@ pub fn render(
             let left = Duration::from_millis(t).saturating_sub(progress.elapsed);
             budget = budget.min(left.as_secs_f64());
         }
-        let wanted = if per_sample > 0.0 { (budget / per_sample) as u64 } else { count * 4 };
+        let wanted = if per_sample > 0.0 {
+            (budget / per_sample) as u64
+        } else {
+            count * 4
+        };
         count = wanted.clamp(1, count * 4);
     }
 }

@@ -63,13 +63,19 @@ impl Quality {
     pub fn validate(&self) -> Result<(), QualityError> {
         let err = |field, reason: String| Err(QualityError { field, reason });
         if self.max_depth > MAX_DEPTH_LIMIT {
-            return err("max_depth", format!("must be at most {MAX_DEPTH_LIMIT} (0 = unbounded)"));
+            return err(
+                "max_depth",
+                format!("must be at most {MAX_DEPTH_LIMIT} (0 = unbounded)"),
+            );
         }
         if self.rr_depth > MAX_DEPTH_LIMIT {
             return err("rr_depth", format!("must be at most {MAX_DEPTH_LIMIT}"));
         }
         if !(self.clamp.is_finite() && self.clamp >= 0.0) {
-            return err("clamp", format!("must be a finite number >= 0 (got {})", self.clamp));
+            return err(
+                "clamp",
+                format!("must be a finite number >= 0 (got {})", self.clamp),
+            );
         }
         if self.spp == Some(0) {
             return err("spp", "must be at least 1".into());
@@ -79,7 +85,10 @@ impl Quality {
         }
         if let Some(e) = self.target_error {
             if !(e.is_finite() && e > 0.0) {
-                return err("target_error", format!("must be a finite number > 0 (got {e})"));
+                return err(
+                    "target_error",
+                    format!("must be a finite number > 0 (got {e})"),
+                );
             }
         }
         Ok(())
@@ -107,7 +116,8 @@ mod tests {
 
     #[test]
     fn json_defaults_and_unknown_fields() {
-        let q: Quality = serde_json::from_str(r#"{"max_depth": 0, "filter": "box"}"#).expect("parses");
+        let q: Quality =
+            serde_json::from_str(r#"{"max_depth": 0, "filter": "box"}"#).expect("parses");
         assert_eq!(q.max_depth, 0);
         assert_eq!(q.filter, Filter::Box);
         assert_eq!(q.rr_depth, Quality::default().rr_depth);
@@ -120,19 +130,70 @@ mod tests {
     #[test]
     fn out_of_range_values_name_their_field() {
         let cases = [
-            (Quality { max_depth: MAX_DEPTH_LIMIT + 1, ..Quality::default() }, "max_depth"),
-            (Quality { rr_depth: u32::MAX, ..Quality::default() }, "rr_depth"),
-            (Quality { clamp: -1.0, ..Quality::default() }, "clamp"),
-            (Quality { clamp: f32::NAN, ..Quality::default() }, "clamp"),
-            (Quality { spp: Some(0), ..Quality::default() }, "spp"),
-            (Quality { time_ms: Some(0), ..Quality::default() }, "time_ms"),
-            (Quality { target_error: Some(0.0), ..Quality::default() }, "target_error"),
-            (Quality { target_error: Some(f64::INFINITY), ..Quality::default() }, "target_error"),
+            (
+                Quality {
+                    max_depth: MAX_DEPTH_LIMIT + 1,
+                    ..Quality::default()
+                },
+                "max_depth",
+            ),
+            (
+                Quality {
+                    rr_depth: u32::MAX,
+                    ..Quality::default()
+                },
+                "rr_depth",
+            ),
+            (
+                Quality {
+                    clamp: -1.0,
+                    ..Quality::default()
+                },
+                "clamp",
+            ),
+            (
+                Quality {
+                    clamp: f32::NAN,
+                    ..Quality::default()
+                },
+                "clamp",
+            ),
+            (
+                Quality {
+                    spp: Some(0),
+                    ..Quality::default()
+                },
+                "spp",
+            ),
+            (
+                Quality {
+                    time_ms: Some(0),
+                    ..Quality::default()
+                },
+                "time_ms",
+            ),
+            (
+                Quality {
+                    target_error: Some(0.0),
+                    ..Quality::default()
+                },
+                "target_error",
+            ),
+            (
+                Quality {
+                    target_error: Some(f64::INFINITY),
+                    ..Quality::default()
+                },
+                "target_error",
+            ),
         ];
         for (q, field) in cases {
             let e = q.validate().expect_err(field);
             assert_eq!(e.field, field);
-            assert!(e.to_string().starts_with(&format!("quality.{field}: ")), "{e}");
+            assert!(
+                e.to_string().starts_with(&format!("quality.{field}: ")),
+                "{e}"
+            );
         }
         assert!(Quality::default().validate().is_ok());
     }

@@ -48,7 +48,10 @@ impl Sampler {
     pub fn next_2d(&mut self) -> (f32, f32) {
         let bits = self.next_bits();
         const SCALE: f32 = 1.0 / 16_777_216.0;
-        ((bits >> 40) as f32 * SCALE, ((bits >> 16) & 0xFF_FFFF) as f32 * SCALE)
+        (
+            (bits >> 40) as f32 * SCALE,
+            ((bits >> 16) & 0xFF_FFFF) as f32 * SCALE,
+        )
     }
 
     /// The next dimension's full 64 bits (for choices among many, where

@@ -108,7 +108,10 @@ pub struct AssetStore {
 
 /// The id of some bytes: their SHA-256, in hex.
 pub fn asset_id(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 impl AssetStore {
@@ -124,13 +127,20 @@ impl AssetStore {
     /// uploaded before).
     pub fn add(&self, name: &str, bytes: &[u8]) -> Result<(Arc<Asset>, bool), AssetError> {
         if bytes.len() > self.limits.max_asset_bytes {
-            return Err(AssetError::TooLarge(bytes.len(), self.limits.max_asset_bytes));
+            return Err(AssetError::TooLarge(
+                bytes.len(),
+                self.limits.max_asset_bytes,
+            ));
         }
         let id = asset_id(bytes);
         if let Some(a) = self.get(&id) {
             return Ok((a, false));
         }
-        let name = if name.trim().is_empty() { "upload" } else { name.trim() };
+        let name = if name.trim().is_empty() {
+            "upload"
+        } else {
+            name.trim()
+        };
         let format = match model::detect(name, bytes) {
             Some(model::Format::Obj) => "obj",
             Some(model::Format::Gltf) => "gltf",
@@ -147,7 +157,8 @@ impl AssetStore {
             max_triangles: self.limits.max_triangles,
             max_vertices: self.limits.max_triangles,
         };
-        let read = model::load_bytes(bytes, name, &limits).map_err(|e| AssetError::Invalid(e.to_string()))?;
+        let read = model::load_bytes(bytes, name, &limits)
+            .map_err(|e| AssetError::Invalid(e.to_string()))?;
         let loaded = LoadedModel::new(name, read).map_err(AssetError::Invalid)?;
         let memory = loaded.memory_bytes();
         let asset = Arc::new(Asset {
@@ -165,41 +176,62 @@ impl AssetStore {
         }
         let need = assets.values().map(|a| a.memory).sum::<usize>() + memory;
         if need > self.limits.max_total_bytes {
-            return Err(AssetError::Full { need, limit: self.limits.max_total_bytes });
+            return Err(AssetError::Full {
+                need,
+                limit: self.limits.max_total_bytes,
+            });
         }
         assets.insert(id, asset.clone());
         Ok((asset, true))
     }
 
     pub fn get(&self, id: &str) -> Option<Arc<Asset>> {
-        self.assets.read().unwrap_or_else(|e| e.into_inner()).get(id).cloned()
+        self.assets
+            .read()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(id)
+            .cloned()
     }
 
     /// Forgets an asset; false if there was none.
     pub fn remove(&self, id: &str) -> bool {
-        self.assets.write().unwrap_or_else(|e| e.into_inner()).remove(id).is_some()
+        self.assets
+            .write()
+            .unwrap_or_else(|e| e.into_inner())
+            .remove(id)
+            .is_some()
     }
 
     /// Every asset, oldest first.
     pub fn list(&self) -> Vec<Arc<Asset>> {
-        let mut all: Vec<_> = self.assets.read().unwrap_or_else(|e| e.into_inner()).values().cloned().collect();
+        let mut all: Vec<_> = self
+            .assets
+            .read()
+            .unwrap_or_else(|e| e.into_inner())
+            .values()
+            .cloned()
+            .collect();
         all.sort_by(|a, b| a.created.cmp(&b.created).then_with(|| a.id.cmp(&b.id)));
         all
     }
 
     /// Memory of all assets' meshes.
     pub fn memory(&self) -> usize {
-        self.assets.read().unwrap_or_else(|e| e.into_inner()).values().map(|a| a.memory).sum()
+        self.assets
+            .read()
+            .unwrap_or_else(|e| e.into_inner())
+            .values()
+            .map(|a| a.memory)
+            .sum()
     }
 }
 
 impl Resolver for AssetStore {
     fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
         match source {
-            ModelSource::Asset(id) => self
-                .get(id)
-                .map(|a| a.model.clone())
-                .ok_or_else(|| format!("no asset '{id}' on this server (upload the file with POST /api/assets)")),
+            ModelSource::Asset(id) => self.get(id).map(|a| a.model.clone()).ok_or_else(|| {
+                format!("no asset '{id}' on this server (upload the file with POST /api/assets)")
+            }),
             ModelSource::File(_) => NoFiles.resolve(source),
         }
     }
@@ -211,13 +243,22 @@ mod tests {
 
     #[test]
     fn ids_are_the_sha256_of_the_bytes() {
-        assert_eq!(asset_id(b"abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+        assert_eq!(
+            asset_id(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
     }
 
     #[test]
     fn oversized_and_unknown_uploads_are_refused_by_name() {
-        let store = AssetStore::new(AssetLimits { max_asset_bytes: 8, ..AssetLimits::default() });
-        assert_eq!(store.add("x.obj", &[0; 9]).unwrap_err(), AssetError::TooLarge(9, 8));
+        let store = AssetStore::new(AssetLimits {
+            max_asset_bytes: 8,
+            ..AssetLimits::default()
+        });
+        assert_eq!(
+            store.add("x.obj", &[0; 9]).unwrap_err(),
+            AssetError::TooLarge(9, 8)
+        );
         let e = store.add("notes.txt", b"hello").unwrap_err();
         assert!(e.to_string().contains("not a model file"), "{e}");
         assert!(store.list().is_empty());

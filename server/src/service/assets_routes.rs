@@ -34,7 +34,9 @@ pub fn router(max_bytes: usize) -> Router<Arc<AppState>> {
     Router::new()
         .route(
             "/assets",
-            get(list).post(upload).layer(DefaultBodyLimit::max(max_bytes.saturating_add(1))),
+            get(list)
+                .post(upload)
+                .layer(DefaultBodyLimit::max(max_bytes.saturating_add(1))),
         )
         .route("/assets/{id}", get(one).delete(remove))
 }
@@ -58,7 +60,8 @@ async fn upload(
     query: Result<Query<UploadQuery>, QueryRejection>,
     request: Request,
 ) -> AppResult<(StatusCode, Json<Uploaded>)> {
-    let Query(query) = query.map_err(|e| ApiError::BadRequest(format!("query: {}", e.body_text())))?;
+    let Query(query) =
+        query.map_err(|e| ApiError::BadRequest(format!("query: {}", e.body_text())))?;
     let limit = state.assets.limits.max_asset_bytes;
     let declared = request
         .headers()
@@ -72,7 +75,9 @@ async fn upload(
         .await
         .map_err(|_| ApiError::TooLarge(limit))?;
     if bytes.is_empty() {
-        return Err(ApiError::BadRequest("body: empty; send the model file's bytes".into()));
+        return Err(ApiError::BadRequest(
+            "body: empty; send the model file's bytes".into(),
+        ));
     }
     let name = query.name.unwrap_or_default();
     let worker = state.clone();
@@ -88,8 +93,18 @@ async fn upload(
     if new {
         tracing::info!(asset = %asset.id, name = %asset.name, triangles = asset.model.triangles(), "asset uploaded");
     }
-    let status = if new { StatusCode::CREATED } else { StatusCode::OK };
-    Ok((status, Json(Uploaded { info: asset.info(), deduplicated: !new })))
+    let status = if new {
+        StatusCode::CREATED
+    } else {
+        StatusCode::OK
+    };
+    Ok((
+        status,
+        Json(Uploaded {
+            info: asset.info(),
+            deduplicated: !new,
+        }),
+    ))
 }
 
 async fn list(State(state): State<Arc<AppState>>) -> Json<Value> {
@@ -105,11 +120,21 @@ fn unknown(id: &str) -> ApiError {
     ApiError::NotFound(format!("no asset '{id}'"))
 }
 
-async fn one(State(state): State<Arc<AppState>>, Path(id): Path<String>) -> AppResult<Json<AssetInfo>> {
-    state.assets.get(&id).map(|a| Json(a.info())).ok_or_else(|| unknown(&id))
+async fn one(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+) -> AppResult<Json<AssetInfo>> {
+    state
+        .assets
+        .get(&id)
+        .map(|a| Json(a.info()))
+        .ok_or_else(|| unknown(&id))
 }
 
-async fn remove(State(state): State<Arc<AppState>>, Path(id): Path<String>) -> AppResult<StatusCode> {
+async fn remove(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+) -> AppResult<StatusCode> {
     if state.assets.remove(&id) {
         tracing::info!(asset = %id, "asset deleted");
         Ok(StatusCode::NO_CONTENT)

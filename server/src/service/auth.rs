@@ -16,9 +16,15 @@ use subtle::ConstantTimeEq;
 
 /// Middleware: passes the request on when no token is configured or the
 /// right one is presented; otherwise 401 with a JSON error.
-pub async fn require_token(State(state): State<Arc<AppState>>, req: Request, next: Next) -> Response {
+pub async fn require_token(
+    State(state): State<Arc<AppState>>,
+    req: Request,
+    next: Next,
+) -> Response {
     match &state.config.token {
-        Some(expected) if !presents(req.headers(), req.uri(), expected) => ApiError::Unauthorized.into_response(),
+        Some(expected) if !presents(req.headers(), req.uri(), expected) => {
+            ApiError::Unauthorized.into_response()
+        }
         _ => next.run(req).await,
     }
 }
@@ -49,12 +55,26 @@ mod tests {
     #[test]
     fn query_tokens_are_percent_and_plus_decoded() {
         assert_eq!(query_token("token=s3cret").as_deref(), Some("s3cret"));
-        assert_eq!(query_token("min_spp=4&token=a%2Bb%21+c").as_deref(), Some("a+b! c"));
-        assert_eq!(query_token("tok%65n=x").as_deref(), Some("x"), "keys are decoded too");
+        assert_eq!(
+            query_token("min_spp=4&token=a%2Bb%21+c").as_deref(),
+            Some("a+b! c")
+        );
+        assert_eq!(
+            query_token("tok%65n=x").as_deref(),
+            Some("x"),
+            "keys are decoded too"
+        );
         assert_eq!(query_token("token=%C3%A9").as_deref(), Some("\u{e9}"));
-        assert_eq!(query_token("token=first&token=second").as_deref(), Some("first"));
+        assert_eq!(
+            query_token("token=first&token=second").as_deref(),
+            Some("first")
+        );
         assert_eq!(query_token("min_spp=4"), None);
-        assert_eq!(query_token("token").as_deref(), Some(""), "a key alone has an empty value");
+        assert_eq!(
+            query_token("token").as_deref(),
+            Some(""),
+            "a key alone has an empty value"
+        );
     }
 
     #[test]
@@ -73,18 +93,36 @@ mod tests {
         let uri = |s: &str| s.parse::<Uri>().expect("uri");
         let bearer = |t: &str| {
             let mut h = HeaderMap::new();
-            h.insert(header::AUTHORIZATION, format!("Bearer {t}").parse().expect("header"));
+            h.insert(
+                header::AUTHORIZATION,
+                format!("Bearer {t}").parse().expect("header"),
+            );
             h
         };
         let none = HeaderMap::new();
         assert!(presents(&bearer("s3cret"), &uri("/api/sessions"), "s3cret"));
-        assert!(presents(&none, &uri("/api/sessions?token=s3cret"), "s3cret"));
+        assert!(presents(
+            &none,
+            &uri("/api/sessions?token=s3cret"),
+            "s3cret"
+        ));
         assert!(presents(&none, &uri("/api/x/ws?token=s3%63ret"), "s3cret"));
         assert!(!presents(&none, &uri("/api/sessions"), "s3cret"));
-        assert!(!presents(&bearer("s3cre"), &uri("/api/sessions"), "s3cret"), "a prefix is not the token");
-        assert!(!presents(&none, &uri("/api/sessions?token=s3cretX"), "s3cret"));
+        assert!(
+            !presents(&bearer("s3cre"), &uri("/api/sessions"), "s3cret"),
+            "a prefix is not the token"
+        );
+        assert!(!presents(
+            &none,
+            &uri("/api/sessions?token=s3cretX"),
+            "s3cret"
+        ));
         assert!(!presents(&none, &uri("/api/sessions?token=%a"), "s3cret"));
         // A wrong header is not rescued by a right query (the header wins).
-        assert!(!presents(&bearer("wrong"), &uri("/api/sessions?token=s3cret"), "s3cret"));
+        assert!(!presents(
+            &bearer("wrong"),
+            &uri("/api/sessions?token=s3cret"),
+            "s3cret"
+        ));
     }
 }

@@ -16,7 +16,9 @@
 //! `quality`.
 
 use super::error::{parse_field, parse_json, ApiError};
-use crate::render::scene::{builtin, CameraEdit, LightEdit, NoFiles, Resolver, SceneJson, BUILTIN_NAMES};
+use crate::render::scene::{
+    builtin, CameraEdit, LightEdit, NoFiles, Resolver, SceneJson, BUILTIN_NAMES,
+};
 use crate::render::{Preset, Quality, Scene};
 use serde_json::Value;
 
@@ -29,7 +31,10 @@ pub enum Change {
     /// the session's current quality by [`patch_quality`]).
     Quality(Value),
     /// A whole new scene: a built-in one by name, or `custom`.
-    Scene { name: String, scene: Box<Scene> },
+    Scene {
+        name: String,
+        scene: Box<Scene>,
+    },
 }
 
 /// What a scene sent to the server may use: meshes from `resolver` (the
@@ -55,13 +60,21 @@ impl Change {
         let (name, scene) = match value {
             Value::String(name) => {
                 let scene = builtin(&name).ok_or_else(|| {
-                    ApiError::BadRequest(format!("scene: unknown scene '{name}' (known: {})", BUILTIN_NAMES.join(", ")))
+                    ApiError::BadRequest(format!(
+                        "scene: unknown scene '{name}' (known: {})",
+                        BUILTIN_NAMES.join(", ")
+                    ))
                 })?;
                 (name, scene)
             }
             value @ Value::Object(_) => {
-                let bad = |e: crate::render::SceneError| ApiError::BadRequest(format!("scene: {e}"));
-                let scene = Scene::from_json_with(&SceneJson::from_value(value).map_err(bad)?, rules.resolver).map_err(bad)?;
+                let bad =
+                    |e: crate::render::SceneError| ApiError::BadRequest(format!("scene: {e}"));
+                let scene = Scene::from_json_with(
+                    &SceneJson::from_value(value).map_err(bad)?,
+                    rules.resolver,
+                )
+                .map_err(bad)?;
                 let triangles = scene.unique_triangles();
                 if triangles > rules.max_triangles {
                     return Err(ApiError::BadRequest(format!(
@@ -71,9 +84,16 @@ impl Change {
                 }
                 ("custom".to_owned(), scene)
             }
-            _ => return Err(ApiError::BadRequest("scene: must be a built-in scene name or a scene JSON object".into())),
+            _ => {
+                return Err(ApiError::BadRequest(
+                    "scene: must be a built-in scene name or a scene JSON object".into(),
+                ))
+            }
         };
-        Ok(Change::Scene { name, scene: Box::new(scene) })
+        Ok(Change::Scene {
+            name,
+            scene: Box::new(scene),
+        })
     }
 
     /// One WebSocket message: a JSON object with any of the keys `scene`,
@@ -82,7 +102,9 @@ impl Change {
         const ORDER: [&str; 4] = ["scene", "camera", "light", "quality"];
         let value: Value = parse_json(text.as_bytes())?;
         let Value::Object(mut map) = value else {
-            return Err(ApiError::BadRequest("message: must be a JSON object".into()));
+            return Err(ApiError::BadRequest(
+                "message: must be a JSON object".into(),
+            ));
         };
         if let Some(other) = map.keys().find(|k| !ORDER.contains(&k.as_str())) {
             return Err(ApiError::BadRequest(format!(
@@ -106,14 +128,26 @@ impl Change {
 /// `"preset"` field applies that preset first, the other fields over it.
 pub fn patch_quality(current: &Quality, patch: &Value) -> Result<Quality, ApiError> {
     let Value::Object(fields) = patch else {
-        return Err(ApiError::BadRequest("quality: must be a JSON object".into()));
+        return Err(ApiError::BadRequest(
+            "quality: must be a JSON object".into(),
+        ));
     };
     let base = match fields.get("preset") {
         None => *current,
-        Some(Value::String(name)) => Preset::from_name(name).map(|p| p.apply(*current)).ok_or_else(|| {
-            ApiError::BadRequest(format!("quality.preset: unknown preset {name:?} (one of {})", Preset::names()))
-        })?,
-        Some(_) => return Err(ApiError::BadRequest(format!("quality.preset: must be one of {}", Preset::names()))),
+        Some(Value::String(name)) => Preset::from_name(name)
+            .map(|p| p.apply(*current))
+            .ok_or_else(|| {
+                ApiError::BadRequest(format!(
+                    "quality.preset: unknown preset {name:?} (one of {})",
+                    Preset::names()
+                ))
+            })?,
+        Some(_) => {
+            return Err(ApiError::BadRequest(format!(
+                "quality.preset: must be one of {}",
+                Preset::names()
+            )))
+        }
     };
     let mut merged = serde_json::to_value(base).map_err(|e| ApiError::Internal(e.to_string()))?;
     if let Value::Object(m) = &mut merged {
@@ -122,7 +156,8 @@ pub fn patch_quality(current: &Quality, patch: &Value) -> Result<Quality, ApiErr
         }
     }
     let q: Quality = parse_field("quality", merged)?;
-    q.validate().map_err(|e| ApiError::BadRequest(e.to_string()))?;
+    q.validate()
+        .map_err(|e| ApiError::BadRequest(e.to_string()))?;
     Ok(q)
 }
 
@@ -141,8 +176,12 @@ mod tests {
         let changes = message(r#"{"quality": {"spp": 8}, "light": {"intensity": 3}, "camera": {"vfov_deg": 40}, "scene": "furnace"}"#).unwrap();
         assert_eq!(changes.len(), 4);
         assert!(matches!(&changes[0], Change::Scene { name, .. } if name == "furnace"));
-        assert!(matches!(&changes[1], Change::Camera(c) if c.vfov_deg == Some(40.0) && c.position.is_none()));
-        assert!(matches!(&changes[2], Change::Light(l) if l.intensity == Some(3.0) && l.color.is_none()));
+        assert!(
+            matches!(&changes[1], Change::Camera(c) if c.vfov_deg == Some(40.0) && c.position.is_none())
+        );
+        assert!(
+            matches!(&changes[2], Change::Light(l) if l.intensity == Some(3.0) && l.color.is_none())
+        );
         assert!(matches!(&changes[3], Change::Quality(q) if q == &json!({"spp": 8})));
         assert!(message("{}").unwrap().is_empty());
     }
@@ -152,18 +191,39 @@ mod tests {
         let cases = [
             ("not json", "invalid JSON"),
             ("[1]", "message: must be a JSON object"),
-            (r#"{"zoom": 1}"#, "message: unknown key 'zoom' (expected camera, light, quality or scene)"),
-            (r#"{"camera": {"zoom": 2}}"#, "camera.zoom: unknown field `zoom`"),
-            (r#"{"camera": {"position": [1, 2]}}"#, "camera.position: invalid length 2"),
-            (r#"{"light": {"intensity": "bright"}}"#, "light.intensity: invalid type: string"),
+            (
+                r#"{"zoom": 1}"#,
+                "message: unknown key 'zoom' (expected camera, light, quality or scene)",
+            ),
+            (
+                r#"{"camera": {"zoom": 2}}"#,
+                "camera.zoom: unknown field `zoom`",
+            ),
+            (
+                r#"{"camera": {"position": [1, 2]}}"#,
+                "camera.position: invalid length 2",
+            ),
+            (
+                r#"{"light": {"intensity": "bright"}}"#,
+                "light.intensity: invalid type: string",
+            ),
             (r#"{"light": 3}"#, "light: invalid type: integer `3`"),
-            (r#"{"scene": "nope"}"#, "scene: unknown scene 'nope' (known: cornell"),
-            (r#"{"scene": 3}"#, "scene: must be a built-in scene name or a scene JSON object"),
+            (
+                r#"{"scene": "nope"}"#,
+                "scene: unknown scene 'nope' (known: cornell",
+            ),
+            (
+                r#"{"scene": 3}"#,
+                "scene: must be a built-in scene name or a scene JSON object",
+            ),
             (r#"{"scene": {"camera": {}}}"#, "scene: camera"),
         ];
         for (text, needle) in cases {
             let e = message(text).expect_err(text);
-            assert!(e.starts_with(needle), "{text}: {e:?} does not start with {needle:?}");
+            assert!(
+                e.starts_with(needle),
+                "{text}: {e:?} does not start with {needle:?}"
+            );
         }
     }
 
@@ -171,19 +231,32 @@ mod tests {
     fn a_scene_object_is_custom_and_validated() {
         let furnace = builtin("furnace").unwrap();
         let json = serde_json::to_value(furnace.to_json()).unwrap();
-        let Change::Scene { name, scene } = Change::scene(json, &SceneRules::INLINE_ONLY).unwrap() else { panic!("a scene") };
+        let Change::Scene { name, scene } = Change::scene(json, &SceneRules::INLINE_ONLY).unwrap()
+        else {
+            panic!("a scene")
+        };
         assert_eq!((name.as_str(), *scene), ("custom", furnace));
     }
 
     #[test]
     fn quality_patches_keep_the_fields_not_named() {
-        let current = Quality { seed: 7, spp: Some(64), ..Quality::default() };
+        let current = Quality {
+            seed: 7,
+            spp: Some(64),
+            ..Quality::default()
+        };
         let q = patch_quality(&current, &json!({"max_depth": 3, "spp": null})).unwrap();
-        assert_eq!((q.max_depth, q.spp, q.seed, q.nee), (3, None, 7, current.nee));
+        assert_eq!(
+            (q.max_depth, q.spp, q.seed, q.nee),
+            (3, None, 7, current.nee)
+        );
         // A preset sets its knobs; a field beside it wins; seed and halts stay.
         let q = patch_quality(&current, &json!({"preset": "reference", "rr_depth": 2})).unwrap();
         let reference = Preset::Reference.apply(current);
-        assert_eq!((q.max_depth, q.nee, q.rr_depth, q.seed, q.spp), (reference.max_depth, reference.nee, 2, 7, Some(64)));
+        assert_eq!(
+            (q.max_depth, q.nee, q.rr_depth, q.seed, q.spp),
+            (reference.max_depth, reference.nee, 2, 7, Some(64))
+        );
     }
 
     #[test]
@@ -200,7 +273,10 @@ mod tests {
         ];
         for (patch, needle) in cases {
             let e = patch_quality(&q, &patch).expect_err(needle).to_string();
-            assert!(e.starts_with(needle), "{patch}: {e:?} does not start with {needle:?}");
+            assert!(
+                e.starts_with(needle),
+                "{patch}: {e:?} does not start with {needle:?}"
+            );
         }
     }
 }

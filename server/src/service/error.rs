@@ -58,11 +58,16 @@ impl IntoResponse for ApiError {
         if let ApiError::Internal(detail) = &self {
             tracing::error!(%detail, "internal error");
         }
-        let mut response = (self.status(), Json(serde_json::json!({"error": self.to_string()}))).into_response();
+        let mut response = (
+            self.status(),
+            Json(serde_json::json!({"error": self.to_string()})),
+        )
+            .into_response();
         if matches!(self, ApiError::Unauthorized) {
-            response
-                .headers_mut()
-                .insert("www-authenticate", axum::http::HeaderValue::from_static("Bearer"));
+            response.headers_mut().insert(
+                "www-authenticate",
+                axum::http::HeaderValue::from_static("Bearer"),
+            );
         }
         response
     }
@@ -76,13 +81,20 @@ pub fn parse_json<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, ApiE
 
 /// Reads an already parsed JSON `value` (the field `key` of a message) as
 /// `T`; errors name the path below `key`, as in `camera.position: ...`.
-pub fn parse_field<T: serde::de::DeserializeOwned>(key: &str, value: serde_json::Value) -> Result<T, ApiError> {
+pub fn parse_field<T: serde::de::DeserializeOwned>(
+    key: &str,
+    value: serde_json::Value,
+) -> Result<T, ApiError> {
     serde_path_to_error::deserialize(value).map_err(|e| path_error(e, key, &format!("{key}.")))
 }
 
 /// A 400 naming where the error is: `whole` when it is the whole document,
 /// else `prefix` and the path.
-fn path_error<E: std::fmt::Display>(e: serde_path_to_error::Error<E>, whole: &str, prefix: &str) -> ApiError {
+fn path_error<E: std::fmt::Display>(
+    e: serde_path_to_error::Error<E>,
+    whole: &str,
+    prefix: &str,
+) -> ApiError {
     let path = e.path().to_string();
     let inner = e.into_inner();
     if path == "." {

@@ -29,7 +29,14 @@ pub struct Frame {
 }
 
 impl Frame {
-    pub(super) fn empty(seq: u64, generation: u64, width: u32, height: u32, backend: String, device: String) -> Self {
+    pub(super) fn empty(
+        seq: u64,
+        generation: u64,
+        width: u32,
+        height: u32,
+        backend: String,
+        device: String,
+    ) -> Self {
         Self {
             seq,
             generation,
@@ -62,8 +69,13 @@ impl Frame {
         if let Some(png) = self.png.get() {
             return Ok(png);
         }
-        let png = encode_png(self.width, self.height, &self.pixels_or_black(), &Tonemap::default())
-            .map_err(|e| ApiError::Internal(e.to_string()))?;
+        let png = encode_png(
+            self.width,
+            self.height,
+            &self.pixels_or_black(),
+            &Tonemap::default(),
+        )
+        .map_err(|e| ApiError::Internal(e.to_string()))?;
         Ok(self.png.get_or_init(|| png))
     }
 

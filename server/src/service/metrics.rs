@@ -15,7 +15,11 @@ pub struct Metrics {
 
 impl Metrics {
     pub fn add_samples(&self, backend: &str, paths: u64) {
-        let counter = if backend == "opencl" { &self.samples_opencl } else { &self.samples_cpu };
+        let counter = if backend == "opencl" {
+            &self.samples_opencl
+        } else {
+            &self.samples_cpu
+        };
         counter.fetch_add(paths, Ordering::Relaxed);
     }
 
@@ -28,8 +32,18 @@ impl Metrics {
                 let _ = writeln!(out, "{name}{labels} {v}");
             }
         };
-        metric("pathstream_sessions", "gauge", "Render sessions open.", &[(String::new(), sessions as u64)]);
-        metric("pathstream_sessions_created_total", "counter", "Render sessions created.", &[(String::new(), get(&self.sessions_created))]);
+        metric(
+            "pathstream_sessions",
+            "gauge",
+            "Render sessions open.",
+            &[(String::new(), sessions as u64)],
+        );
+        metric(
+            "pathstream_sessions_created_total",
+            "counter",
+            "Render sessions created.",
+            &[(String::new(), get(&self.sessions_created))],
+        );
         metric(
             "pathstream_samples_total",
             "counter",
@@ -39,7 +53,12 @@ impl Metrics {
                 ("{backend=\"opencl\"}".into(), get(&self.samples_opencl)),
             ],
         );
-        metric("pathstream_frames_sent_total", "counter", "Frames sent over WebSockets.", &[(String::new(), get(&self.frames_sent))]);
+        metric(
+            "pathstream_frames_sent_total",
+            "counter",
+            "Frames sent over WebSockets.",
+            &[(String::new(), get(&self.frames_sent))],
+        );
         metric(
             "pathstream_frames_dropped_total",
             "counter",

@@ -16,9 +16,9 @@ mod static_files;
 mod worker;
 mod ws;
 
-pub use config::ServeConfig;
 use assets::AssetStore;
 use change::SceneRules;
+pub use config::ServeConfig;
 pub use error::ApiError;
 pub use metrics::Metrics;
 pub use routes::app;
@@ -71,7 +71,10 @@ impl AppState {
     /// is not read): new sessions render on it by default.
     pub fn with_device(config: ServeConfig, device: Option<Backend>) -> Arc<Self> {
         let metrics = Arc::new(Metrics::default());
-        let mut workers = vec![Worker::start(Backend::Cpu(CpuBackend::low_priority()), metrics.clone())];
+        let mut workers = vec![Worker::start(
+            Backend::Cpu(CpuBackend::low_priority()),
+            metrics.clone(),
+        )];
         if let Some(backend) = device {
             workers.push(Worker::start(backend, metrics.clone()));
         }
@@ -97,7 +100,9 @@ impl AppState {
 
     pub fn session(&self, id: &str) -> Result<Arc<Session>, ApiError> {
         let sessions = self.sessions.read().unwrap_or_else(|e| e.into_inner());
-        let (s, _) = sessions.get(id).ok_or_else(|| ApiError::unknown_session(id))?;
+        let (s, _) = sessions
+            .get(id)
+            .ok_or_else(|| ApiError::unknown_session(id))?;
         s.touch();
         Ok(s.clone())
     }
@@ -110,7 +115,10 @@ impl AppState {
     }
 
     pub fn session_count(&self) -> usize {
-        self.sessions.read().unwrap_or_else(|e| e.into_inner()).len()
+        self.sessions
+            .read()
+            .unwrap_or_else(|e| e.into_inner())
+            .len()
     }
 
     /// The worker a new session asking for `backend` goes to.
@@ -118,14 +126,21 @@ impl AppState {
         match backend {
             None | Some("auto") => Ok(self.default_worker),
             Some("cpu") => Ok(0),
-            Some("opencl") => self.workers.iter().position(|w| w.info().backend == "opencl").ok_or_else(|| {
-                let why = match self.workers.get(1) {
-                    // A device that failed: its worker renders with rayon and says why.
-                    Some(fell_back) => format!("the OpenCL device is no longer in use ({})", fell_back.info().device),
-                    None => "this server has no OpenCL device".to_owned(),
-                };
-                ApiError::BadRequest(format!("backend: {why}"))
-            }),
+            Some("opencl") => self
+                .workers
+                .iter()
+                .position(|w| w.info().backend == "opencl")
+                .ok_or_else(|| {
+                    let why = match self.workers.get(1) {
+                        // A device that failed: its worker renders with rayon and says why.
+                        Some(fell_back) => format!(
+                            "the OpenCL device is no longer in use ({})",
+                            fell_back.info().device
+                        ),
+                        None => "this server has no OpenCL device".to_owned(),
+                    };
+                    ApiError::BadRequest(format!("backend: {why}"))
+                }),
             Some(other) => Err(ApiError::BadRequest(format!(
                 "backend: unknown backend '{other}' (expected auto, opencl or cpu)"
             ))),
@@ -158,13 +173,19 @@ impl AppState {
             }
             sessions.insert(session.id.clone(), (session.clone(), worker));
         }
-        self.metrics.sessions_created.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.metrics
+            .sessions_created
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.workers[worker].add(session);
         Ok(())
     }
 
     pub fn remove_session(&self, id: &str) -> Result<(), ApiError> {
-        let removed = self.sessions.write().unwrap_or_else(|e| e.into_inner()).remove(id);
+        let removed = self
+            .sessions
+            .write()
+            .unwrap_or_else(|e| e.into_inner())
+            .remove(id);
         let (_, worker) = removed.ok_or_else(|| ApiError::unknown_session(id))?;
         self.workers[worker].remove(id);
         Ok(())
@@ -228,7 +249,10 @@ pub async fn start(config: ServeConfig) -> Result<Running, String> {
 
 /// As [`start`], with the device backend given instead of chosen by
 /// `config.backend` (tests: a device that fails on purpose).
-pub async fn start_with_device(config: ServeConfig, device: Option<Backend>) -> Result<Running, String> {
+pub async fn start_with_device(
+    config: ServeConfig,
+    device: Option<Backend>,
+) -> Result<Running, String> {
     let listener = bind(&config).await?;
     serve(listener, AppState::with_device(config, device))
 }
@@ -244,7 +268,8 @@ fn serve(listener: tokio::net::TcpListener, state: Arc<AppState>) -> Result<Runn
     let (stop, stopped) = oneshot::channel::<()>();
     let janitor_state = state.clone();
     let janitor = tokio::spawn(async move {
-        let period = (janitor_state.config.idle_timeout / 4).clamp(Duration::from_millis(50), Duration::from_secs(5));
+        let period = (janitor_state.config.idle_timeout / 4)
+            .clamp(Duration::from_millis(50), Duration::from_secs(5));
         loop {
             tokio::time::sleep(period).await;
             janitor_state.expire_idle();

@@ -59,7 +59,11 @@ pub fn app(state: Arc<AppState>) -> Router {
 }
 
 async fn api_not_found(req: Request) -> ApiError {
-    ApiError::NotFound(format!("no route for {} {}", req.method(), req.uri().path()))
+    ApiError::NotFound(format!(
+        "no route for {} {}",
+        req.method(),
+        req.uri().path()
+    ))
 }
 
 fn body_bytes(body: Result<Bytes, BytesRejection>, limit: usize) -> AppResult<Bytes> {
@@ -151,7 +155,9 @@ fn new_id() -> String {
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_nanos() as u64);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let id = crate::render::sampler::mix64(nanos ^ crate::render::sampler::mix64(n ^ u64::from(std::process::id())));
+    let id = crate::render::sampler::mix64(
+        nanos ^ crate::render::sampler::mix64(n ^ u64::from(std::process::id())),
+    );
     format!("{id:016x}")
 }
 
@@ -162,8 +168,10 @@ async fn create_session(
     let body = body_bytes(body, state.config.max_body_bytes)?;
     let req: CreateSession = parse_json(&body)?;
     let (width, height) = (
-        u32::try_from(req.width).map_err(|_| ApiError::BadRequest(format!("width: {} is too large", req.width)))?,
-        u32::try_from(req.height).map_err(|_| ApiError::BadRequest(format!("height: {} is too large", req.height)))?,
+        u32::try_from(req.width)
+            .map_err(|_| ApiError::BadRequest(format!("width: {} is too large", req.width)))?,
+        u32::try_from(req.height)
+            .map_err(|_| ApiError::BadRequest(format!("height: {} is too large", req.height)))?,
     );
     check_size(width, height).map_err(ApiError::BadRequest)?;
     let pixels = u64::from(width) * u64::from(height);
@@ -178,10 +186,20 @@ async fn create_session(
         None => Quality::default(),
     };
     let Change::Scene { name, scene } = Change::scene(req.scene, &state.scene_rules())? else {
-        return Err(ApiError::Internal("Change::scene made another change".into()));
+        return Err(ApiError::Internal(
+            "Change::scene made another change".into(),
+        ));
     };
     let worker = state.worker_for(req.backend.as_deref())?;
-    let session = Arc::new(Session::new(new_id(), name, *scene, width, height, quality, state.worker_info(worker)));
+    let session = Arc::new(Session::new(
+        new_id(),
+        name,
+        *scene,
+        width,
+        height,
+        quality,
+        state.worker_info(worker),
+    ));
     state.add_session(session.clone(), worker)?;
     tracing::info!(session = %session.id, width, height, "session created");
     Ok((StatusCode::CREATED, Json(session.status())))
@@ -192,11 +210,17 @@ async fn list_sessions(State(state): State<Arc<AppState>>) -> Json<Value> {
     Json(json!({"sessions": list}))
 }
 
-async fn get_session(State(state): State<Arc<AppState>>, Path(id): Path<String>) -> AppResult<Json<Status>> {
+async fn get_session(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+) -> AppResult<Json<Status>> {
     Ok(Json(state.session(&id)?.status()))
 }
 
-async fn delete_session(State(state): State<Arc<AppState>>, Path(id): Path<String>) -> AppResult<StatusCode> {
+async fn delete_session(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+) -> AppResult<StatusCode> {
     state.remove_session(&id)?;
     tracing::info!(session = %id, "session deleted");
     Ok(StatusCode::NO_CONTENT)
@@ -219,7 +243,10 @@ async fn patch_camera(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, |edit: CameraEdit, _| Ok(Change::Camera(edit))).await
+    change(state, id, body, |edit: CameraEdit, _| {
+        Ok(Change::Camera(edit))
+    })
+    .await
 }
 
 async fn patch_light(
@@ -227,7 +254,10 @@ async fn patch_light(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, |edit: LightEdit, _| Ok(Change::Light(edit))).await
+    change(state, id, body, |edit: LightEdit, _| {
+        Ok(Change::Light(edit))
+    })
+    .await
 }
 
 async fn patch_quality_route(
@@ -235,7 +265,10 @@ async fn patch_quality_route(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, |patch: Value, _| Ok(Change::Quality(patch))).await
+    change(state, id, body, |patch: Value, _| {
+        Ok(Change::Quality(patch))
+    })
+    .await
 }
 
 async fn put_scene(
@@ -243,7 +276,10 @@ async fn put_scene(
     Path(id): Path<String>,
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<Json<Status>> {
-    change(state, id, body, |v, state| Change::scene(v, &state.scene_rules())).await
+    change(state, id, body, |v, state| {
+        Change::scene(v, &state.scene_rules())
+    })
+    .await
 }
 
 /// `?min_spp=N&timeout_ms=T` on the frame routes.
@@ -264,12 +300,16 @@ impl FrameQuery {
     const MAX_TIMEOUT: Duration = Duration::from_secs(600);
 
     fn parse(query: Result<Query<FrameQuery>, QueryRejection>) -> AppResult<FrameQuery> {
-        query.map(|Query(q)| q).map_err(|e| ApiError::BadRequest(e.body_text()))
+        query
+            .map(|Query(q)| q)
+            .map_err(|e| ApiError::BadRequest(e.body_text()))
     }
 
     /// (samples per pixel to wait for, longest wait).
     fn wait(&self) -> (u64, Duration) {
-        let timeout = self.timeout_ms.map_or(Self::DEFAULT_TIMEOUT, Duration::from_millis);
+        let timeout = self
+            .timeout_ms
+            .map_or(Self::DEFAULT_TIMEOUT, Duration::from_millis);
         (self.min_spp.unwrap_or(0), timeout.min(Self::MAX_TIMEOUT))
     }
 }
@@ -287,7 +327,10 @@ async fn wait_frame(
 fn frame_headers(f: &Frame) -> [(&'static str, String); 3] {
     [
         ("x-pathstream-spp", f.spp.to_string()),
-        ("x-pathstream-error-estimate", f.error_estimate.map_or("null".into(), |e| e.to_string())),
+        (
+            "x-pathstream-error-estimate",
+            f.error_estimate.map_or("null".into(), |e| e.to_string()),
+        ),
         ("x-pathstream-generation", f.generation.to_string()),
     ]
 }
@@ -302,7 +345,12 @@ async fn frame_png(
     let png = tokio::task::spawn_blocking(move || f.png().map(<[u8]>::to_vec))
         .await
         .map_err(|e| ApiError::Internal(e.to_string()))??;
-    Ok(([(header::CONTENT_TYPE.as_str(), "image/png".to_owned())], frame_headers(&frame), png).into_response())
+    Ok((
+        [(header::CONTENT_TYPE.as_str(), "image/png".to_owned())],
+        frame_headers(&frame),
+        png,
+    )
+        .into_response())
 }
 
 async fn frame_pfm(
@@ -316,7 +364,10 @@ async fn frame_pfm(
         .await
         .map_err(|e| ApiError::Internal(e.to_string()))?;
     Ok((
-        [(header::CONTENT_TYPE.as_str(), "image/x-portable-floatmap".to_owned())],
+        [(
+            header::CONTENT_TYPE.as_str(),
+            "image/x-portable-floatmap".to_owned(),
+        )],
         frame_headers(&frame),
         pfm,
     )
@@ -337,10 +388,21 @@ mod tests {
     #[test]
     fn frame_queries_decode_with_defaults_and_a_cap() {
         assert_eq!(query("").unwrap().wait(), (0, Duration::from_secs(30)));
-        assert_eq!(query("?min_spp=64&timeout_ms=1500").unwrap().wait(), (64, Duration::from_millis(1500)));
-        assert_eq!(query("?timeout_ms=99999999").unwrap().wait().1, Duration::from_secs(600), "at most 10 min");
+        assert_eq!(
+            query("?min_spp=64&timeout_ms=1500").unwrap().wait(),
+            (64, Duration::from_millis(1500))
+        );
+        assert_eq!(
+            query("?timeout_ms=99999999").unwrap().wait().1,
+            Duration::from_secs(600),
+            "at most 10 min"
+        );
         let q = query("?token=a%2Bb+c&min_spp=%31%36").unwrap();
-        assert_eq!((q.token.as_deref(), q.min_spp), (Some("a+b c"), Some(16)), "percent and plus decoded");
+        assert_eq!(
+            (q.token.as_deref(), q.min_spp),
+            (Some("a+b c"), Some(16)),
+            "percent and plus decoded"
+        );
     }
 
     #[test]

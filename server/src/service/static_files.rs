@@ -39,7 +39,10 @@ pub fn router(static_dir: Option<&Path>) -> Router {
     };
     Router::new()
         .fallback_service(files)
-        .layer(SetResponseHeaderLayer::overriding(header::CACHE_CONTROL, NO_CACHE))
+        .layer(SetResponseHeaderLayer::overriding(
+            header::CACHE_CONTROL,
+            NO_CACHE,
+        ))
 }
 
 /// Names of the files built into this binary, `/`-separated.
@@ -52,12 +55,19 @@ async fn not_found(uri: Uri) -> ApiError {
 }
 
 async fn wrong_method(method: Method, uri: Uri) -> ApiError {
-    ApiError::MethodNotAllowed(format!("{method} {}: only GET serves files here", uri.path()))
+    ApiError::MethodNotAllowed(format!(
+        "{method} {}: only GET serves files here",
+        uri.path()
+    ))
 }
 
 async fn embedded(uri: Uri, headers: HeaderMap) -> Response {
     let path = uri.path().trim_start_matches('/');
-    let name = if path.is_empty() || path.ends_with('/') { format!("{path}index.html") } else { path.to_owned() };
+    let name = if path.is_empty() || path.ends_with('/') {
+        format!("{path}index.html")
+    } else {
+        path.to_owned()
+    };
     let Some(file) = Embedded::get(&name) else {
         return not_found(uri).await.into_response();
     };
@@ -71,9 +81,21 @@ async fn embedded(uri: Uri, headers: HeaderMap) -> Response {
     } else {
         let mime = file.metadata.mimetype();
         // Browsers refuse ES modules served without a JavaScript type.
-        let mime = if mime == "application/javascript" { "text/javascript" } else { mime };
-        let content_type = if mime.starts_with("text/") { format!("{mime}; charset=utf-8") } else { mime.to_owned() };
-        ([(header::CONTENT_TYPE, content_type)], Body::from(file.data.into_owned())).into_response()
+        let mime = if mime == "application/javascript" {
+            "text/javascript"
+        } else {
+            mime
+        };
+        let content_type = if mime.starts_with("text/") {
+            format!("{mime}; charset=utf-8")
+        } else {
+            mime.to_owned()
+        };
+        (
+            [(header::CONTENT_TYPE, content_type)],
+            Body::from(file.data.into_owned()),
+        )
+            .into_response()
     };
     if let Ok(v) = HeaderValue::from_str(&etag) {
         response.headers_mut().insert(header::ETAG, v);
@@ -83,8 +105,10 @@ async fn embedded(uri: Uri, headers: HeaderMap) -> Response {
 
 fn hex(bytes: &[u8]) -> String {
     use std::fmt::Write;
-    bytes.iter().fold(String::with_capacity(bytes.len() * 2), |mut s, b| {
-        let _ = write!(s, "{b:02x}");
-        s
-    })
+    bytes
+        .iter()
+        .fold(String::with_capacity(bytes.len() * 2), |mut s, b| {
+            let _ = write!(s, "{b:02x}");
+            s
+        })
 }

@@ -123,7 +123,9 @@ fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
         let session = {
             let sessions = lock(&shared.sessions);
             let n = sessions.len();
-            let found = (0..n).map(|k| (next + k) % n.max(1)).find(|&i| sessions[i].wants_render());
+            let found = (0..n)
+                .map(|k| (next + k) % n.max(1))
+                .find(|&i| sessions[i].wants_render());
             match found {
                 Some(i) => {
                     next = i + 1;
@@ -131,7 +133,9 @@ fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
                 }
                 None => {
                     // Idle: sleep until a session changes (or check again soon).
-                    let _ = shared.wake.wait_timeout(sessions, Duration::from_millis(200));
+                    let _ = shared
+                        .wake
+                        .wait_timeout(sessions, Duration::from_millis(200));
                     None
                 }
             }

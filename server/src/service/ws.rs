@@ -49,7 +49,9 @@ fn stats(status: &Status, frame: &Frame) -> Value {
 }
 
 fn error_message(e: &str) -> Message {
-    Message::Text(Utf8Bytes::from(json!({"type": "error", "error": e}).to_string()))
+    Message::Text(Utf8Bytes::from(
+        json!({"type": "error", "error": e}).to_string(),
+    ))
 }
 
 async fn serve(socket: WebSocket, state: Arc<AppState>, session: Arc<Session>) {

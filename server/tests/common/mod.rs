@@ -6,7 +6,14 @@ use pathstream::render::scene::{MaterialJson, SurfaceJson};
 use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene};
 
 /// Renders `spp` samples per pixel of `scene` on `backend`.
-pub fn render_on(backend: &mut Backend, scene: &Scene, w: u32, h: u32, q: &Quality, spp: u64) -> Film {
+pub fn render_on(
+    backend: &mut Backend,
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    q: &Quality,
+    spp: u64,
+) -> Film {
     q.validate().expect("valid quality");
     let job = RenderJob::new(scene, w, h, q);
     let mut film = Film::new(w, h);
@@ -52,7 +59,10 @@ pub fn region(film: &Film, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -
     let n = film.spp() as f64;
     let (na, nb) = (film.spp().div_ceil(2) as f64, (film.spp() / 2) as f64);
     let w = film.width();
-    let mut r = Region { mean: [0.0; 3], var: [0.0; 3] };
+    let mut r = Region {
+        mean: [0.0; 3],
+        var: [0.0; 3],
+    };
     let mut count = 0.0;
     for y in ys {
         for x in xs.clone() {
@@ -78,7 +88,11 @@ pub fn regions(film: &Film, block: u32) -> Vec<Region> {
     let mut out = Vec::new();
     for by in (0..h).step_by(block as usize) {
         for bx in (0..w).step_by(block as usize) {
-            out.push(region(film, bx..(bx + block).min(w), by..(by + block).min(h)));
+            out.push(region(
+                film,
+                bx..(bx + block).min(w),
+                by..(by + block).min(h),
+            ));
         }
     }
     out
@@ -95,7 +109,11 @@ pub fn assert_agree(a: &Film, b: &Film, block: u32, z_max: f64, rel: f64, what: 
             let diff = (x.mean[c] - y.mean[c]).abs();
             let floor = rel * x.mean[c].abs().max(y.mean[c].abs());
             let se = (x.var[c] + y.var[c]).sqrt();
-            let z = if diff <= floor { 0.0 } else { (diff - floor) / se };
+            let z = if diff <= floor {
+                0.0
+            } else {
+                (diff - floor) / se
+            };
             worst = worst.max(z);
             assert!(
                 z < z_max,
@@ -127,18 +145,27 @@ pub fn assert_mean(film: &Film, block: u32, expected: f64, z_max: f64, rel: f64,
 /// Every pixel mean is finite and nothing was rejected.
 pub fn assert_clean(film: &Film, what: &str) {
     assert_eq!(film.rejected(), 0, "{what}: rejected samples");
-    assert!(film.mean().iter().flatten().all(|v| v.is_finite()), "{what}: non-finite pixel");
+    assert!(
+        film.mean().iter().flatten().all(|v| v.is_finite()),
+        "{what}: non-finite pixel"
+    );
 }
 
 /// A `mesh` object with inline data (normals kept only if `smooth`).
-pub fn mesh_object(m: &pathstream::model::MeshData, material: &str, transform: serde_json::Value, smooth: bool) -> serde_json::Value {
+pub fn mesh_object(
+    m: &pathstream::model::MeshData,
+    material: &str,
+    transform: serde_json::Value,
+    smooth: bool,
+) -> serde_json::Value {
     let mut data = serde_json::json!({
         "positions": m.positions.iter().map(|p| p.map(f64::from)).collect::<Vec<_>>(),
         "triangles": m.triangles,
     });
     if smooth {
         if let Some(n) = &m.normals {
-            data["normals"] = serde_json::json!(n.iter().map(|p| p.map(f64::from)).collect::<Vec<_>>());
+            data["normals"] =
+                serde_json::json!(n.iter().map(|p| p.map(f64::from)).collect::<Vec<_>>());
         }
     }
     let mut o = serde_json::json!({"type": "mesh", "data": data, "material": material});
@@ -173,18 +200,27 @@ pub fn assert_region(r: &Region, expected: f64, z_max: f64, floor: f64, what: &s
 /// tests/models by scripts/test.sh): 1,839 vertices, 3,674 triangles. None
 /// when it is not installed, except under CI, where that is a failure.
 pub fn bunny() -> Option<pathstream::model::MeshData> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/models/node_modules/bunny/index.js");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/models/node_modules/bunny/index.js");
     let text = match std::fs::read_to_string(&path) {
         Ok(t) => t,
-        Err(e) if std::env::var_os("CI").is_some() => panic!("{}: {e} (scripts/test.sh installs it)", path.display()),
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("{}: {e} (scripts/test.sh installs it)", path.display())
+        }
         Err(e) => {
-            eprintln!("skipping: no bunny at {} ({e}); scripts/test.sh installs it", path.display());
+            eprintln!(
+                "skipping: no bunny at {} ({e}); scripts/test.sh installs it",
+                path.display()
+            );
             return None;
         }
     };
     // Two lines: `exports.positions=[[x,y,z],...]` and `exports.cells=[[a,b,c],...]`.
     let value = |key: &str| -> serde_json::Value {
-        let line = text.lines().find(|l| l.starts_with(&format!("exports.{key}="))).expect("bunny line");
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&format!("exports.{key}=")))
+            .expect("bunny line");
         serde_json::from_str(&line[line.find('=').expect("=") + 1..]).expect("bunny JSON")
     };
     let positions: Vec<[f32; 3]> = serde_json::from_value(value("positions")).expect("positions");

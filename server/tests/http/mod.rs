@@ -8,7 +8,8 @@ use serde_json::Value;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
 
-pub type Ws = tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+pub type Ws =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 pub fn config() -> ServeConfig {
     ServeConfig {
@@ -29,27 +30,47 @@ pub fn client() -> reqwest::Client {
 }
 
 pub async fn create(base: &str, body: Value) -> Value {
-    let r = client().post(format!("{base}/api/sessions")).json(&body).send().await.expect("request");
+    let r = client()
+        .post(format!("{base}/api/sessions"))
+        .json(&body)
+        .send()
+        .await
+        .expect("request");
     assert_eq!(r.status(), 201, "{:?}", r.text().await);
     r.json().await.expect("json")
 }
 
 pub async fn status(base: &str, id: &str) -> Value {
-    client().get(format!("{base}/api/sessions/{id}")).send().await.expect("request").json().await.expect("json")
+    client()
+        .get(format!("{base}/api/sessions/{id}"))
+        .send()
+        .await
+        .expect("request")
+        .json()
+        .await
+        .expect("json")
 }
 
 /// Linear image after at least `min_spp` samples.
 pub async fn pfm(base: &str, id: &str, min_spp: u64) -> Vec<[f32; 3]> {
     let r = client()
-        .get(format!("{base}/api/sessions/{id}/frame.pfm?min_spp={min_spp}&timeout_ms=60000"))
+        .get(format!(
+            "{base}/api/sessions/{id}/frame.pfm?min_spp={min_spp}&timeout_ms=60000"
+        ))
         .send()
         .await
         .expect("request");
     assert_eq!(r.status(), 200);
-    let spp: u64 = r.headers()["x-pathstream-spp"].to_str().expect("header").parse().expect("number");
+    let spp: u64 = r.headers()["x-pathstream-spp"]
+        .to_str()
+        .expect("header")
+        .parse()
+        .expect("number");
     assert!(spp >= min_spp, "waited for {min_spp} spp, got {spp}");
     let bytes = r.bytes().await.expect("body");
-    pathstream::render::output::decode_pfm(&bytes).expect("pfm").2
+    pathstream::render::output::decode_pfm(&bytes)
+        .expect("pfm")
+        .2
 }
 
 pub fn mean(img: &[[f32; 3]]) -> [f64; 3] {
@@ -63,21 +84,28 @@ pub fn mean(img: &[[f32; 3]]) -> [f64; 3] {
 }
 
 pub async fn patch(base: &str, id: &str, what: &str, body: Value) -> reqwest::Response {
-    client().patch(format!("{base}/api/sessions/{id}/{what}")).json(&body).send().await.expect("request")
+    client()
+        .patch(format!("{base}/api/sessions/{id}/{what}"))
+        .json(&body)
+        .send()
+        .await
+        .expect("request")
 }
 
 pub async fn ws_connect(base: &str, id: &str) -> Ws {
     let url = format!("{}/api/sessions/{id}/ws", base.replace("http://", "ws://"));
-    tokio_tungstenite::connect_async(url).await.expect("ws connects").0
+    tokio_tungstenite::connect_async(url)
+        .await
+        .expect("ws connects")
+        .0
 }
 
 /// Reads frames until `deadline`; returns (frames, last stats).
-pub async fn read_frames(
-    ws: &mut Ws,
-    until: Instant,
-) -> (usize, Value) {
+pub async fn read_frames(ws: &mut Ws, until: Instant) -> (usize, Value) {
     let (mut frames, mut stats) = (0, Value::Null);
-    while let Ok(Some(Ok(msg))) = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next()).await {
+    while let Ok(Some(Ok(msg))) =
+        tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next()).await
+    {
         match msg {
             Message::Binary(_) => frames += 1,
             Message::Text(t) => stats = serde_json::from_str(t.as_str()).expect("json stats"),
@@ -87,12 +115,12 @@ pub async fn read_frames(
     (frames, stats)
 }
 
-
 /// The first binary (PNG) frame, waiting at most `timeout`.
 pub async fn first_frame(ws: &mut Ws, timeout: Duration) -> Vec<u8> {
     let until = Instant::now() + timeout;
     loop {
-        match tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next()).await {
+        match tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next()).await
+        {
             Ok(Some(Ok(Message::Binary(png)))) => return png.to_vec(),
             Ok(Some(Ok(_))) => {}
             other => panic!("no frame within {timeout:?}: {other:?}"),

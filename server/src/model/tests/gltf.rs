@@ -110,13 +110,28 @@ fn scene() -> (Value, Vec<u8>) {
         .filter(|(_, &m)| m == 1)
         .flat_map(|(t, _)| *t)
         .collect();
-    let p1 = b.vec3(&caps.iter().map(|&i| g.positions[i as usize]).collect::<Vec<_>>());
-    let n1 = b.vec3(&caps.iter().map(|&i| g.normals[i as usize]).collect::<Vec<_>>());
+    let p1 = b.vec3(
+        &caps
+            .iter()
+            .map(|&i| g.positions[i as usize])
+            .collect::<Vec<_>>(),
+    );
+    let n1 = b.vec3(
+        &caps
+            .iter()
+            .map(|&i| g.normals[i as usize])
+            .collect::<Vec<_>>(),
+    );
     // Mesh 1: a strip (u32 indices), a fan from a sparse accessor, points, lines.
     let s = b.vec3(&STRIP);
     let si = b.indices(&[0, 1, 2, 3, 4], 5125);
     let fan_idx = b.view(&[0, 1, 2, 3, 4]);
-    let fan_val = b.view(&FAN.iter().flatten().flat_map(|x| x.to_le_bytes()).collect::<Vec<_>>());
+    let fan_val = b.view(
+        &FAN.iter()
+            .flatten()
+            .flat_map(|x| x.to_le_bytes())
+            .collect::<Vec<_>>(),
+    );
     let f = b.accessor(json!({"componentType": 5126, "count": 5, "type": "VEC3",
         "sparse": {"count": 5, "indices": {"bufferView": fan_idx, "componentType": 5121},
                    "values": {"bufferView": fan_val}}}));
@@ -230,7 +245,14 @@ fn expected() -> Model {
         name: "strips".into(),
         positions: STRIP.iter().chain(&FAN).copied().collect(),
         normals: None,
-        triangles: vec![[0, 1, 2], [1, 3, 2], [2, 3, 4], [5, 6, 7], [5, 7, 8], [5, 8, 9]],
+        triangles: vec![
+            [0, 1, 2],
+            [1, 3, 2],
+            [2, 3, 4],
+            [5, 6, 7],
+            [5, 7, 8],
+            [5, 8, 9],
+        ],
         materials: vec![2; 6],
     };
     let tri = MeshData {
@@ -307,7 +329,9 @@ fn expected() -> Model {
 /// quaternion in f32): within 1e-12.
 fn assert_model(got: &Model, want: &Model) {
     assert_guarantees(got);
-    let close = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+    let close = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+    };
     assert_eq!(got.instances.len(), want.instances.len());
     for (g, w) in got.instances.iter().zip(&want.instances) {
         assert_eq!(g.mesh, w.mesh);
@@ -347,10 +371,18 @@ fn gltf_with_an_external_bin_loads_exactly_from_a_file_only() {
     let (doc, bin) = scene();
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::write(dir.path().join("scene data.bin"), &bin).expect("write");
-    let text = serde_json::to_vec(&with_buffer(doc, bin.len(), Some("scene%20data.bin".into()))).expect("json");
+    let text = serde_json::to_vec(&with_buffer(
+        doc,
+        bin.len(),
+        Some("scene%20data.bin".into()),
+    ))
+    .expect("json");
     let path = dir.path().join("scene.gltf");
     std::fs::write(&path, &text).expect("write");
-    assert_model(&load_file(&path, &Limits::default()).expect("loads"), &expected());
+    assert_model(
+        &load_file(&path, &Limits::default()).expect("loads"),
+        &expected(),
+    );
     let e = load_bytes(&text, "scene.gltf", &Limits::default()).expect_err("an upload");
     assert_eq!(
         e.to_string(),
@@ -359,7 +391,8 @@ fn gltf_with_an_external_bin_loads_exactly_from_a_file_only() {
     std::fs::remove_file(dir.path().join("scene data.bin")).expect("rm");
     let e = load_file(&path, &Limits::default()).expect_err("no bin");
     assert!(
-        e.to_string().contains("buffers[0]: cannot read \"scene data.bin\": "),
+        e.to_string()
+            .contains("buffers[0]: cannot read \"scene data.bin\": "),
         "{e}"
     );
 }
@@ -522,7 +555,10 @@ fn truncated_glb() {
     );
     bytes[4] = 1;
     let e = load_bytes(&bytes, "s.glb", &Limits::default()).expect_err("v1");
-    assert_eq!(e.to_string(), "s.glb: byte 4: GLB version 1 (only version 2 is read)");
+    assert_eq!(
+        e.to_string(),
+        "s.glb: byte 4: GLB version 1 (only version 2 is read)"
+    );
 }
 
 #[test]
@@ -547,7 +583,10 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
     assert_guarantees(&m);
     assert_eq!(
         m.materials,
-        vec![("material0".to_owned(), MaterialJson::Diffuse(surface([1.0; 3], None)))]
+        vec![(
+            "material0".to_owned(),
+            MaterialJson::Diffuse(surface([1.0; 3], None))
+        )]
     );
     assert_eq!(
         m.warnings,

@@ -43,7 +43,8 @@ pub(super) fn cube() -> Gen {
                 .push([0, 1, 2].map(|k| centre[k] + 0.5 * (n[k] + su * u[k] + sv * v[k])));
             g.normals.push(*n);
         }
-        g.faces.push(((first..first + 4).collect(), u32::from(f >= 4)));
+        g.faces
+            .push(((first..first + 4).collect(), u32::from(f >= 4)));
     }
     g
 }
@@ -79,7 +80,11 @@ impl Gen {
 pub(super) fn assert_guarantees(m: &Model) {
     assert!(!m.meshes.is_empty() && !m.instances.is_empty());
     for mesh in &m.meshes {
-        assert!(!mesh.triangles.is_empty(), "mesh {} has no triangles", mesh.name);
+        assert!(
+            !mesh.triangles.is_empty(),
+            "mesh {} has no triangles",
+            mesh.name
+        );
         assert!(mesh.positions.iter().flatten().all(|x| x.is_finite()));
         assert!(mesh
             .triangles
@@ -87,7 +92,10 @@ pub(super) fn assert_guarantees(m: &Model) {
             .flatten()
             .all(|&i| (i as usize) < mesh.positions.len()));
         assert_eq!(mesh.materials.len(), mesh.triangles.len());
-        assert!(mesh.materials.iter().all(|&i| (i as usize) < m.materials.len()));
+        assert!(mesh
+            .materials
+            .iter()
+            .all(|&i| (i as usize) < m.materials.len()));
         if let Some(n) = &mesh.normals {
             assert_eq!(n.len(), mesh.positions.len());
             for v in n {
@@ -103,7 +111,11 @@ pub(super) fn assert_guarantees(m: &Model) {
     let names: std::collections::HashSet<_> = m.materials.iter().map(|(n, _)| n).collect();
     assert_eq!(names.len(), m.materials.len(), "material names are unique");
     let warnings: std::collections::HashSet<_> = m.warnings.iter().collect();
-    assert_eq!(warnings.len(), m.warnings.len(), "warnings are deduplicated");
+    assert_eq!(
+        warnings.len(),
+        m.warnings.len(),
+        "warnings are deduplicated"
+    );
 }
 
 /// A tiny deterministic generator (xorshift64*).
@@ -125,12 +137,18 @@ impl Rng {
 fn detect_reads_magic_then_extension() {
     assert_eq!(detect("a.obj", b"glTF\x02\0\0\0"), Some(Format::Glb));
     assert_eq!(detect("x", b"ply\nformat ascii 1.0\n"), Some(Format::Ply));
-    assert_eq!(detect("x", b"ply\r\nformat ascii 1.0\r\n"), Some(Format::Ply));
+    assert_eq!(
+        detect("x", b"ply\r\nformat ascii 1.0\r\n"),
+        Some(Format::Ply)
+    );
     assert_eq!(
         detect("upload", b" \n{\"asset\": {\"version\": \"2.0\"}}"),
         Some(Format::Gltf)
     );
-    assert_eq!(detect("upload", b"\xEF\xBB\xBF{\"asset\": {}}"), Some(Format::Gltf));
+    assert_eq!(
+        detect("upload", b"\xEF\xBB\xBF{\"asset\": {}}"),
+        Some(Format::Gltf)
+    );
     assert_eq!(detect("M.OBJ", b"v 0 0 0"), Some(Format::Obj));
     assert_eq!(detect("m.GlTf", b"{}"), Some(Format::Gltf));
     assert_eq!(detect("m.Glb", b""), Some(Format::Glb));
@@ -148,6 +166,11 @@ fn unknown_and_unreadable_files_are_errors() {
         e.to_string(),
         "cube.stl: unknown format: expected an .obj, .gltf, .glb or .ply file"
     );
-    let e = super::load_file(std::path::Path::new("/nonexistent/x.obj"), &limits).expect_err("missing");
-    assert!(e.to_string().starts_with("/nonexistent/x.obj: cannot read: "), "{e}");
+    let e =
+        super::load_file(std::path::Path::new("/nonexistent/x.obj"), &limits).expect_err("missing");
+    assert!(
+        e.to_string()
+            .starts_with("/nonexistent/x.obj: cannot read: "),
+        "{e}"
+    );
 }

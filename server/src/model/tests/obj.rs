@@ -38,7 +38,10 @@ fn diffuse(albedo: [f64; 3], emission: Option<[f64; 3]>) -> MaterialJson {
 }
 
 fn mirror(albedo: [f64; 3]) -> MaterialJson {
-    MaterialJson::Mirror(SurfaceJson { albedo, emission: None })
+    MaterialJson::Mirror(SurfaceJson {
+        albedo,
+        emission: None,
+    })
 }
 
 fn glass(ior: f64, albedo: Option<[f64; 3]>) -> MaterialJson {
@@ -71,9 +74,17 @@ fn cube_with_two_mtl_files_loads_exactly() {
     let dir = tempfile::tempdir().expect("tempdir");
     let g = cube();
     std::fs::write(dir.path().join("a.mtl"), "newmtl paint\nKd 0.8 0.2 0.1\n").expect("write");
-    std::fs::write(dir.path().join("b.mtl"), "newmtl chrome\nillum 3\nKs 0.9 0.9 0.9\n").expect("write");
+    std::fs::write(
+        dir.path().join("b.mtl"),
+        "newmtl chrome\nillum 3\nKs 0.9 0.9 0.9\n",
+    )
+    .expect("write");
     let path = dir.path().join("cube.obj");
-    std::fs::write(&path, cube_obj(&g, ["paint", "chrome"], Some("a.mtl b.mtl"))).expect("write");
+    std::fs::write(
+        &path,
+        cube_obj(&g, ["paint", "chrome"], Some("a.mtl b.mtl")),
+    )
+    .expect("write");
     let m = load_file(&path, &Limits::default()).expect("loads");
     assert_guarantees(&m);
     assert_eq!(
@@ -86,7 +97,11 @@ fn cube_with_two_mtl_files_loads_exactly() {
             ],
             instances: vec![Instance {
                 mesh: 0,
-                transform: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]],
+                transform: [
+                    [1.0, 0.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0]
+                ],
             }],
             camera: None,
             warnings: vec![],
@@ -243,7 +258,9 @@ fn mtl_rules_map_every_material() {
         .all(|c| c == [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]));
     assert_eq!(
         mesh.triangles,
-        (0..11).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect::<Vec<_>>()
+        (0..11)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect::<Vec<_>>()
     );
     assert_eq!(
         m.warnings,
@@ -267,7 +284,10 @@ fn uploads_cannot_follow_mtllib() {
     let m = load_bytes(text.as_bytes(), "cube.obj", &Limits::default()).expect("loads");
     assert_guarantees(&m);
     assert_eq!(m.meshes, vec![g.mesh("cube", &[0, 0])]);
-    assert_eq!(m.materials, vec![("default".to_owned(), diffuse([0.8; 3], None))]);
+    assert_eq!(
+        m.materials,
+        vec![("default".to_owned(), diffuse([0.8; 3], None))]
+    );
     assert_eq!(
         m.warnings,
         [
@@ -283,12 +303,19 @@ fn uploads_cannot_follow_mtllib() {
 fn mtl_problems() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("t.obj");
-    std::fs::write(&path, "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n").expect("write");
+    std::fs::write(
+        &path,
+        "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    )
+    .expect("write");
     std::fs::write(dir.path().join("bad.mtl"), "newmtl a\nKd 1 x 1\n").expect("write");
     let e = load_file(&path, &Limits::default()).expect_err("bad mtl");
     assert_eq!(
         e.to_string(),
-        format!("{}: bad.mtl: line 2: Kd: \"x\" is not a number", path.display())
+        format!(
+            "{}: bad.mtl: line 2: Kd: \"x\" is not a number",
+            path.display()
+        )
     );
 
     std::fs::write(dir.path().join("bad.mtl"), "newmtl a\nKd 0.5\n").expect("write");

@@ -19,7 +19,11 @@ fn ply_ascii(g: &Gen) -> String {
         g.faces.len()
     );
     for (p, n) in g.positions.iter().zip(&g.normals) {
-        let _ = writeln!(s, "{} {} {} {} {} {} 0.5 0.25", p[0], p[1], p[2], n[0], n[1], n[2]);
+        let _ = writeln!(
+            s,
+            "{} {} {} {} {} {} 0.5 0.25",
+            p[0], p[1], p[2], n[0], n[1], n[2]
+        );
     }
     for (poly, _) in &g.faces {
         let _ = write!(s, "{}", poly.len());
@@ -47,7 +51,13 @@ macro_rules! put {
 /// `ushort`/`ushort` `vertex_index` lists. Returns (bytes, header length).
 fn ply_binary(g: &Gen, big: bool) -> (Vec<u8>, usize) {
     let (format, pos, nor, list, name) = if big {
-        ("binary_big_endian", "float", "double", "ushort ushort", "vertex_index")
+        (
+            "binary_big_endian",
+            "float",
+            "double",
+            "ushort ushort",
+            "vertex_index",
+        )
     } else {
         (
             "binary_little_endian",
@@ -121,7 +131,11 @@ fn expected(g: &Gen, warnings: &[&str]) -> Model {
         )],
         instances: vec![Instance {
             mesh: 0,
-            transform: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]],
+            transform: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ],
         }],
         camera: None,
         warnings: warnings.iter().map(|w| w.to_string()).collect(),
@@ -147,7 +161,10 @@ fn ascii_loads_exactly() {
     );
     let m = load_bytes(text.as_bytes(), "cube.ply", &Limits::default()).expect("loads");
     assert_guarantees(&m);
-    assert_eq!(m, expected(&g, &["vertex properties ignored: u, v", NO_MATERIALS]));
+    assert_eq!(
+        m,
+        expected(&g, &["vertex properties ignored: u, v", NO_MATERIALS])
+    );
     // CRLF line ends read the same.
     let crlf = text.replace('\n', "\r\n");
     let m2 = load_bytes(crlf.as_bytes(), "cube.ply", &Limits::default()).expect("loads");
@@ -247,7 +264,9 @@ fn ascii_errors_name_the_line() {
     );
     let e = err(with(v3, "nan 1.5 3.5 1 0 0 0 0").as_bytes());
     assert!(
-        e.starts_with(&format!("c.ply: line {v3}: vertex 3: cannot read \"nan 1.5")),
+        e.starts_with(&format!(
+            "c.ply: line {v3}: vertex 3: cannot read \"nan 1.5"
+        )),
         "{e}"
     );
     let short = lines[..ASCII_HEADER_LINES + 29].join("\n") + "\n";
@@ -278,11 +297,16 @@ fn header_problems() {
     );
     // The last line without its newline: still enough bytes.
     let m = load_bytes(
-        ply(&format!("element vertex 3\n{xyz}{face}")).trim_end().as_bytes(),
+        ply(&format!("element vertex 3\n{xyz}{face}"))
+            .trim_end()
+            .as_bytes(),
         "c.ply",
         &Limits::default(),
     );
-    assert_eq!(m.map(|m| m.meshes[0].triangles.clone()), Ok(vec![[0, 1, 2]]));
+    assert_eq!(
+        m.map(|m| m.meshes[0].triangles.clone()),
+        Ok(vec![[0, 1, 2]])
+    );
     assert_eq!(
         err(ply(&format!(
             "element vertex 3\n{xyz}element face 0\nproperty list uchar int vertex_indices\n"
@@ -295,7 +319,10 @@ fn header_problems() {
         "c.ply: no triangles (the file needs a vertex and a face element)"
     );
     assert_eq!(
-        err(ply(&format!("element vertex 3\nproperty float x\nproperty float y\n{face}")).as_bytes()),
+        err(ply(&format!(
+            "element vertex 3\nproperty float x\nproperty float y\n{face}"
+        ))
+        .as_bytes()),
         "c.ply: header: element vertex has no x, y and z properties"
     );
     assert_eq!(
@@ -318,5 +345,8 @@ fn header_problems() {
         "ply\nformat ascii 1.0\nelement vertex 4\n{xyz}{face}end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n5 0 1 2 3 0\n"
     );
     let e = load_bytes(quad.as_bytes(), "q.ply", &limits).expect_err("over");
-    assert_eq!(e.to_string(), "q.ply: line 14: 3 triangles, more than the limit of 2");
+    assert_eq!(
+        e.to_string(),
+        "q.ply: line 14: 3 triangles, more than the limit of 2"
+    );
 }

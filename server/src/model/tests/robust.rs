@@ -70,7 +70,8 @@ fn samples_load() {
         if name == "be.ply" {
             continue;
         }
-        let m = load_bytes(&bytes, name, &Limits::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let m =
+            load_bytes(&bytes, name, &Limits::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_guarantees(&m);
     }
 }
@@ -96,7 +97,9 @@ fn mutate(rng: &mut Rng, bytes: &[u8]) -> Vec<u8> {
             // A run of digits replaced by an extreme number.
             let starts: Vec<usize> = (0..b.len()).filter(|&i| b[i].is_ascii_digit()).collect();
             if let Some(&s) = starts.get(rng.below(starts.len())) {
-                let e = (s..b.len()).find(|&i| !b[i].is_ascii_digit()).unwrap_or(b.len());
+                let e = (s..b.len())
+                    .find(|&i| !b[i].is_ascii_digit())
+                    .unwrap_or(b.len());
                 let pick = [
                     "0",
                     "4294967295",
@@ -157,7 +160,10 @@ fn mutated_files_never_panic() {
                     assert!(!e.reason.is_empty());
                     failed += 1;
                 }
-                Err(_) => panic!("{name} round {round} panics on {:?}", String::from_utf8_lossy(&m)),
+                Err(_) => panic!(
+                    "{name} round {round} panics on {:?}",
+                    String::from_utf8_lossy(&m)
+                ),
             }
         }
     }
@@ -171,7 +177,10 @@ fn garbage_is_an_error() {
     for name in ["g.obj", "g.ply", "g.gltf", "g.glb", "g"] {
         for len in [0, 1, 7, 100, 5000] {
             let bytes: Vec<u8> = (0..len).map(|_| rng.next() as u8).collect();
-            assert!(load_bytes(&bytes, name, &Limits::default()).is_err(), "{name} {len}");
+            assert!(
+                load_bytes(&bytes, name, &Limits::default()).is_err(),
+                "{name} {len}"
+            );
             let mut magic = match name {
                 "g.ply" => b"ply\n".to_vec(),
                 "g.glb" => b"glTF".to_vec(),
@@ -203,8 +212,11 @@ fn grid(n: u32) -> MeshData {
     };
     for y in 0..=n {
         for x in 0..=n {
-            m.positions
-                .push([x as f32 / n as f32, y as f32 / n as f32, ((x * y) % 7) as f32 * 1e-3]);
+            m.positions.push([
+                x as f32 / n as f32,
+                y as f32 / n as f32,
+                ((x * y) % 7) as f32 * 1e-3,
+            ]);
             if let Some(v) = m.normals.as_mut() {
                 v.push([0.0, 0.0, 1.0]);
             }
@@ -228,7 +240,11 @@ fn grid(n: u32) -> MeshData {
 fn time_large_files() {
     let dir = tempfile::tempdir().expect("tempdir");
     let mesh = grid(708);
-    println!("{} vertices, {} triangles", mesh.positions.len(), mesh.triangles.len());
+    println!(
+        "{} vertices, {} triangles",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
     for (name, write) in [
         (
             "grid.ply",
@@ -249,7 +265,11 @@ fn time_large_files() {
             if name.ends_with(".ply") {
                 assert_eq!(m.meshes[0], mesh);
             }
-            println!("{name} ({:.1} MB) run {run}: load_file {:.3} s", size as f64 / 1e6, s);
+            println!(
+                "{name} ({:.1} MB) run {run}: load_file {:.3} s",
+                size as f64 / 1e6,
+                s
+            );
         }
     }
 }

@@ -47,7 +47,10 @@ impl CpuBackend {
             .map(Arc::new)
             .map_err(|e| tracing::warn!("no low-priority render pool ({e}); using the global one"))
             .ok();
-        Self { pool, ..Self::default() }
+        Self {
+            pool,
+            ..Self::default()
+        }
     }
 
     /// This backend without the wide kernels: the code every CPU runs.
@@ -59,7 +62,10 @@ impl CpuBackend {
     }
 
     pub fn device(&self) -> String {
-        let threads = self.pool.as_ref().map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
+        let threads = self
+            .pool
+            .as_ref()
+            .map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
         match &self.fallback_reason {
             Some(why) => format!("rayon, {threads} threads; {why}"),
             None => format!("rayon, {threads} threads"),
@@ -74,7 +80,13 @@ impl CpuBackend {
     /// As [`CpuBackend::render`], but gives up between rows once `cancelled`
     /// says so; returns false then, and the film is left half-updated (the
     /// caller throws it away).
-    pub fn render_unless(&mut self, job: &RenderJob, film: &mut Film, count: u64, cancelled: &(dyn Fn() -> bool + Sync)) -> bool {
+    pub fn render_unless(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        count: u64,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> bool {
         let first = film.spp();
         let width = film.width() as usize;
         let wide = if self.portable_only { None } else { wide_isa() };
@@ -109,7 +121,9 @@ impl CpuBackend {
 /// the benchmarks time as rays per second.
 pub fn nearest_hits(world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
     let wide = wide_isa();
-    rays.par_chunks(4096).flat_map_iter(|chunk| hits_chunk(wide, world, chunk)).collect()
+    rays.par_chunks(4096)
+        .flat_map_iter(|chunk| hits_chunk(wide, world, chunk))
+        .collect()
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -136,7 +150,9 @@ fn hits_avx2(isa: Avx2, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit
 
 #[inline(always)]
 fn hits_with<I: Isa>(isa: I, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
-    rays.iter().map(|(r, from)| world.intersect(isa, r, *from)).collect()
+    rays.iter()
+        .map(|(r, from)| world.intersect(isa, r, *from))
+        .collect()
 }
 
 /// The wide kernels this CPU can run, if any.
@@ -153,7 +169,13 @@ fn wide_isa() -> Option<Portable> {
 /// Adds samples `samples` to every pixel of row `y`; returns how many were
 /// rejected. Runs the wide code when `wide` is given.
 #[cfg(target_arch = "x86_64")]
-fn render_row(wide: Option<Avx2>, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
+fn render_row(
+    wide: Option<Avx2>,
+    job: &RenderJob,
+    y: u32,
+    row: &mut [PixelSums],
+    samples: Range<u64>,
+) -> u64 {
     match wide {
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[allow(unsafe_code)]
@@ -163,7 +185,13 @@ fn render_row(wide: Option<Avx2>, job: &RenderJob, y: u32, row: &mut [PixelSums]
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-fn render_row(_: Option<Portable>, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
+fn render_row(
+    _: Option<Portable>,
+    job: &RenderJob,
+    y: u32,
+    row: &mut [PixelSums],
+    samples: Range<u64>,
+) -> u64 {
     row_with(Portable, job, y, row, samples)
 }
 
@@ -180,7 +208,13 @@ fn row_avx2(isa: Avx2, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: 
 /// so that the processor overlaps the two (independent) intersection tests.
 /// Samples still reach each pixel in index order.
 #[inline(always)]
-fn row_with<I: Isa>(isa: I, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
+fn row_with<I: Isa>(
+    isa: I,
+    job: &RenderJob,
+    y: u32,
+    row: &mut [PixelSums],
+    samples: Range<u64>,
+) -> u64 {
     let (world, settings) = (&job.world, &job.settings);
     let mut rejected = 0u64;
     for (x, px) in row.iter_mut().enumerate() {
@@ -189,11 +223,23 @@ fn row_with<I: Isa>(isa: I, job: &RenderJob, y: u32, row: &mut [PixelSums], samp
         while s < samples.end {
             let pair = s + 1 < samples.end;
             let mut a = job.camera_path(x, y, s);
-            let mut b = if pair { job.camera_path(x, y, s + 1) } else { a };
+            let mut b = if pair {
+                job.camera_path(x, y, s + 1)
+            } else {
+                a
+            };
             let (mut live_a, mut live_b) = (true, pair);
             while live_a || live_b {
-                let hit_a = if live_a { world.intersect(isa, &a.ray, a.from) } else { None };
-                let hit_b = if live_b { world.intersect(isa, &b.ray, b.from) } else { None };
+                let hit_a = if live_a {
+                    world.intersect(isa, &a.ray, a.from)
+                } else {
+                    None
+                };
+                let hit_b = if live_b {
+                    world.intersect(isa, &b.ray, b.from)
+                } else {
+                    None
+                };
                 live_a = live_a && a.advance(isa, world, settings, hit_a);
                 live_b = live_b && b.advance(isa, world, settings, hit_b);
             }

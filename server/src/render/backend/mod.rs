@@ -23,7 +23,9 @@ pub enum BackendChoice {
     Auto,
     Cpu,
     /// OpenCL device N as `pathstream devices` numbers them (None: the first).
-    OpenCl { device: Option<usize> },
+    OpenCl {
+        device: Option<usize>,
+    },
 }
 
 impl BackendChoice {
@@ -51,7 +53,10 @@ pub enum BackendError {
 fn log_scene_fallback(job: &RenderJob, why: &str) {
     static LAST: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     if LAST.swap(job.id, std::sync::atomic::Ordering::Relaxed) != job.id {
-        tracing::info!(job = job.id, "OpenCL cannot render this scene ({why}); rendering it with rayon on the CPU");
+        tracing::info!(
+            job = job.id,
+            "OpenCL cannot render this scene ({why}); rendering it with rayon on the CPU"
+        );
     }
 }
 
@@ -145,7 +150,12 @@ impl Backend {
 
     /// Adds `count` samples per pixel to `film`. On failure the film is as
     /// it was before the call.
-    pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) -> Result<(), BackendError> {
+    pub fn render(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        count: u64,
+    ) -> Result<(), BackendError> {
         match self {
             Backend::Cpu(b) => {
                 b.render(job, film, count);

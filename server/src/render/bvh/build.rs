@@ -30,8 +30,15 @@ const TRAVERSAL_COST: f32 = 1.0;
 
 /// A node of the binary tree; leaves are ranges of the primitive order.
 pub(super) enum Node2 {
-    Leaf { bounds: Aabb, start: u32, count: u32 },
-    Inner { bounds: Aabb, children: Box<[Node2; 2]> },
+    Leaf {
+        bounds: Aabb,
+        start: u32,
+        count: u32,
+    },
+    Inner {
+        bounds: Aabb,
+        children: Box<[Node2; 2]>,
+    },
 }
 
 impl Node2 {
@@ -49,7 +56,10 @@ pub(super) fn build(boxes: &[Aabb]) -> (Option<Node2>, Vec<u32>) {
     }
     let centroids: Vec<Vec3A> = boxes.par_iter().map(Aabb::centroid).collect();
     let mut refs: Vec<u32> = (0..boxes.len() as u32).collect();
-    let ctx = Ctx { boxes, centroids: &centroids };
+    let ctx = Ctx {
+        boxes,
+        centroids: &centroids,
+    };
     let (bounds, cbounds) = ctx.bounds_of(&refs);
     let tree = ctx.node(&mut refs, 0, 0, bounds, cbounds);
     (Some(tree), refs)
@@ -90,7 +100,14 @@ struct Split {
 }
 
 impl Ctx<'_> {
-    fn node(&self, refs: &mut [u32], offset: usize, depth: u32, bounds: Aabb, cbounds: Aabb) -> Node2 {
+    fn node(
+        &self,
+        refs: &mut [u32],
+        offset: usize,
+        depth: u32,
+        bounds: Aabb,
+        cbounds: Aabb,
+    ) -> Node2 {
         let n = refs.len();
         let leaf = || Node2::Leaf {
             bounds,
@@ -141,13 +158,17 @@ impl Ctx<'_> {
     fn bounds_of(&self, refs: &[u32]) -> (Aabb, Aabb) {
         let fold = |refs: &[u32]| {
             refs.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), &r| {
-                (b.union(self.boxes[r as usize]), c.with_point(self.centroids[r as usize]))
+                (
+                    b.union(self.boxes[r as usize]),
+                    c.with_point(self.centroids[r as usize]),
+                )
             })
         };
         if refs.len() > PARALLEL_BINNING {
-            refs.par_chunks(PARALLEL_BINNING / 4)
-                .map(fold)
-                .reduce(|| (Aabb::EMPTY, Aabb::EMPTY), |(a, b), (c, d)| (a.union(c), b.union(d)))
+            refs.par_chunks(PARALLEL_BINNING / 4).map(fold).reduce(
+                || (Aabb::EMPTY, Aabb::EMPTY),
+                |(a, b), (c, d)| (a.union(c), b.union(d)),
+            )
         } else {
             fold(refs)
         }
@@ -214,7 +235,8 @@ impl Ctx<'_> {
                 if left.count == 0 || r.count == 0 {
                     continue;
                 }
-                let cost = left.bounds.half_area() * left.count as f32 + r.bounds.half_area() * r.count as f32;
+                let cost = left.bounds.half_area() * left.count as f32
+                    + r.bounds.half_area() * r.count as f32;
                 if best.as_ref().is_none_or(|b| cost < b.cost) {
                     best = Some(Split {
                         axis,
@@ -246,7 +268,9 @@ impl Ctx<'_> {
         };
         let mid = refs.len() / 2;
         let c = self.centroids;
-        refs.select_nth_unstable_by(mid, |&a, &b| c[a as usize][axis].total_cmp(&c[b as usize][axis]));
+        refs.select_nth_unstable_by(mid, |&a, &b| {
+            c[a as usize][axis].total_cmp(&c[b as usize][axis])
+        });
         let side = |refs: &[u32]| {
             let (bounds, cbounds) = self.bounds_of(refs);
             Bin {

@@ -12,7 +12,11 @@ pub(super) fn flatten(root: Option<&Node2>) -> Bvh {
     };
     let mut nodes = Vec::new();
     let depth = match root {
-        Node2::Leaf { bounds, start, count } => {
+        Node2::Leaf {
+            bounds,
+            start,
+            count,
+        } => {
             let mut node = BvhNode::EMPTY_NODE;
             node.set_child(0, *bounds, *start, *count);
             nodes.push(node);
@@ -42,7 +46,9 @@ fn emit(node: &Node2, out: &mut Vec<BvhNode>) -> u32 {
             .max_by(|(_, a), (_, b)| a.bounds().half_area().total_cmp(&b.bounds().half_area()))
             .map(|(i, _)| i);
         let Some(i) = widest else { break };
-        let Node2::Inner { children, .. } = kids[i] else { break };
+        let Node2::Inner { children, .. } = kids[i] else {
+            break;
+        };
         kids[i] = &children[0];
         kids.push(&children[1]);
     }
@@ -51,7 +57,11 @@ fn emit(node: &Node2, out: &mut Vec<BvhNode>) -> u32 {
     let mut depth = 0;
     for (slot, kid) in kids.into_iter().enumerate() {
         match kid {
-            Node2::Leaf { bounds, start, count } => out[index].set_child(slot, *bounds, *start, *count),
+            Node2::Leaf {
+                bounds,
+                start,
+                count,
+            } => out[index].set_child(slot, *bounds, *start, *count),
             Node2::Inner { bounds, .. } => {
                 let child = out.len() as u32;
                 depth = depth.max(emit(kid, out));

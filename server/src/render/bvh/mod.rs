@@ -64,7 +64,10 @@ impl BvhNode {
     /// The box of child `i`.
     pub fn child_bounds(&self, i: usize) -> Aabb {
         let b = &self.bounds;
-        Aabb::new([b[0][i], b[1][i], b[2][i]].into(), [b[3][i], b[4][i], b[5][i]].into())
+        Aabb::new(
+            [b[0][i], b[1][i], b[2][i]].into(),
+            [b[3][i], b[4][i], b[5][i]].into(),
+        )
     }
 
     fn set_child(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
@@ -99,7 +102,10 @@ impl Bvh {
     /// primitive can never be hit: such boxes are placed but never split on).
     /// At most [`Bvh::MAX_PRIMS`] of them.
     pub fn build(boxes: &[Aabb]) -> Bvh {
-        assert!(boxes.len() <= Self::MAX_PRIMS, "too many primitives for one BVH");
+        assert!(
+            boxes.len() <= Self::MAX_PRIMS,
+            "too many primitives for one BVH"
+        );
         let (tree, prims) = build::build(boxes);
         let mut bvh = flatten::flatten(tree.as_ref());
         bvh.prims = prims;

@@ -19,8 +19,19 @@ fn check_structure(bvh: &Bvh, boxes: &[Aabb]) {
     let mut seen = vec![0u32; boxes.len()];
     let mut sorted = bvh.prims.clone();
     sorted.sort_unstable();
-    assert_eq!(sorted, (0..boxes.len() as u32).collect::<Vec<_>>(), "prims is a permutation");
-    fn walk(bvh: &Bvh, boxes: &[Aabb], node: usize, outer: Aabb, seen: &mut [u32], depth: u32) -> u32 {
+    assert_eq!(
+        sorted,
+        (0..boxes.len() as u32).collect::<Vec<_>>(),
+        "prims is a permutation"
+    );
+    fn walk(
+        bvh: &Bvh,
+        boxes: &[Aabb],
+        node: usize,
+        outer: Aabb,
+        seen: &mut [u32],
+        depth: u32,
+    ) -> u32 {
         let n = &bvh.nodes[node];
         let mut deepest = depth;
         for i in 0..4 {
@@ -29,16 +40,25 @@ fn check_structure(bvh: &Bvh, boxes: &[Aabb]) {
                 assert!(b.is_empty(), "empty slot with a box");
                 continue;
             }
-            assert!(outer.contains(b.min) && outer.contains(b.max), "child box outside its parent's");
+            assert!(
+                outer.contains(b.min) && outer.contains(b.max),
+                "child box outside its parent's"
+            );
             if n.count[i] > 0 {
                 assert!(n.count[i] as usize <= MAX_LEAF, "leaf of {}", n.count[i]);
                 for slot in n.child[i]..n.child[i] + n.count[i] {
                     let p = bvh.prims[slot as usize] as usize;
                     seen[p] += 1;
-                    assert!(b.contains(boxes[p].min) && b.contains(boxes[p].max), "leaf box does not hold prim {p}");
+                    assert!(
+                        b.contains(boxes[p].min) && b.contains(boxes[p].max),
+                        "leaf box does not hold prim {p}"
+                    );
                 }
             } else {
-                assert!(n.child[i] as usize > node, "children come after their parent");
+                assert!(
+                    n.child[i] as usize > node,
+                    "children come after their parent"
+                );
                 deepest = deepest.max(walk(bvh, boxes, n.child[i] as usize, b, seen, depth + 1));
             }
         }
@@ -46,7 +66,10 @@ fn check_structure(bvh: &Bvh, boxes: &[Aabb]) {
     }
     let depth = walk(bvh, boxes, 0, bvh.bounds, &mut seen, 1);
     assert_eq!(depth, bvh.depth);
-    assert!(seen.iter().all(|&c| c == 1), "every prim in exactly one leaf");
+    assert!(
+        seen.iter().all(|&c| c == 1),
+        "every prim in exactly one leaf"
+    );
 }
 
 #[test]
@@ -105,7 +128,8 @@ fn traversal_visits_every_leaf_whose_primitive_the_ray_meets() {
     for i in 0..2_000u64 {
         let mut s = Sampler::new(99, i, 0);
         let o = Vec3A::new(s.next_f32(), s.next_f32(), s.next_f32()) * 120.0 - 10.0;
-        let mut d = Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize();
+        let mut d =
+            Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize();
         // Axis-parallel rays too: zero direction components.
         if i % 4 == 0 {
             d = [Vec3A::X, -Vec3A::Y, Vec3A::Z, -Vec3A::X][(i / 4 % 4) as usize];
@@ -120,7 +144,10 @@ fn traversal_visits_every_leaf_whose_primitive_the_ray_meets() {
         });
         for (p, b) in boxes.iter().enumerate() {
             if meets(b, o, d, f64::from(t_max)) {
-                assert!(visited[p], "ray {i}: box {p} met but its leaf was not visited");
+                assert!(
+                    visited[p],
+                    "ray {i}: box {p} met but its leaf was not visited"
+                );
             }
         }
     }

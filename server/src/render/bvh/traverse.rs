@@ -46,8 +46,16 @@ impl BoxRay {
         let inv = |d: f32| 1.0 / d;
         let neg = |d: f32| usize::from(d.is_sign_negative());
         Self {
-            org: [Vec4::splat(origin.x), Vec4::splat(origin.y), Vec4::splat(origin.z)],
-            inv: [Vec4::splat(inv(dir.x)), Vec4::splat(inv(dir.y)), Vec4::splat(inv(dir.z))],
+            org: [
+                Vec4::splat(origin.x),
+                Vec4::splat(origin.y),
+                Vec4::splat(origin.z),
+            ],
+            inv: [
+                Vec4::splat(inv(dir.x)),
+                Vec4::splat(inv(dir.y)),
+                Vec4::splat(inv(dir.z)),
+            ],
             near: [3 * neg(dir.x), 1 + 3 * neg(dir.y), 2 + 3 * neg(dir.z)],
             far: [3 - 3 * neg(dir.x), 4 - 3 * neg(dir.y), 5 - 3 * neg(dir.z)],
         }
@@ -61,7 +69,10 @@ impl BoxRay {
         let slab = |axis: usize| {
             let near = Vec4::from_array(b[self.near[axis]]);
             let far = Vec4::from_array(b[self.far[axis]]);
-            ((near - self.org[axis]) * self.inv[axis], (far - self.org[axis]) * self.inv[axis])
+            (
+                (near - self.org[axis]) * self.inv[axis],
+                (far - self.org[axis]) * self.inv[axis],
+            )
         };
         let (nx, fx) = slab(0);
         let (ny, fy) = slab(1);
@@ -97,7 +108,12 @@ impl Bvh {
     /// and returns the (possibly nearer) `t_max` to go on with; the last
     /// one is returned.
     #[inline(always)]
-    pub fn traverse(&self, ray: &BoxRay, t_max: f32, leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+    pub fn traverse(
+        &self,
+        ray: &BoxRay,
+        t_max: f32,
+        leaf: impl FnMut(u32, u32, f32) -> f32,
+    ) -> f32 {
         if self.depth <= SHALLOW_DEPTH {
             self.traverse_with::<SHALLOW_STACK>(ray, t_max, leaf)
         } else {
@@ -106,7 +122,12 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn traverse_with<const N: usize>(&self, ray: &BoxRay, mut t_max: f32, mut leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+    fn traverse_with<const N: usize>(
+        &self,
+        ray: &BoxRay,
+        mut t_max: f32,
+        mut leaf: impl FnMut(u32, u32, f32) -> f32,
+    ) -> f32 {
         if self.nodes.is_empty() {
             return t_max;
         }

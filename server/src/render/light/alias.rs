@@ -27,7 +27,8 @@ impl AliasTable {
         let clean = |w: f64| if w.is_finite() && w > 0.0 { w } else { 0.0 };
         let pmf: Vec<f64> = weights.iter().map(|&w| clean(w) / total).collect();
         let mut scaled: Vec<f64> = pmf.iter().map(|p| p * n as f64).collect();
-        let (mut small, mut large): (Vec<u32>, Vec<u32>) = (0..n as u32).partition(|&i| scaled[i as usize] < 1.0);
+        let (mut small, mut large): (Vec<u32>, Vec<u32>) =
+            (0..n as u32).partition(|&i| scaled[i as usize] < 1.0);
         let mut prob = vec![1.0f64; n];
         let mut alias: Vec<u32> = (0..n as u32).collect();
         while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
@@ -43,7 +44,13 @@ impl AliasTable {
         // What is left (rounding) keeps its own column always.
         let threshold = prob
             .iter()
-            .map(|&p| if p >= 1.0 { u32::MAX } else { (p * 4_294_967_296.0) as u32 })
+            .map(|&p| {
+                if p >= 1.0 {
+                    u32::MAX
+                } else {
+                    (p * 4_294_967_296.0) as u32
+                }
+            })
             .collect();
         Some(Self {
             threshold,
@@ -67,7 +74,11 @@ impl AliasTable {
         let low = bits as u32;
         // u32::MAX as a threshold means "always keep" (even for low = MAX).
         let keep = low < self.threshold[column] || self.threshold[column] == u32::MAX;
-        let i = if keep { column } else { self.alias[column] as usize };
+        let i = if keep {
+            column
+        } else {
+            self.alias[column] as usize
+        };
         (i, self.pmf[i])
     }
 
@@ -99,7 +110,10 @@ mod tests {
             let expected = w / total;
             let got = counts[k] as f64 / n as f64;
             let se = (expected * (1.0 - expected) / n as f64).sqrt();
-            assert!((got - expected).abs() <= 5.0 * se + 1e-9, "index {k}: {got} vs {expected}");
+            assert!(
+                (got - expected).abs() <= 5.0 * se + 1e-9,
+                "index {k}: {got} vs {expected}"
+            );
         }
     }
 

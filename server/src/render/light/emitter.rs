@@ -80,14 +80,24 @@ impl Lights {
                     if m.emissive {
                         let r = f64::from(s.radius);
                         power.push(brightness(m.emission) * 4.0 * std::f64::consts::PI * r * r);
-                        emitters.push(Emitter { object: id, prim: NO_PRIM, emission: m.emission, shape: EmitterShape::Sphere(s) });
+                        emitters.push(Emitter {
+                            object: id,
+                            prim: NO_PRIM,
+                            emission: m.emission,
+                            shape: EmitterShape::Sphere(s),
+                        });
                     }
                 }
                 Geometry::Quad(q) => {
                     let m = &materials[o.material as usize];
                     if m.emissive {
                         power.push(brightness(m.emission) * 2.0 * f64::from(q.area));
-                        emitters.push(Emitter { object: id, prim: NO_PRIM, emission: m.emission, shape: EmitterShape::Quad(q) });
+                        emitters.push(Emitter {
+                            object: id,
+                            prim: NO_PRIM,
+                            emission: m.emission,
+                            shape: EmitterShape::Quad(q),
+                        });
                     }
                 }
                 Geometry::Instance(i) => {
@@ -98,15 +108,28 @@ impl Lights {
                         if !m.emissive {
                             continue;
                         }
-                        let [a, b, c] = mesh.vertices(t as u32).map(|v| inst.cam_from_obj.transform_point3a(v));
+                        let [a, b, c] = mesh
+                            .vertices(t as u32)
+                            .map(|v| inst.cam_from_obj.transform_point3a(v));
                         let cross = (b - a).cross(c - a);
                         let area = 0.5 * cross.length();
                         if !(area > 0.0) {
                             continue;
                         }
-                        let tri = LightTri { p0: a, e1: b - a, e2: c - a, n: cross.normalize(), area };
+                        let tri = LightTri {
+                            p0: a,
+                            e1: b - a,
+                            e2: c - a,
+                            n: cross.normalize(),
+                            area,
+                        };
                         power.push(brightness(m.emission) * 2.0 * f64::from(area));
-                        emitters.push(Emitter { object: id, prim: t as u32, emission: m.emission, shape: EmitterShape::Triangle(tri) });
+                        emitters.push(Emitter {
+                            object: id,
+                            prim: t as u32,
+                            emission: m.emission,
+                            shape: EmitterShape::Triangle(tri),
+                        });
                     }
                 }
             }
@@ -114,11 +137,19 @@ impl Lights {
         if environment.max_element() > 0.0 {
             // As bright as a sphere of the scene's size lit from everywhere.
             power.push(brightness(environment) * 4.0 * std::f64::consts::PI * radius * radius);
-            emitters.push(Emitter { object: u32::MAX, prim: NO_PRIM, emission: environment, shape: EmitterShape::Environment });
+            emitters.push(Emitter {
+                object: u32::MAX,
+                prim: NO_PRIM,
+                emission: environment,
+                shape: EmitterShape::Environment,
+            });
         }
         // Power is brightness x area x pi (x the solid angle factor folded
         // into the constants above); only ratios matter.
-        Self { table: AliasTable::new(&power), emitters }
+        Self {
+            table: AliasTable::new(&power),
+            emitters,
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -131,7 +162,14 @@ impl Emitter {
     /// angle) of choosing it; `nl` is the geometric normal and `ns` the
     /// shading normal, both on the side the path arrived from.
     #[inline(always)]
-    pub fn sample_direction(&self, s: &Surface, nl: Vec3A, ns: Vec3A, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
+    pub fn sample_direction(
+        &self,
+        s: &Surface,
+        nl: Vec3A,
+        ns: Vec3A,
+        u1: f32,
+        u2: f32,
+    ) -> Option<(Vec3A, f32)> {
         let on_self = self.object == s.object && self.prim == s.prim;
         match &self.shape {
             EmitterShape::Sphere(sphere) => sample_sphere(sphere, s.p, nl, on_self, u1, u2),
@@ -172,7 +210,14 @@ fn toward_point(p: Vec3A, q: Vec3A, n: Vec3A, area: f32) -> Option<(Vec3A, f32)>
 }
 
 #[inline(always)]
-fn sample_sphere(s: &Sphere, p: Vec3A, nl: Vec3A, on_self: bool, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
+fn sample_sphere(
+    s: &Sphere,
+    p: Vec3A,
+    nl: Vec3A,
+    on_self: bool,
+    u1: f32,
+    u2: f32,
+) -> Option<(Vec3A, f32)> {
     let to_center = s.center - p;
     let d2 = to_center.length_squared();
     let r2 = s.radius * s.radius;

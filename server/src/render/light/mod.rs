@@ -44,13 +44,19 @@ pub fn direct<I: Isa>(
 ) -> Vec3A {
     let lights = &world.lights;
     match sampling {
-        LightSampling::Power => {
-            let Some(table) = &lights.table else {
-                return Vec3A::ZERO;
-            };
-            let (i, pmf) = table.pick(sampler.next_u64());
-            one(isa, world, &lights.emitters[i], s, nl, ns, sampler) / pmf
-        }
+        LightSampling::Power => match lights.emitters.as_slice() {
+            [] => Vec3A::ZERO,
+            // One emitter (the thesis's scenes): picked with probability 1,
+            // no random number spent on the pick.
+            [only] => one(isa, world, only, s, nl, ns, sampler),
+            _ => {
+                let Some(table) = &lights.table else {
+                    return Vec3A::ZERO;
+                };
+                let (i, pmf) = table.pick(sampler.next_u64());
+                one(isa, world, &lights.emitters[i], s, nl, ns, sampler) / pmf
+            }
+        },
         LightSampling::All => {
             let mut sum = Vec3A::ZERO;
             for e in &lights.emitters {
@@ -63,7 +69,15 @@ pub fn direct<I: Isa>(
 
 /// One shadow ray towards `e`.
 #[inline(always)]
-fn one<I: Isa>(isa: I, world: &World, e: &Emitter, s: &Surface, nl: Vec3A, ns: Vec3A, sampler: &mut Sampler) -> Vec3A {
+fn one<I: Isa>(
+    isa: I,
+    world: &World,
+    e: &Emitter,
+    s: &Surface,
+    nl: Vec3A,
+    ns: Vec3A,
+    sampler: &mut Sampler,
+) -> Vec3A {
     let (u1, u2) = sampler.next_2d();
     let Some((dir, weight)) = e.sample_direction(s, nl, ns, u1, u2) else {
         return Vec3A::ZERO;

@@ -5,7 +5,13 @@ use super::Scene;
 use serde_json::{json, Value};
 
 /// Names accepted by [`builtin`], in the order `pathstream scenes` lists them.
-pub const BUILTIN_NAMES: [&str; 5] = ["cornell", "cornell-glass", "cornell-quads", "smallpt", "furnace"];
+pub const BUILTIN_NAMES: [&str; 5] = [
+    "cornell",
+    "cornell-glass",
+    "cornell-quads",
+    "smallpt",
+    "furnace",
+];
 
 /// A built-in scene by name.
 pub fn builtin(name: &str) -> Option<Scene> {
@@ -57,11 +63,31 @@ fn sphere_walls(back: &str) -> Vec<Value> {
 fn quad_walls(back: &str) -> Vec<Value> {
     vec![
         quad([1.0, 0.0, 0.0], [0.0, 0.0, 170.0], [0.0, 81.6, 0.0], "red"),
-        quad([99.0, 0.0, 0.0], [0.0, 0.0, 170.0], [0.0, 81.6, 0.0], "blue"),
+        quad(
+            [99.0, 0.0, 0.0],
+            [0.0, 0.0, 170.0],
+            [0.0, 81.6, 0.0],
+            "blue",
+        ),
         quad([1.0, 0.0, 0.0], [98.0, 0.0, 0.0], [0.0, 81.6, 0.0], back),
-        quad([1.0, 0.0, 170.0], [98.0, 0.0, 0.0], [0.0, 81.6, 0.0], "black"),
-        quad([1.0, 0.0, 0.0], [98.0, 0.0, 0.0], [0.0, 0.0, 170.0], "white"),
-        quad([1.0, 81.6, 0.0], [98.0, 0.0, 0.0], [0.0, 0.0, 170.0], "white"),
+        quad(
+            [1.0, 0.0, 170.0],
+            [98.0, 0.0, 0.0],
+            [0.0, 81.6, 0.0],
+            "black",
+        ),
+        quad(
+            [1.0, 0.0, 0.0],
+            [98.0, 0.0, 0.0],
+            [0.0, 0.0, 170.0],
+            "white",
+        ),
+        quad(
+            [1.0, 81.6, 0.0],
+            [98.0, 0.0, 0.0],
+            [0.0, 0.0, 170.0],
+            "white",
+        ),
     ]
 }
 
@@ -104,7 +130,8 @@ fn cornell_quads() -> Value {
 /// through the ceiling; its glass is Schlick with albedo 0.999.
 fn smallpt() -> Value {
     let mut materials = box_materials();
-    materials["glass"] = json!({"type": "glass", "ior": 1.5, "albedo": [0.999, 0.999, 0.999], "fresnel": "schlick"});
+    materials["glass"] =
+        json!({"type": "glass", "ior": 1.5, "albedo": [0.999, 0.999, 0.999], "fresnel": "schlick"});
     let mut objects = sphere_walls("white");
     objects.push(sphere([27.0, 16.5, 47.0], 16.5, "mirror"));
     objects.push(sphere([73.0, 16.5, 78.0], 16.5, "glass"));

@@ -77,7 +77,11 @@ impl Scene {
         let object = self.objects.get(index)?;
         let emission = self.materials.get(object.material)?.emission;
         let intensity = emission.max_element();
-        let color = if intensity > 0.0 { emission / intensity } else { DVec3::ZERO };
+        let color = if intensity > 0.0 {
+            emission / intensity
+        } else {
+            DVec3::ZERO
+        };
         Some(LightInfo {
             index,
             position: self.object_center(index).to_array(),
@@ -90,7 +94,13 @@ impl Scene {
     pub fn edit_camera(&self, edit: &CameraEdit) -> Result<Scene, EditError> {
         let mut json = self.to_json();
         let c = json.camera.get_or_insert_with(|| self.camera.to_json());
-        let CameraEdit { position, look_at, up, vfov_deg, near_clip } = *edit;
+        let CameraEdit {
+            position,
+            look_at,
+            up,
+            vfov_deg,
+            near_clip,
+        } = *edit;
         c.position = position.unwrap_or(c.position);
         c.look_at = look_at.unwrap_or(c.look_at);
         c.up = up.unwrap_or(c.up);
@@ -134,7 +144,10 @@ fn finite3(field: &'static str, v: [f64; 3], max: f64) -> Result<DVec3, EditErro
     if v.iter().all(|x| x.is_finite() && x.abs() <= max) {
         Ok(DVec3::from_array(v))
     } else {
-        Err(EditError::Field { field, reason: format!("components must be finite and within +-{max:e}") })
+        Err(EditError::Field {
+            field,
+            reason: format!("components must be finite and within +-{max:e}"),
+        })
     }
 }
 
@@ -143,7 +156,10 @@ fn unit_color(c: [f64; 3]) -> Result<DVec3, EditError> {
     let field = "light.color";
     let c = finite3(field, c, 1.0)?;
     if c.min_element() < 0.0 {
-        return Err(EditError::Field { field, reason: "components must be between 0 and 1".into() });
+        return Err(EditError::Field {
+            field,
+            reason: "components must be between 0 and 1".into(),
+        });
     }
     Ok(c)
 }
@@ -163,7 +179,11 @@ fn own_material(s: &mut Scene, index: usize) -> Result<usize, EditError> {
         Shape::Import(k) => Some(k),
         _ => None,
     };
-    let shared = s.objects.iter().enumerate().any(|(i, o)| i != index && o.material == m);
+    let shared = s
+        .objects
+        .iter()
+        .enumerate()
+        .any(|(i, o)| i != index && o.material == m);
     if !shared && !s.materials[m].imported {
         return Ok(m);
     }
@@ -183,7 +203,10 @@ fn unique_name(s: &Scene, base: &str) -> String {
     if !taken(base) {
         return base.to_owned();
     }
-    (2..).map(|n| format!("{base}-{n}")).find(|name| !taken(name)).unwrap_or_else(|| base.to_owned())
+    (2..)
+        .map(|n| format!("{base}-{n}"))
+        .find(|name| !taken(name))
+        .unwrap_or_else(|| base.to_owned())
 }
 
 #[cfg(test)]
@@ -223,32 +246,81 @@ mod tests {
     #[test]
     fn moving_a_light_keeps_its_shape_and_everything_else() {
         let s = cornell();
-        let moved = s.edit_light(&LightEdit { position: Some([20.0, 60.0, 100.0]), ..LightEdit::default() }).unwrap();
+        let moved = s
+            .edit_light(&LightEdit {
+                position: Some([20.0, 60.0, 100.0]),
+                ..LightEdit::default()
+            })
+            .unwrap();
         let i = s.light.unwrap();
-        assert_eq!(moved.objects[i].shape, Shape::Sphere { center: DVec3::new(20.0, 60.0, 100.0), radius: 7.0 });
+        assert_eq!(
+            moved.objects[i].shape,
+            Shape::Sphere {
+                center: DVec3::new(20.0, 60.0, 100.0),
+                radius: 7.0
+            }
+        );
         assert_eq!(moved.light_info().unwrap().intensity, 12.0);
         assert_eq!(moved.camera, s.camera);
         assert_eq!(moved.objects.len(), s.objects.len());
         // A quad moves by its centre; its edges stay.
-        let q = shared_quad_light().edit_light(&LightEdit { position: Some([1.0, 3.0, 0.5]), ..LightEdit::default() }).unwrap();
-        let Shape::Quad { corner, edge_u, edge_v } = q.objects[0].shape else { panic!("a quad") };
-        assert_eq!((corner, edge_u, edge_v), (DVec3::new(0.0, 3.0, -0.5), DVec3::new(2.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 2.0)));
+        let q = shared_quad_light()
+            .edit_light(&LightEdit {
+                position: Some([1.0, 3.0, 0.5]),
+                ..LightEdit::default()
+            })
+            .unwrap();
+        let Shape::Quad {
+            corner,
+            edge_u,
+            edge_v,
+        } = q.objects[0].shape
+        else {
+            panic!("a quad")
+        };
+        assert_eq!(
+            (corner, edge_u, edge_v),
+            (
+                DVec3::new(0.0, 3.0, -0.5),
+                DVec3::new(2.0, 0.0, 0.0),
+                DVec3::new(0.0, 0.0, 2.0)
+            )
+        );
         assert_eq!(q.light_info().unwrap().position, [1.0, 3.0, 0.5]);
     }
 
     #[test]
     fn recolouring_a_shared_material_splits_it_with_a_fresh_name() {
         let s = shared_quad_light();
-        let e = s.edit_light(&LightEdit { color: Some([0.0, 1.0, 0.5]), intensity: Some(8.0), ..LightEdit::default() }).unwrap();
+        let e = s
+            .edit_light(&LightEdit {
+                color: Some([0.0, 1.0, 0.5]),
+                intensity: Some(8.0),
+                ..LightEdit::default()
+            })
+            .unwrap();
         let light = &e.materials[e.objects[0].material];
         // "lamp-light" is taken by the sphere's material: the copy is "lamp-light-2".
         assert_eq!(light.name, "lamp-light-2");
-        assert_eq!(light.emission, DVec3::new(0.0, 8.0, 4.0), "colour times intensity");
+        assert_eq!(
+            light.emission,
+            DVec3::new(0.0, 8.0, 4.0),
+            "colour times intensity"
+        );
         let other = &e.materials[e.objects[1].material];
-        assert_eq!((other.name.as_str(), other.emission), ("lamp", DVec3::new(4.0, 2.0, 1.0)), "the other quad keeps its lamp");
+        assert_eq!(
+            (other.name.as_str(), other.emission),
+            ("lamp", DVec3::new(4.0, 2.0, 1.0)),
+            "the other quad keeps its lamp"
+        );
         assert_eq!(e.materials[e.objects[2].material].name, "lamp-light");
         // An intensity alone keeps the colour; a light of its own is not copied again.
-        let again = e.edit_light(&LightEdit { intensity: Some(2.0), ..LightEdit::default() }).unwrap();
+        let again = e
+            .edit_light(&LightEdit {
+                intensity: Some(2.0),
+                ..LightEdit::default()
+            })
+            .unwrap();
         assert_eq!(again.materials.len(), e.materials.len());
         assert_eq!(again.light_info().unwrap().color, [0.0, 1.0, 0.5]);
         assert_eq!(again.light_info().unwrap().intensity, 2.0);
@@ -256,9 +328,19 @@ mod tests {
 
     #[test]
     fn a_dark_light_brightened_without_a_colour_is_white() {
-        let dark = cornell().edit_light(&LightEdit { intensity: Some(0.0), ..LightEdit::default() }).unwrap();
+        let dark = cornell()
+            .edit_light(&LightEdit {
+                intensity: Some(0.0),
+                ..LightEdit::default()
+            })
+            .unwrap();
         assert_eq!(dark.light_info().unwrap().color, [0.0; 3]);
-        let lit = dark.edit_light(&LightEdit { intensity: Some(3.0), ..LightEdit::default() }).unwrap();
+        let lit = dark
+            .edit_light(&LightEdit {
+                intensity: Some(3.0),
+                ..LightEdit::default()
+            })
+            .unwrap();
         assert_eq!(lit.light_info().unwrap().color, [1.0; 3]);
     }
 
@@ -266,31 +348,91 @@ mod tests {
     fn bad_light_edits_name_the_field_and_change_nothing() {
         let s = cornell();
         let cases = [
-            (LightEdit { position: Some([f64::NAN, 0.0, 0.0]), ..LightEdit::default() }, "light.position: components must be finite"),
-            (LightEdit { position: Some([2e15, 0.0, 0.0]), ..LightEdit::default() }, "light.position"),
-            (LightEdit { color: Some([2.0, 0.0, 0.0]), ..LightEdit::default() }, "light.color: components must be finite and within"),
-            (LightEdit { color: Some([-0.5, 1.0, 0.0]), ..LightEdit::default() }, "light.color: components must be between 0 and 1"),
-            (LightEdit { intensity: Some(-1.0), ..LightEdit::default() }, "light.intensity: must be between 0"),
-            (LightEdit { intensity: Some(f64::INFINITY), ..LightEdit::default() }, "light.intensity"),
+            (
+                LightEdit {
+                    position: Some([f64::NAN, 0.0, 0.0]),
+                    ..LightEdit::default()
+                },
+                "light.position: components must be finite",
+            ),
+            (
+                LightEdit {
+                    position: Some([2e15, 0.0, 0.0]),
+                    ..LightEdit::default()
+                },
+                "light.position",
+            ),
+            (
+                LightEdit {
+                    color: Some([2.0, 0.0, 0.0]),
+                    ..LightEdit::default()
+                },
+                "light.color: components must be finite and within",
+            ),
+            (
+                LightEdit {
+                    color: Some([-0.5, 1.0, 0.0]),
+                    ..LightEdit::default()
+                },
+                "light.color: components must be between 0 and 1",
+            ),
+            (
+                LightEdit {
+                    intensity: Some(-1.0),
+                    ..LightEdit::default()
+                },
+                "light.intensity: must be between 0",
+            ),
+            (
+                LightEdit {
+                    intensity: Some(f64::INFINITY),
+                    ..LightEdit::default()
+                },
+                "light.intensity",
+            ),
         ];
         for (edit, needle) in cases {
             let e = s.edit_light(&edit).expect_err(needle).to_string();
-            assert!(e.starts_with(needle), "{e:?} does not start with {needle:?}");
+            assert!(
+                e.starts_with(needle),
+                "{e:?} does not start with {needle:?}"
+            );
         }
         let mut none = s.clone();
         none.light = None;
-        assert_eq!(none.edit_light(&LightEdit::default()), Err(EditError::NoLight));
+        assert_eq!(
+            none.edit_light(&LightEdit::default()),
+            Err(EditError::NoLight)
+        );
     }
 
     #[test]
     fn camera_edits_replace_only_the_fields_given_and_are_validated() {
         let s = cornell();
-        let e = s.edit_camera(&CameraEdit { vfov_deg: Some(50.0), ..CameraEdit::default() }).unwrap();
+        let e = s
+            .edit_camera(&CameraEdit {
+                vfov_deg: Some(50.0),
+                ..CameraEdit::default()
+            })
+            .unwrap();
         assert_eq!(e.camera.vfov_deg, 50.0);
-        assert_eq!((e.camera.position, e.camera.look_at, e.camera.near_clip), (s.camera.position, s.camera.look_at, s.camera.near_clip));
-        let err = s.edit_camera(&CameraEdit { up: Some([0.0, 0.0, 0.0]), ..CameraEdit::default() }).unwrap_err();
+        assert_eq!(
+            (e.camera.position, e.camera.look_at, e.camera.near_clip),
+            (s.camera.position, s.camera.look_at, s.camera.near_clip)
+        );
+        let err = s
+            .edit_camera(&CameraEdit {
+                up: Some([0.0, 0.0, 0.0]),
+                ..CameraEdit::default()
+            })
+            .unwrap_err();
         assert!(err.to_string().starts_with("camera.up"), "{err}");
-        let err = s.edit_camera(&CameraEdit { vfov_deg: Some(200.0), ..CameraEdit::default() }).unwrap_err();
+        let err = s
+            .edit_camera(&CameraEdit {
+                vfov_deg: Some(200.0),
+                ..CameraEdit::default()
+            })
+            .unwrap_err();
         assert!(err.to_string().starts_with("camera.vfov_deg"), "{err}");
     }
 }

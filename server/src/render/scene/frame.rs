@@ -22,8 +22,17 @@ pub(super) fn bounds(objects: &[Object], imports: &[Import]) -> Option<(DVec3, D
                 grow(center - DVec3::splat(radius));
                 grow(center + DVec3::splat(radius));
             }
-            Shape::Quad { corner, edge_u, edge_v } => {
-                for p in [corner, corner + edge_u, corner + edge_v, corner + edge_u + edge_v] {
+            Shape::Quad {
+                corner,
+                edge_u,
+                edge_v,
+            } => {
+                for p in [
+                    corner,
+                    corner + edge_u,
+                    corner + edge_v,
+                    corner + edge_u + edge_v,
+                ] {
                     grow(p);
                 }
             }
@@ -45,8 +54,18 @@ pub(super) fn import_bounds(import: &Import) -> Option<(DVec3, DVec3)> {
     for inst in &import.instances {
         let b = inst.mesh.bounds();
         for i in 0..8 {
-            let pick = |bit: usize, a: usize| f64::from(if i >> bit & 1 == 0 { b.min[a] } else { b.max[a] });
-            let p = inst.world_from_object.transform_point3(DVec3::new(pick(0, 0), pick(1, 1), pick(2, 2)));
+            let pick = |bit: usize, a: usize| {
+                f64::from(if i >> bit & 1 == 0 {
+                    b.min[a]
+                } else {
+                    b.max[a]
+                })
+            };
+            let p = inst.world_from_object.transform_point3(DVec3::new(
+                pick(0, 0),
+                pick(1, 1),
+                pick(2, 2),
+            ));
             lo = lo.min(p);
             hi = hi.max(p);
         }

@@ -62,7 +62,9 @@ pub struct MeshInstance {
 
 impl PartialEq for MeshInstance {
     fn eq(&self, o: &Self) -> bool {
-        Arc::ptr_eq(&self.mesh, &o.mesh) && self.world_from_object == o.world_from_object && self.materials == o.materials
+        Arc::ptr_eq(&self.mesh, &o.mesh)
+            && self.world_from_object == o.world_from_object
+            && self.materials == o.materials
     }
 }
 
@@ -77,8 +79,17 @@ pub(super) struct Importer<'a> {
 
 impl Importer<'_> {
     /// The import for object `path`, and the material its object reports.
-    pub fn import(&mut self, path: &str, kind: ImportKind, json: &ImportJson) -> Result<(Import, usize)> {
-        let sources = [json.file.is_some(), json.asset.is_some(), json.data.is_some()];
+    pub fn import(
+        &mut self,
+        path: &str,
+        kind: ImportKind,
+        json: &ImportJson,
+    ) -> Result<(Import, usize)> {
+        let sources = [
+            json.file.is_some(),
+            json.asset.is_some(),
+            json.data.is_some(),
+        ];
         if sources.iter().filter(|&&s| s).count() != 1 {
             let what = match kind {
                 ImportKind::Mesh => "give exactly one of file, asset or data",
@@ -88,7 +99,10 @@ impl Importer<'_> {
         }
         if kind == ImportKind::Model {
             if json.data.is_some() {
-                return Err(SceneError::new(format!("{path}.data"), "inline data makes a mesh, not a model"));
+                return Err(SceneError::new(
+                    format!("{path}.data"),
+                    "inline data makes a mesh, not a model",
+                ));
             }
             if json.material.is_some() {
                 return Err(SceneError::new(
@@ -98,18 +112,32 @@ impl Importer<'_> {
             }
         }
         let model = match (&json.data, ModelSource::of(json)) {
-            (Some(data), _) => inline(data).map_err(|e| SceneError::new(format!("{path}.data"), e))?,
+            (Some(data), _) => {
+                inline(data).map_err(|e| SceneError::new(format!("{path}.data"), e))?
+            }
             (None, Some(source)) => {
                 let field = if json.file.is_some() { "file" } else { "asset" };
-                self.resolver.resolve(source).map_err(|e| SceneError::new(format!("{path}.{field}"), e))?
+                self.resolver
+                    .resolve(source)
+                    .map_err(|e| SceneError::new(format!("{path}.{field}"), e))?
             }
-            (None, None) => return Err(SceneError::new(path, "give exactly one of file, asset or data")),
+            (None, None) => {
+                return Err(SceneError::new(
+                    path,
+                    "give exactly one of file, asset or data",
+                ))
+            }
         };
-        let world_from_json = placement::world_from_object(&format!("{path}.transform"), json.transform.as_ref())?;
+        let world_from_json =
+            placement::world_from_object(&format!("{path}.transform"), json.transform.as_ref())?;
         let map: Arc<[u32]> = match &json.material {
             Some(name) => {
                 let Some(&m) = self.index_of.get(name) else {
-                    return Err(validate::unknown_material(&format!("{path}.material"), name, self.index_of));
+                    return Err(validate::unknown_material(
+                        &format!("{path}.material"),
+                        name,
+                        self.index_of,
+                    ));
                 };
                 vec![m as u32; model.materials.len().max(1)].into()
             }
@@ -123,9 +151,18 @@ impl Importer<'_> {
         };
         let mut instances = Vec::with_capacity(model.instances.len());
         for &(mesh, world_from_object) in &model.instances {
-            let mesh = model.meshes.get(mesh).ok_or_else(|| SceneError::new(path, "the model places a mesh it does not have"))?;
+            let mesh = model
+                .meshes
+                .get(mesh)
+                .ok_or_else(|| SceneError::new(path, "the model places a mesh it does not have"))?;
             if mesh.material_slots as usize > map.len() {
-                return Err(SceneError::new(path, format!("mesh '{}' uses more materials than the model has", mesh.name)));
+                return Err(SceneError::new(
+                    path,
+                    format!(
+                        "mesh '{}' uses more materials than the model has",
+                        mesh.name
+                    ),
+                ));
             }
             instances.push(MeshInstance {
                 mesh: mesh.clone(),
@@ -133,7 +170,9 @@ impl Importer<'_> {
                 materials: map.clone(),
             });
         }
-        let material = instances.first().map_or(map[0], |i| map[i.mesh.materials[0] as usize]) as usize;
+        let material = instances
+            .first()
+            .map_or(map[0], |i| map[i.mesh.materials[0] as usize]) as usize;
         let import = Import {
             kind,
             json: json.clone(),
@@ -157,7 +196,8 @@ impl Importer<'_> {
                 full = format!("{}/{name} ({n})", model.name);
                 n += 1;
             }
-            let mut material = validate::material(&full, m).map_err(|e| SceneError::new(path, format!("{}: {e}", model.name)))?;
+            let mut material = validate::material(&full, m)
+                .map_err(|e| SceneError::new(path, format!("{}: {e}", model.name)))?;
             material.imported = true;
             self.index_of.insert(full, self.materials.len());
             map.push(self.materials.len() as u32);
@@ -181,19 +221,31 @@ fn inline(data: &MeshDataJson) -> std::result::Result<Arc<LoadedModel>, String> 
         p.map(f64::to_bits).hash(&mut hasher);
     }
     data.triangles.hash(&mut hasher);
-    data.normals.as_ref().map(|n| n.iter().map(|v| v.map(f64::to_bits)).collect::<Vec<_>>()).hash(&mut hasher);
+    data.normals
+        .as_ref()
+        .map(|n| n.iter().map(|v| v.map(f64::to_bits)).collect::<Vec<_>>())
+        .hash(&mut hasher);
     let key = hasher.finish();
-    if let Some(hit) = inline_cache().lock().ok().and_then(|c| c.get(&key).and_then(Weak::upgrade)) {
+    if let Some(hit) = inline_cache()
+        .lock()
+        .ok()
+        .and_then(|c| c.get(&key).and_then(Weak::upgrade))
+    {
         return Ok(hit);
     }
     let to_f32 = |what: &str, v: &[[f64; 3]]| -> std::result::Result<Vec<[f32; 3]>, String> {
         v.iter()
             .enumerate()
             .map(|(i, p)| {
-                if p.iter().all(|x| x.is_finite() && x.abs() <= super::MAX_COORDINATE) {
+                if p.iter()
+                    .all(|x| x.is_finite() && x.abs() <= super::MAX_COORDINATE)
+                {
                     Ok(p.map(|x| x as f32))
                 } else {
-                    Err(format!("{what}[{i}]: must be finite numbers within +-{:e}", super::MAX_COORDINATE))
+                    Err(format!(
+                        "{what}[{i}]: must be finite numbers within +-{:e}",
+                        super::MAX_COORDINATE
+                    ))
                 }
             })
             .collect()
@@ -229,12 +281,19 @@ fn inline(data: &MeshDataJson) -> std::result::Result<Arc<LoadedModel>, String> 
         materials: Vec::new(),
         instances: vec![ModelInstance {
             mesh: 0,
-            transform: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]],
+            transform: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ],
         }],
         camera: None,
         warnings: Vec::new(),
     };
-    let loaded = Arc::new(LoadedModel::new("data", model).map_err(|e| e.trim_start_matches("data: mesh 'data': ").to_owned())?);
+    let loaded = Arc::new(
+        LoadedModel::new("data", model)
+            .map_err(|e| e.trim_start_matches("data: mesh 'data': ").to_owned())?,
+    );
     if let Ok(mut cache) = inline_cache().lock() {
         cache.retain(|_, w| w.strong_count() > 0);
         cache.insert(key, Arc::downgrade(&loaded));

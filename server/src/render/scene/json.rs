@@ -246,12 +246,14 @@ impl SceneJson {
             .enumerate()
             .map(|(i, v)| {
                 let path = format!("objects[{i}]");
-                Ok(match tagged(&path, v, &["sphere", "quad", "mesh", "model"])? {
-                    ("sphere", rest) => ObjectJson::Sphere(at(&path, rest)?),
-                    ("quad", rest) => ObjectJson::Quad(at(&path, rest)?),
-                    ("mesh", rest) => ObjectJson::Mesh(at(&path, rest)?),
-                    (_, rest) => ObjectJson::Model(at(&path, rest)?),
-                })
+                Ok(
+                    match tagged(&path, v, &["sphere", "quad", "mesh", "model"])? {
+                        ("sphere", rest) => ObjectJson::Sphere(at(&path, rest)?),
+                        ("quad", rest) => ObjectJson::Quad(at(&path, rest)?),
+                        ("mesh", rest) => ObjectJson::Mesh(at(&path, rest)?),
+                        (_, rest) => ObjectJson::Model(at(&path, rest)?),
+                    },
+                )
             })
             .collect::<Result<_, SceneError>>()?;
         Ok(SceneJson {
@@ -279,7 +281,11 @@ fn at<T: DeserializeOwned>(prefix: &str, value: Value) -> Result<T, SceneError> 
 }
 
 /// Splits the `type` tag off an object; it must be one of `kinds`.
-fn tagged(path: &str, value: Value, kinds: &[&'static str]) -> Result<(&'static str, Value), SceneError> {
+fn tagged(
+    path: &str,
+    value: Value,
+    kinds: &[&'static str],
+) -> Result<(&'static str, Value), SceneError> {
     let Value::Object(mut map) = value else {
         return Err(SceneError::new(path, "expected an object"));
     };
@@ -291,7 +297,10 @@ fn tagged(path: &str, value: Value, kinds: &[&'static str]) -> Result<(&'static 
     let Some(&kind) = kinds.iter().find(|k| **k == kind) else {
         return Err(SceneError::new(
             format!("{path}.type"),
-            format!("unknown type '{kind}' (expected one of: {})", kinds.join(", ")),
+            format!(
+                "unknown type '{kind}' (expected one of: {})",
+                kinds.join(", ")
+            ),
         ));
     };
     Ok((kind, Value::Object(map)))

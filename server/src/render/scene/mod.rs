@@ -6,9 +6,9 @@
 //! (see `render::world`).
 
 mod builtin;
+mod edit;
 mod frame;
 mod import;
-mod edit;
 mod json;
 mod placement;
 mod resolve;
@@ -16,11 +16,11 @@ mod transform;
 mod validate;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
-pub use import::{Import, ImportKind, MeshInstance};
 pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
+pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
-    CameraJson, FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson, QuadJson, RotateJson,
-    ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
+    CameraJson, FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson,
+    QuadJson, RotateJson, ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
 };
 pub use resolve::{FileResolver, LoadedModel, ModelSource, NoFiles, Resolver};
 pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};
@@ -151,7 +151,8 @@ impl Scene {
 
     fn parse_value(text: &str) -> Result<serde_json::Value, SceneError> {
         let de = &mut serde_json::Deserializer::from_str(text);
-        serde_path_to_error::deserialize(de).map_err(|e| SceneError::new(e.path().to_string(), e.into_inner().to_string()))
+        serde_path_to_error::deserialize(de)
+            .map_err(|e| SceneError::new(e.path().to_string(), e.into_inner().to_string()))
     }
 
     /// Validates already parsed JSON (e.g. the `scene` field of a request).
@@ -196,7 +197,10 @@ impl Scene {
         }
         let resolver = FileResolver::new(path.parent().unwrap_or(std::path::Path::new(".")));
         if crate::model::is_model_name(name_or_path) {
-            let file = path.file_name().map_or_else(|| name_or_path.to_owned(), |f| f.to_string_lossy().into_owned());
+            let file = path.file_name().map_or_else(
+                || name_or_path.to_owned(),
+                |f| f.to_string_lossy().into_owned(),
+            );
             let raw = SceneJson {
                 camera: None,
                 materials: Default::default(),
@@ -214,7 +218,10 @@ impl Scene {
         }
         let text = std::fs::read_to_string(path)
             .map_err(|e| SceneError::new(".", format!("cannot read {name_or_path}: {e}")))?;
-        Self::from_json_with(&SceneJson::from_value(Self::parse_value(&text)?)?, &resolver)
+        Self::from_json_with(
+            &SceneJson::from_value(Self::parse_value(&text)?)?,
+            &resolver,
+        )
     }
 
     /// The scene back in its JSON form (round-trips through `from_json`
@@ -226,10 +233,11 @@ impl Scene {
     /// Whether object `i` emits light (an import: any of its triangles).
     pub fn object_emits(&self, i: usize) -> bool {
         match self.objects[i].shape {
-            Shape::Import(k) => self.imports[k]
-                .instances
-                .iter()
-                .any(|inst| inst.materials.iter().any(|&m| self.materials[m as usize].is_emissive())),
+            Shape::Import(k) => self.imports[k].instances.iter().any(|inst| {
+                inst.materials
+                    .iter()
+                    .any(|&m| self.materials[m as usize].is_emissive())
+            }),
             _ => self.materials[self.objects[i].material].is_emissive(),
         }
     }

@@ -18,19 +18,28 @@ pub(super) fn world_from_object(path: &str, t: Option<&TransformJson>) -> Result
     let err = |field: &str, why: String| SceneError::new(format!("{path}.{field}"), why);
     let finite = |field: &str, v: &[f64]| -> Result<()> {
         match v.iter().position(|x| !x.is_finite()) {
-            Some(i) => Err(err(&format!("{field}[{i}]"), "must be a finite number".into())),
+            Some(i) => Err(err(
+                &format!("{field}[{i}]"),
+                "must be a finite number".into(),
+            )),
             None => Ok(()),
         }
     };
     if let Some(m) = &t.matrix {
         if t.translate.is_some() || t.rotate.is_some() || t.scale.is_some() {
-            return Err(err("matrix", "give either matrix or translate/rotate/scale, not both".into()));
+            return Err(err(
+                "matrix",
+                "give either matrix or translate/rotate/scale, not both".into(),
+            ));
         }
         for (r, row) in m.iter().enumerate() {
             finite(&format!("matrix[{r}]"), row)?;
         }
         if m[3] != [0.0, 0.0, 0.0, 1.0] {
-            return Err(err("matrix[3]", "the last row must be [0, 0, 0, 1] (no projection)".into()));
+            return Err(err(
+                "matrix[3]",
+                "the last row must be [0, 0, 0, 1] (no projection)".into(),
+            ));
         }
         let matrix3 = DMat3::from_cols(
             DVec3::new(m[0][0], m[1][0], m[2][0]),
@@ -76,7 +85,10 @@ pub(super) fn world_from_object(path: &str, t: Option<&TransformJson>) -> Result
     if scale.abs().min_element() < 1.0 / MAX_SCALE || scale.abs().max_element() > MAX_SCALE {
         return Err(err(
             "scale",
-            format!("every factor must be non-zero, between 1e-9 and 1e9 in size (got {:?})", scale.to_array()),
+            format!(
+                "every factor must be non-zero, between 1e-9 and 1e9 in size (got {:?})",
+                scale.to_array()
+            ),
         ));
     }
     let a = DAffine3 {
@@ -124,7 +136,10 @@ mod tests {
     fn translate_rotate_scale_compose_in_that_order() {
         let t = TransformJson {
             translate: Some([1.0, 2.0, 3.0]),
-            rotate: Some(RotateJson { axis: [0.0, 0.0, 1.0], deg: 90.0 }),
+            rotate: Some(RotateJson {
+                axis: [0.0, 0.0, 1.0],
+                deg: 90.0,
+            }),
             scale: Some(ScaleJson::Uniform(2.0)),
             matrix: None,
         };
@@ -133,21 +148,63 @@ mod tests {
         let p = a.transform_point3(DVec3::X);
         assert!((p - DVec3::new(1.0, 4.0, 3.0)).length() < 1e-12, "{p:?}");
         let back = world_from_object("t", to_json(&a).as_ref()).expect("matrix form");
-        assert!((back.transform_point3(DVec3::new(0.3, -2.0, 5.0)) - a.transform_point3(DVec3::new(0.3, -2.0, 5.0))).length() < 1e-12);
+        assert!(
+            (back.transform_point3(DVec3::new(0.3, -2.0, 5.0))
+                - a.transform_point3(DVec3::new(0.3, -2.0, 5.0)))
+            .length()
+                < 1e-12
+        );
     }
 
     #[test]
     fn bad_transforms_name_the_field() {
         let cases = [
-            (TransformJson { scale: Some(ScaleJson::PerAxis([1.0, 0.0, 1.0])), ..Default::default() }, "t.scale"),
-            (TransformJson { rotate: Some(RotateJson { axis: [0.0; 3], deg: 5.0 }), ..Default::default() }, "t.rotate.axis"),
-            (TransformJson { translate: Some([0.0, f64::NAN, 0.0]), ..Default::default() }, "t.translate[1]"),
             (
-                TransformJson { matrix: Some([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 1.0, 1.0]]), ..Default::default() },
+                TransformJson {
+                    scale: Some(ScaleJson::PerAxis([1.0, 0.0, 1.0])),
+                    ..Default::default()
+                },
+                "t.scale",
+            ),
+            (
+                TransformJson {
+                    rotate: Some(RotateJson {
+                        axis: [0.0; 3],
+                        deg: 5.0,
+                    }),
+                    ..Default::default()
+                },
+                "t.rotate.axis",
+            ),
+            (
+                TransformJson {
+                    translate: Some([0.0, f64::NAN, 0.0]),
+                    ..Default::default()
+                },
+                "t.translate[1]",
+            ),
+            (
+                TransformJson {
+                    matrix: Some([
+                        [1.0, 0.0, 0.0, 0.0],
+                        [0.0, 1.0, 0.0, 0.0],
+                        [0.0, 0.0, 1.0, 0.0],
+                        [0.0, 0.0, 1.0, 1.0],
+                    ]),
+                    ..Default::default()
+                },
                 "t.matrix[3]",
             ),
             (
-                TransformJson { matrix: Some([[1.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]), ..Default::default() },
+                TransformJson {
+                    matrix: Some([
+                        [1.0, 0.0, 0.0, 0.0],
+                        [1.0, 0.0, 0.0, 0.0],
+                        [0.0, 0.0, 1.0, 0.0],
+                        [0.0, 0.0, 0.0, 1.0],
+                    ]),
+                    ..Default::default()
+                },
                 "t.matrix",
             ),
         ];

@@ -65,7 +65,9 @@ impl LoadedModel {
             .into_par_iter()
             .map(|m| {
                 let mesh_name = m.name.clone();
-                Mesh::new(m).map(Arc::new).map_err(|e| format!("{name}: mesh '{mesh_name}': {e}"))
+                Mesh::new(m)
+                    .map(Arc::new)
+                    .map_err(|e| format!("{name}: mesh '{mesh_name}': {e}"))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let instances = model
@@ -78,7 +80,13 @@ impl LoadedModel {
                     DVec3::new(r0[1], r1[1], r2[1]),
                     DVec3::new(r0[2], r1[2], r2[2]),
                 );
-                (i.mesh, DAffine3 { matrix3, translation: DVec3::new(r0[3], r1[3], r2[3]) })
+                (
+                    i.mesh,
+                    DAffine3 {
+                        matrix3,
+                        translation: DVec3::new(r0[3], r1[3], r2[3]),
+                    },
+                )
             })
             .collect();
         Ok(Self {
@@ -129,7 +137,8 @@ type FileKey = (PathBuf, u64, Option<std::time::SystemTime>);
 
 /// Models read from files, for as long as something holds them.
 fn file_cache() -> &'static Mutex<HashMap<FileKey, Weak<LoadedModel>>> {
-    static CACHE: std::sync::OnceLock<Mutex<HashMap<FileKey, Weak<LoadedModel>>>> = std::sync::OnceLock::new();
+    static CACHE: std::sync::OnceLock<Mutex<HashMap<FileKey, Weak<LoadedModel>>>> =
+        std::sync::OnceLock::new();
     CACHE.get_or_init(Default::default)
 }
 
@@ -152,14 +161,21 @@ impl Resolver for FileResolver {
             return NoFiles.resolve(source);
         };
         let path = self.base.join(name);
-        let meta = std::fs::metadata(&path).map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+        let meta = std::fs::metadata(&path)
+            .map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
         let canonical = path.canonicalize().unwrap_or_else(|_| path.clone());
         let key = (canonical, meta.len(), meta.modified().ok());
-        if let Some(hit) = file_cache().lock().ok().and_then(|c| c.get(&key).and_then(Weak::upgrade)) {
+        if let Some(hit) = file_cache()
+            .lock()
+            .ok()
+            .and_then(|c| c.get(&key).and_then(Weak::upgrade))
+        {
             return Ok(hit);
         }
         let model = model::load_file(&path, &self.limits).map_err(|e| e.to_string())?;
-        let display = path.file_name().map_or_else(|| name.to_owned(), |f| f.to_string_lossy().into_owned());
+        let display = path
+            .file_name()
+            .map_or_else(|| name.to_owned(), |f| f.to_string_lossy().into_owned());
         let loaded = Arc::new(LoadedModel::new(&display, model)?);
         if let Ok(mut cache) = file_cache().lock() {
             cache.retain(|_, w| w.strong_count() > 0);

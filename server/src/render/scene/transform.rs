@@ -18,7 +18,11 @@ impl Scene {
 
     fn mapped(&self, point: impl Fn(DVec3) -> DVec3, scale: f64) -> Scene {
         let mut s = self.clone();
-        let map = DAffine3::from_scale_rotation_translation(DVec3::splat(scale), Default::default(), point(DVec3::ZERO));
+        let map = DAffine3::from_scale_rotation_translation(
+            DVec3::splat(scale),
+            Default::default(),
+            point(DVec3::ZERO),
+        );
         for import in &mut s.imports {
             import.world_from_json = map * import.world_from_json;
             import.json.transform = placement::to_json(&import.world_from_json);
@@ -57,8 +61,13 @@ impl Scene {
     pub fn object_center(&self, i: usize) -> DVec3 {
         match self.objects[i].shape {
             Shape::Sphere { center, .. } => center,
-            Shape::Quad { corner, edge_u, edge_v } => corner + (edge_u + edge_v) * 0.5,
-            Shape::Import(k) => super::frame::import_bounds(&self.imports[k]).map_or(DVec3::ZERO, |(lo, hi)| (lo + hi) * 0.5),
+            Shape::Quad {
+                corner,
+                edge_u,
+                edge_v,
+            } => corner + (edge_u + edge_v) * 0.5,
+            Shape::Import(k) => super::frame::import_bounds(&self.imports[k])
+                .map_or(DVec3::ZERO, |(lo, hi)| (lo + hi) * 0.5),
         }
     }
 
@@ -66,8 +75,19 @@ impl Scene {
     pub fn move_object(&mut self, i: usize, by: DVec3) {
         let shape = &mut self.objects[i].shape;
         *shape = match *shape {
-            Shape::Sphere { center, radius } => Shape::Sphere { center: center + by, radius },
-            Shape::Quad { corner, edge_u, edge_v } => Shape::Quad { corner: corner + by, edge_u, edge_v },
+            Shape::Sphere { center, radius } => Shape::Sphere {
+                center: center + by,
+                radius,
+            },
+            Shape::Quad {
+                corner,
+                edge_u,
+                edge_v,
+            } => Shape::Quad {
+                corner: corner + by,
+                edge_u,
+                edge_v,
+            },
             Shape::Import(k) => {
                 let import = &mut self.imports[k];
                 import.world_from_json.translation += by;

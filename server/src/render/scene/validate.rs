@@ -3,12 +3,13 @@
 
 use super::import::{ImportKind, Importer};
 use super::json::{
-    CameraJson, FresnelJson, GlassJson, MaterialJson, ObjectJson, QuadJson, SceneJson, SphereJson, SurfaceJson,
+    CameraJson, FresnelJson, GlassJson, MaterialJson, ObjectJson, QuadJson, SceneJson, SphereJson,
+    SurfaceJson,
 };
 use super::resolve::Resolver;
 use super::{
-    frame, Camera, Fresnel, Material, MaterialKind, Object, Scene, SceneError, Shape, MAX_COORDINATE,
-    MAX_EMISSION, MAX_OBJECTS,
+    frame, Camera, Fresnel, Material, MaterialKind, Object, Scene, SceneError, Shape,
+    MAX_COORDINATE, MAX_EMISSION, MAX_OBJECTS,
 };
 use crate::render::math::DVec3;
 use std::collections::{BTreeMap, HashMap};
@@ -39,7 +40,10 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
     if raw.objects.len() > MAX_OBJECTS {
         return Err(SceneError::new(
             "objects",
-            format!("{} objects is more than the limit of {MAX_OBJECTS}", raw.objects.len()),
+            format!(
+                "{} objects is more than the limit of {MAX_OBJECTS}",
+                raw.objects.len()
+            ),
         ));
     }
     let mut imports = Vec::new();
@@ -55,7 +59,11 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
         let path = format!("objects[{i}]");
         let object = match o {
             ObjectJson::Mesh(json) | ObjectJson::Model(json) => {
-                let kind = if matches!(o, ObjectJson::Mesh(_)) { ImportKind::Mesh } else { ImportKind::Model };
+                let kind = if matches!(o, ObjectJson::Mesh(_)) {
+                    ImportKind::Mesh
+                } else {
+                    ImportKind::Model
+                };
                 let (import, material) = importer.import(&path, kind, json)?;
                 placed += import.instances.len();
                 imports.push(import);
@@ -91,22 +99,28 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
     let camera = match &raw.camera {
         Some(c) => camera(c)?,
         None => {
-            let from_model = imports.iter().filter(|i| i.kind == ImportKind::Model).find_map(|i| {
-                let c = i.model.camera?;
-                let t = i.world_from_json;
-                Some(CameraJson {
-                    position: t.transform_point3(DVec3::from_array(c.position)).to_array(),
-                    look_at: t.transform_point3(DVec3::from_array(c.look_at)).to_array(),
-                    up: t.transform_vector3(DVec3::from_array(c.up)).to_array(),
-                    vfov_deg: c.vfov_deg,
-                    near_clip: 0.0,
-                })
-            });
+            let from_model = imports
+                .iter()
+                .filter(|i| i.kind == ImportKind::Model)
+                .find_map(|i| {
+                    let c = i.model.camera?;
+                    let t = i.world_from_json;
+                    Some(CameraJson {
+                        position: t.transform_point3(DVec3::from_array(c.position)).to_array(),
+                        look_at: t.transform_point3(DVec3::from_array(c.look_at)).to_array(),
+                        up: t.transform_vector3(DVec3::from_array(c.up)).to_array(),
+                        vfov_deg: c.vfov_deg,
+                        near_clip: 0.0,
+                    })
+                });
             match from_model {
-                Some(c) => camera(&c).map_err(|e| SceneError::new("camera", format!("the model's camera: {}", e.reason)))?,
+                Some(c) => camera(&c).map_err(|e| {
+                    SceneError::new("camera", format!("the model's camera: {}", e.reason))
+                })?,
                 None => {
-                    let (lo, hi) = frame::bounds(&objects, &imports)
-                        .ok_or_else(|| SceneError::new("camera", "the scene has no bounds to frame; give a camera"))?;
+                    let (lo, hi) = frame::bounds(&objects, &imports).ok_or_else(|| {
+                        SceneError::new("camera", "the scene has no bounds to frame; give a camera")
+                    })?;
                     warnings.push("no camera given: framed the scene's bounds".to_owned());
                     camera(&frame::framed(lo, hi).to_json())?
                 }
@@ -118,7 +132,10 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
         Some(e) => {
             let e = vec3("environment", e)?;
             if e.min_element() < 0.0 || e.max_element() > MAX_EMISSION {
-                return Err(SceneError::new("environment", format!("components must be between 0 and {MAX_EMISSION:e}")));
+                return Err(SceneError::new(
+                    "environment",
+                    format!("components must be between 0 and {MAX_EMISSION:e}"),
+                ));
             }
             e
         }
@@ -138,7 +155,10 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
         Some(i) if i >= scene.objects.len() => {
             return Err(SceneError::new(
                 "light",
-                format!("object index {i} is out of range (the scene has {} objects)", scene.objects.len()),
+                format!(
+                    "object index {i} is out of range (the scene has {} objects)",
+                    scene.objects.len()
+                ),
             ))
         }
         Some(i) => Some(i),
@@ -173,7 +193,10 @@ fn camera(c: &CameraJson) -> Result<Camera> {
     }
     let view = look_at - position;
     if view.length() <= 1e-12 * position.abs().max_element().max(1.0) {
-        return Err(SceneError::new("camera.look_at", "must differ from camera.position"));
+        return Err(SceneError::new(
+            "camera.look_at",
+            "must differ from camera.position",
+        ));
     }
     if up.length() == 0.0 {
         return Err(SceneError::new("camera.up", "must not be the zero vector"));
@@ -197,8 +220,12 @@ fn camera(c: &CameraJson) -> Result<Camera> {
 pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
     let path = format!("materials.{name}");
     let (kind, albedo, emission) = match m {
-        MaterialJson::Diffuse(SurfaceJson { albedo, emission }) => (MaterialKind::Diffuse, *albedo, *emission),
-        MaterialJson::Mirror(SurfaceJson { albedo, emission }) => (MaterialKind::Mirror, *albedo, *emission),
+        MaterialJson::Diffuse(SurfaceJson { albedo, emission }) => {
+            (MaterialKind::Diffuse, *albedo, *emission)
+        }
+        MaterialJson::Mirror(SurfaceJson { albedo, emission }) => {
+            (MaterialKind::Mirror, *albedo, *emission)
+        }
         MaterialJson::Glass(GlassJson {
             ior,
             albedo,
@@ -294,25 +321,41 @@ fn object(path: &str, o: &ObjectJson, index_of: &BTreeMap<String, usize>) -> Res
                 material,
             )
         }
-        ObjectJson::Mesh(_) | ObjectJson::Model(_) => unreachable!("imports are validated by the importer"),
+        ObjectJson::Mesh(_) | ObjectJson::Model(_) => {
+            unreachable!("imports are validated by the importer")
+        }
     };
     let Some(&material) = index_of.get(material.as_str()) else {
-        return Err(unknown_material(&format!("{path}.material"), material, index_of));
+        return Err(unknown_material(
+            &format!("{path}.material"),
+            material,
+            index_of,
+        ));
     };
     Ok(Object { shape, material })
 }
 
 /// The error for a material name that the scene does not define.
-pub(super) fn unknown_material(path: &str, name: &str, index_of: &BTreeMap<String, usize>) -> SceneError {
+pub(super) fn unknown_material(
+    path: &str,
+    name: &str,
+    index_of: &BTreeMap<String, usize>,
+) -> SceneError {
     let known: Vec<&str> = index_of.keys().map(String::as_str).collect();
-    SceneError::new(path, format!("unknown material '{name}' (known: {})", known.join(", ")))
+    SceneError::new(
+        path,
+        format!("unknown material '{name}' (known: {})", known.join(", ")),
+    )
 }
 
 fn finite(path: &str, x: f64) -> Result<f64> {
     if x.is_finite() {
         Ok(x)
     } else {
-        Err(SceneError::new(path, format!("must be a finite number (got {x})")))
+        Err(SceneError::new(
+            path,
+            format!("must be a finite number (got {x})"),
+        ))
     }
 }
 

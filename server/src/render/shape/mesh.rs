@@ -60,7 +60,10 @@ impl Mesh {
         if triangles.is_empty() {
             return Err(MeshError::Empty);
         }
-        if let Some(i) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        if let Some(i) = positions
+            .iter()
+            .position(|p| !p.iter().all(|x| x.is_finite()))
+        {
             return Err(MeshError::Position(i));
         }
         if let Some(n) = &normals {
@@ -76,7 +79,11 @@ impl Mesh {
                 return Err(MeshError::Index(i, bad, positions.len()));
             }
         }
-        let materials = if materials.is_empty() { vec![0; triangles.len()] } else { materials };
+        let materials = if materials.is_empty() {
+            vec![0; triangles.len()]
+        } else {
+            materials
+        };
         if materials.len() != triangles.len() {
             return Err(MeshError::MaterialCount(materials.len(), triangles.len()));
         }
@@ -87,7 +94,11 @@ impl Mesh {
             .map(|i| Aabb::of_points(verts(i).map(Vec3A::from)))
             .collect();
         let bvh = Bvh::build(&boxes);
-        let tris = bvh.prims.par_iter().map(|&p| TriVerts::new(p, verts(p as usize))).collect();
+        let tris = bvh
+            .prims
+            .par_iter()
+            .map(|&p| TriVerts::new(p, verts(p as usize)))
+            .collect();
         Ok(Mesh {
             name,
             positions,

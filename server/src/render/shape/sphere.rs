@@ -141,7 +141,9 @@ mod tests {
             let (of, df) = ((o - camera).as_vec3(), d.as_vec3().normalize());
             let (o64, d64) = (of.as_dvec3() + camera, df.as_dvec3());
             for (c, r) in walls {
-                let Some(exact) = reference(o64, d64, c, r) else { continue };
+                let Some(exact) = reference(o64, d64, c, r) else {
+                    continue;
+                };
                 if exact > 1e3 {
                     continue; // beyond the box: another wall is nearer
                 }
@@ -149,14 +151,26 @@ mod tests {
                 let t = sphere.intersect(&Ray::new(of.into(), df.into()), Roots::Any);
                 assert!(t.is_finite(), "missed a wall at distance {exact}");
                 worst = worst.max(off_surface(o64, d64, t, c, r));
-                let tn = naive(of.into(), df.into(), (c - camera).as_vec3().into(), r as f32);
-                naive_errors.push(if tn.is_finite() { off_surface(o64, d64, tn, c, r) } else { f64::INFINITY });
+                let tn = naive(
+                    of.into(),
+                    df.into(),
+                    (c - camera).as_vec3().into(),
+                    r as f32,
+                );
+                naive_errors.push(if tn.is_finite() {
+                    off_surface(o64, d64, tn, c, r)
+                } else {
+                    f64::INFINITY
+                });
             }
         }
         assert!(worst < 1e-4, "worst error {worst}");
         naive_errors.sort_by(f64::total_cmp);
         let median = naive_errors[naive_errors.len() / 2];
-        assert!(median > 1e-3, "the naive test should be visibly worse, median {median}");
+        assert!(
+            median > 1e-3,
+            "the naive test should be visibly worse, median {median}"
+        );
     }
 
     #[test]

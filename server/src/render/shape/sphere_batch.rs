@@ -61,7 +61,11 @@ impl SphereBatch {
     pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) {
         let inf = Vec4::splat(f32::INFINITY);
         let from_id = Vec4::splat(from.id);
-        let entering = if from.entering { BVec4A::TRUE } else { BVec4A::FALSE };
+        let entering = if from.entering {
+            BVec4A::TRUE
+        } else {
+            BVec4A::FALSE
+        };
         let (mut best_t, mut best_id) = (inf, Vec4::splat(-1.0));
         let mut visit = |b: &SphereBatch, lo: usize| {
             let lanes = |a: &[f32; LANES]| Vec4::from_slice(&a[lo..lo + 4]);
@@ -69,7 +73,11 @@ impl SphereBatch {
             // The sphere the ray starts on: only its far side, and only when
             // the ray goes into it.
             let own = ids.cmpeq(from_id);
-            let t = intersect4([lanes(&b.cx), lanes(&b.cy), lanes(&b.cz), lanes(&b.k)], ray, own);
+            let t = intersect4(
+                [lanes(&b.cx), lanes(&b.cy), lanes(&b.cz), lanes(&b.k)],
+                ray,
+                own,
+            );
             let t = Vec4::select(own & !entering, inf, t);
             let closer = t.cmplt(best_t);
             best_t = Vec4::select(closer, t, best_t);
@@ -93,7 +101,11 @@ impl SphereBatch {
 /// [`SphereBatch`].
 #[inline(always)]
 fn intersect4([cx, cy, cz, k]: [Vec4; 4], ray: &Ray, far_only: BVec4A) -> Vec4 {
-    let (dx, dy, dz) = (Vec4::splat(ray.dir.x), Vec4::splat(ray.dir.y), Vec4::splat(ray.dir.z));
+    let (dx, dy, dz) = (
+        Vec4::splat(ray.dir.x),
+        Vec4::splat(ray.dir.y),
+        Vec4::splat(ray.dir.z),
+    );
     let (ox, oy, oz) = (
         Vec4::splat(ray.origin.x),
         Vec4::splat(ray.origin.y),
@@ -111,7 +123,11 @@ fn intersect4([cx, cy, cz, k]: [Vec4; 4], ray: &Ray, far_only: BVec4A) -> Vec4 {
     let t0 = q.min(other);
     let t1 = q.max(other);
     let t = Vec4::select(t0.cmpgt(Vec4::ZERO) & !far_only, t0, t1);
-    Vec4::select(t.cmpgt(Vec4::ZERO) & disc.cmpge(Vec4::ZERO), t, Vec4::splat(f32::INFINITY))
+    Vec4::select(
+        t.cmpgt(Vec4::ZERO) & disc.cmpge(Vec4::ZERO),
+        t,
+        Vec4::splat(f32::INFINITY),
+    )
 }
 
 #[cfg(test)]
@@ -135,12 +151,21 @@ pub(crate) mod tests {
         let rays = (0..10_000u64)
             .map(|i| {
                 let mut s = Sampler::new(1, i, 0);
-                let o = Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5) * 4.0;
-                let d = Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize();
+                let o =
+                    Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5) * 4.0;
+                let d = Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5)
+                    .normalize();
                 Ray::new(o, d)
             })
             .collect();
-        (spheres.into_iter().enumerate().map(|(i, s)| (i as u32 * 2 + 1, s)).collect(), rays)
+        (
+            spheres
+                .into_iter()
+                .enumerate()
+                .map(|(i, s)| (i as u32 * 2 + 1, s))
+                .collect(),
+            rays,
+        )
     }
 
     pub(crate) fn batches(spheres: &[(u32, Sphere)]) -> Vec<SphereBatch> {
@@ -171,9 +196,18 @@ pub(crate) mod tests {
         for (i, ray) in rays.iter().enumerate() {
             let own = spheres[i % spheres.len()].0 as f32;
             for from in [
-                Leaving { id: -2.0, entering: false },
-                Leaving { id: own, entering: true },
-                Leaving { id: own, entering: false },
+                Leaving {
+                    id: -2.0,
+                    entering: false,
+                },
+                Leaving {
+                    id: own,
+                    entering: true,
+                },
+                Leaving {
+                    id: own,
+                    entering: false,
+                },
             ] {
                 let (t, id) = SphereBatch::nearest(&batches, ray, from);
                 let (scalar, scalar_id) = scalar_nearest(&spheres, ray, from);

@@ -23,13 +23,19 @@ pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) 
     let splat = _mm256_set1_ps;
     let (inf, zero, sign) = (splat(f32::INFINITY), _mm256_setzero_ps(), splat(-0.0));
     let (dx, dy, dz) = (splat(ray.dir.x), splat(ray.dir.y), splat(ray.dir.z));
-    let (ox, oy, oz) = (splat(ray.origin.x), splat(ray.origin.y), splat(ray.origin.z));
+    let (ox, oy, oz) = (
+        splat(ray.origin.x),
+        splat(ray.origin.y),
+        splat(ray.origin.z),
+    );
     let (od, oo) = (splat(ray.od), splat(ray.oo));
     let from_id = splat(from.id);
     // The sphere a ray leaves outwards is skipped altogether; NaN matches
     // no lane.
     // (A select on the bits: `entering` is data, not worth a branch.)
-    let skip_id = splat(f32::from_bits(from.id.to_bits() | (u32::from(from.entering) * 0x7FC0_0000)));
+    let skip_id = splat(f32::from_bits(
+        from.id.to_bits() | (u32::from(from.entering) * 0x7FC0_0000),
+    ));
     let (mut best_t, mut best_id) = (inf, splat(-1.0));
     for batch in batches {
         let (cx, cy, cz, k, ids) = (
@@ -79,7 +85,11 @@ pub fn nearest(batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) 
         best_id = _mm256_blendv_ps(best_id, ids, closer);
     }
     let m = min_all(best_t);
-    let id = min_all(_mm256_blendv_ps(inf, best_id, _mm256_cmp_ps::<_CMP_EQ_OQ>(best_t, m)));
+    let id = min_all(_mm256_blendv_ps(
+        inf,
+        best_id,
+        _mm256_cmp_ps::<_CMP_EQ_OQ>(best_t, m),
+    ));
     (_mm256_cvtss_f32(m), _mm256_cvtss_f32(id))
 }
 
@@ -108,15 +118,28 @@ mod tests {
             for (i, ray) in rays.iter().enumerate() {
                 let own = spheres[i % n].0 as f32;
                 for from in [
-                    Leaving { id: -2.0, entering: false },
-                    Leaving { id: own, entering: true },
-                    Leaving { id: own, entering: false },
+                    Leaving {
+                        id: -2.0,
+                        entering: false,
+                    },
+                    Leaving {
+                        id: own,
+                        entering: true,
+                    },
+                    Leaving {
+                        id: own,
+                        entering: false,
+                    },
                 ] {
                     // SAFETY: AVX2 and FMA were detected above.
                     #[allow(unsafe_code)]
                     let wide = unsafe { nearest(&batches, ray, from) };
                     let portable = SphereBatch::nearest(&batches, ray, from);
-                    assert_eq!(wide.0.to_bits(), portable.0.to_bits(), "{n} spheres, ray {i} {from:?}");
+                    assert_eq!(
+                        wide.0.to_bits(),
+                        portable.0.to_bits(),
+                        "{n} spheres, ray {i} {from:?}"
+                    );
                     if wide.0 < f32::INFINITY {
                         assert_eq!(wide.1, portable.1, "{n} spheres, ray {i} {from:?}");
                     }

@@ -88,7 +88,11 @@ impl TriRay {
         if dir[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let unit = |k: usize| Vec3A::from(std::array::from_fn::<f32, 3, _>(|i| f32::from(u8::from(i == k))));
+        let unit = |k: usize| {
+            Vec3A::from(std::array::from_fn::<f32, 3, _>(|i| {
+                f32::from(u8::from(i == k))
+            }))
+        };
         let (sx, sy, sz) = (dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
         Self {
             origin,
@@ -113,7 +117,9 @@ impl TriRay {
             // (which would accept a ray far from the triangle): recompute
             // in f64, where products of f32s are exact. Shared edges still
             // get exactly opposite values.
-            let e = |p: f32, q: f32, r: f32, s: f32| (f64::from(p) * f64::from(q) - f64::from(r) * f64::from(s)) as f32;
+            let e = |p: f32, q: f32, r: f32, s: f32| {
+                (f64::from(p) * f64::from(q) - f64::from(r) * f64::from(s)) as f32
+            };
             (u, v, w) = (e(cx, by, cy, bx), e(ax, cy, ay, cx), e(bx, ay, by, ax));
         }
         if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
@@ -150,24 +156,47 @@ mod tests {
     use crate::render::sampler::Sampler;
 
     fn tri() -> [Vec3A; 3] {
-        [Vec3A::new(0.0, 0.0, 0.0), Vec3A::new(2.0, 0.0, 0.0), Vec3A::new(0.0, 2.0, 0.0)]
+        [
+            Vec3A::new(0.0, 0.0, 0.0),
+            Vec3A::new(2.0, 0.0, 0.0),
+            Vec3A::new(0.0, 2.0, 0.0),
+        ]
     }
 
     #[test]
     fn hits_from_both_sides_and_reports_barycentrics() {
-        for (o, d) in [(Vec3A::new(0.5, 0.5, 3.0), -Vec3A::Z), (Vec3A::new(0.5, 0.5, -3.0), Vec3A::Z)] {
-            let (t, b) = TriRay::new(o, d).intersect(tri(), f32::INFINITY).expect("hit");
+        for (o, d) in [
+            (Vec3A::new(0.5, 0.5, 3.0), -Vec3A::Z),
+            (Vec3A::new(0.5, 0.5, -3.0), Vec3A::Z),
+        ] {
+            let (t, b) = TriRay::new(o, d)
+                .intersect(tri(), f32::INFINITY)
+                .expect("hit");
             assert!((t - 3.0).abs() < 1e-6);
-            assert!((b[0] - 0.5).abs() < 1e-6 && (b[1] - 0.25).abs() < 1e-6 && (b[2] - 0.25).abs() < 1e-6, "{b:?}");
+            assert!(
+                (b[0] - 0.5).abs() < 1e-6
+                    && (b[1] - 0.25).abs() < 1e-6
+                    && (b[2] - 0.25).abs() < 1e-6,
+                "{b:?}"
+            );
         }
         let r = TriRay::new(Vec3A::new(1.5, 1.5, 3.0), -Vec3A::Z);
-        assert!(r.intersect(tri(), f32::INFINITY).is_none(), "outside the hypotenuse");
+        assert!(
+            r.intersect(tri(), f32::INFINITY).is_none(),
+            "outside the hypotenuse"
+        );
         let r = TriRay::new(Vec3A::new(0.5, 0.5, 3.0), -Vec3A::Z);
         assert!(r.intersect(tri(), 2.9).is_none(), "beyond t_max");
         let r = TriRay::new(Vec3A::new(0.5, 0.5, 3.0), Vec3A::Z);
-        assert!(r.intersect(tri(), f32::INFINITY).is_none(), "behind the origin");
+        assert!(
+            r.intersect(tri(), f32::INFINITY).is_none(),
+            "behind the origin"
+        );
         let r = TriRay::new(Vec3A::new(-1.0, 0.5, 0.0), Vec3A::X);
-        assert!(r.intersect(tri(), f32::INFINITY).is_none(), "in the triangle's plane");
+        assert!(
+            r.intersect(tri(), f32::INFINITY).is_none(),
+            "in the triangle's plane"
+        );
     }
 
     #[test]
@@ -190,7 +219,11 @@ mod tests {
         // angle, and rays aimed at points of that edge from random origins.
         // (Off the plane every such ray sees the two on either side of the
         // edge; a fold would have silhouettes that rays may rightly graze.)
-        let (a, b, c) = (Vec3A::new(0.1, 0.2, 0.3), Vec3A::new(3.7, -0.4, 1.1), Vec3A::new(2.9, 3.3, -0.7));
+        let (a, b, c) = (
+            Vec3A::new(0.1, 0.2, 0.3),
+            Vec3A::new(3.7, -0.4, 1.1),
+            Vec3A::new(2.9, 3.3, -0.7),
+        );
         let d = a + (c - b) * 0.9 + (a - b) * 0.3;
         let (first, second) = ([a, b, c], [a, c, d]);
         for i in 0..100_000u64 {
@@ -198,7 +231,10 @@ mod tests {
             let on_edge = a + (c - a) * s.next_f32();
             let o = Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5) * 40.0;
             let r = TriRay::new(o, (on_edge - o).normalize());
-            let hits = [first, second].iter().filter(|t| r.intersect(**t, f32::INFINITY).is_some()).count();
+            let hits = [first, second]
+                .iter()
+                .filter(|t| r.intersect(**t, f32::INFINITY).is_some())
+                .count();
             let plane = (b - a).cross(c - a);
             if plane.dot(o - a).abs() > 1e-3 {
                 assert!(hits >= 1, "ray {i} slipped through the shared edge");
@@ -208,16 +244,27 @@ mod tests {
 
     #[test]
     fn hit_point_error_bound_covers_the_exact_point() {
-        let t = [Vec3A::new(1e3, 2e3, -5e2), Vec3A::new(1e3 + 1.0, 2e3, -5e2), Vec3A::new(1e3, 2e3 + 1.0, -5e2 + 0.5)];
+        let t = [
+            Vec3A::new(1e3, 2e3, -5e2),
+            Vec3A::new(1e3 + 1.0, 2e3, -5e2),
+            Vec3A::new(1e3, 2e3 + 1.0, -5e2 + 0.5),
+        ];
         for i in 0..10_000u64 {
             let mut s = Sampler::new(9, i, 0);
             let (u, v) = (s.next_f32(), s.next_f32());
-            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
             let b = [1.0 - u - v, u, v];
             let (p, err) = hit_point(t, b);
             for k in 0..3 {
                 let exact: f64 = (0..3).map(|j| f64::from(t[j][k]) * f64::from(b[j])).sum();
-                assert!((f64::from(p[k]) - exact).abs() <= f64::from(err[k]), "axis {k}");
+                assert!(
+                    (f64::from(p[k]) - exact).abs() <= f64::from(err[k]),
+                    "axis {k}"
+                );
             }
         }
     }

@@ -16,12 +16,17 @@ use crate::render::math::{DAffine3, DVec3, Vec3A};
 use crate::render::scene::{Scene, Shape};
 use crate::render::shape::{Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
 
-/// Scenes of at most this many objects (and no meshes) are scanned, not
-/// searched through a BVH. Measured with `cargo run --release --example
-/// accel_crossover`: see docs/BENCHMARKS.md.
-pub const SCAN_MAX_OBJECTS: usize = 16;
+/// Scenes whose scan costs at most this much (and without meshes) are
+/// scanned, not searched through a BVH; see [`scan_cost`]. Measured with
+/// `cargo run --release --example accel_crossover` (docs/BENCHMARKS.md):
+/// the BVH catches up at about 256 spheres, or 9 spheres and 8 quads.
+pub const SCAN_MAX_COST: usize = 32;
 
-
+/// What scanning costs per ray, in units of one 8-sphere SIMD batch: a
+/// quad's test costs about four batches.
+pub fn scan_cost(spheres: usize, quads: usize) -> usize {
+    spheres.div_ceil(8) + 4 * quads
+}
 
 /// Which accelerator a world uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -42,7 +47,8 @@ impl World {
     }
 
     pub fn with_accel(scene: &Scene, origin: DVec3, choice: AccelChoice) -> Self {
-        let materials: Vec<SurfaceMaterial> = scene.materials.iter().map(SurfaceMaterial::new).collect();
+        let materials: Vec<SurfaceMaterial> =
+            scene.materials.iter().map(SurfaceMaterial::new).collect();
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut instances = Vec::new();
         let mut boxes = Vec::with_capacity(scene.objects.len());
@@ -57,20 +63,33 @@ impl World {
                     let r = DVec3::splat(radius);
                     boxes.push(padded(c - r, c + r, 1e-4));
                 }
-                Shape::Quad { corner, edge_u, edge_v } => {
+                Shape::Quad {
+                    corner,
+                    edge_u,
+                    edge_v,
+                } => {
                     let c = corner - origin;
                     objects.push(WorldObject {
                         geometry: Geometry::Quad(Quad::new(c, edge_u, edge_v)),
                         material: o.material as u32,
                     });
                     let corners = [c, c + edge_u, c + edge_v, c + edge_u + edge_v];
-                    let (lo, hi) = corners.iter().fold((corners[0], corners[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+                    let (lo, hi) = corners
+                        .iter()
+                        .fold((corners[0], corners[0]), |(lo, hi), &p| {
+                            (lo.min(p), hi.max(p))
+                        });
                     boxes.push(padded(lo, hi, 1e-5));
                 }
                 Shape::Import(k) => {
                     for inst in &scene.imports[k].instances {
                         let index = instances.len() as u32;
-                        instances.push(Instance::new(inst.mesh.clone(), inst.world_from_object, origin, inst.materials.clone()));
+                        instances.push(Instance::new(
+                            inst.mesh.clone(),
+                            inst.world_from_object,
+                            origin,
+                            inst.materials.clone(),
+                        ));
                         objects.push(WorldObject {
                             geometry: Geometry::Instance(index),
                             material: u32::MAX,
@@ -86,12 +105,22 @@ impl World {
             }
         }
         let scene_box = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-        let radius = if scene_box.is_empty() { 1.0 } else { f64::from(scene_box.extent().length()) * 0.5 };
+        let radius = if scene_box.is_empty() {
+            1.0
+        } else {
+            f64::from(scene_box.extent().length()) * 0.5
+        };
         let environment: Vec3A = scene.environment.as_vec3().into();
         let lights = Lights::new(&objects, &instances, &materials, environment, radius);
         let scan = instances.is_empty()
             && match choice {
-                AccelChoice::Auto => objects.len() <= SCAN_MAX_OBJECTS,
+                AccelChoice::Auto => {
+                    let quads = objects
+                        .iter()
+                        .filter(|o| matches!(o.geometry, Geometry::Quad(_)))
+                        .count();
+                    scan_cost(objects.len() - quads, quads) <= SCAN_MAX_COST
+                }
                 AccelChoice::Bvh => false,
                 AccelChoice::Scan => true,
             };
@@ -106,7 +135,10 @@ impl World {
                 }
             }
             Accel::Scan {
-                sphere_batches: spheres.chunks(SPHERE_BATCH_LANES).map(SphereBatch::new).collect(),
+                sphere_batches: spheres
+                    .chunks(SPHERE_BATCH_LANES)
+                    .map(SphereBatch::new)
+                    .collect(),
                 quads,
             }
         } else {
@@ -119,14 +151,20 @@ impl World {
                     _ => None,
                 })
                 .collect();
-            let ids: Vec<u32> = (0..boxes.len()).filter(|&i| !is_big(i)).map(|i| i as u32).collect();
+            let ids: Vec<u32> = (0..boxes.len())
+                .filter(|&i| !is_big(i))
+                .map(|i| i as u32)
+                .collect();
             let mut bvh = Bvh::build(&ids.iter().map(|&i| boxes[i as usize]).collect::<Vec<_>>());
             for p in &mut bvh.prims {
                 *p = ids[*p as usize];
             }
             Accel::Bvh {
                 bvh,
-                big: batch.chunks(SPHERE_BATCH_LANES).map(SphereBatch::new).collect(),
+                big: batch
+                    .chunks(SPHERE_BATCH_LANES)
+                    .map(SphereBatch::new)
+                    .collect(),
             }
         };
         Self {
@@ -163,7 +201,11 @@ fn big_spheres(objects: &[WorldObject], boxes: &[Aabb]) -> Vec<u32> {
         .iter()
         .filter(|&&(_, i)| {
             let b = &boxes[i as usize];
-            let held = centers.iter().enumerate().filter(|&(j, c)| j != i as usize && b.contains(*c)).count();
+            let held = centers
+                .iter()
+                .enumerate()
+                .filter(|&(j, c)| j != i as usize && b.contains(*c))
+                .count();
             4 * held >= 3 * others
         })
         .map(|&(_, i)| i)
@@ -174,7 +216,10 @@ fn big_spheres(objects: &[WorldObject], boxes: &[Aabb]) -> Vec<u32> {
 
 /// The f32 box holding [lo, hi] grown by `rel` of its size and position.
 fn padded(lo: DVec3, hi: DVec3, rel: f64) -> Aabb {
-    let scale = (hi - lo).max_element().max(lo.abs().max_element()).max(hi.abs().max_element());
+    let scale = (hi - lo)
+        .max_element()
+        .max(lo.abs().max_element())
+        .max(hi.abs().max_element());
     let pad = DVec3::splat(rel * scale + f64::from(f32::MIN_POSITIVE));
     Aabb::new((lo - pad).as_vec3().into(), (hi + pad).as_vec3().into())
 }
@@ -184,7 +229,13 @@ pub(super) fn transformed_bounds(b: &Aabb, a: &DAffine3) -> (DVec3, DVec3) {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for i in 0..8 {
-        let pick = |bit: usize, axis: usize| f64::from(if i >> bit & 1 == 0 { b.min[axis] } else { b.max[axis] });
+        let pick = |bit: usize, axis: usize| {
+            f64::from(if i >> bit & 1 == 0 {
+                b.min[axis]
+            } else {
+                b.max[axis]
+            })
+        };
         let p = a.transform_point3(DVec3::new(pick(0, 0), pick(1, 1), pick(2, 2)));
         lo = lo.min(p);
         hi = hi.max(p);
@@ -202,8 +253,15 @@ mod tests {
         let w = World::with_accel(&s, s.camera.position, AccelChoice::Bvh);
         match &w.accel {
             Accel::Bvh { big, bvh } => {
-                let n: usize = big.iter().map(|b| b.ids.iter().filter(|&&id| id >= 0.0).count()).sum();
-                assert_eq!(n + bvh.prims.len(), w.objects.len(), "{name}: every object is in one place");
+                let n: usize = big
+                    .iter()
+                    .map(|b| b.ids.iter().filter(|&&id| id >= 0.0).count())
+                    .sum();
+                assert_eq!(
+                    n + bvh.prims.len(),
+                    w.objects.len(),
+                    "{name}: every object is in one place"
+                );
                 n
             }
             Accel::Scan { .. } => panic!("forced BVH"),
@@ -220,5 +278,25 @@ mod tests {
         assert_eq!(big_of("furnace"), 1);
         // cornell-quads: the walls are quads; the balls and lamp are small.
         assert_eq!(big_of("cornell-quads"), 0);
+    }
+
+    #[test]
+    fn auto_scans_what_scanning_is_cheaper_for() {
+        let scans = |name: &str| {
+            let s = builtin(name).expect("built-in");
+            matches!(World::new(&s, s.camera.position).accel, Accel::Scan { .. })
+        };
+        for name in [
+            "cornell",
+            "cornell-glass",
+            "cornell-quads",
+            "smallpt",
+            "furnace",
+        ] {
+            assert!(scans(name), "{name} is scanned");
+        }
+        // The crossovers measured by the accel_crossover example.
+        assert!(scan_cost(256, 0) <= SCAN_MAX_COST && scan_cost(264, 0) > SCAN_MAX_COST);
+        assert!(scan_cost(9, 6) <= SCAN_MAX_COST && scan_cost(9, 8) > SCAN_MAX_COST);
     }
 }

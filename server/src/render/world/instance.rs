@@ -50,14 +50,21 @@ pub struct Offset {
 
 impl Instance {
     /// `world_from_obj` placed relative to the render origin `origin`.
-    pub fn new(mesh: Arc<Mesh>, world_from_obj: DAffine3, origin: DVec3, materials: Arc<[u32]>) -> Self {
+    pub fn new(
+        mesh: Arc<Mesh>,
+        world_from_obj: DAffine3,
+        origin: DVec3,
+        materials: Arc<[u32]>,
+    ) -> Self {
         let cam = DAffine3 {
             matrix3: world_from_obj.matrix3,
             translation: world_from_obj.translation - origin,
         };
-        let cam_from_obj = Affine3A::from_mat3_translation(cam.matrix3.as_mat3(), cam.translation.as_vec3());
+        let cam_from_obj =
+            Affine3A::from_mat3_translation(cam.matrix3.as_mat3(), cam.translation.as_vec3());
         let inv = cam.inverse();
-        let obj_from_cam = Affine3A::from_mat3_translation(inv.matrix3.as_mat3(), inv.translation.as_vec3());
+        let obj_from_cam =
+            Affine3A::from_mat3_translation(inv.matrix3.as_mat3(), inv.translation.as_vec3());
         let normal_from_obj = Mat3A::from(cam.matrix3.inverse().transpose().as_mat3());
         let (rt_a, rt_b) = round_trip_bound(&cam_from_obj, &obj_from_cam);
         Self {
@@ -93,10 +100,11 @@ impl Instance {
         if BRUTE {
             test(&mesh.tris, best);
         } else {
-            mesh.bvh.traverse(&BoxRay::new(o, d), best.t, |first, count, _| {
-                test(&mesh.tris[first as usize..(first + count) as usize], best);
-                best.t
-            });
+            mesh.bvh
+                .traverse(&BoxRay::new(o, d), best.t, |first, count, _| {
+                    test(&mesh.tris[first as usize..(first + count) as usize], best);
+                    best.t
+                });
         }
     }
 
@@ -138,7 +146,11 @@ impl Instance {
     /// `dir` goes, each coordinate rounded away from the plane.
     #[inline(always)]
     pub(super) fn spawn_origin(&self, off: &Offset, ng: Vec3A, dir: Vec3A) -> Vec3A {
-        let shift = if dir.dot(ng) > 0.0 { off.n_obj * off.dist } else { off.n_obj * -off.dist };
+        let shift = if dir.dot(ng) > 0.0 {
+            off.n_obj * off.dist
+        } else {
+            off.n_obj * -off.dist
+        };
         let mut p = off.p_obj + shift;
         for i in 0..3 {
             if shift[i] > 0.0 {
@@ -168,23 +180,30 @@ impl Instance {
 /// to first order in g; the result is doubled for the second-order terms
 /// and the f32 evaluation of `a |p| + b` itself.
 fn round_trip_bound(fwd: &Affine3A, inv: &Affine3A) -> (f32, f32) {
-    let m = |x: &Affine3A| DMat3::from_cols(
-        x.matrix3.x_axis.as_dvec3(),
-        x.matrix3.y_axis.as_dvec3(),
-        x.matrix3.z_axis.as_dvec3(),
-    );
+    let m = |x: &Affine3A| {
+        DMat3::from_cols(
+            x.matrix3.x_axis.as_dvec3(),
+            x.matrix3.y_axis.as_dvec3(),
+            x.matrix3.z_axis.as_dvec3(),
+        )
+    };
     let (a, b) = (m(fwd), m(inv));
     let (t, s) = (fwd.translation.as_dvec3(), inv.translation.as_dvec3());
     // Infinity norm: the largest row sum of magnitudes.
     let norm = |x: DMat3| {
         let r = x.transpose();
-        [r.x_axis, r.y_axis, r.z_axis].iter().map(|row| row.abs().element_sum()).fold(0.0, f64::max)
+        [r.x_axis, r.y_axis, r.z_axis]
+            .iter()
+            .map(|row| row.abs().element_sum())
+            .fold(0.0, f64::max)
     };
     let g = f64::from(gamma(3));
     let (na, nb) = (norm(a), norm(b));
     let drift = norm(b * a - DMat3::IDENTITY);
     let rt_a = drift + 2.0 * g * nb * na;
-    let rt_b = (b * t + s).abs().max_element() + 2.0 * g * nb * t.abs().max_element() + g * s.abs().max_element();
+    let rt_b = (b * t + s).abs().max_element()
+        + 2.0 * g * nb * t.abs().max_element()
+        + g * s.abs().max_element();
     ((2.0 * rt_a) as f32, (2.0 * rt_b) as f32)
 }
 
@@ -203,10 +222,17 @@ mod tests {
             DVec3::new(1234.5, -77.25, 3e3),
         );
         let cam = DVec3::new(1200.0, -70.0, 2980.0);
-        let cam_from = DAffine3 { matrix3: world.matrix3, translation: world.translation - cam };
-        let fwd = Affine3A::from_mat3_translation(cam_from.matrix3.as_mat3(), cam_from.translation.as_vec3());
+        let cam_from = DAffine3 {
+            matrix3: world.matrix3,
+            translation: world.translation - cam,
+        };
+        let fwd = Affine3A::from_mat3_translation(
+            cam_from.matrix3.as_mat3(),
+            cam_from.translation.as_vec3(),
+        );
         let inv_d = cam_from.inverse();
-        let inv = Affine3A::from_mat3_translation(inv_d.matrix3.as_mat3(), inv_d.translation.as_vec3());
+        let inv =
+            Affine3A::from_mat3_translation(inv_d.matrix3.as_mat3(), inv_d.translation.as_vec3());
         let (a, b) = round_trip_bound(&fwd, &inv);
         let mut worst = 0.0f32;
         for i in 0..100_000u64 {

@@ -18,7 +18,7 @@ mod build;
 mod instance;
 mod scan;
 
-pub use build::{AccelChoice, SCAN_MAX_OBJECTS};
+pub use build::{scan_cost, AccelChoice, SCAN_MAX_COST};
 pub use instance::Instance;
 
 use crate::render::bvh::{BoxRay, Bvh};
@@ -97,7 +97,12 @@ impl Hit {
     #[inline(always)]
     fn offer(&mut self, t: f32, object: u32, prim: u32, bary: [f32; 3]) {
         if t < self.t || (t == self.t && (object, prim) < (self.object, self.prim)) {
-            *self = Hit { t, object, prim, bary };
+            *self = Hit {
+                t,
+                object,
+                prim,
+                bary,
+            };
         }
     }
 }
@@ -133,10 +138,7 @@ enum Accel {
     /// walls, a furnace shell) are scanned first instead, in batches:
     /// nearly every ray enters their boxes anyway, and their hit bounds the
     /// BVH search from the start.
-    Bvh {
-        bvh: Bvh,
-        big: Vec<SphereBatch>,
-    },
+    Bvh { bvh: Bvh, big: Vec<SphereBatch> },
 }
 
 #[derive(Clone, Debug)]
@@ -171,15 +173,31 @@ impl World {
     #[inline(always)]
     pub fn intersect<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
         let hit = match &self.accel {
-            Accel::Scan { sphere_batches, quads } => scan::nearest(isa, sphere_batches, quads, ray, from),
+            Accel::Scan {
+                sphere_batches,
+                quads,
+            } => scan::nearest(isa, sphere_batches, quads, ray, from),
             Accel::Bvh { bvh, big } => {
-                let mut best = if big.is_empty() { Hit::NONE } else { scan::nearest(isa, big, &[], ray, from) };
-                bvh.traverse(&BoxRay::new(ray.origin, ray.dir), best.t, |first, count, _| {
-                    for slot in first..first + count {
-                        self.offer_object::<false>(bvh.prims[slot as usize], ray, from, &mut best);
-                    }
-                    best.t
-                });
+                let mut best = if big.is_empty() {
+                    Hit::NONE
+                } else {
+                    scan::nearest(isa, big, &[], ray, from)
+                };
+                bvh.traverse(
+                    &BoxRay::new(ray.origin, ray.dir),
+                    best.t,
+                    |first, count, _| {
+                        for slot in first..first + count {
+                            self.offer_object::<false>(
+                                bvh.prims[slot as usize],
+                                ray,
+                                from,
+                                &mut best,
+                            );
+                        }
+                        best.t
+                    },
+                );
                 best
             }
         };
@@ -213,7 +231,11 @@ impl World {
                 }
             }
             Geometry::Instance(i) => {
-                let skip = if id == from.object { from.prim } else { NO_PRIM };
+                let skip = if id == from.object {
+                    from.prim
+                } else {
+                    NO_PRIM
+                };
                 self.instances[*i as usize].offer::<BRUTE>(id, ray, skip, best);
             }
         }
@@ -249,7 +271,10 @@ impl World {
     pub fn spawn(&self, s: &Surface, dir: Vec3A) -> Ray {
         match &s.offset {
             None => Ray::new(s.p, dir),
-            Some(off) => Ray::new(self.instances[off.instance as usize].spawn_origin(off, s.ng, dir), dir),
+            Some(off) => Ray::new(
+                self.instances[off.instance as usize].spawn_origin(off, s.ng, dir),
+                dir,
+            ),
         }
     }
 

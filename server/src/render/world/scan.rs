@@ -9,7 +9,13 @@ use crate::render::scene::MAX_PLACED;
 use crate::render::shape::{Leaving, Quad, SphereBatch};
 
 #[inline(always)]
-pub(super) fn nearest<I: Isa>(isa: I, batches: &[SphereBatch], quads: &[(u32, Quad)], ray: &Ray, from: Origin) -> Hit {
+pub(super) fn nearest<I: Isa>(
+    isa: I,
+    batches: &[SphereBatch],
+    quads: &[(u32, Quad)],
+    ray: &Ray,
+    from: Origin,
+) -> Hit {
     let leaving = Leaving {
         id: from.object as f32,
         entering: from.entering,
@@ -30,7 +36,7 @@ pub(super) fn nearest<I: Isa>(isa: I, batches: &[SphereBatch], quads: &[(u32, Qu
         if id == from.object {
             continue;
         }
-        let t = quad.intersect(ray);
+        let t = quad.intersect_before(ray, best.t);
         if t < best.t {
             best.t = t;
             best.object = id;

@@ -1,6 +1,8 @@
 //! OpenCL platforms and devices: what is there, and which one `auto` takes.
 
-use opencl3::device::{Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU};
+use opencl3::device::{
+    Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU,
+};
 use opencl3::platform::get_platforms;
 use serde::Serialize;
 use std::sync::OnceLock;
@@ -59,8 +61,12 @@ fn enumerate() -> Result<Vec<DeviceInfo>, String> {
     })?;
     let mut out = Vec::new();
     for platform in platforms {
-        let platform_name = platform.name().unwrap_or_else(|_| "unknown platform".into());
-        let Ok(ids) = platform.get_devices(CL_DEVICE_TYPE_ALL) else { continue };
+        let platform_name = platform
+            .name()
+            .unwrap_or_else(|_| "unknown platform".into());
+        let Ok(ids) = platform.get_devices(CL_DEVICE_TYPE_ALL) else {
+            continue;
+        };
         for id in ids {
             let d = Device::new(id);
             let ty = d.dev_type().unwrap_or(0);
@@ -82,7 +88,9 @@ fn enumerate() -> Result<Vec<DeviceInfo>, String> {
                 compute_units: d.max_compute_units().unwrap_or(0),
                 global_mem_bytes: d.global_mem_size().unwrap_or(0),
                 fp64: d.double_fp_config().map(|c| c != 0).unwrap_or(false)
-                    || d.extensions().map(|e| e.contains("cl_khr_fp64")).unwrap_or(false),
+                    || d.extensions()
+                        .map(|e| e.contains("cl_khr_fp64"))
+                        .unwrap_or(false),
                 opencl_c_version: d.opencl_c_version().unwrap_or_default(),
                 device: d,
             });
@@ -96,5 +104,8 @@ fn enumerate() -> Result<Vec<DeviceInfo>, String> {
 
 /// What `auto` takes: the GPU with the most compute units, if any.
 pub fn auto_pick(devices: &[DeviceInfo]) -> Option<&DeviceInfo> {
-    devices.iter().filter(|d| d.kind == "gpu").max_by_key(|d| d.compute_units)
+    devices
+        .iter()
+        .filter(|d| d.kind == "gpu")
+        .max_by_key(|d| d.compute_units)
 }

@@ -3,9 +3,9 @@
 //! against the device's own `sizeof` by the `layout_sizes` kernel.
 
 use crate::render::job::RenderJob;
+use crate::render::light::EmitterShape;
 use crate::render::material::Bsdf;
 use crate::render::math::Vec3A;
-use crate::render::light::EmitterShape;
 use crate::render::world::{Geometry, World};
 use crate::render::Filter;
 use bytemuck::{Pod, Zeroable};

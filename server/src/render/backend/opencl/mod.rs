@@ -24,13 +24,13 @@ pub use program::{Features, ProgramKey, SOURCES};
 
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
+use bytemuck::Pod;
 use opencl3::command_queue::CommandQueue;
 use opencl3::context::Context;
 use opencl3::kernel::Kernel;
-use bytemuck::Pod;
 use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
 use opencl3::program::Program;
-use opencl3::types::{cl_mem_flags, cl_ulong, cl_uint, CL_BLOCKING};
+use opencl3::types::{cl_mem_flags, cl_uint, cl_ulong, CL_BLOCKING};
 use std::collections::HashMap;
 use std::ptr;
 use std::time::{Duration, Instant};
@@ -136,7 +136,9 @@ pub struct OpenClBackend {
 
 impl std::fmt::Debug for OpenClBackend {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("OpenClBackend").field("device", &self.info.name).finish()
+        f.debug_struct("OpenClBackend")
+            .field("device", &self.info.name)
+            .finish()
     }
 }
 
@@ -147,9 +149,16 @@ impl OpenClBackend {
         let devices = list_devices().map_err(OpenClError::Unavailable)?;
         let info = match index {
             Some(i) => devices.get(i).cloned().ok_or_else(|| {
-                OpenClError::Unavailable(format!("--device {i}: there are {} OpenCL devices (0..{})", devices.len(), devices.len()))
+                OpenClError::Unavailable(format!(
+                    "--device {i}: there are {} OpenCL devices (0..{})",
+                    devices.len(),
+                    devices.len()
+                ))
             })?,
-            None => devices.first().cloned().ok_or_else(|| OpenClError::Unavailable("no device".into()))?,
+            None => devices
+                .first()
+                .cloned()
+                .ok_or_else(|| OpenClError::Unavailable("no device".into()))?,
         };
         Self::on(info)
     }
@@ -166,7 +175,8 @@ impl OpenClBackend {
     fn on(info: DeviceInfo) -> Result<Self, OpenClError> {
         let context = Context::from_device(&info.device).map_err(call("context creation"))?;
         #[allow(deprecated)] // clCreateCommandQueue: OpenCL 1.2 devices have only this one
-        let queue = CommandQueue::create_default(&context, 0).map_err(call("command queue creation"))?;
+        let queue =
+            CommandQueue::create_default(&context, 0).map_err(call("command queue creation"))?;
         Ok(Self {
             info,
             context,
@@ -204,12 +214,13 @@ impl OpenClBackend {
     pub fn program(&mut self, key: &ProgramKey) -> Result<&Kernel, OpenClError> {
         if !self.programs.contains_key(key) {
             let start = Instant::now();
-            let program = program::build(&self.context, &SOURCES, &key.build_options()).map_err(|log| {
-                OpenClError::Build {
-                    device: self.info.name.trim().to_owned(),
-                    log,
-                }
-            })?;
+            let program =
+                program::build(&self.context, &SOURCES, &key.build_options()).map_err(|log| {
+                    OpenClError::Build {
+                        device: self.info.name.trim().to_owned(),
+                        log,
+                    }
+                })?;
             let kernel = Kernel::create(&program, "render").map_err(call("kernel creation"))?;
             if let Ok(log) = program.get_build_log(self.info.device.id()) {
                 if !log.trim().is_empty() {
@@ -278,12 +289,25 @@ impl OpenClBackend {
         #[allow(unsafe_code)]
         // SAFETY: every argument is set; `buf` lives until the blocking read
         // below has returned; `global` has `work_dim` (1) entries.
-        unsafe { self.queue.enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[]) }
-            .map_err(call("launch"))?;
+        unsafe {
+            self.queue.enqueue_nd_range_kernel(
+                kernel.get(),
+                1,
+                ptr::null(),
+                global.as_ptr(),
+                ptr::null(),
+                &[],
+            )
+        }
+        .map_err(call("launch"))?;
         #[allow(unsafe_code)]
         // SAFETY: a blocking read of `out.len()` elements, the buffer's size,
         // into `out`, which lives past the call; T: Pod takes any bytes.
-        unsafe { self.queue.enqueue_read_buffer(&buf, CL_BLOCKING, 0, out, &[]) }.map_err(call("read"))?;
+        unsafe {
+            self.queue
+                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, out, &[])
+        }
+        .map_err(call("read"))?;
         Ok(())
     }
 
@@ -293,7 +317,9 @@ impl OpenClBackend {
         #[allow(unsafe_code)]
         // SAFETY: the host pointer is null and `access` never asks OpenCL to
         // read it; the size is computed by opencl3 from `count.max(1)` and T.
-        let buf = unsafe { Buffer::<T>::create(&self.context, access.flags(), count.max(1), ptr::null_mut()) };
+        let buf = unsafe {
+            Buffer::<T>::create(&self.context, access.flags(), count.max(1), ptr::null_mut())
+        };
         buf.map_err(call("buffer allocation"))
     }
 
@@ -305,26 +331,49 @@ impl OpenClBackend {
             // SAFETY: a blocking write: OpenCL is done with `data` when the
             // call returns; the buffer holds `data.len()` elements; T: Pod has
             // no padding or pointers, only the plain values the kernel reads.
-            unsafe { self.queue.enqueue_write_buffer(&mut buf, CL_BLOCKING, 0, data, &[]) }.map_err(call("write"))?;
+            unsafe {
+                self.queue
+                    .enqueue_write_buffer(&mut buf, CL_BLOCKING, 0, data, &[])
+            }
+            .map_err(call("write"))?;
         }
         Ok(buf)
     }
 
     /// Makes the device hold `job` and a film equal to the host's, as the
     /// most recently used state (uploading only when it does not already).
-    fn prepare(&mut self, job: &RenderJob, film: &Film, key: &ProgramKey) -> Result<(), OpenClError> {
-        let matches = |s: &JobState| s.job_id == job.id && &s.key == key && s.spp == film.spp() && s.pixels == film.pixels().len();
+    fn prepare(
+        &mut self,
+        job: &RenderJob,
+        film: &Film,
+        key: &ProgramKey,
+    ) -> Result<(), OpenClError> {
+        let matches = |s: &JobState| {
+            s.job_id == job.id
+                && &s.key == key
+                && s.spp == film.spp()
+                && s.pixels == film.pixels().len()
+        };
         if let Some(i) = self.states.iter().position(matches) {
             let s = self.states.remove(i);
             self.states.push(s);
             return Ok(());
         }
-        let per_sample = self.states.iter().rev().find(|s| s.job_id == job.id).and_then(|s| s.per_sample);
+        let per_sample = self
+            .states
+            .iter()
+            .rev()
+            .find(|s| s.job_id == job.id)
+            .and_then(|s| s.per_sample);
         self.states.retain(|s| s.job_id != job.id);
         let packed = layout::pack(job);
         let mut device_film = vec![0f32; film.pixels().len() * FILM_FLOATS];
         if film.spp() > 0 {
-            for (px, out) in film.pixels().iter().zip(device_film.chunks_exact_mut(FILM_FLOATS)) {
+            for (px, out) in film
+                .pixels()
+                .iter()
+                .zip(device_film.chunks_exact_mut(FILM_FLOATS))
+            {
                 for c in 0..3 {
                     for (half, base) in [(px.even[c], 0), (px.odd[c], 6)] {
                         let hi = half as f32;
@@ -352,7 +401,8 @@ impl OpenClBackend {
         // Keep at most RESIDENT_JOBS states and RESIDENT_FILM_BYTES of films.
         let film_bytes = |s: &JobState| s.pixels * FILM_FLOATS * 4;
         while self.states.len() > 1
-            && (self.states.len() > RESIDENT_JOBS || self.states.iter().map(film_bytes).sum::<usize>() > RESIDENT_FILM_BYTES)
+            && (self.states.len() > RESIDENT_JOBS
+                || self.states.iter().map(film_bytes).sum::<usize>() > RESIDENT_FILM_BYTES)
         {
             self.states.remove(0);
         }
@@ -369,7 +419,12 @@ impl OpenClBackend {
     }
 
     /// Adds `count` samples per pixel to `film`.
-    pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) -> Result<(), OpenClError> {
+    pub fn render(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        count: u64,
+    ) -> Result<(), OpenClError> {
         if let Some(why) = unsupported(job) {
             return Err(OpenClError::Unsupported(why));
         }
@@ -389,12 +444,21 @@ impl OpenClBackend {
     /// [`TILE`] pixels and the image in several launches): drivers such as
     /// PoCL compile a kernel anew for every new launch size. The number of
     /// samples per launch adapts to the measured time instead.
-    fn launch_all(&mut self, key: &ProgramKey, count: u64, pixels: usize) -> Result<(), OpenClError> {
+    fn launch_all(
+        &mut self,
+        key: &ProgramKey,
+        count: u64,
+        pixels: usize,
+    ) -> Result<(), OpenClError> {
         let target = self.launch_target.as_secs_f64();
         let tile = pixels.min(TILE);
         let mut done = 0u64;
         while done < count {
-            let per_sample = self.states.last().and_then(|s| s.per_sample).map(|d| d.as_secs_f64());
+            let per_sample = self
+                .states
+                .last()
+                .and_then(|s| s.per_sample)
+                .map(|d| d.as_secs_f64());
             let n = match per_sample {
                 Some(p) if p > 0.0 => ((target / p) as u64).clamp(1, count - done),
                 Some(_) => count - done,
@@ -418,14 +482,24 @@ impl OpenClBackend {
 
     /// One launch of `size` work-items: samples `spp .. spp + n` of pixels
     /// `offset .. min(offset + size, pixels)`.
-    fn launch(&mut self, key: &ProgramKey, offset: usize, size: usize, pixels: usize, n: u64) -> Result<(), OpenClError> {
+    fn launch(
+        &mut self,
+        key: &ProgramKey,
+        offset: usize,
+        size: usize,
+        pixels: usize,
+        n: u64,
+    ) -> Result<(), OpenClError> {
         if self.fail_launches {
             return Err(OpenClError::Call {
                 what: "kernel launch",
                 code: "CL_OUT_OF_RESOURCES (injected)".into(),
             });
         }
-        let state = self.states.last().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
+        let state = self
+            .states
+            .last()
+            .ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         let first: cl_ulong = state.spp;
         let count: cl_uint = n as cl_uint;
         let kernel = &self
@@ -439,12 +513,24 @@ impl OpenClBackend {
         // `__global` pointers (the cl_mem handles of this job's buffers),
         // `ulong first`, `uint count`, `uint pixel_base`, `uint pixel_end`.
         unsafe {
-            kernel.set_arg(0, &state.params.get()).map_err(call("set_arg"))?;
-            kernel.set_arg(1, &state.objects.get()).map_err(call("set_arg"))?;
-            kernel.set_arg(2, &state.materials.get()).map_err(call("set_arg"))?;
-            kernel.set_arg(3, &state.lights.get()).map_err(call("set_arg"))?;
-            kernel.set_arg(4, &state.film.get()).map_err(call("set_arg"))?;
-            kernel.set_arg(5, &state.rejected.get()).map_err(call("set_arg"))?;
+            kernel
+                .set_arg(0, &state.params.get())
+                .map_err(call("set_arg"))?;
+            kernel
+                .set_arg(1, &state.objects.get())
+                .map_err(call("set_arg"))?;
+            kernel
+                .set_arg(2, &state.materials.get())
+                .map_err(call("set_arg"))?;
+            kernel
+                .set_arg(3, &state.lights.get())
+                .map_err(call("set_arg"))?;
+            kernel
+                .set_arg(4, &state.film.get())
+                .map_err(call("set_arg"))?;
+            kernel
+                .set_arg(5, &state.rejected.get())
+                .map_err(call("set_arg"))?;
             kernel.set_arg(6, &first).map_err(call("set_arg"))?;
             kernel.set_arg(7, &count).map_err(call("set_arg"))?;
             kernel.set_arg(8, &base).map_err(call("set_arg"))?;
@@ -457,13 +543,25 @@ impl OpenClBackend {
         // lights as `layout::pack` counted into the params with them, and
         // work-items at or past `pixel_end` (<= the film's pixels) return
         // before touching the film of `pixels` x FILM_FLOATS floats.
-        unsafe { self.queue.enqueue_nd_range_kernel(kernel.get(), 1, ptr::null(), global.as_ptr(), ptr::null(), &[]) }
-            .map_err(call("kernel launch"))?;
+        unsafe {
+            self.queue.enqueue_nd_range_kernel(
+                kernel.get(),
+                1,
+                ptr::null(),
+                global.as_ptr(),
+                ptr::null(),
+                &[],
+            )
+        }
+        .map_err(call("kernel launch"))?;
         self.queue.finish().map_err(call("kernel execution"))
     }
 
     fn read_back(&mut self, film: &mut Film, count: u64) -> Result<(), OpenClError> {
-        let state = self.states.last_mut().ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
+        let state = self
+            .states
+            .last_mut()
+            .ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         let mut sums = vec![0f32; state.pixels * FILM_FLOATS];
         let mut rejected = [0u32];
         #[allow(unsafe_code)]
@@ -478,7 +576,11 @@ impl OpenClBackend {
                 .enqueue_read_buffer(&state.rejected, CL_BLOCKING, 0, &mut rejected, &[])
                 .map_err(call("film read"))?;
         }
-        for (px, s) in film.pixels_mut().iter_mut().zip(sums.chunks_exact(FILM_FLOATS)) {
+        for (px, s) in film
+            .pixels_mut()
+            .iter_mut()
+            .zip(sums.chunks_exact(FILM_FLOATS))
+        {
             for c in 0..3 {
                 px.even[c] = f64::from(s[c]) + f64::from(s[3 + c]);
                 px.odd[c] = f64::from(s[6 + c]) + f64::from(s[9 + c]);

@@ -69,14 +69,17 @@ impl Features {
             })
         };
         let glass_with = |want: bool| {
-            used.iter().any(|m| matches!(m.bsdf, Bsdf::Glass { schlick, .. } if schlick == want))
+            used.iter()
+                .any(|m| matches!(m.bsdf, Bsdf::Glass { schlick, .. } if schlick == want))
         };
         let light_kind = |k: u32| {
-            lights.iter().any(|&i| match w.objects[i as usize].geometry {
-                Geometry::Sphere(_) => k == KIND_SPHERE,
-                Geometry::Quad(_) => k == KIND_QUAD,
-                Geometry::Instance(_) => false,
-            })
+            lights
+                .iter()
+                .any(|&i| match w.objects[i as usize].geometry {
+                    Geometry::Sphere(_) => k == KIND_SPHERE,
+                    Geometry::Quad(_) => k == KIND_QUAD,
+                    Geometry::Instance(_) => false,
+                })
         };
         Self {
             spheres: kind(KIND_SPHERE),
@@ -91,7 +94,11 @@ impl Features {
             nee: job.settings.nee && !lights.is_empty(),
             box_filter: job.filter == Filter::Box,
             num_objects: w.objects.len() as u32,
-            num_lights: if job.settings.nee { lights.len() as u32 } else { 0 },
+            num_lights: if job.settings.nee {
+                lights.len() as u32
+            } else {
+                0
+            },
             max_depth: job.settings.max_depth,
             inject_nan_every: None,
         }
@@ -139,8 +146,12 @@ impl ProgramKey {
         let common = "-cl-std=CL1.2";
         match self {
             ProgramKey::Specialised(f) => format!("{common} {}", f.build_options()),
-            ProgramKey::Generic { inject_nan_every: Some(n) } => format!("{common} -D INJECT_NAN_EVERY={n}UL"),
-            ProgramKey::Generic { inject_nan_every: None } => common.to_owned(),
+            ProgramKey::Generic {
+                inject_nan_every: Some(n),
+            } => format!("{common} -D INJECT_NAN_EVERY={n}UL"),
+            ProgramKey::Generic {
+                inject_nan_every: None,
+            } => common.to_owned(),
         }
     }
 }
