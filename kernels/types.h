@@ -1,15 +1,16 @@
 /* Types shared with the host. Their Rust twins, with the same names and
  * layout (sizes asserted on both sides), are in
- * server/src/render/backend/opencl/layout.rs. */
-
-#define KIND_SPHERE 0u
-#define KIND_QUAD 1u
-
-#define MAT_DIFFUSE 0u
-#define MAT_MIRROR 1u
-#define MAT_GLASS 2u
-
-#define NO_OBJECT 0xFFFFFFFFu
+ * server/src/render/backend/opencl/layout.rs, and so are the shared
+ * constants (KIND_*, MAT_*, NO_OBJECT): the host passes them to every build
+ * as -D options, so they are written once.
+ *
+ * Floating point: no contraction of a * b + c into fma, as in the Rust twins
+ * (which never fuse), so that both round every operation the same way and the
+ * CPU's error bounds hold here; division and sqrt are correctly rounded
+ * (-cl-fp32-correctly-rounded-divide-sqrt, see program.rs). */
+#ifndef ALLOW_CONTRACTION
+#pragma OPENCL FP_CONTRACT OFF
+#endif
 
 typedef struct {
     float4 p0;  /* sphere: centre.xyz, radius  | quad: corner.xyz, area */

@@ -482,9 +482,16 @@ fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
     // white sky around it (the default diffuse albedo is 0.8).
     let img = image::open(&direct).expect("a PNG").to_rgb8();
     let sky = img.get_pixel(0, 0).0;
-    assert!(sky.iter().all(|&c| c > 240), "the corner shows the sky: {sky:?}");
+    assert!(
+        sky.iter().all(|&c| c > 240),
+        "the corner shows the sky: {sky:?}"
+    );
     let covered = img.pixels().filter(|p| p.0[1] < 235).count();
-    assert!(covered * 20 > 24 * 16, "the model covers {covered} of {} pixels", 24 * 16);
+    assert!(
+        covered * 20 > 24 * 16,
+        "the model covers {covered} of {} pixels",
+        24 * 16
+    );
 
     // A scene JSON naming the file relative to itself: uploaded once.
     let scene = dir.path().join("scene.json");

@@ -34,7 +34,7 @@ fn glb_with_camera() -> Vec<u8> {
         "scenes": [{"nodes": [0, 1]}], "scene": 0
     });
     let mut json_chunk = doc.to_string().into_bytes();
-    while json_chunk.len() % 4 != 0 {
+    while !json_chunk.len().is_multiple_of(4) {
         json_chunk.push(b' ');
     }
     let total = 12 + 8 + json_chunk.len() + 8 + bin.len();
@@ -154,7 +154,7 @@ async fn uploaded_meshes_and_models_render_in_sessions() {
             .is_some_and(|e| e.contains("objects[0].asset") && e.contains("no asset")),
         "{e}"
     );
-    running.shutdown().await;
+    running.shutdown().await.expect("shutdown");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -253,7 +253,7 @@ async fn every_bad_upload_or_reference_is_a_4xx_naming_the_problem() {
         .await
         .expect("req");
     assert_eq!(r.status(), 404);
-    running.shutdown().await;
+    running.shutdown().await.expect("shutdown");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -269,5 +269,5 @@ async fn a_full_asset_store_answers_507() {
             .is_some_and(|e| e.contains("DELETE /api/assets")),
         "{body}"
     );
-    running.shutdown().await;
+    running.shutdown().await.expect("shutdown");
 }

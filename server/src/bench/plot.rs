@@ -263,7 +263,8 @@ pub fn calibration(path: &Path, rows: &[CalibrationRow]) -> Result<(), PlotError
 
 /// Rays and paths per second against the mesh's triangle count (log-log).
 pub fn meshes(path: &Path, rows: &[MeshRow]) -> Result<(), PlotError> {
-    let series: [(&str, fn(&MeshRow) -> f64); 3] = [
+    type Series = (&'static str, fn(&MeshRow) -> f64);
+    let series: [Series; 3] = [
         ("camera rays/s", |m| m.camera_rays_per_sec),
         ("bounce rays/s", |m| m.bounce_rays_per_sec),
         ("paths/s", |m| m.paths_per_sec),

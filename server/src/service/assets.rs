@@ -256,13 +256,15 @@ mod tests {
             ..AssetLimits::default()
         });
         assert_eq!(
-            store.add("x.obj", &[0; 9]).unwrap_err(),
+            store.add("x.obj", &[0; 9]).expect_err("refused"),
             AssetError::TooLarge(9, 8)
         );
-        let e = store.add("notes.txt", b"hello").unwrap_err();
+        let e = store.add("notes.txt", b"hello").expect_err("refused");
         assert!(e.to_string().contains("not a model file"), "{e}");
         assert!(store.list().is_empty());
-        let missing = store.resolve(ModelSource::Asset("feed")).unwrap_err();
+        let missing = store
+            .resolve(ModelSource::Asset("feed"))
+            .expect_err("refused");
         assert!(missing.contains("no asset 'feed'"), "{missing}");
         assert!(store.resolve(ModelSource::File("/etc/passwd")).is_err());
     }

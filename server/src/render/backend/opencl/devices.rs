@@ -2,6 +2,7 @@
 
 use opencl3::device::{
     Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU,
+    CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT,
 };
 use opencl3::platform::get_platforms;
 use serde::Serialize;
@@ -20,6 +21,10 @@ pub struct DeviceInfo {
     pub global_mem_bytes: u64,
     pub fp64: bool,
     pub opencl_c_version: String,
+    /// Single-precision division and sqrt can be built correctly rounded
+    /// (`-cl-fp32-correctly-rounded-divide-sqrt`), as on the CPU.
+    #[serde(skip)]
+    pub correctly_rounded_divide_sqrt: bool,
     #[serde(skip)]
     pub device: Device,
 }
@@ -87,6 +92,10 @@ fn enumerate() -> Result<Vec<DeviceInfo>, String> {
                 kind,
                 compute_units: d.max_compute_units().unwrap_or(0),
                 global_mem_bytes: d.global_mem_size().unwrap_or(0),
+                correctly_rounded_divide_sqrt: d
+                    .single_fp_config()
+                    .map(|c| c & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT != 0)
+                    .unwrap_or(false),
                 fp64: d.double_fp_config().map(|c| c != 0).unwrap_or(false)
                     || d.extensions()
                         .map(|e| e.contains("cl_khr_fp64"))

@@ -15,6 +15,28 @@ pub const KIND_QUAD: u32 = 1;
 pub const MAT_DIFFUSE: u32 = 0;
 pub const MAT_MIRROR: u32 = 1;
 pub const MAT_GLASS: u32 = 2;
+/// No object hit (an object index).
+pub const NO_OBJECT: u32 = u32::MAX;
+
+/// The constants host and kernel share, written once: every program is
+/// built with them as `-D NAME=VALUEu` (kernels/types.h defines none).
+pub const SHARED_CONSTANTS: [(&str, u32); 6] = [
+    ("KIND_SPHERE", KIND_SPHERE),
+    ("KIND_QUAD", KIND_QUAD),
+    ("MAT_DIFFUSE", MAT_DIFFUSE),
+    ("MAT_MIRROR", MAT_MIRROR),
+    ("MAT_GLASS", MAT_GLASS),
+    ("NO_OBJECT", NO_OBJECT),
+];
+
+/// [`SHARED_CONSTANTS`] as compiler options.
+pub fn shared_defines() -> String {
+    SHARED_CONSTANTS
+        .iter()
+        .map(|(name, value)| format!("-D {name}={value}u"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
 
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

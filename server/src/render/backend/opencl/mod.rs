@@ -15,12 +15,18 @@
 //! `bytemuck::Pod` types cross between host and device memory, so any bytes
 //! either side writes are valid values on the other.
 
+mod check;
 mod devices;
 mod layout;
 mod program;
 
+pub use check::{CheckArg, Checks};
 pub use devices::{auto_pick, list as list_devices, DeviceInfo};
-pub use program::{Features, ProgramKey, SOURCES};
+pub use layout::{
+    pack, shared_defines, Material as KernelMaterial, Object as KernelObject, Packed,
+    Params as KernelParams, SHARED_CONSTANTS,
+};
+pub use program::{common_options, Features, ProgramKey, SOURCES};
 
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
@@ -214,20 +220,20 @@ impl OpenClBackend {
     pub fn program(&mut self, key: &ProgramKey) -> Result<&Kernel, OpenClError> {
         if !self.programs.contains_key(key) {
             let start = Instant::now();
-            let program =
-                program::build(&self.context, &SOURCES, &key.build_options()).map_err(|log| {
-                    OpenClError::Build {
-                        device: self.info.name.trim().to_owned(),
-                        log,
-                    }
-                })?;
+            let options = format!("{}{}", key.build_options(), self.device_options());
+            let program = program::build(&self.context, &SOURCES, &options).map_err(|log| {
+                OpenClError::Build {
+                    device: self.info.name.trim().to_owned(),
+                    log,
+                }
+            })?;
             let kernel = Kernel::create(&program, "render").map_err(call("kernel creation"))?;
             if let Ok(log) = program.get_build_log(self.info.device.id()) {
                 if !log.trim().is_empty() {
                     tracing::debug!(log = %log.trim(), "OpenCL build log");
                 }
             }
-            tracing::info!(options = %key.build_options(), ms = start.elapsed().as_millis() as u64, "built OpenCL program");
+            tracing::info!(options = %options, ms = start.elapsed().as_millis() as u64, "built OpenCL program");
             self.programs.insert(key.clone(), (program, kernel));
         }
         self.programs
@@ -236,9 +242,31 @@ impl OpenClBackend {
             .ok_or_else(|| OpenClError::Unavailable("program cache".into()))
     }
 
-    /// Builds arbitrary sources (tests: a broken kernel must fail with its log).
+    /// Options this device's programs are built with on top of the
+    /// program's own: division and sqrt correctly rounded where the device
+    /// can, as on the CPU, and `PATHSTREAM_OPENCL_OPTIONS` (to measure a
+    /// compiler option; docs/OPENCL.md has what each costs).
+    pub fn device_options(&self) -> String {
+        let mut o = String::new();
+        if self.info.correctly_rounded_divide_sqrt {
+            o.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
+        }
+        if let Ok(extra) = std::env::var("PATHSTREAM_OPENCL_OPTIONS") {
+            o.push(' ');
+            o.push_str(&extra);
+        }
+        o
+    }
+
+    /// Builds arbitrary sources (tests: a broken kernel must fail with its
+    /// log); the shared constants are always defined.
     pub fn build_sources(&self, sources: &[&str], options: &str) -> Result<Program, OpenClError> {
-        program::build(&self.context, sources, options).map_err(|log| OpenClError::Build {
+        let options = if options.contains(&shared_defines()) {
+            options.to_owned()
+        } else {
+            format!("{options} {}", shared_defines())
+        };
+        program::build(&self.context, sources, &options).map_err(|log| OpenClError::Build {
             device: self.info.name.trim().to_owned(),
             log,
         })
@@ -277,7 +305,7 @@ impl OpenClBackend {
         out: &mut [T],
         args: impl FnOnce(&Kernel) -> Result<(), OpenClError>,
     ) -> Result<(), OpenClError> {
-        let program = self.build_sources(&SOURCES, "-cl-std=CL1.2")?;
+        let program = self.build_sources(&SOURCES, &common_options())?;
         let kernel = Kernel::create(&program, name).map_err(call("kernel creation"))?;
         let buf = self.buffer::<T>(Access::ReadWrite, out.len())?;
         #[allow(unsafe_code)]

@@ -3,7 +3,9 @@
 //! generated in one place ([`Features::build_options`]), never by editing
 //! the source.
 
-use super::layout::{kernel_lights, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR};
+use super::layout::{
+    kernel_lights, shared_defines, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
+};
 use crate::render::job::RenderJob;
 use crate::render::material::Bsdf;
 use crate::render::world::Geometry;
@@ -141,9 +143,24 @@ pub enum ProgramKey {
     Generic { inject_nan_every: Option<u64> },
 }
 
+/// Options every program is built with: the language version and the
+/// constants shared with the host.
+pub fn common_options() -> String {
+    format!("-cl-std=CL1.2 {}", shared_defines())
+}
+
+/// The kernel sources followed by the routine checks (`kernels/checks.cl`),
+/// which run single routines on the device against their Rust twins.
+pub fn check_sources() -> Vec<&'static str> {
+    let mut v = SOURCES.to_vec();
+    v.push(include_str!("../../../../../kernels/checks.cl"));
+    v
+}
+
 impl ProgramKey {
     pub fn build_options(&self) -> String {
-        let common = "-cl-std=CL1.2";
+        let common = common_options();
+        let common = common.as_str();
         match self {
             ProgramKey::Specialised(f) => format!("{common} {}", f.build_options()),
             ProgramKey::Generic {

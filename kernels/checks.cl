@@ -1,0 +1,87 @@
+/* Routine checks: each kernel runs one routine of the path tracer on inputs
+ * from the host, which compares the outputs with the routine's Rust twin
+ * (server/tests/opencl_parity.rs). Arguments: the output buffer, the item
+ * count n, then the inputs; item i < n writes its own outputs only. */
+
+/* The sampler: 8 draws from sampler_new(seed, pixel, sample), given as 3
+ * ulongs per item. */
+__kernel void check_rng(__global ulong *out, uint n, __global const ulong *in) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Sampler s = sampler_new(in[3 * i], in[3 * i + 1], in[3 * i + 2]);
+    for (uint k = 0; k < 8u; ++k) {
+        out[8 * i + k] = next_bits(&s);
+    }
+}
+
+/* sincos_turns(u): (sin, cos). */
+__kernel void check_sincos(__global float *out, uint n, __global const float *u) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    float2 r = sincos_turns(u[i]);
+    out[2 * i] = r.x;
+    out[2 * i + 1] = r.y;
+}
+
+/* pixel_offset(P, sample = i, (u[2i], u[2i+1])) with P's filter. */
+__kernel void check_pixel_offset(__global float *out, uint n, __global const float *u, __global const Params *P) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    float2 r = pixel_offset(P, (ulong)i, (float2)(u[2 * i], u[2 * i + 1]));
+    out[2 * i] = r.x;
+    out[2 * i + 1] = r.y;
+}
+
+/* Ray i = (rays[2i].xyz origin, rays[2i+1].xyz unit direction) against every
+ * object: its distance to each (the nearer root for spheres), then the
+ * nearest hit by intersect() as (t, object index as float bits). P gives the
+ * object count. Outputs per item: num_objects + 2. */
+__kernel void check_intersect(__global float *out, uint n, __global const float4 *rays,
+                              __global const Object *objects, __global const Params *P) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    float3 o = rays[2 * i].xyz;
+    float3 d = rays[2 * i + 1].xyz;
+    uint count = P->num_objects;
+    __global float *r = out + (size_t)i * (count + 2u);
+    for (uint j = 0; j < count; ++j) {
+        __global const Object *ob = &objects[j];
+        r[j] = ob->kind == KIND_SPHERE ? sphere_intersect(ob, o, d, dot(o, o), dot(o, d), 0)
+                                       : quad_intersect(ob, o, d);
+    }
+    uint hit;
+    r[count] = intersect(P, objects, o, d, NO_OBJECT, 0, &hit);
+    r[count + 1u] = as_float(hit);
+}
+
+/* scatter() off material `material` for direction in[2i].xyz and outward
+ * normal in[2i+1].xyz, with the sampler of (seed 0, pixel i, sample 0):
+ * (dir.xyz, weight.xyz, specular, 0) per item. */
+__kernel void check_scatter(__global float *out, uint n, __global const float4 *in,
+                            __global const Material *materials, uint material) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Sampler s = sampler_new(0UL, (ulong)i, 0UL);
+    float3 weight;
+    int specular;
+    float3 dir = scatter(&materials[material], in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
+    __global float *r = out + (size_t)i * 8u;
+    r[0] = dir.x;
+    r[1] = dir.y;
+    r[2] = dir.z;
+    r[3] = weight.x;
+    r[4] = weight.y;
+    r[5] = weight.z;
+    r[6] = (float)specular;
+    r[7] = 0.0f;
+}

@@ -1,0 +1,362 @@
+//! The kernel's routines against their Rust twins, routine by routine, on
+//! the same inputs (check kernels in `kernels/checks.cl`): the sampler bit
+//! for bit; sincos, the tent filter, sphere and quad intersection, the
+//! nearest hit and scattering off every material within a few ulps. Runs on
+//! any OpenCL device (PoCL in CI, where a missing device is a failure).
+
+use pathstream::render::backend::nearest_hits;
+use pathstream::render::backend::opencl::{pack, CheckArg, Checks, KernelParams, OpenClBackend};
+use pathstream::render::material::{scatter, Bsdf};
+use pathstream::render::math::{sincos_turns, Vec3A};
+use pathstream::render::ray::Ray;
+use pathstream::render::sampler::{mix64, Sampler};
+use pathstream::render::shape::Roots;
+use pathstream::render::world::{Geometry, Origin};
+use pathstream::render::{Filter, Quality, RenderJob, Scene};
+
+fn device() -> Option<OpenClBackend> {
+    match OpenClBackend::new(None) {
+        Ok(b) => Some(b),
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("CI is set but there is no OpenCL device: {e}")
+        }
+        Err(e) => {
+            eprintln!("skipping: {e}");
+            None
+        }
+    }
+}
+
+/// Distance in units in the last place (0 for equal values, infinities
+/// included; u64::MAX when only one is NaN or infinite).
+fn ulps(a: f32, b: f32) -> u64 {
+    if a == b {
+        return 0;
+    }
+    if !(a.is_finite() && b.is_finite()) {
+        return u64::MAX;
+    }
+    let key = |x: f32| {
+        let i = i64::from(x.to_bits() as i32);
+        if i < 0 {
+            i64::from(i32::MIN) - i
+        } else {
+            i
+        }
+    };
+    key(a).abs_diff(key(b))
+}
+
+/// Uniform numbers in [0, 1) from a counter.
+fn uniform(i: u64, salt: u64) -> f32 {
+    (mix64(i ^ mix64(salt)) >> 40) as f32 / 16_777_216.0
+}
+
+fn unit(i: u64, salt: u64) -> Vec3A {
+    let z = 1.0 - 2.0 * uniform(i, salt);
+    let (s, c) = sincos_turns(uniform(i, salt + 1));
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3A::new(r * c, r * s, z)
+}
+
+fn job(scene: &str) -> RenderJob {
+    RenderJob::new(
+        &Scene::load(scene).expect("built-in"),
+        16,
+        16,
+        &Quality::default(),
+    )
+}
+
+/// The check program; `PARITY_OPTIONS` adds compiler options, to measure
+/// what each floating-point choice changes (docs/OPENCL.md).
+fn checks(d: &OpenClBackend) -> Checks<'_> {
+    let extra = std::env::var("PARITY_OPTIONS").unwrap_or_default();
+    d.checks(&extra).expect("the check program builds")
+}
+
+#[test]
+fn the_sampler_is_bit_exact() {
+    let Some(d) = device() else { return };
+    let n = 4096u64;
+    let input: Vec<u64> = (0..n)
+        .flat_map(|i| [mix64(i), mix64(i + n) % 1_000_000, i * 7])
+        .collect();
+    let out: Vec<u64> = checks(&d)
+        .run(
+            "check_rng",
+            n as usize,
+            8,
+            &[CheckArg::Buffer(bytemuck::cast_slice(&input))],
+        )
+        .expect("run");
+    for i in 0..n as usize {
+        let mut s = Sampler::new(input[3 * i], input[3 * i + 1], input[3 * i + 2]);
+        let cpu: Vec<u64> = (0..8).map(|_| s.next_u64()).collect();
+        assert_eq!(&out[8 * i..8 * i + 8], &cpu[..], "item {i}");
+    }
+}
+
+#[test]
+fn sincos_and_the_pixel_filters_agree_to_an_ulp() {
+    let Some(d) = device() else { return };
+    let c = checks(&d);
+    let n = 1 << 16;
+    let u: Vec<f32> = (0..n)
+        .map(|i| {
+            if i % 2 == 0 {
+                i as f32 / n as f32
+            } else {
+                uniform(i, 1)
+            }
+        })
+        .collect();
+    let out: Vec<f32> = c
+        .run(
+            "check_sincos",
+            n as usize,
+            2,
+            &[CheckArg::Buffer(bytemuck::cast_slice(&u))],
+        )
+        .expect("run");
+    let worst = (0..n as usize)
+        .map(|i| {
+            let (s, cs) = sincos_turns(u[i]);
+            ulps(out[2 * i], s).max(ulps(out[2 * i + 1], cs))
+        })
+        .max()
+        .unwrap_or(0);
+    assert!(worst <= 1, "sincos differs by {worst} ulps");
+
+    for filter in [Filter::Tent2x2, Filter::Box] {
+        let mut params = pack(&job("cornell")).params;
+        params.filter = u32::from(filter == Filter::Box);
+        let items = 1 << 14;
+        let out: Vec<f32> = c
+            .run(
+                "check_pixel_offset",
+                items,
+                2,
+                &[
+                    CheckArg::Buffer(bytemuck::cast_slice(&u[..2 * items])),
+                    CheckArg::Buffer(bytemuck::bytes_of(&params)),
+                ],
+            )
+            .expect("run");
+        for i in 0..items {
+            let (x, y) = filter.pixel_offset(i as u64, u[2 * i], u[2 * i + 1]);
+            assert!(
+                ulps(out[2 * i], x) <= 1 && ulps(out[2 * i + 1], y) <= 1,
+                "{filter:?} sample {i}: ({}, {}) vs ({x}, {y})",
+                out[2 * i],
+                out[2 * i + 1]
+            );
+        }
+    }
+}
+
+/// 1e5 rays from inside the scene in every direction, against each object
+/// and for the nearest hit.
+fn intersections_agree(d: &OpenClBackend, scene: &str) {
+    let job = job(scene);
+    let packed = pack(&job);
+    let world = &job.world;
+    let count = world.objects.len();
+    // Origins around the camera-relative scene centre, within its size.
+    let centre = world.objects.iter().find_map(|o| match &o.geometry {
+        Geometry::Quad(q) => Some(q.corner + 0.5 * (q.edge_u + q.edge_v)),
+        _ => None,
+    });
+    let (centre, size) = match centre {
+        Some(c) => (c, 40.0),
+        None => (job.camera.forward * 120.0, 40.0),
+    };
+    let n = 100_000u64;
+    let rays: Vec<Ray> = (0..n)
+        .map(|i| {
+            let jitter = Vec3A::new(
+                uniform(i, 10) - 0.5,
+                uniform(i, 11) - 0.5,
+                uniform(i, 12) - 0.5,
+            );
+            Ray::new(centre + jitter * size, unit(i, 20))
+        })
+        .collect();
+    let input: Vec<[f32; 4]> = rays
+        .iter()
+        .flat_map(|r| {
+            [
+                r.origin.extend(0.0).to_array(),
+                r.dir.extend(0.0).to_array(),
+            ]
+        })
+        .collect();
+    let out: Vec<f32> = checks(d)
+        .run(
+            "check_intersect",
+            n as usize,
+            count + 2,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&input)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
+                CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
+            ],
+        )
+        .expect("run");
+    let cpu_nearest = nearest_hits(
+        world,
+        &rays.iter().map(|r| (*r, Origin::NONE)).collect::<Vec<_>>(),
+    );
+    let (mut worst, mut hits, mut other_object) = (0u64, 0usize, 0usize);
+    for (i, ray) in rays.iter().enumerate() {
+        let r = &out[i * (count + 2)..(i + 1) * (count + 2)];
+        let mut ts = Vec::with_capacity(count);
+        for (j, o) in world.objects.iter().enumerate() {
+            let t = match &o.geometry {
+                Geometry::Sphere(s) => s.intersect(ray, Roots::Any),
+                Geometry::Quad(q) => q.intersect(ray),
+                Geometry::Instance(_) => unreachable!("no meshes here"),
+            };
+            let u = ulps(r[j], t);
+            assert!(
+                u <= 8,
+                "{scene}: ray {i}, object {j}: device {} vs CPU {t} ({u} ulps)",
+                r[j]
+            );
+            worst = worst.max(u);
+            ts.push(t);
+        }
+        let device_hit = r[count + 1].to_bits();
+        match cpu_nearest[i] {
+            None => assert_eq!(
+                device_hit,
+                u32::MAX,
+                "{scene}: ray {i}: the device hit {device_hit}, the CPU nothing"
+            ),
+            Some(h) => {
+                hits += 1;
+                assert!(
+                    ulps(r[count], h.t) <= 8,
+                    "{scene}: ray {i}: nearest t {} vs {}",
+                    r[count],
+                    h.t
+                );
+                if device_hit != h.object {
+                    // Only a tie within rounding may pick another object.
+                    other_object += 1;
+                    let td = ts[device_hit as usize];
+                    assert!(
+                        ulps(td, h.t) <= 8,
+                        "{scene}: ray {i}: object {device_hit} at {td} vs {} at {}",
+                        h.object,
+                        h.t
+                    );
+                }
+            }
+        }
+    }
+    eprintln!("{scene}: {hits} of {n} rays hit; worst {worst} ulps; {other_object} ties resolved differently");
+    assert!(
+        hits > n as usize / 2,
+        "{scene}: the rays mostly hit the scene ({hits})"
+    );
+    assert!(
+        other_object * 10_000 <= n as usize,
+        "{scene}: {other_object} different nearest objects"
+    );
+}
+
+#[test]
+fn sphere_and_quad_intersection_and_the_nearest_hit_agree_on_1e5_rays() {
+    let Some(d) = device() else { return };
+    intersections_agree(&d, "cornell-quads");
+    intersections_agree(&d, "smallpt");
+}
+
+#[test]
+fn scattering_agrees_for_every_material() {
+    let Some(d) = device() else { return };
+    let c = checks(&d);
+    let mut seen = Vec::new();
+    for scene in ["cornell-glass", "smallpt"] {
+        let job = job(scene);
+        let packed = pack(&job);
+        for (index, m) in job.world.materials.iter().enumerate() {
+            let kind = match m.bsdf {
+                Bsdf::Diffuse => "diffuse",
+                Bsdf::Mirror => "mirror",
+                Bsdf::Glass { schlick: false, .. } => "glass (exact Fresnel)",
+                Bsdf::Glass { schlick: true, .. } => "glass (Schlick)",
+            };
+            if seen.contains(&kind) {
+                continue;
+            }
+            seen.push(kind);
+            let n = 10_000u64;
+            let dirs: Vec<(Vec3A, Vec3A)> = (0..n).map(|i| (unit(i, 30), unit(i, 40))).collect();
+            let input: Vec<[f32; 4]> = dirs
+                .iter()
+                .flat_map(|(d, n)| [d.extend(0.0).to_array(), n.extend(0.0).to_array()])
+                .collect();
+            let out: Vec<f32> = c
+                .run(
+                    "check_scatter",
+                    n as usize,
+                    8,
+                    &[
+                        CheckArg::Buffer(bytemuck::cast_slice(&input)),
+                        CheckArg::Buffer(bytemuck::cast_slice(&packed.materials)),
+                        CheckArg::U32(index as u32),
+                    ],
+                )
+                .expect("run");
+            let mut decisions = 0;
+            for (i, (dir, normal)) in dirs.iter().enumerate() {
+                let entering = dir.dot(*normal) < 0.0;
+                let nl = if entering { *normal } else { -*normal };
+                let mut s = Sampler::new(0, i as u64, 0);
+                let cpu = scatter(m, *dir, entering, nl, &mut s);
+                let r = &out[8 * i..8 * i + 8];
+                let device_dir = Vec3A::new(r[0], r[1], r[2]);
+                assert_eq!(
+                    [r[3], r[4], r[5]],
+                    cpu.weight.to_array(),
+                    "{kind}: item {i}: weight"
+                );
+                assert_eq!(r[6] != 0.0, cpu.specular, "{kind}: item {i}: specular");
+                let gap = (device_dir - cpu.dir).abs().max_element();
+                if gap > 1e-6 {
+                    // A reflect/refract choice on a Fresnel value within an
+                    // ulp of the random number may go the other way.
+                    decisions += 1;
+                    assert!(
+                        matches!(m.bsdf, Bsdf::Glass { .. }),
+                        "{kind}: item {i}: {device_dir} vs {}",
+                        cpu.dir
+                    );
+                }
+            }
+            assert!(
+                decisions <= 1,
+                "{kind}: {decisions} of {n} directions differ"
+            );
+        }
+    }
+    assert_eq!(seen.len(), 4, "every material kind was checked: {seen:?}");
+}
+
+#[test]
+fn shared_constants_are_written_once_in_rust() {
+    use pathstream::render::backend::opencl::{shared_defines, SHARED_CONSTANTS, SOURCES};
+    let source = SOURCES.concat();
+    for (name, value) in SHARED_CONSTANTS {
+        assert!(
+            !source.contains(&format!("#define {name}")),
+            "kernels/ defines {name} again"
+        );
+        assert!(
+            shared_defines().contains(&format!("-D {name}={value}u")),
+            "{name} is not passed to the build"
+        );
+    }
+}
