@@ -40,10 +40,13 @@ __kernel void check_pixel_offset(__global float *out, uint n, __global const flo
 
 /* Ray i = (rays[2i].xyz origin, rays[2i+1].xyz unit direction) against every
  * object: its distance to each (the nearer root for spheres), then the
- * nearest hit by intersect() as (t, object index as float bits). P gives the
- * object count. Outputs per item: num_objects + 2. */
+ * nearest hit by intersect() as (t, object index as float bits), through
+ * the BVH when P says so. P gives the object count. Outputs per item:
+ * num_objects + 2. */
 __kernel void check_intersect(__global float *out, uint n, __global const float4 *rays,
-                              __global const Object *objects, __global const Params *P) {
+                              __global const Object *objects, __global const Params *P,
+                              __global const BvhNode *nodes, __global const uint *prims, __global const uint *big) {
+    Scene sc = {P, objects, 0, 0, nodes, prims, big};
     uint i = (uint)get_global_id(0);
     if (i >= n) {
         return;
@@ -58,7 +61,7 @@ __kernel void check_intersect(__global float *out, uint n, __global const float4
                                        : quad_intersect(ob, o, d);
     }
     uint hit;
-    r[count] = intersect(P, objects, o, d, NO_OBJECT, 0, &hit);
+    r[count] = intersect(&sc, o, d, NO_OBJECT, 0, &hit);
     r[count + 1u] = as_float(hit);
 }
 
@@ -84,4 +87,19 @@ __kernel void check_scatter(__global float *out, uint n, __global const float4 *
     r[5] = weight.z;
     r[6] = (float)specular;
     r[7] = 0.0f;
+}
+
+/* The nearest hit of ray i (as check_intersect's rays) by intersect(),
+ * through the BVH when P says so: (t, object index as float bits). */
+__kernel void check_nearest(__global float *out, uint n, __global const float4 *rays, __global const Object *objects,
+                            __global const Params *P, __global const BvhNode *nodes, __global const uint *prims,
+                            __global const uint *big) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {P, objects, 0, 0, nodes, prims, big};
+    uint hit;
+    out[2 * i] = intersect(&sc, rays[2 * i].xyz, rays[2 * i + 1].xyz, NO_OBJECT, 0, &hit);
+    out[2 * i + 1] = as_float(hit);
 }

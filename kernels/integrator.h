@@ -2,8 +2,11 @@
 
 #define MAX_SURVIVAL 0.99f
 
-inline float3 radiance(__global const Params *P, __global const Object *objects, __global const Material *materials,
-                       __global const uint *lights, float3 o, float3 d, Sampler *s) {
+inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
+    __global const Params *P = sc->P;
+    __global const Object *objects = sc->objects;
+    __global const Material *materials = sc->materials;
+    __global const uint *lights = sc->lights;
     int nee = USE_NEE; /* a variable: `x || !CONSTANT` draws a warning */
     float3 l = (float3)(0.0f);
     float3 beta = (float3)(1.0f);
@@ -13,7 +16,7 @@ inline float3 radiance(__global const Params *P, __global const Object *objects,
     uint bounces = 0;
     for (;;) {
         uint hit;
-        float t = intersect(P, objects, o, d, from, entering, &hit);
+        float t = intersect(sc, o, d, from, entering, &hit);
         if (hit == NO_OBJECT) {
             break;
         }
@@ -44,7 +47,7 @@ inline float3 radiance(__global const Params *P, __global const Object *objects,
                     continue;
                 }
                 uint shadow_hit;
-                intersect(P, objects, p, dir, hit, dot(dir, n) < 0.0f, &shadow_hit);
+                intersect(sc, p, dir, hit, dot(dir, n) < 0.0f, &shadow_hit);
                 if (shadow_hit == light) {
                     direct += materials[objects[light].material].emission.xyz * (cos_s * weight);
                 }

@@ -23,7 +23,9 @@ inline void add_compensated(__global float *hi, __global float *lo, float x) {
 
 __kernel void render(__global const Params *P, __global const Object *objects, __global const Material *materials,
                      __global const uint *lights, __global float *film, __global uint *rejected, ulong first,
-                     uint count, uint pixel_base, uint pixel_end) {
+                     uint count, uint pixel_base, uint pixel_end, __global const BvhNode *nodes,
+                     __global const uint *prims, __global const uint *big) {
+    Scene sc = {P, objects, materials, lights, nodes, prims, big};
     uint gid = pixel_base + (uint)get_global_id(0);
     if (gid >= pixel_end) {
         return;
@@ -37,7 +39,7 @@ __kernel void render(__global const Params *P, __global const Object *objects, _
         float2 off = pixel_offset(P, sample, next_2d(&s));
         float3 o, d;
         camera_ray(P, (float)x + off.x, (float)y + off.y, &o, &d);
-        float3 l = radiance(P, objects, materials, lights, o, d, &s);
+        float3 l = radiance(&sc, o, d, &s);
 #ifdef INJECT_NAN_EVERY
         if (sample % INJECT_NAN_EVERY == 0UL) {
             l.y = NAN;
@@ -59,6 +61,7 @@ __kernel void layout_sizes(__global uint *out) {
     out[0] = (uint)sizeof(Object);
     out[1] = (uint)sizeof(Material);
     out[2] = (uint)sizeof(Params);
+    out[3] = (uint)sizeof(BvhNode);
 }
 
 /* Adds `value` to a compensated sum `count` times, as the film does: the

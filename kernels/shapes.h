@@ -35,46 +35,40 @@ inline float quad_intersect(__global const Object *ob, float3 o, float3 d) {
     return (a >= 0.0f && a <= 1.0f && b >= 0.0f && b <= 1.0f) ? t : INFINITY;
 }
 
-/* Nearest hit, never the surface the ray starts on (world.rs). Returns the
- * distance; *hit is the object index or NO_OBJECT. */
-inline float intersect(__global const Params *P, __global const Object *objects, float3 o, float3 d, uint from,
-                       int entering, uint *hit) {
-    float oo = dot(o, o);
-    float od = dot(o, d);
-    float best = INFINITY;
-    *hit = NO_OBJECT;
-    for (uint i = 0; i < OBJECT_COUNT; ++i) {
-        __global const Object *ob = &objects[i];
-        float t;
+/* Offers object i to the nearest hit so far (*best, *hit), never the
+ * surface the ray starts on (world/mod.rs, offer_object): a sphere the ray
+ * leaves outwards is skipped, one it enters gives its far root; a quad it
+ * starts on is skipped. Ties go to the lower object index. */
+inline void offer_object(__global const Object *objects, uint i, float3 o, float3 d, float oo, float od, uint from,
+                         int entering, float *best, uint *hit) {
+    __global const Object *ob = &objects[i];
+    float t;
 #if HAS_SPHERES && HAS_QUADS
-        if (ob->kind == KIND_SPHERE) {
+    if (ob->kind == KIND_SPHERE) {
 #endif
 #if HAS_SPHERES
-            if (i == from && !entering) {
-                continue;
-            }
-            t = sphere_intersect(ob, o, d, oo, od, i == from);
+        if (i == from && !entering) {
+            return;
+        }
+        t = sphere_intersect(ob, o, d, oo, od, i == from);
 #endif
 #if HAS_SPHERES && HAS_QUADS
-        } else {
+    } else {
 #endif
 #if HAS_QUADS
-            if (i == from) {
-                continue;
-            }
-            t = quad_intersect(ob, o, d);
+        if (i == from) {
+            return;
+        }
+        t = quad_intersect(ob, o, d);
 #endif
 #if HAS_SPHERES && HAS_QUADS
-        }
-#endif
-        if (t < best) {
-            best = t;
-            *hit = i;
-        }
     }
-    return best;
+#endif
+    if (t < *best || (t == *best && t < INFINITY && i < *hit)) {
+        *best = t;
+        *hit = i;
+    }
 }
-
 inline float3 object_normal(__global const Object *ob, float3 p) {
 #if HAS_SPHERES && HAS_QUADS
     if (ob->kind == KIND_SPHERE) {

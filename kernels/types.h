@@ -48,7 +48,33 @@ typedef struct {
     uint num_objects;
     uint num_lights;
     uint pad0;
+    uint use_bvh;    /* nearest hits through the BVH (nodes, prims, big) */
+    uint num_big;    /* objects tested one by one before the BVH */
+    uint pad1;
+    uint pad2;
 } Params;
+
+/* A BVH node (render/bvh/mod.rs, BvhNode): four children's boxes as
+ * structure of arrays, bounds[0..3] the min x, y, z and bounds[3..6] the
+ * max x, y, z of children 0..3. Child i is an inner node (count[i] == 0,
+ * child[i] its index), a leaf (count[i] > 0 slots from child[i]), or empty
+ * (an inverted box that no ray meets). */
+typedef struct {
+    float4 bounds[6];
+    uint child[4];
+    uint count[4];
+} BvhNode;
+
+/* The scene's buffers, as one argument for the routines that read them. */
+typedef struct {
+    __global const Params *P;
+    __global const Object *objects;
+    __global const Material *materials;
+    __global const uint *lights;
+    __global const BvhNode *nodes; /* the objects' BVH (use_bvh) */
+    __global const uint *prims;    /* object of each leaf slot */
+    __global const uint *big;      /* objects tested before the BVH */
+} Scene;
 
 /* What the program was specialised for. Without SPECIALISED every feature is
  * compiled in and counts and switches are read from Params (the generic
@@ -63,6 +89,9 @@ typedef struct {
 #define HAS_EXACT 1
 #define HAS_SPHERE_LIGHTS 1
 #define HAS_QUAD_LIGHTS 1
+#define HAS_BVH 1
+#define BVH_STACK 196
+#define USE_BVH (P->use_bvh != 0u)
 #define OBJECT_COUNT (P->num_objects)
 #define LIGHT_COUNT (P->num_lights)
 #define MAX_DEPTH (P->max_depth)
@@ -70,6 +99,7 @@ typedef struct {
 #define USE_NEE (P->nee != 0u)
 #define USE_BOX_FILTER (P->filter != 0u)
 #else
+#define USE_BVH HAS_BVH
 #define OBJECT_COUNT NUM_OBJECTS
 #define LIGHT_COUNT NUM_LIGHTS
 #define MAX_DEPTH MAX_DEPTH_VALUE

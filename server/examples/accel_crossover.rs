@@ -1,6 +1,7 @@
 //! Where the BVH starts to beat scanning every object: `cornell` with N
 //! extra small diffuse spheres, or quads (random, seeded), rendered at
-//! 128x128 for a second each way. `cargo run --release --example accel_crossover`.
+//! 128x128 for a second each way, on the CPU (default) or OpenCL
+//! (`-- opencl`). `cargo run --release --example accel_crossover`.
 //! The result sets `render::world::{SCAN_MAX_COST, scan_cost}`.
 
 use pathstream::render::progressive;
@@ -30,14 +31,22 @@ fn scene(extra: usize, quads: bool) -> Scene {
     Scene::from_json_value(j).expect("valid")
 }
 
-fn rate(s: &Scene, choice: AccelChoice) -> f64 {
+fn rate(s: &Scene, choice: AccelChoice, backend: BackendChoice) -> f64 {
     let q = Quality {
         time_ms: Some(1000),
         ..Quality::default()
     };
     let mut job = RenderJob::new(s, 128, 128, &q);
     job.world = World::with_accel(s, s.camera.position, choice);
-    let mut b = Backend::choose(BackendChoice::Cpu).expect("cpu");
+    let mut b = Backend::choose(backend).expect("the backend");
+    // Program build and first launch (PoCL compiles per launch size) first.
+    b.prepare(&job).expect("prepare");
+    let warm = Quality {
+        spp: Some(2),
+        time_ms: None,
+        ..q
+    };
+    progressive::render(&job, &mut b, &mut Film::new(128, 128), &warm, |_| {}).expect("warm-up");
     let mut film = Film::new(128, 128);
     progressive::render(&job, &mut b, &mut film, &q, |_| {})
         .expect("render")
@@ -45,6 +54,14 @@ fn rate(s: &Scene, choice: AccelChoice) -> f64 {
 }
 
 fn main() {
+    let backend = match std::env::args().nth(1).as_deref() {
+        None | Some("cpu") => BackendChoice::Cpu,
+        Some("opencl") => BackendChoice::OpenCl { device: None },
+        Some(other) => {
+            eprintln!("usage: accel_crossover [cpu|opencl] (not {other})");
+            std::process::exit(2);
+        }
+    };
     println!("| extra objects | objects | scan M paths/s | BVH M paths/s | BVH / scan |");
     println!("| --- | ---: | ---: | ---: | ---: |");
     for (quads, counts) in [
@@ -53,7 +70,10 @@ fn main() {
     ] {
         for extra in counts {
             let s = scene(extra, quads);
-            let (scan, bvh) = (rate(&s, AccelChoice::Scan), rate(&s, AccelChoice::Bvh));
+            let (scan, bvh) = (
+                rate(&s, AccelChoice::Scan, backend),
+                rate(&s, AccelChoice::Bvh, backend),
+            );
             println!(
                 "| {} | {} | {:.2} | {:.2} | {:.2} |",
                 if quads { "quads" } else { "spheres" },

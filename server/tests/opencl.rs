@@ -43,8 +43,8 @@ fn shared_structs_have_the_same_size_on_the_device() {
     let sizes = d.device_layout_sizes().expect("layout kernel");
     assert_eq!(
         sizes,
-        [96, 48, 96],
-        "Object, Material, Params as the device compiler sees them"
+        [96, 48, 112, 128],
+        "Object, Material, Params, BvhNode as the device compiler sees them"
     );
 }
 
@@ -172,6 +172,32 @@ fn nee_on_and_off_agree() {
         2048,
     );
     assert_agree(&a, &b, 8, 4.5, 0.0, "opencl cornell: NEE on vs off");
+}
+
+#[test]
+fn cpu_and_opencl_agree_on_a_scene_searched_through_the_bvh() {
+    let Some(mut cl) = opencl() else { return };
+    // cornell and 300 small spheres, a third of them mirrors: the six
+    // walls are tested first, the rest through the BVH, on both backends.
+    let mut j = serde_json::to_value(scene("cornell").to_json()).expect("json");
+    j["materials"]["chrome"] = serde_json::json!({"type": "mirror", "albedo": [0.9, 0.9, 0.9]});
+    let objects = j["objects"].as_array_mut().expect("objects");
+    for i in 0..300u64 {
+        let mut s = pathstream::render::sampler::Sampler::new(7, i, 0);
+        let c = [
+            10.0 + 80.0 * s.next_f32(),
+            5.0 + 60.0 * s.next_f32(),
+            20.0 + 120.0 * s.next_f32(),
+        ];
+        let material = if i % 3 == 0 { "chrome" } else { "white" };
+        objects.push(serde_json::json!({"type": "sphere", "center": c, "radius": 1.0 + 3.0 * s.next_f32(), "material": material}));
+    }
+    let s = Scene::from_json_value(j).expect("valid");
+    let q = Quality::default();
+    let cpu = render(&s, 16, 16, &Quality { seed: 10, ..q }, 256);
+    let gpu = render_on(&mut cl, &s, 16, 16, &Quality { seed: 11, ..q }, 256);
+    assert_clean(&gpu, "crowded cornell");
+    assert_agree(&cpu, &gpu, 8, 4.5, 1e-4, "crowded cornell: CPU vs OpenCL");
 }
 
 #[test]
@@ -336,6 +362,12 @@ fn every_feature_combination_builds() {
                         num_objects: 3,
                         num_lights: u32::from(lights != 0),
                         max_depth: u32::from(materials),
+                        // With and without the BVH code.
+                        bvh_stack: if lights % 2 == 0 {
+                            3 * u32::from(materials) + 4
+                        } else {
+                            0
+                        },
                         inject_nan_every: None,
                     }));
                 }

@@ -5,7 +5,9 @@
 //! any OpenCL device (PoCL in CI, where a missing device is a failure).
 
 use pathstream::render::backend::nearest_hits;
-use pathstream::render::backend::opencl::{pack, CheckArg, Checks, KernelParams, OpenClBackend};
+use pathstream::render::backend::opencl::{
+    device_uses_bvh, pack, CheckArg, Checks, KernelParams, OpenClBackend,
+};
 use pathstream::render::material::{scatter, Bsdf};
 use pathstream::render::math::{sincos_turns, Vec3A};
 use pathstream::render::ray::Ray;
@@ -200,6 +202,9 @@ fn intersections_agree(d: &OpenClBackend, scene: &str) {
                 CheckArg::Buffer(bytemuck::cast_slice(&input)),
                 CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
                 CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.nodes)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.prims)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.big)),
             ],
         )
         .expect("run");
@@ -271,6 +276,125 @@ fn sphere_and_quad_intersection_and_the_nearest_hit_agree_on_1e5_rays() {
     let Some(d) = device() else { return };
     intersections_agree(&d, "cornell-quads");
     intersections_agree(&d, "smallpt");
+}
+
+/// `cornell` (or `cornell-quads`) with `extra` small random spheres (or
+/// quads): enough to be searched through the BVH.
+fn crowded(base: &str, extra: u64, quads: bool) -> RenderJob {
+    let mut j = serde_json::to_value(Scene::load(base).expect("built-in").to_json()).expect("json");
+    let objects = j["objects"].as_array_mut().expect("objects");
+    for i in 0..extra {
+        let c = [
+            10.0 + 80.0 * uniform(i, 50),
+            5.0 + 70.0 * uniform(i, 51),
+            20.0 + 130.0 * uniform(i, 52),
+        ];
+        let size = if quads {
+            2.0 + 10.0 * uniform(i, 53)
+        } else {
+            0.5 + 4.0 * uniform(i, 53)
+        };
+        objects.push(if quads {
+            serde_json::json!({"type": "quad", "corner": c, "edge_u": [size, 0.0, 0.0], "edge_v": [0.0, size, size], "material": "white"})
+        } else {
+            serde_json::json!({"type": "sphere", "center": c, "radius": size, "material": "white"})
+        });
+    }
+    let scene = Scene::from_json_value(j).expect("valid");
+    RenderJob::new(&scene, 16, 16, &Quality::default())
+}
+
+/// The device's nearest hit through its BVH against the CPU's on 1e5 rays
+/// from inside the box.
+fn nearest_agrees(d: &OpenClBackend, label: &str, job: &RenderJob) {
+    assert!(
+        device_uses_bvh(&job.world),
+        "{label}: searched through the BVH on the device"
+    );
+    let packed = pack(job);
+    let n = 100_000u64;
+    let centre = Vec3A::from((job.camera.forward * 140.0).to_array());
+    let rays: Vec<Ray> = (0..n)
+        .map(|i| {
+            let jitter = Vec3A::new(
+                uniform(i, 60) - 0.5,
+                uniform(i, 61) - 0.5,
+                uniform(i, 62) - 0.5,
+            );
+            Ray::new(centre + jitter * 60.0, unit(i, 63))
+        })
+        .collect();
+    let input: Vec<[f32; 4]> = rays
+        .iter()
+        .flat_map(|r| {
+            [
+                r.origin.extend(0.0).to_array(),
+                r.dir.extend(0.0).to_array(),
+            ]
+        })
+        .collect();
+    let out: Vec<f32> = checks(d)
+        .run(
+            "check_nearest",
+            n as usize,
+            2,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&input)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
+                CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.nodes)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.prims)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.big)),
+            ],
+        )
+        .expect("run");
+    let cpu = nearest_hits(
+        &job.world,
+        &rays.iter().map(|r| (*r, Origin::NONE)).collect::<Vec<_>>(),
+    );
+    let mut small = 0;
+    for i in 0..n as usize {
+        let (t, hit) = (out[2 * i], out[2 * i + 1].to_bits());
+        match cpu[i] {
+            None => assert_eq!(
+                hit,
+                u32::MAX,
+                "{label}: ray {i}: the device hit {hit} at {t}, the CPU nothing"
+            ),
+            Some(h) => {
+                assert_eq!(
+                    (hit, ulps(t, h.t)),
+                    (h.object, 0),
+                    "{label}: ray {i}: device {t} object {hit}, CPU {} object {}",
+                    h.t,
+                    h.object
+                );
+                small += usize::from(h.object >= 9);
+            }
+        }
+    }
+    eprintln!("{label}: {small} of {n} rays hit one of the added objects");
+    assert!(
+        small >= 500,
+        "{label}: the rays meet the added objects ({small})"
+    );
+}
+
+#[test]
+fn the_bvh_nearest_hit_agrees_on_1e5_rays() {
+    let Some(d) = device() else { return };
+    // Six radius-1e5 walls tested before the BVH, 600 small spheres in it.
+    nearest_agrees(&d, "cornell + 600 spheres", &crowded("cornell", 600, false));
+    // 21 spheres: scanned on the CPU, a BVH built for the device.
+    let few = crowded("cornell", 12, false);
+    assert!(!few.world.uses_bvh());
+    nearest_agrees(&d, "cornell + 12 spheres", &few);
+    // Quad walls and 120 quads, all in the BVH.
+    nearest_agrees(
+        &d,
+        "cornell-quads + 120 quads",
+        &crowded("cornell-quads", 120, true),
+    );
 }
 
 #[test]

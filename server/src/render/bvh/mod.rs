@@ -20,7 +20,7 @@ mod traverse;
 
 pub use aabb::Aabb;
 pub use build::MAX_LEAF;
-pub use traverse::BoxRay;
+pub use traverse::{BoxRay, ROBUST};
 
 use bytemuck::{Pod, Zeroable};
 

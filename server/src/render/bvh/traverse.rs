@@ -13,8 +13,9 @@
 use super::{Bvh, BvhNode, EMPTY};
 use crate::render::math::{gamma, Vec3A, Vec4};
 
-/// Exit distances are scaled by this before the overlap test.
-const ROBUST: f32 = 1.0 + 2.0 * gamma(3);
+/// Exit distances are scaled by this before the overlap test (the OpenCL
+/// kernel gets the same bits as `BVH_ROBUST_BITS`).
+pub const ROBUST: f32 = 1.0 + 2.0 * gamma(3);
 
 /// Deepest node stack a traversal needs: three more children than it pops
 /// at each level, and trees are at most 64 levels deep (see `build`).

@@ -140,31 +140,14 @@ impl World {
                     .map(SphereBatch::new)
                     .collect(),
                 quads,
+                boxes,
+                bvh: std::sync::OnceLock::new(),
             }
         } else {
-            let big = big_spheres(&objects, &boxes);
-            let is_big = |i: usize| big.binary_search(&(i as u32)).is_ok();
-            let batch: Vec<(u32, Sphere)> = big
-                .iter()
-                .filter_map(|&i| match objects[i as usize].geometry {
-                    Geometry::Sphere(s) => Some((i, s)),
-                    _ => None,
-                })
-                .collect();
-            let ids: Vec<u32> = (0..boxes.len())
-                .filter(|&i| !is_big(i))
-                .map(|i| i as u32)
-                .collect();
-            let mut bvh = Bvh::build(&ids.iter().map(|&i| boxes[i as usize]).collect::<Vec<_>>());
-            for p in &mut bvh.prims {
-                *p = ids[*p as usize];
-            }
+            let (bvh, big) = object_bvh(&objects, &boxes);
             Accel::Bvh {
                 bvh,
-                big: batch
-                    .chunks(SPHERE_BATCH_LANES)
-                    .map(SphereBatch::new)
-                    .collect(),
+                big: sphere_batches(&objects, &big),
             }
         };
         Self {
@@ -175,8 +158,40 @@ impl World {
             lights,
             environment,
             accel,
+            accel_choice: choice,
         }
     }
+}
+
+/// A BVH over the objects that are not too large for one, and those
+/// (ascending), which are tested one by one before it.
+pub(super) fn object_bvh(objects: &[WorldObject], boxes: &[Aabb]) -> (Bvh, Vec<u32>) {
+    let big = big_spheres(objects, boxes);
+    let is_big = |i: usize| big.binary_search(&(i as u32)).is_ok();
+    let ids: Vec<u32> = (0..boxes.len())
+        .filter(|&i| !is_big(i))
+        .map(|i| i as u32)
+        .collect();
+    let mut bvh = Bvh::build(&ids.iter().map(|&i| boxes[i as usize]).collect::<Vec<_>>());
+    for p in &mut bvh.prims {
+        *p = ids[*p as usize];
+    }
+    (bvh, big)
+}
+
+/// The spheres among `ids`, eight to a batch.
+fn sphere_batches(objects: &[WorldObject], ids: &[u32]) -> Vec<SphereBatch> {
+    let spheres: Vec<(u32, Sphere)> = ids
+        .iter()
+        .filter_map(|&i| match objects[i as usize].geometry {
+            Geometry::Sphere(s) => Some((i, s)),
+            _ => None,
+        })
+        .collect();
+    spheres
+        .chunks(SPHERE_BATCH_LANES)
+        .map(SphereBatch::new)
+        .collect()
 }
 
 /// The spheres that enclose the scene: whose boxes hold at least three

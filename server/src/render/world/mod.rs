@@ -21,7 +21,7 @@ mod scan;
 pub use build::{scan_cost, AccelChoice, SCAN_MAX_COST};
 pub use instance::Instance;
 
-use crate::render::bvh::{BoxRay, Bvh};
+use crate::render::bvh::{Aabb, BoxRay, Bvh};
 use crate::render::isa::Isa;
 use crate::render::light::Lights;
 use crate::render::material::SurfaceMaterial;
@@ -133,6 +133,11 @@ enum Accel {
         sphere_batches: Vec<SphereBatch>,
         /// The quads again with their object indices.
         quads: Vec<(u32, Quad)>,
+        /// Each object's box, for a device that searches by BVH what the
+        /// CPU scans ([`World::device_bvh`]).
+        boxes: Vec<Aabb>,
+        /// That BVH and the objects tested before it, built on first use.
+        bvh: std::sync::OnceLock<(Bvh, Vec<u32>)>,
     },
     /// A BVH over most objects; spheres that enclose the scene (smallpt's
     /// walls, a furnace shell) are scanned first instead, in batches:
@@ -152,6 +157,9 @@ pub struct World {
     /// Radiance of rays that leave the scene.
     pub environment: Vec3A,
     accel: Accel,
+    /// What the world was asked for: `Auto` lets each backend choose by
+    /// its own measurement; `Bvh` and `Scan` hold for every backend.
+    pub accel_choice: AccelChoice,
 }
 
 impl World {
@@ -168,6 +176,34 @@ impl World {
         }
     }
 
+    /// The objects' BVH and the objects to test one by one before it
+    /// (ascending), for a backend whose own measurement prefers the BVH:
+    /// the world's own, or for a scanned world one built on first use.
+    pub fn device_bvh(&self) -> (&Bvh, Vec<u32>) {
+        match &self.accel {
+            Accel::Bvh { bvh, .. } => (bvh, self.scanned_first()),
+            Accel::Scan { boxes, bvh, .. } => {
+                let (b, big) = bvh.get_or_init(|| build::object_bvh(&self.objects, boxes));
+                (b, big.clone())
+            }
+        }
+    }
+
+    /// The objects a BVH world tests one by one before its BVH (spheres so
+    /// large that they would fill every node's box), in ascending order;
+    /// none for a scanned world.
+    pub fn scanned_first(&self) -> Vec<u32> {
+        match &self.accel {
+            Accel::Bvh { big, .. } => big
+                .iter()
+                .flat_map(|b| b.ids)
+                .filter(|&id| id >= 0.0)
+                .map(|id| id as u32)
+                .collect(),
+            Accel::Scan { .. } => Vec::new(),
+        }
+    }
+
     /// Nearest hit along `ray`, never the surface the ray starts on; the
     /// spheres of a scan are tested with `isa`'s kernel.
     #[inline(always)]
@@ -176,6 +212,7 @@ impl World {
             Accel::Scan {
                 sphere_batches,
                 quads,
+                ..
             } => scan::nearest(isa, sphere_batches, quads, ray, from),
             Accel::Bvh { bvh, big } => {
                 let mut best = if big.is_empty() {

@@ -2,11 +2,12 @@
 //! names, `#[repr(C)]`, 16-byte aligned, sizes asserted here and checked
 //! against the device's own `sizeof` by the `layout_sizes` kernel.
 
+use crate::render::bvh::BvhNode;
 use crate::render::job::RenderJob;
 use crate::render::light::EmitterShape;
 use crate::render::material::Bsdf;
 use crate::render::math::Vec3A;
-use crate::render::world::{Geometry, World};
+use crate::render::world::{AccelChoice, Geometry, World};
 use crate::render::Filter;
 use bytemuck::{Pod, Zeroable};
 
@@ -20,13 +21,14 @@ pub const NO_OBJECT: u32 = u32::MAX;
 
 /// The constants host and kernel share, written once: every program is
 /// built with them as `-D NAME=VALUEu` (kernels/types.h defines none).
-pub const SHARED_CONSTANTS: [(&str, u32); 6] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 7] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("MAT_DIFFUSE", MAT_DIFFUSE),
     ("MAT_MIRROR", MAT_MIRROR),
     ("MAT_GLASS", MAT_GLASS),
     ("NO_OBJECT", NO_OBJECT),
+    ("BVH_ROBUST_BITS", crate::render::bvh::ROBUST.to_bits()),
 ];
 
 /// [`SHARED_CONSTANTS`] as compiler options.
@@ -82,14 +84,50 @@ pub struct Params {
     pub num_objects: u32,
     pub num_lights: u32,
     pub pad0: u32,
+    /// 1 when nearest hits are found through the BVH (nodes, prims, big).
+    pub use_bvh: u32,
+    /// Objects tested one by one before the BVH (`big`).
+    pub num_big: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
 const _: () = assert!(std::mem::size_of::<Material>() == 48);
-const _: () = assert!(std::mem::size_of::<Params>() == 96);
+const _: () = assert!(std::mem::size_of::<Params>() == 112);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
+}
+
+/// The object loop's cost per ray on a device, in units of one sphere
+/// test: a quad costs two.
+pub fn device_scan_cost(spheres: usize, quads: usize) -> usize {
+    spheres + 2 * quads
+}
+
+/// Scenes whose loop costs more than this are searched through the BVH on
+/// a device. Measured on PoCL (`cargo run --release --example
+/// accel_crossover -- opencl`, docs/OPENCL.md): the BVH wins from about 17
+/// spheres, or 9 spheres and 4 quads, far sooner than on the CPU, whose
+/// scan tests eight spheres at once.
+pub const DEVICE_SCAN_MAX_COST: usize = 16;
+
+/// Whether the kernel searches `w` through a BVH: the device's own
+/// measurement, unless the world was built with a fixed choice.
+pub fn device_uses_bvh(w: &World) -> bool {
+    match w.accel_choice {
+        AccelChoice::Bvh => true,
+        AccelChoice::Scan => false,
+        AccelChoice::Auto => {
+            let quads = w
+                .objects
+                .iter()
+                .filter(|o| matches!(o.geometry, Geometry::Quad(_)))
+                .count();
+            device_scan_cost(w.objects.len() - quads, quads) > DEVICE_SCAN_MAX_COST
+        }
+    }
 }
 
 /// The objects the kernel's next-event estimation aims at: every emissive
@@ -109,6 +147,12 @@ pub struct Packed {
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
     pub lights: Vec<u32>,
+    /// The objects' BVH as the CPU traverses it (empty for a scanned world):
+    /// its nodes, the object of each leaf slot, and the objects tested one
+    /// by one before it.
+    pub nodes: Vec<BvhNode>,
+    pub prims: Vec<u32>,
+    pub big: Vec<u32>,
 }
 
 pub fn pack(job: &RenderJob) -> Packed {
@@ -173,11 +217,69 @@ pub fn pack(job: &RenderJob) -> Packed {
         num_objects: w.objects.len() as u32,
         num_lights: kernel_lights(w).len() as u32,
         pad0: 0,
+        use_bvh: 0,
+        num_big: 0,
+        pad1: 0,
+        pad2: 0,
     };
-    Packed {
+    let mut packed = Packed {
         params,
         objects,
         materials,
         lights: kernel_lights(w),
+        nodes: Vec::new(),
+        prims: Vec::new(),
+        big: Vec::new(),
+    };
+    if device_uses_bvh(w) {
+        let (bvh, big) = w.device_bvh();
+        packed.nodes = bvh.nodes.clone();
+        packed.prims = bvh.prims.clone();
+        packed.params.use_bvh = 1;
+        packed.params.num_big = big.len() as u32;
+        packed.big = big;
+    }
+    packed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::scene::builtin;
+    use crate::render::world::World;
+
+    #[test]
+    fn the_device_searches_by_bvh_from_its_own_crossover() {
+        let world = |name: &str, choice| {
+            let s = builtin(name).expect("built-in");
+            World::with_accel(&s, s.camera.position, choice)
+        };
+        for name in [
+            "cornell",
+            "cornell-glass",
+            "cornell-quads",
+            "smallpt",
+            "furnace",
+        ] {
+            assert!(
+                !device_uses_bvh(&world(name, AccelChoice::Auto)),
+                "{name} is looped over"
+            );
+        }
+        assert!(
+            device_uses_bvh(&world("cornell", AccelChoice::Bvh)),
+            "a forced choice holds"
+        );
+        assert!(
+            device_scan_cost(16, 0) <= DEVICE_SCAN_MAX_COST
+                && device_scan_cost(17, 0) > DEVICE_SCAN_MAX_COST
+        );
+        assert!(device_scan_cost(9, 4) > DEVICE_SCAN_MAX_COST);
+        // A BVH built for the device where the CPU scans: every object once.
+        let w = world("cornell-quads", AccelChoice::Auto);
+        let (bvh, big) = w.device_bvh();
+        let mut all: Vec<u32> = bvh.prims.iter().copied().chain(big).collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..w.objects.len() as u32).collect::<Vec<_>>());
     }
 }

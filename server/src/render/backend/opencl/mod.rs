@@ -23,8 +23,8 @@ mod program;
 pub use check::{CheckArg, Checks};
 pub use devices::{auto_pick, list as list_devices, DeviceInfo};
 pub use layout::{
-    pack, shared_defines, Material as KernelMaterial, Object as KernelObject, Packed,
-    Params as KernelParams, SHARED_CONSTANTS,
+    device_uses_bvh, pack, shared_defines, Material as KernelMaterial, Object as KernelObject,
+    Packed, Params as KernelParams, SHARED_CONSTANTS,
 };
 pub use program::{common_options, Features, ProgramKey, SOURCES};
 
@@ -111,6 +111,9 @@ struct JobState {
     objects: Buffer<layout::Object>,
     materials: Buffer<layout::Material>,
     lights: Buffer<u32>,
+    nodes: Buffer<crate::render::bvh::BvhNode>,
+    prims: Buffer<u32>,
+    big: Buffer<u32>,
     film: Buffer<f32>,
     rejected: Buffer<u32>,
     pixels: usize,
@@ -273,9 +276,9 @@ impl OpenClBackend {
     }
 
     /// `sizeof` of each shared struct as the device compiler sees it:
-    /// (Object, Material, Params).
-    pub fn device_layout_sizes(&self) -> Result<[u32; 3], OpenClError> {
-        let mut out = [0u32; 3];
+    /// (Object, Material, Params, BvhNode).
+    pub fn device_layout_sizes(&self) -> Result<[u32; 4], OpenClError> {
+        let mut out = [0u32; 4];
         self.run_check_kernel("layout_sizes", &mut out, |_| Ok(()))?;
         Ok(out)
     }
@@ -418,6 +421,9 @@ impl OpenClBackend {
             objects: self.upload(Access::ReadOnly, &packed.objects)?,
             materials: self.upload(Access::ReadOnly, &packed.materials)?,
             lights: self.upload(Access::ReadOnly, &packed.lights)?,
+            nodes: self.upload(Access::ReadOnly, &packed.nodes)?,
+            prims: self.upload(Access::ReadOnly, &packed.prims)?,
+            big: self.upload(Access::ReadOnly, &packed.big)?,
             film: self.upload(Access::ReadWrite, &device_film)?,
             rejected: self.upload(Access::ReadWrite, &[0u32])?,
             pixels: film.pixels().len(),
@@ -539,7 +545,8 @@ impl OpenClBackend {
         #[allow(unsafe_code)]
         // SAFETY: the types of `render` in kernels/render.cl, in order: six
         // `__global` pointers (the cl_mem handles of this job's buffers),
-        // `ulong first`, `uint count`, `uint pixel_base`, `uint pixel_end`.
+        // `ulong first`, `uint count`, `uint pixel_base`, `uint pixel_end`,
+        // and three more `__global` pointers (the BVH's buffers).
         unsafe {
             kernel
                 .set_arg(0, &state.params.get())
@@ -563,12 +570,23 @@ impl OpenClBackend {
             kernel.set_arg(7, &count).map_err(call("set_arg"))?;
             kernel.set_arg(8, &base).map_err(call("set_arg"))?;
             kernel.set_arg(9, &end).map_err(call("set_arg"))?;
+            kernel
+                .set_arg(10, &state.nodes.get())
+                .map_err(call("set_arg"))?;
+            kernel
+                .set_arg(11, &state.prims.get())
+                .map_err(call("set_arg"))?;
+            kernel
+                .set_arg(12, &state.big.get())
+                .map_err(call("set_arg"))?;
         }
         let global = [size];
         #[allow(unsafe_code)]
         // SAFETY: every argument is set and the buffers live in `state` past
         // the `finish` below. The kernel reads as many objects, materials and
-        // lights as `layout::pack` counted into the params with them, and
+        // lights as `layout::pack` counted into the params with them, BVH
+        // nodes and slots only as the nodes it uploaded reach (and only when
+        // the params say the BVH is used), and
         // work-items at or past `pixel_end` (<= the film's pixels) return
         // before touching the film of `pixels` x FILM_FLOATS floats.
         unsafe {

@@ -4,7 +4,8 @@
 //! the source.
 
 use super::layout::{
-    kernel_lights, shared_defines, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
+    device_uses_bvh, kernel_lights, shared_defines, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS,
+    MAT_MIRROR,
 };
 use crate::render::job::RenderJob;
 use crate::render::material::Bsdf;
@@ -14,11 +15,12 @@ use opencl3::context::Context;
 use opencl3::program::Program;
 
 /// The kernel's sources in dependency order (`kernels/`, built into the binary).
-pub const SOURCES: [&str; 8] = [
+pub const SOURCES: [&str; 9] = [
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
     include_str!("../../../../../kernels/camera.h"),
     include_str!("../../../../../kernels/shapes.h"),
+    include_str!("../../../../../kernels/bvh.h"),
     include_str!("../../../../../kernels/materials.h"),
     include_str!("../../../../../kernels/lights.h"),
     include_str!("../../../../../kernels/integrator.h"),
@@ -42,6 +44,9 @@ pub struct Features {
     pub num_objects: u32,
     pub num_lights: u32,
     pub max_depth: u32,
+    /// Entries of the BVH traversal stack (three per level and four), or 0
+    /// when the world is scanned (no BVH code is compiled in).
+    pub bvh_stack: u32,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
     pub inject_nan_every: Option<u64>,
 }
@@ -102,6 +107,11 @@ impl Features {
                 0
             },
             max_depth: job.settings.max_depth,
+            bvh_stack: if device_uses_bvh(w) {
+                bvh_stack(w.device_bvh().0.depth)
+            } else {
+                0
+            },
             inject_nan_every: None,
         }
     }
@@ -112,7 +122,8 @@ impl Features {
         let mut o = format!(
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
              -D HAS_GLASS={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
-             -D NEE={} -D BOX_FILTER={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u",
+             -D NEE={} -D BOX_FILTER={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
+             -D HAS_BVH={} -D BVH_STACK={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -127,6 +138,8 @@ impl Features {
             self.num_objects,
             self.num_lights,
             self.max_depth,
+            b(self.bvh_stack > 0),
+            self.bvh_stack.max(1),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));
@@ -141,6 +154,12 @@ impl Features {
 pub enum ProgramKey {
     Specialised(Features),
     Generic { inject_nan_every: Option<u64> },
+}
+
+/// Stack entries a traversal of a BVH `depth` levels deep needs: a node
+/// pushes at most four children and pops one, per level.
+pub fn bvh_stack(depth: u32) -> u32 {
+    3 * depth + 4
 }
 
 /// Options every program is built with: the language version and the
