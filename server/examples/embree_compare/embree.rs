@@ -1,0 +1,322 @@
+//! Embree 3 through a small `extern "C"` block (rtcore.h, 3.13): a device,
+//! a scene of one triangle mesh, and single-ray queries on rayon's threads.
+
+use pathstream::render::math::Affine3A;
+use pathstream::render::ray::Ray;
+use pathstream::render::world::{Hit, Origin};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The part of Embree 3's C API (rtcore.h, 3.13) that this example needs.
+#[allow(unsafe_code, non_camel_case_types, dead_code)]
+pub mod ffi {
+    use std::ffi::{c_char, c_uint, c_void};
+
+    pub type RTCDevice = *mut c_void;
+    pub type RTCScene = *mut c_void;
+    pub type RTCGeometry = *mut c_void;
+
+    pub const RTC_GEOMETRY_TYPE_TRIANGLE: c_uint = 0;
+    pub const RTC_BUFFER_TYPE_INDEX: c_uint = 0;
+    pub const RTC_BUFFER_TYPE_VERTEX: c_uint = 1;
+    pub const RTC_FORMAT_UINT3: c_uint = 0x5003;
+    pub const RTC_FORMAT_FLOAT3: c_uint = 0x9003;
+    pub const RTC_SCENE_FLAG_NONE: c_uint = 0;
+    pub const RTC_SCENE_FLAG_ROBUST: c_uint = 1 << 2;
+    pub const RTC_BUILD_QUALITY_MEDIUM: c_uint = 1;
+    pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
+    pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
+    pub const RTC_INVALID_GEOMETRY_ID: c_uint = c_uint::MAX;
+    pub const RTC_DEVICE_PROPERTY_VERSION: c_uint = 0;
+    pub const RTC_ERROR_NONE: c_uint = 0;
+
+    /// `struct RTCRay` (16-byte aligned, 48 bytes).
+    #[repr(C, align(16))]
+    #[derive(Clone, Copy, Debug)]
+    pub struct RTCRay {
+        pub org_x: f32,
+        pub org_y: f32,
+        pub org_z: f32,
+        pub tnear: f32,
+        pub dir_x: f32,
+        pub dir_y: f32,
+        pub dir_z: f32,
+        pub time: f32,
+        pub tfar: f32,
+        pub mask: c_uint,
+        pub id: c_uint,
+        pub flags: c_uint,
+    }
+
+    /// `struct RTCHit` with RTC_MAX_INSTANCE_LEVEL_COUNT = 1 (as Debian
+    /// builds it).
+    #[repr(C, align(16))]
+    #[derive(Clone, Copy, Debug)]
+    pub struct RTCHit {
+        pub ng_x: f32,
+        pub ng_y: f32,
+        pub ng_z: f32,
+        pub u: f32,
+        pub v: f32,
+        pub prim_id: c_uint,
+        pub geom_id: c_uint,
+        pub inst_id: [c_uint; 1],
+    }
+
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug)]
+    pub struct RTCRayHit {
+        pub ray: RTCRay,
+        pub hit: RTCHit,
+    }
+
+    /// `struct RTCIntersectContext` (RTC_MAX_INSTANCE_LEVEL_COUNT = 1,
+    /// RTC_MIN_WIDTH = 0).
+    #[repr(C)]
+    pub struct RTCIntersectContext {
+        pub flags: c_uint,
+        pub filter: Option<unsafe extern "C" fn(*const c_void)>,
+        pub inst_id: [c_uint; 1],
+    }
+
+    const _: () = assert!(std::mem::size_of::<RTCRay>() == 48);
+    const _: () = assert!(std::mem::size_of::<RTCHit>() == 32);
+    const _: () = assert!(std::mem::size_of::<RTCRayHit>() == 80);
+    const _: () = assert!(std::mem::size_of::<RTCIntersectContext>() == 24);
+
+    impl RTCIntersectContext {
+        /// What the header's inline `rtcInitIntersectContext` does.
+        pub fn new() -> Self {
+            Self {
+                flags: RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
+                filter: None,
+                inst_id: [RTC_INVALID_GEOMETRY_ID],
+            }
+        }
+    }
+
+    #[link(name = "embree3")]
+    extern "C" {
+        pub fn rtcNewDevice(config: *const c_char) -> RTCDevice;
+        pub fn rtcReleaseDevice(device: RTCDevice);
+        pub fn rtcGetDeviceError(device: RTCDevice) -> c_uint;
+        pub fn rtcGetDeviceProperty(device: RTCDevice, prop: c_uint) -> isize;
+        pub fn rtcNewScene(device: RTCDevice) -> RTCScene;
+        pub fn rtcSetSceneFlags(scene: RTCScene, flags: c_uint);
+        pub fn rtcSetSceneBuildQuality(scene: RTCScene, quality: c_uint);
+        pub fn rtcNewGeometry(device: RTCDevice, kind: c_uint) -> RTCGeometry;
+        pub fn rtcSetGeometryBuildQuality(geometry: RTCGeometry, quality: c_uint);
+        pub fn rtcSetNewGeometryBuffer(
+            geometry: RTCGeometry,
+            kind: c_uint,
+            slot: c_uint,
+            format: c_uint,
+            byte_stride: usize,
+            item_count: usize,
+        ) -> *mut c_void;
+        pub fn rtcCommitGeometry(geometry: RTCGeometry);
+        pub fn rtcAttachGeometry(scene: RTCScene, geometry: RTCGeometry) -> c_uint;
+        pub fn rtcReleaseGeometry(geometry: RTCGeometry);
+        pub fn rtcCommitScene(scene: RTCScene);
+        pub fn rtcReleaseScene(scene: RTCScene);
+        pub fn rtcIntersect1(
+            scene: RTCScene,
+            context: *mut RTCIntersectContext,
+            rayhit: *mut RTCRayHit,
+        );
+    }
+}
+
+/// An Embree device, released on drop.
+pub struct Device(ffi::RTCDevice);
+
+impl Device {
+    pub fn new(config: &str) -> Device {
+        let config = std::ffi::CString::new(config).expect("no NUL in the config");
+        // SAFETY: `config` is a NUL-terminated string that outlives the call.
+        #[allow(unsafe_code)]
+        let device = unsafe { ffi::rtcNewDevice(config.as_ptr()) };
+        assert!(!device.is_null(), "rtcNewDevice failed");
+        Device(device)
+    }
+
+    /// Panics with Embree's error code if the last calls failed.
+    fn check(&self, what: &str) {
+        // SAFETY: the device is live (released only on drop).
+        #[allow(unsafe_code)]
+        let error = unsafe { ffi::rtcGetDeviceError(self.0) };
+        assert_eq!(error, ffi::RTC_ERROR_NONE, "Embree error {error} in {what}");
+    }
+
+    /// Embree's version, e.g. 31305 for 3.13.5.
+    pub fn version(&self) -> isize {
+        // SAFETY: the device is live.
+        #[allow(unsafe_code)]
+        unsafe {
+            ffi::rtcGetDeviceProperty(self.0, ffi::RTC_DEVICE_PROPERTY_VERSION)
+        }
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: every scene holds a reference of its own (Embree counts
+        // them), so releasing ours here is valid whatever order drops run.
+        #[allow(unsafe_code)]
+        unsafe {
+            ffi::rtcReleaseDevice(self.0)
+        }
+    }
+}
+
+/// A committed Embree scene of one triangle mesh, released on drop.
+pub struct EmbreeScene {
+    scene: ffi::RTCScene,
+    pub build_seconds: f64,
+}
+
+// SAFETY: a committed Embree scene is read-only and Embree documents
+// rtcIntersect1 on one scene as safe to call from many threads at once.
+#[allow(unsafe_code)]
+unsafe impl Sync for EmbreeScene {}
+// SAFETY: as above; the handle may be used and released from any thread.
+#[allow(unsafe_code)]
+unsafe impl Send for EmbreeScene {}
+
+impl EmbreeScene {
+    /// Copies the mesh into Embree's buffers and commits the scene; the
+    /// commit (the BVH build) is timed.
+    pub fn build(
+        device: &Device,
+        positions: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+        flags: u32,
+        quality: u32,
+    ) -> EmbreeScene {
+        // SAFETY: the device is live; the buffers Embree returns have room
+        // for `count` items of the stride asked (16-byte vertices, the
+        // padding Embree wants for its SIMD loads; 12-byte index triples),
+        // and are written only before the geometry is committed. The
+        // geometry is released after attaching (the scene keeps it).
+        #[allow(unsafe_code)]
+        let (scene, build_seconds) = unsafe {
+            let scene = ffi::rtcNewScene(device.0);
+            ffi::rtcSetSceneFlags(scene, flags);
+            ffi::rtcSetSceneBuildQuality(scene, quality);
+            let geometry = ffi::rtcNewGeometry(device.0, ffi::RTC_GEOMETRY_TYPE_TRIANGLE);
+            ffi::rtcSetGeometryBuildQuality(geometry, quality);
+            let vertices = ffi::rtcSetNewGeometryBuffer(
+                geometry,
+                ffi::RTC_BUFFER_TYPE_VERTEX,
+                0,
+                ffi::RTC_FORMAT_FLOAT3,
+                16,
+                positions.len(),
+            )
+            .cast::<[f32; 4]>();
+            let indices = ffi::rtcSetNewGeometryBuffer(
+                geometry,
+                ffi::RTC_BUFFER_TYPE_INDEX,
+                0,
+                ffi::RTC_FORMAT_UINT3,
+                12,
+                triangles.len(),
+            )
+            .cast::<[u32; 3]>();
+            device.check("rtcSetNewGeometryBuffer");
+            assert!(!vertices.is_null() && !indices.is_null());
+            let vertices = std::slice::from_raw_parts_mut(vertices, positions.len());
+            for (v, p) in vertices.iter_mut().zip(positions) {
+                *v = [p[0], p[1], p[2], 0.0];
+            }
+            std::slice::from_raw_parts_mut(indices, triangles.len()).copy_from_slice(triangles);
+            ffi::rtcCommitGeometry(geometry);
+            ffi::rtcAttachGeometry(scene, geometry);
+            ffi::rtcReleaseGeometry(geometry);
+            let start = Instant::now();
+            ffi::rtcCommitScene(scene);
+            (scene, start.elapsed().as_secs_f64())
+        };
+        device.check("rtcCommitScene");
+        EmbreeScene {
+            scene,
+            build_seconds,
+        }
+    }
+
+    /// Nearest hit of `ray`, mapped by `map` first, as pathstream reports
+    /// one (the same type, so that collecting the results costs both
+    /// tracers the same): object 0 (the mesh is the world's only
+    /// object), the triangle, and barycentrics from Embree's u, v.
+    #[inline(always)]
+    pub fn intersect(&self, map: &Affine3A, ray: &Ray) -> Option<Hit> {
+        let o = map.transform_point3a(ray.origin);
+        let d = map.transform_vector3a(ray.dir);
+        let mut rh = ffi::RTCRayHit {
+            ray: ffi::RTCRay {
+                org_x: o.x,
+                org_y: o.y,
+                org_z: o.z,
+                tnear: 0.0,
+                dir_x: d.x,
+                dir_y: d.y,
+                dir_z: d.z,
+                time: 0.0,
+                tfar: f32::INFINITY,
+                mask: u32::MAX,
+                id: 0,
+                flags: 0,
+            },
+            hit: ffi::RTCHit {
+                ng_x: 0.0,
+                ng_y: 0.0,
+                ng_z: 0.0,
+                u: 0.0,
+                v: 0.0,
+                prim_id: ffi::RTC_INVALID_GEOMETRY_ID,
+                geom_id: ffi::RTC_INVALID_GEOMETRY_ID,
+                inst_id: [ffi::RTC_INVALID_GEOMETRY_ID],
+            },
+        };
+        let mut context = ffi::RTCIntersectContext::new();
+        // SAFETY: the scene is committed and live; `context` and `rh` are
+        // valid, aligned, and exclusively ours for the call.
+        #[allow(unsafe_code)]
+        unsafe {
+            ffi::rtcIntersect1(self.scene, &mut context, &mut rh)
+        };
+        (rh.hit.geom_id != ffi::RTC_INVALID_GEOMETRY_ID).then_some(Hit {
+            t: rh.ray.tfar,
+            object: 0,
+            prim: rh.hit.prim_id,
+            bary: [1.0 - rh.hit.u - rh.hit.v, rh.hit.u, rh.hit.v],
+        })
+    }
+
+    /// Every ray's nearest hit, on rayon's threads, in chunks as
+    /// `nearest_hits` does.
+    pub fn hits(&self, map: &Affine3A, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+        rays.par_chunks(4096)
+            .flat_map_iter(|chunk| chunk.iter().map(|(r, _)| self.intersect(map, r)))
+            .collect()
+    }
+
+    /// Rays per second of one pass.
+    pub fn rays_per_sec(&self, map: &Affine3A, rays: &[(Ray, Origin)]) -> f64 {
+        let start = Instant::now();
+        let hits = self.hits(map, rays);
+        let seconds = start.elapsed().as_secs_f64();
+        std::hint::black_box(hits);
+        rays.len() as f64 / seconds.max(1e-9)
+    }
+}
+
+impl Drop for EmbreeScene {
+    fn drop(&mut self) {
+        // SAFETY: the scene is ours and no trace is running (we hold it).
+        #[allow(unsafe_code)]
+        unsafe {
+            ffi::rtcReleaseScene(self.scene)
+        }
+    }
+}
