@@ -23,6 +23,9 @@ pub enum ApiError {
     /// Out of room for what the request would store (assets).
     #[error("{0}")]
     Full(String),
+    /// A body of a type the route does not take (see `guard`).
+    #[error("{0}")]
+    UnsupportedMediaType(String),
     #[error("internal error")]
     Internal(String),
 }
@@ -37,6 +40,7 @@ impl ApiError {
             ApiError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
             ApiError::TooMany(_) => StatusCode::TOO_MANY_REQUESTS,
             ApiError::Full(_) => StatusCode::INSUFFICIENT_STORAGE,
+            ApiError::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             ApiError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }

@@ -11,6 +11,7 @@ pub struct Metrics {
     pub frames_dropped: AtomicU64,
     pub rejected_samples: AtomicU64,
     pub sessions_created: AtomicU64,
+    pub handler_panics: AtomicU64,
 }
 
 impl Metrics {
@@ -64,6 +65,12 @@ impl Metrics {
             "counter",
             "Frames a WebSocket client skipped because a newer one was ready.",
             &[(String::new(), get(&self.frames_dropped))],
+        );
+        metric(
+            "pathstream_handler_panics_total",
+            "counter",
+            "Request handlers that panicked (each answered 500).",
+            &[(String::new(), get(&self.handler_panics))],
         );
         metric(
             "pathstream_rejected_samples_total",

@@ -9,6 +9,7 @@ pub mod change;
 pub mod config;
 pub mod error;
 mod frame;
+mod guard;
 mod metrics;
 mod routes;
 pub mod session;

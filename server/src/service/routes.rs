@@ -22,6 +22,7 @@ use serde::Deserialize;
 use serde_json::{json, Value};
 use std::sync::Arc;
 use std::time::Duration;
+use tower_http::catch_panic::CatchPanicLayer;
 use tower_http::cors::CorsLayer;
 use tower_http::trace::TraceLayer;
 
@@ -45,17 +46,30 @@ pub fn app(state: Arc<AppState>) -> Router {
         .route("/sessions/{id}/ws", get(ws::upgrade))
         .merge(assets_routes::router(state.config.assets.max_asset_bytes))
         .fallback(api_not_found)
-        .route_layer(middleware::from_fn_with_state(state.clone(), require_token));
-    let mut router = Router::new()
+        .route_layer(middleware::from_fn_with_state(state.clone(), require_token))
+        .layer(middleware::from_fn(super::guard::api_guard));
+    let router = Router::new()
         .nest("/api", api)
         .route("/metrics", get(metrics))
-        .fallback_service(static_files::router(state.config.static_dir.as_deref()))
+        .fallback_service(static_files::router(state.config.static_dir.as_deref()));
+    with_layers(router, &state).with_state(state)
+}
+
+/// The layers around every route: the body limit, handler panics answered
+/// as 500 JSON (logged, counted), request traces, CORS when asked for.
+fn with_layers(router: Router<Arc<AppState>>, state: &Arc<AppState>) -> Router<Arc<AppState>> {
+    let metrics = state.metrics.clone();
+    let router = router
         .layer(DefaultBodyLimit::max(state.config.max_body_bytes))
+        .layer(CatchPanicLayer::custom(move |panic| {
+            super::guard::panic_response(&metrics, panic)
+        }))
         .layer(TraceLayer::new_for_http());
     if state.config.cors {
-        router = router.layer(CorsLayer::permissive());
+        router.layer(CorsLayer::permissive())
+    } else {
+        router
     }
-    router.with_state(state)
 }
 
 async fn api_not_found(req: Request) -> ApiError {
@@ -377,6 +391,48 @@ async fn frame_pfm(
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
+
+    #[tokio::test]
+    async fn a_handler_panic_answers_500_json_is_counted_and_the_server_lives_on() {
+        let state = AppState::with_device(super::super::ServeConfig::default(), None);
+        let router = Router::new()
+            .route(
+                "/api/boom",
+                get(|| async { panic!("boom from input") as &'static str }),
+            )
+            .route("/metrics", get(metrics));
+        let app = with_layers(router, &state).with_state(state.clone());
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0")
+            .await
+            .expect("bind");
+        let addr = listener.local_addr().expect("addr");
+        let server = tokio::spawn(async move { axum::serve(listener, app).await });
+        let client = reqwest::Client::new();
+        for _ in 0..2 {
+            let r = client
+                .get(format!("http://{addr}/api/boom"))
+                .send()
+                .await
+                .expect("an answer, not a reset");
+            assert_eq!(r.status().as_u16(), 500);
+            let body: Value = r.json().await.expect("JSON");
+            assert_eq!(
+                body["error"], "internal error",
+                "the panic's text stays in the log"
+            );
+        }
+        let m = client
+            .get(format!("http://{addr}/metrics"))
+            .send()
+            .await
+            .expect("metrics")
+            .text()
+            .await
+            .expect("text");
+        assert!(m.contains("pathstream_handler_panics_total 2"), "{m}");
+        server.abort();
+        state.stop();
+    }
     use super::*;
     use axum::http::Uri;
 

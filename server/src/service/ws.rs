@@ -30,7 +30,12 @@ pub async fn upgrade(
     ws: WebSocketUpgrade,
 ) -> Result<Response, ApiError> {
     let session = state.session(&id)?;
-    Ok(ws.on_upgrade(move |socket| serve(socket, state, session)))
+    // Messages from the client are changes: no larger than an HTTP body.
+    let limit = state.config.max_body_bytes;
+    Ok(ws
+        .max_message_size(limit)
+        .max_frame_size(limit)
+        .on_upgrade(move |socket| serve(socket, state, session)))
 }
 
 fn stats(status: &Status, frame: &Frame) -> Value {

@@ -1,0 +1,262 @@
+//! The server under a hostile client (issue: the server under abuse): every
+//! error under `/api` is JSON, JSON bodies need their content type (no
+//! cross-site simple requests), WebSocket messages are capped at the body
+//! limit. A real server on 127.0.0.1:0 and real clients; every loop bounded.
+
+mod http;
+
+use futures_util::{SinkExt, StreamExt};
+use http::{client, config, create, server, status, ws_connect};
+use serde_json::{json, Value};
+use std::time::Duration;
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio_tungstenite::tungstenite::Message;
+
+/// A request written byte for byte (paths no client library would send):
+/// status, headers (lower case) and body.
+async fn raw(
+    addr: &std::net::SocketAddr,
+    method: &str,
+    target: &[u8],
+    headers: &str,
+    body: &[u8],
+) -> (u16, String, String) {
+    let mut tcp = tokio::net::TcpStream::connect(addr).await.expect("connect");
+    let mut request = format!("{method} ").into_bytes();
+    request.extend_from_slice(target);
+    request.extend_from_slice(
+        format!(
+            " HTTP/1.1\r\nhost: test\r\nconnection: close\r\ncontent-length: {}\r\n{headers}\r\n",
+            body.len()
+        )
+        .as_bytes(),
+    );
+    request.extend_from_slice(body);
+    tcp.write_all(&request).await.expect("write");
+    let mut response = Vec::new();
+    tokio::time::timeout(Duration::from_secs(20), tcp.read_to_end(&mut response))
+        .await
+        .expect("an answer in time")
+        .expect("read");
+    let text = String::from_utf8_lossy(&response).into_owned();
+    let code = text
+        .split_whitespace()
+        .nth(1)
+        .and_then(|c| c.parse().ok())
+        .unwrap_or(0);
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    (code, head.to_ascii_lowercase(), body.to_owned())
+}
+
+fn error_of(body: &str, what: &str) -> String {
+    let v: Value =
+        serde_json::from_str(body).unwrap_or_else(|_| panic!("{what}: not JSON: {body:?}"));
+    v["error"]
+        .as_str()
+        .unwrap_or_else(|| panic!("{what}: no error field: {body}"))
+        .to_owned()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_api_error_is_json_with_allow_on_405() {
+    let (running, _) = server(config()).await;
+    let addr = running.addr;
+    let cases: [(&str, &[u8], u16, &str); 6] = [
+        ("GET", b"/api/sessions/%ff%fe", 400, "utf-8"),
+        ("GET", b"/api/sessions/%ff%fe/ws", 400, "utf-8"),
+        ("DELETE", b"/api/health", 405, "not allowed"),
+        ("PUT", b"/api/sessions", 405, "not allowed"),
+        ("PATCH", b"/api/presets", 405, "not allowed"),
+        ("GET", b"/api/no/such/route", 404, "no route"),
+    ];
+    for (method, target, code, needle) in cases {
+        let what = format!("{method} {}", String::from_utf8_lossy(target));
+        let (got, head, body) = raw(
+            &addr,
+            method,
+            target,
+            "content-type: application/json\r\n",
+            b"",
+        )
+        .await;
+        assert_eq!(got, code, "{what}: {head}\n{body}");
+        assert!(
+            head.contains("content-type: application/json"),
+            "{what}: {head}"
+        );
+        let message = error_of(&body, &what).to_ascii_lowercase();
+        assert!(
+            message.contains(needle),
+            "{what}: {needle:?} not in {message:?}"
+        );
+        if code == 405 {
+            assert!(
+                head.contains("\r\nallow: get"),
+                "{what}: no Allow header: {head}"
+            );
+        }
+    }
+    // A raw non-ASCII byte after a broken escape in the token: no panic.
+    let (running_t, _) = server(pathstream::service::ServeConfig {
+        token: Some("t".into()),
+        ..config()
+    })
+    .await;
+    let (code, _, body) = raw(
+        &running_t.addr,
+        "GET",
+        b"/api/sessions?token=%a\xc3\xa9",
+        "",
+        b"",
+    )
+    .await;
+    assert_eq!(code, 401, "{body}");
+    error_of(&body, "bad token");
+    running_t.shutdown().await.expect("shutdown");
+    running.shutdown().await.expect("shutdown");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bodies_a_web_page_could_send_cross_site_are_refused() {
+    let (running, base) = server(config()).await;
+    let addr = running.addr;
+    let create_body = br#"{"scene": "furnace", "width": 8, "height": 8}"#;
+    // A browser sends these without asking the server first (no preflight).
+    for (headers, shown) in [
+        ("content-type: text/plain\r\n", "text/plain"),
+        (
+            "content-type: application/x-www-form-urlencoded\r\n",
+            "application/x-www-form-urlencoded",
+        ),
+        (
+            "content-type: multipart/form-data; boundary=x\r\n",
+            "multipart/form-data",
+        ),
+        ("", "none"),
+    ] {
+        let (code, _, body) = raw(&addr, "POST", b"/api/sessions", headers, create_body).await;
+        assert_eq!(code, 415, "{shown}: {body}");
+        let message = error_of(&body, shown);
+        assert!(
+            message.contains("application/json") && message.contains(shown),
+            "{message}"
+        );
+    }
+    let list: Value = client()
+        .get(format!("{base}/api/sessions"))
+        .send()
+        .await
+        .expect("list")
+        .json()
+        .await
+        .expect("json");
+    assert_eq!(
+        list["sessions"].as_array().map(Vec::len),
+        Some(0),
+        "no session was created"
+    );
+
+    // A change as text/plain: refused, the camera stays.
+    let s = create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await;
+    let id = s["id"].as_str().expect("id");
+    let target = format!("/api/sessions/{id}/camera");
+    let (code, _, body) = raw(
+        &addr,
+        "PATCH",
+        target.as_bytes(),
+        "content-type: text/plain\r\n",
+        br#"{"vfov_deg": 10}"#,
+    )
+    .await;
+    assert_eq!(code, 415, "{body}");
+    assert_eq!(
+        status(&base, id).await["camera"],
+        s["camera"],
+        "the camera did not change"
+    );
+    let (code, _, body) = raw(
+        &addr,
+        "PATCH",
+        target.as_bytes(),
+        "content-type: application/json; charset=utf-8\r\n",
+        br#"{"vfov_deg": 10}"#,
+    )
+    .await;
+    assert_eq!(code, 200, "{body}");
+
+    // Uploads: any type but the cross-site ones.
+    let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    for headers in [
+        "content-type: text/plain\r\n",
+        "content-type: application/x-www-form-urlencoded\r\n",
+        "",
+    ] {
+        let (code, _, body) = raw(&addr, "POST", b"/api/assets?name=t.obj", headers, obj).await;
+        assert_eq!(code, 415, "{headers:?}: {body}");
+        assert!(
+            error_of(&body, headers).contains("application/octet-stream"),
+            "{body}"
+        );
+    }
+    let (code, _, body) = raw(
+        &addr,
+        "POST",
+        b"/api/assets?name=t.obj",
+        "content-type: application/octet-stream\r\n",
+        obj,
+    )
+    .await;
+    assert_eq!(code, 201, "{body}");
+    running.shutdown().await.expect("shutdown");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn websocket_messages_are_capped_at_the_body_limit() {
+    let limit = 64 << 10;
+    let (running, base) = server(pathstream::service::ServeConfig {
+        max_body_bytes: limit,
+        ..config()
+    })
+    .await;
+    let s = create(&base, json!({"scene": "furnace", "width": 8, "height": 8})).await;
+    let id = s["id"].as_str().expect("id");
+    let mut ws = ws_connect(&base, id).await;
+    // Just over the limit: the server closes the socket (1009, too big).
+    let big = format!(
+        "{{\"camera\": {{\"vfov_deg\": 40}}, \"pad\": \"{}\"}}",
+        "x".repeat(limit)
+    );
+    let _ = ws.send(Message::text(big)).await;
+    let mut closed = false;
+    for _ in 0..200 {
+        match tokio::time::timeout(Duration::from_secs(10), ws.next()).await {
+            Ok(Some(Ok(Message::Close(frame)))) => {
+                if let Some(f) = frame {
+                    assert_eq!(u16::from(f.code), 1009, "{f:?}");
+                }
+                closed = true;
+                break;
+            }
+            Ok(Some(Ok(_))) => {}
+            Ok(Some(Err(_)) | None) => {
+                closed = true;
+                break;
+            }
+            Err(_) => break,
+        }
+    }
+    assert!(closed, "the socket was closed");
+    // Under the limit on a new socket: taken as usual.
+    let mut ws = ws_connect(&base, id).await;
+    ws.send(Message::text(
+        json!({"camera": {"vfov_deg": 33}}).to_string(),
+    ))
+    .await
+    .expect("send");
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    while status(&base, id).await["camera"]["vfov_deg"] != json!(33.0) {
+        assert!(std::time::Instant::now() < deadline, "the change arrived");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    running.shutdown().await.expect("shutdown");
+}
