@@ -260,3 +260,68 @@ async fn websocket_messages_are_capped_at_the_body_limit() {
     }
     running.shutdown().await.expect("shutdown");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_delete_answers_every_waiter_and_closes_every_socket_at_once() {
+    let (running, base) = server(config()).await;
+    // Large enough that nothing reaches 1e6 samples per pixel meanwhile.
+    let s = create(
+        &base,
+        json!({"scene": "cornell-glass", "width": 256, "height": 256}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id").to_owned();
+    let waiters: Vec<_> = (0..3)
+        .map(|_| {
+            let url =
+                format!("{base}/api/sessions/{id}/frame.png?min_spp=1000000&timeout_ms=600000");
+            tokio::spawn(async move {
+                let r = client().get(url).send().await.expect("an answer");
+                (r.status().as_u16(), r.text().await.unwrap_or_default())
+            })
+        })
+        .collect();
+    let mut ws = ws_connect(&base, &id).await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let deleted_at = std::time::Instant::now();
+    let r = client()
+        .delete(format!("{base}/api/sessions/{id}"))
+        .send()
+        .await
+        .expect("delete");
+    assert_eq!(r.status().as_u16(), 204);
+    for w in waiters {
+        let (code, body) = tokio::time::timeout(Duration::from_secs(10), w)
+            .await
+            .expect("answered at once")
+            .expect("task");
+        assert_eq!(code, 410, "{body}");
+        assert!(error_of(&body, "waiter").contains("was deleted"), "{body}");
+    }
+    let mut close = None;
+    for _ in 0..1000 {
+        match tokio::time::timeout(Duration::from_secs(10), ws.next())
+            .await
+            .expect("the socket is told in time")
+        {
+            Some(Ok(Message::Close(frame))) => {
+                close = frame;
+                break;
+            }
+            Some(Ok(_)) => {}
+            other => panic!("the socket ended without a close frame: {other:?}"),
+        }
+    }
+    let close = close.expect("a close frame with a code");
+    assert_eq!(u16::from(close.code), 4404);
+    assert!(close.reason.contains("deleted"), "{}", close.reason);
+    // Seconds, not the waiters' ten minutes (a loaded machine keeps this).
+    assert!(deleted_at.elapsed() < Duration::from_secs(10));
+    let r = client()
+        .get(format!("{base}/api/sessions/{id}/frame.png"))
+        .send()
+        .await
+        .expect("get");
+    assert_eq!(r.status().as_u16(), 404);
+    running.shutdown().await.expect("shutdown");
+}

@@ -187,8 +187,9 @@ impl AppState {
             .write()
             .unwrap_or_else(|e| e.into_inner())
             .remove(id);
-        let (_, worker) = removed.ok_or_else(|| ApiError::unknown_session(id))?;
+        let (session, worker) = removed.ok_or_else(|| ApiError::unknown_session(id))?;
         self.workers[worker].remove(id);
+        session.close();
         Ok(())
     }
 

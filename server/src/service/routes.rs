@@ -335,7 +335,7 @@ async fn wait_frame(
 ) -> AppResult<Arc<Frame>> {
     let (min_spp, timeout) = FrameQuery::parse(query)?.wait();
     let session = state.session(id)?;
-    Ok(session.frame_with(min_spp, timeout).await)
+    session.frame_with(min_spp, timeout).await
 }
 
 fn frame_headers(f: &Frame) -> [(&'static str, String); 3] {

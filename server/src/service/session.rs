@@ -55,6 +55,9 @@ pub struct Session {
     passes: AtomicU64,
     /// Set by the worker that renders this session.
     waker: OnceLock<Waker>,
+    /// Becomes true when the session is deleted ([`Session::close`]):
+    /// waiting requests and WebSockets are answered at once.
+    deleted: watch::Sender<bool>,
 }
 
 /// Status as `GET /api/sessions/{id}` reports it.
@@ -133,6 +136,7 @@ impl Session {
             clients: AtomicUsize::new(0),
             passes: AtomicU64::new(0),
             waker: OnceLock::new(),
+            deleted: watch::channel(false).0,
         }
     }
 
@@ -237,6 +241,29 @@ impl Session {
         Ok(self.status())
     }
 
+    /// Ends the session (it was deleted or expired): the pass in flight is
+    /// cancelled, the film is freed, and everyone waiting on the session is
+    /// told at once.
+    pub fn close(&self) {
+        self.current_generation.fetch_add(1, Ordering::Relaxed);
+        {
+            let mut st = lock(&self.state);
+            st.halted = true;
+            st.film = None;
+        }
+        self.deleted.send_replace(true);
+    }
+
+    pub fn is_deleted(&self) -> bool {
+        *self.deleted.borrow()
+    }
+
+    /// Resolves once the session is deleted.
+    pub async fn deleted(&self) {
+        let mut rx = self.deleted.subscribe();
+        let _ = rx.wait_for(|d| *d).await;
+    }
+
     /// Whether a worker should give this session a pass.
     pub fn wants_render(&self) -> bool {
         let st = lock(&self.state);
@@ -282,8 +309,8 @@ impl Session {
         };
         let mut st = lock(&self.state);
         tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
-        if st.generation != generation {
-            return; // changed while rendering: that film is stale
+        if st.generation != generation || self.is_deleted() {
+            return; // changed while rendering (that film is stale) or deleted
         }
         if matches!(result, Ok(false)) {
             return; // given up for a change; the state has a fresh film
@@ -348,7 +375,11 @@ impl Session {
     /// The first frame of the current generation with at least `min_spp`
     /// samples (or a halted one), waiting at most `timeout`; on timeout, the
     /// latest frame.
-    pub async fn frame_with(&self, min_spp: u64, timeout: Duration) -> Arc<Frame> {
+    pub async fn frame_with(
+        &self,
+        min_spp: u64,
+        timeout: Duration,
+    ) -> Result<Arc<Frame>, ApiError> {
         let mut rx = self.subscribe();
         let ready = |f: &Frame, generation: u64| {
             f.generation == generation && (f.spp >= min_spp || f.halted)
@@ -367,9 +398,13 @@ impl Session {
                 }
             }
         };
-        match tokio::time::timeout(timeout, wait).await {
-            Ok(frame) => frame,
-            Err(_) => self.latest(),
+        let gone = || ApiError::Gone(format!("session '{}' was deleted", self.id));
+        if self.is_deleted() {
+            return Err(gone());
+        }
+        tokio::select! {
+            frame = tokio::time::timeout(timeout, wait) => Ok(frame.unwrap_or_else(|_| self.latest())),
+            () = self.deleted() => Err(gone()),
         }
     }
 }

@@ -23,6 +23,8 @@ use std::time::Duration;
 
 /// A client that takes longer than this to accept one frame is dropped.
 const SEND_TIMEOUT: Duration = Duration::from_secs(30);
+/// Close code of a socket whose session was deleted (application range).
+pub const SESSION_DELETED: u16 = 4404;
 
 pub async fn upgrade(
     State(state): State<Arc<AppState>>,
@@ -118,6 +120,14 @@ async fn serve(socket: WebSocket, state: Arc<AppState>, session: Arc<Session>) {
                         break;
                     }
                 }
+            }
+            () = session.deleted() => {
+                let reason = format!("session '{}' was deleted", session.id);
+                let _ = sink.send(Message::Close(Some(axum::extract::ws::CloseFrame {
+                    code: SESSION_DELETED,
+                    reason: Utf8Bytes::from(reason),
+                }))).await;
+                break;
             }
             _ = shutdown.changed() => {
                 let _ = sink.send(Message::Close(Some(axum::extract::ws::CloseFrame {
