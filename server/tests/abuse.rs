@@ -325,3 +325,100 @@ async fn a_delete_answers_every_waiter_and_closes_every_socket_at_once() {
     assert_eq!(r.status().as_u16(), 404);
     running.shutdown().await.expect("shutdown");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn slow_and_excess_connections_are_dropped_and_health_keeps_answering() {
+    use pathstream::service::listen::ConnectionLimits;
+    let limits = ConnectionLimits {
+        max_connections: 100_000,
+        max_per_address: 64,
+        header_timeout: Duration::from_secs(2),
+    };
+    let (running, base) = server(pathstream::service::ServeConfig {
+        connections: limits,
+        ..config()
+    })
+    .await;
+    let addr = running.addr;
+    // A canary session renders through all of it.
+    let s = create(
+        &base,
+        json!({"scene": "furnace", "width": 16, "height": 16}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id").to_owned();
+    // 150 clients sending a request head a byte at a time: 64 are taken,
+    // the rest are closed at once; the taken ones are closed after 2 s.
+    let mut slow = Vec::new();
+    for _ in 0..150 {
+        slow.push(tokio::net::TcpStream::connect(addr).await.expect("connect"));
+    }
+    let started = std::time::Instant::now();
+    let dribble: Vec<_> = slow
+        .into_iter()
+        .map(|mut tcp| {
+            tokio::spawn(async move {
+                // Until the server closes the connection, or 12 s at most.
+                for b in b"GET /api/health HTTP/1.1\r\nhost: slow\r\nx-pad: aaaaaaaaaaaaaaaaaaaaaa"
+                    .iter()
+                    .cycle()
+                    .take(24)
+                {
+                    if tcp.write_all(&[*b]).await.is_err() {
+                        return started.elapsed();
+                    }
+                    let mut buf = [0u8; 64];
+                    match tokio::time::timeout(Duration::from_millis(500), tcp.read(&mut buf)).await
+                    {
+                        Ok(Ok(0) | Err(_)) => return started.elapsed(),
+                        _ => {}
+                    }
+                }
+                Duration::MAX
+            })
+        })
+        .collect();
+    // Health answers (a new connection once slots free up) within the head
+    // deadline plus a loaded machine's margin.
+    let mut healthy = None;
+    for _ in 0..60 {
+        let r = tokio::time::timeout(
+            Duration::from_secs(2),
+            client().get(format!("{base}/api/health")).send(),
+        )
+        .await;
+        if let Ok(Ok(r)) = r {
+            if r.status().as_u16() == 200 {
+                healthy = Some(started.elapsed());
+                break;
+            }
+        }
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    let healthy = healthy.expect("/api/health answered under the attack");
+    assert!(healthy < Duration::from_secs(10), "health took {healthy:?}");
+    let mut ended = Vec::new();
+    for d in dribble {
+        ended.push(d.await.expect("task"));
+    }
+    let dropped_at_once = ended
+        .iter()
+        .filter(|&&t| t < Duration::from_secs(1))
+        .count();
+    let timed_out = ended
+        .iter()
+        .filter(|&&t| t >= Duration::from_secs(1) && t < Duration::from_secs(9))
+        .count();
+    assert!(
+        dropped_at_once >= 150 - 64 - 5,
+        "excess connections closed at once: {dropped_at_once}"
+    );
+    assert!(
+        dropped_at_once + timed_out == 150,
+        "every slow client was dropped: {ended:?}"
+    );
+    // The canary kept rendering.
+    let spp = status(&base, &id).await["spp"].as_u64().unwrap_or(0);
+    assert!(spp > 0, "the canary session rendered");
+    running.shutdown().await.expect("shutdown");
+}

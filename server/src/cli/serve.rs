@@ -50,6 +50,16 @@ pub struct ServeArgs {
     /// Most triangles in one session's scene (and in one uploaded file) [default: 16000000].
     #[arg(long, value_name = "N")]
     max_triangles: Option<u64>,
+    /// Most open connections; more are closed at once [default: 4096].
+    #[arg(long, value_name = "N")]
+    max_connections: Option<usize>,
+    /// Most open connections from one client address [default: 256].
+    #[arg(long, value_name = "N")]
+    max_connections_per_ip: Option<usize>,
+    /// Seconds a client may take to send a request head (and an idle
+    /// keep-alive connection is kept) [default: 10].
+    #[arg(long, value_name = "S")]
+    header_timeout_s: Option<u64>,
 }
 
 pub fn run(args: ServeArgs) -> Result<(), CliError> {
@@ -73,6 +83,12 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
             args.max_asset_memory.map(|v| v as u64),
         ),
         ("--max-triangles", args.max_triangles),
+        ("--max-connections", args.max_connections.map(|v| v as u64)),
+        (
+            "--max-connections-per-ip",
+            args.max_connections_per_ip.map(|v| v as u64),
+        ),
+        ("--header-timeout-s", args.header_timeout_s),
     ] {
         if v == Some(0) {
             return Err(CliError::Usage(format!("{flag}: must be at least 1")));
@@ -102,6 +118,17 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         static_dir: args.static_dir,
         assets,
         max_triangles,
+        connections: service::listen::ConnectionLimits {
+            max_connections: args
+                .max_connections
+                .unwrap_or(defaults.connections.max_connections),
+            max_per_address: args
+                .max_connections_per_ip
+                .unwrap_or(defaults.connections.max_per_address),
+            header_timeout: args
+                .header_timeout_s
+                .map_or(defaults.connections.header_timeout, Duration::from_secs),
+        },
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

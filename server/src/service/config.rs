@@ -1,6 +1,7 @@
 //! What `pathstream serve` is started with.
 
 use super::assets::AssetLimits;
+use super::listen::ConnectionLimits;
 use crate::render::BackendChoice;
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -28,6 +29,9 @@ pub struct ServeConfig {
     pub assets: AssetLimits,
     /// Most triangles one session's scene may hold (each mesh counted once).
     pub max_triangles: u64,
+    /// Open connections (in total, per client address) and the deadline
+    /// for a request head.
+    pub connections: ConnectionLimits,
 }
 
 impl Default for ServeConfig {
@@ -44,6 +48,7 @@ impl Default for ServeConfig {
             static_dir: None,
             assets: AssetLimits::default(),
             max_triangles: 16_000_000,
+            connections: ConnectionLimits::default(),
         }
     }
 }

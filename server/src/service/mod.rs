@@ -10,6 +10,7 @@ pub mod config;
 pub mod error;
 mod frame;
 mod guard;
+pub mod listen;
 mod metrics;
 mod routes;
 pub mod session;
@@ -279,21 +280,17 @@ fn serve(listener: tokio::net::TcpListener, state: Arc<AppState>) -> Result<Runn
     });
     let serve_state = state.clone();
     let signal_state = state.clone();
+    let limits = state.config.connections;
+    if let Some(n) = listen::raise_file_limit() {
+        tracing::debug!(open_files = n, "open-file limit");
+    }
     let task = tokio::spawn(async move {
-        // No Nagle: a frame is followed at once by its small stats message,
-        // which must not wait for the client's delayed ACK (~40 ms).
-        let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
-            if let Err(e) = tcp.set_nodelay(true) {
-                tracing::debug!("TCP_NODELAY: {e}");
-            }
-        });
-        let result = axum::serve(listener, app(serve_state.clone()))
-            .with_graceful_shutdown(async move {
-                let _ = stopped.await;
-                // Closing WebSockets first lets the connections drain.
-                let _ = signal_state.shutdown.send(true);
-            })
-            .await;
+        let result = listen::serve(listener, app(serve_state.clone()), limits, async move {
+            let _ = stopped.await;
+            // Closing WebSockets first lets the connections drain.
+            let _ = signal_state.shutdown.send(true);
+        })
+        .await;
         janitor.abort();
         let s = serve_state.clone();
         let _ = tokio::task::spawn_blocking(move || s.stop()).await;
