@@ -6,7 +6,7 @@
 
 use pathstream::render::backend::nearest_hits;
 use pathstream::render::backend::opencl::{
-    device_uses_bvh, pack, CheckArg, Checks, KernelParams, OpenClBackend,
+    device_uses_bvh, pack, CheckArg, Checks, KernelParams, OpenClBackend, Packed,
 };
 use pathstream::render::material::{scatter, Bsdf};
 use pathstream::render::math::{sincos_turns, Vec3A};
@@ -157,6 +157,31 @@ fn sincos_and_the_pixel_filters_agree_to_an_ulp() {
     }
 }
 
+/// Rays as the check kernels read them: origin and direction as float4s.
+fn ray_input(rays: &[Ray]) -> Vec<[f32; 4]> {
+    rays.iter()
+        .flat_map(|r| {
+            [
+                r.origin.extend(0.0).to_array(),
+                r.dir.extend(0.0).to_array(),
+            ]
+        })
+        .collect()
+}
+
+/// The arguments of `check_intersect` and `check_nearest` after the item
+/// count: the rays and the scene's buffers.
+fn ray_args<'a>(input: &'a [[f32; 4]], packed: &'a Packed) -> Vec<CheckArg<'a>> {
+    vec![
+        CheckArg::Buffer(bytemuck::cast_slice(input)),
+        CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
+        CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
+        CheckArg::Buffer(bytemuck::cast_slice(&packed.nodes)),
+        CheckArg::Buffer(bytemuck::cast_slice(&packed.prims)),
+        CheckArg::Buffer(bytemuck::cast_slice(&packed.big)),
+    ]
+}
+
 /// 1e5 rays from inside the scene in every direction, against each object
 /// and for the nearest hit.
 fn intersections_agree(d: &OpenClBackend, scene: &str) {
@@ -184,28 +209,13 @@ fn intersections_agree(d: &OpenClBackend, scene: &str) {
             Ray::new(centre + jitter * size, unit(i, 20))
         })
         .collect();
-    let input: Vec<[f32; 4]> = rays
-        .iter()
-        .flat_map(|r| {
-            [
-                r.origin.extend(0.0).to_array(),
-                r.dir.extend(0.0).to_array(),
-            ]
-        })
-        .collect();
+    let input = ray_input(&rays);
     let out: Vec<f32> = checks(d)
         .run(
             "check_intersect",
             n as usize,
             count + 2,
-            &[
-                CheckArg::Buffer(bytemuck::cast_slice(&input)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
-                CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.nodes)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.prims)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.big)),
-            ],
+            &ray_args(&input, &packed),
         )
         .expect("run");
     let cpu_nearest = nearest_hits(
@@ -324,29 +334,9 @@ fn nearest_agrees(d: &OpenClBackend, label: &str, job: &RenderJob) {
             Ray::new(centre + jitter * 60.0, unit(i, 63))
         })
         .collect();
-    let input: Vec<[f32; 4]> = rays
-        .iter()
-        .flat_map(|r| {
-            [
-                r.origin.extend(0.0).to_array(),
-                r.dir.extend(0.0).to_array(),
-            ]
-        })
-        .collect();
+    let input = ray_input(&rays);
     let out: Vec<f32> = checks(d)
-        .run(
-            "check_nearest",
-            n as usize,
-            2,
-            &[
-                CheckArg::Buffer(bytemuck::cast_slice(&input)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
-                CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.nodes)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.prims)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.big)),
-            ],
-        )
+        .run("check_nearest", n as usize, 2, &ray_args(&input, &packed))
         .expect("run");
     let cpu = nearest_hits(
         &job.world,

@@ -507,30 +507,11 @@ async fn the_token_guards_every_api_route_and_the_websocket() {
     running.shutdown().await.expect("shutdown");
 }
 
-/// A GET of `path` + `query` written byte for byte on a socket (no client
-/// library would send raw non-ASCII bytes): the status code and the body.
+/// A GET of `path` + `query` written byte for byte (no client library
+/// would send raw non-ASCII bytes): the status code and the body.
 async fn raw_get(addr: &std::net::SocketAddr, path: &[u8], query: &[u8]) -> (u16, String) {
-    use tokio::io::{AsyncReadExt, AsyncWriteExt};
-    let mut tcp = tokio::net::TcpStream::connect(addr).await.expect("connect");
-    let mut request = b"GET ".to_vec();
-    request.extend_from_slice(path);
-    request.extend_from_slice(query);
-    request.extend_from_slice(b" HTTP/1.1\r\nhost: test\r\nconnection: close\r\n\r\n");
-    tcp.write_all(&request).await.expect("write");
-    let mut response = Vec::new();
-    tokio::time::timeout(Duration::from_secs(20), tcp.read_to_end(&mut response))
-        .await
-        .expect("an answer in time")
-        .expect("read");
-    let text = String::from_utf8_lossy(&response).into_owned();
-    let code = text
-        .split_whitespace()
-        .nth(1)
-        .and_then(|c| c.parse().ok())
-        .unwrap_or_else(|| panic!("no status line: {text:?}"));
-    let body = text
-        .split_once("\r\n\r\n")
-        .map_or(String::new(), |(_, b)| b.to_owned());
+    let target = [path, query].concat();
+    let (code, _, body) = http::raw(addr, "GET", &target, "", b"").await;
     (code, body)
 }
 
