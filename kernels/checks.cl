@@ -103,3 +103,27 @@ __kernel void check_nearest(__global float *out, uint n, __global const float4 *
     out[2 * i] = intersect(&sc, rays[2 * i].xyz, rays[2 * i + 1].xyz, NO_OBJECT, 0, &hit);
     out[2 * i + 1] = as_float(hit);
 }
+
+/* sizeof of every shared struct, for the host's layout check. */
+__kernel void check_layout_sizes(__global uint *out, uint n) {
+    if (get_global_id(0) != 0) {
+        return;
+    }
+    out[0] = (uint)sizeof(Object);
+    out[1] = (uint)sizeof(Material);
+    out[2] = (uint)sizeof(Params);
+    out[3] = (uint)sizeof(BvhNode);
+}
+
+/* Adds `value` to a compensated sum `count` times, as the film does: the
+ * host checks that 1e8 additions keep the value to 1e-6. */
+__kernel void check_accumulate(__global float *sum, uint n, float value, uint count) {
+    if (get_global_id(0) != 0) {
+        return;
+    }
+    sum[0] = 0.0f;
+    sum[1] = 0.0f;
+    for (uint i = 0; i < count; ++i) {
+        add_compensated(sum + 0, sum + 1, value);
+    }
+}

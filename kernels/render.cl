@@ -55,21 +55,3 @@ __kernel void render(__global const Params *P, __global const Object *objects, _
         add_compensated(sums + 2, sums + 5, l.z);
     }
 }
-
-/* Reports sizeof of every shared struct, for the host's layout check. */
-__kernel void layout_sizes(__global uint *out) {
-    out[0] = (uint)sizeof(Object);
-    out[1] = (uint)sizeof(Material);
-    out[2] = (uint)sizeof(Params);
-    out[3] = (uint)sizeof(BvhNode);
-}
-
-/* Adds `value` to a compensated sum `count` times, as the film does: the
- * host checks that 1e8 additions keep the value to 1e-6. */
-__kernel void accumulate_constant(__global float *sum, float value, uint count) {
-    sum[0] = 0.0f;
-    sum[1] = 0.0f;
-    for (uint i = 0; i < count; ++i) {
-        add_compensated(sum + 0, sum + 1, value);
-    }
-}

@@ -17,6 +17,7 @@ pub enum CheckArg<'a> {
     /// A `__global const` buffer holding these bytes (any element type).
     Buffer(&'a [u8]),
     U32(u32),
+    F32(f32),
 }
 
 /// The check program, built once for several checks.
@@ -73,7 +74,7 @@ impl Checks<'_> {
         // SAFETY: argument 0 is `__global O *out`, a cl_mem of `len`
         // elements, as many as the kernel writes (`per_item` per item below
         // n); argument 1 is `uint n`; each further argument is a `__global`
-        // pointer (a cl_mem) or a `uint`, in the order of `args`, which is
+        // pointer (a cl_mem), a `uint` or a `float`, in the order of `args`, which is
         // the kernel's signature by this function's contract.
         unsafe {
             kernel.set_arg(0, &out.get()).map_err(call("set_arg"))?;
@@ -87,6 +88,7 @@ impl Checks<'_> {
                         kernel.set_arg(index, &b.get()).map_err(call("set_arg"))?;
                     }
                     CheckArg::U32(v) => kernel.set_arg(index, v).map_err(call("set_arg"))?,
+                    CheckArg::F32(v) => kernel.set_arg(index, v).map_err(call("set_arg"))?,
                 }
             }
         }

@@ -1,6 +1,6 @@
 //! Host twins of the kernel's shared structs (`kernels/types.h`): same field
 //! names, `#[repr(C)]`, 16-byte aligned, sizes asserted here and checked
-//! against the device's own `sizeof` by the `layout_sizes` kernel.
+//! against the device's own `sizeof` by the `check_layout_sizes` kernel.
 
 use crate::render::bvh::BvhNode;
 use crate::render::job::RenderJob;

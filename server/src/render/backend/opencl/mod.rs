@@ -278,68 +278,20 @@ impl OpenClBackend {
     /// `sizeof` of each shared struct as the device compiler sees it:
     /// (Object, Material, Params, BvhNode).
     pub fn device_layout_sizes(&self) -> Result<[u32; 4], OpenClError> {
-        let mut out = [0u32; 4];
-        self.run_check_kernel("layout_sizes", &mut out, |_| Ok(()))?;
-        Ok(out)
+        let out: Vec<u32> = self.checks("")?.run("check_layout_sizes", 1, 4, &[])?;
+        Ok([out[0], out[1], out[2], out[3]])
     }
 
     /// The device's compensated sum of `count` copies of `value` (hi + lo),
     /// computed with the film's own addition.
     pub fn accumulate_constant(&self, value: f32, count: u32) -> Result<f64, OpenClError> {
-        let mut out = [0f32; 2];
-        self.run_check_kernel("accumulate_constant", &mut out, |k| {
-            #[allow(unsafe_code)]
-            // SAFETY: `accumulate_constant(__global float *sum, float value,
-            // uint count)`: arguments 1 and 2 are an f32 and a u32.
-            unsafe {
-                k.set_arg(1, &value).map_err(call("set_arg"))?;
-                k.set_arg(2, &count).map_err(call("set_arg"))
-            }
-        })?;
+        let out: Vec<f32> = self.checks("")?.run(
+            "check_accumulate",
+            1,
+            2,
+            &[CheckArg::F32(value), CheckArg::U32(count)],
+        )?;
         Ok(f64::from(out[0]) + f64::from(out[1]))
-    }
-
-    /// Runs one work-item of a check kernel from `kernels/render.cl` whose
-    /// first argument is an output buffer the size of `out`, which is all the
-    /// kernel may write; `args` sets the rest.
-    fn run_check_kernel<T: Pod>(
-        &self,
-        name: &str,
-        out: &mut [T],
-        args: impl FnOnce(&Kernel) -> Result<(), OpenClError>,
-    ) -> Result<(), OpenClError> {
-        let program = self.build_sources(&SOURCES, &common_options())?;
-        let kernel = Kernel::create(&program, name).map_err(call("kernel creation"))?;
-        let buf = self.buffer::<T>(Access::ReadWrite, out.len())?;
-        #[allow(unsafe_code)]
-        // SAFETY: argument 0 of every check kernel is a `__global` pointer,
-        // here a cl_mem of `out.len()` elements, as many as the kernel writes.
-        unsafe { kernel.set_arg(0, &buf.get()) }.map_err(call("set_arg"))?;
-        args(&kernel)?;
-        let global = [1usize];
-        #[allow(unsafe_code)]
-        // SAFETY: every argument is set; `buf` lives until the blocking read
-        // below has returned; `global` has `work_dim` (1) entries.
-        unsafe {
-            self.queue.enqueue_nd_range_kernel(
-                kernel.get(),
-                1,
-                ptr::null(),
-                global.as_ptr(),
-                ptr::null(),
-                &[],
-            )
-        }
-        .map_err(call("launch"))?;
-        #[allow(unsafe_code)]
-        // SAFETY: a blocking read of `out.len()` elements, the buffer's size,
-        // into `out`, which lives past the call; T: Pod takes any bytes.
-        unsafe {
-            self.queue
-                .enqueue_read_buffer(&buf, CL_BLOCKING, 0, out, &[])
-        }
-        .map_err(call("read"))?;
-        Ok(())
     }
 
     /// A device buffer of `count` elements (at least 1: OpenCL refuses empty
