@@ -113,6 +113,7 @@ __kernel void check_layout_sizes(__global uint *out, uint n) {
     out[1] = (uint)sizeof(Material);
     out[2] = (uint)sizeof(Params);
     out[3] = (uint)sizeof(BvhNode);
+    out[4] = (uint)sizeof(Light);
 }
 
 /* Adds `value` to a compensated sum `count` times, as the film does: the

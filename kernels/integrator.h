@@ -2,11 +2,34 @@
 
 #define MAX_SURVIVAL 0.99f
 
+#if HAS_DIFFUSE
+/* Le * V * cos / pdf of one shadow ray from p (on object `at`, normal n,
+ * nl facing the path) towards emitter `light`, as light/mod.rs's `one`. */
+inline float3 direct_from(const Scene *sc, uint light, float3 p, float3 n, float3 nl, uint at, float2 u) {
+    __global const Object *light_ob = &sc->objects[light];
+    float3 dir;
+    float weight;
+    if (!sample_light(light_ob, light, p, nl, at, u, &dir, &weight)) {
+        return (float3)(0.0f);
+    }
+    float cos_s = dot(nl, dir);
+    if (!(cos_s > 0.0f)) {
+        return (float3)(0.0f);
+    }
+    uint shadow_hit;
+    intersect(sc, p, dir, at, dot(dir, n) < 0.0f, &shadow_hit);
+    if (shadow_hit != light) {
+        return (float3)(0.0f);
+    }
+    return sc->materials[light_ob->material].emission.xyz * (cos_s * weight);
+}
+#endif
+
 inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     __global const Params *P = sc->P;
     __global const Object *objects = sc->objects;
     __global const Material *materials = sc->materials;
-    __global const uint *lights = sc->lights;
+    __global const Light *lights = sc->lights;
     int nee = USE_NEE; /* a variable: `x || !CONSTANT` draws a warning */
     float3 l = (float3)(0.0f);
     float3 beta = (float3)(1.0f);
@@ -34,22 +57,20 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         if (nee && m->kind == MAT_DIFFUSE) {
             float3 nl = dot(d, n) < 0.0f ? n : -n;
             float3 direct = (float3)(0.0f);
-            for (uint j = 0; j < LIGHT_COUNT; ++j) {
-                uint light = lights[j];
-                float2 u = next_2d(s);
-                float3 dir;
-                float weight;
-                if (!sample_light(&objects[light], light, p, nl, hit, u, &dir, &weight)) {
-                    continue;
+            if (LIGHT_COUNT > 0u) {
+                /* One emitter, picked in proportion to its power
+                 * (light/mod.rs): no random number when there is one. */
+                uint j = 0u;
+                if (LIGHT_COUNT > 1u) {
+                    ulong bits = next_bits(s);
+                    uint column = (uint)(((bits >> 32) * (ulong)LIGHT_COUNT) >> 32);
+                    uint threshold = lights[column].threshold;
+                    int keep = (uint)bits < threshold || threshold == 0xFFFFFFFFu;
+                    j = keep ? column : lights[column].alias;
                 }
-                float cos_s = dot(nl, dir);
-                if (!(cos_s > 0.0f)) {
-                    continue;
-                }
-                uint shadow_hit;
-                intersect(sc, p, dir, hit, dot(dir, n) < 0.0f, &shadow_hit);
-                if (shadow_hit == light) {
-                    direct += materials[objects[light].material].emission.xyz * (cos_s * weight);
+                direct = direct_from(sc, lights[j].object, p, n, nl, hit, next_2d(s));
+                if (LIGHT_COUNT > 1u) {
+                    direct = direct / lights[j].pmf;
                 }
             }
             l += beta * m->albedo.xyz * direct * M_1_PI_F;

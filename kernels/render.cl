@@ -22,7 +22,7 @@ inline void add_compensated(__global float *hi, __global float *lo, float x) {
 }
 
 __kernel void render(__global const Params *P, __global const Object *objects, __global const Material *materials,
-                     __global const uint *lights, __global float *film, __global uint *rejected, ulong first,
+                     __global const Light *lights, __global float *film, __global uint *rejected, ulong first,
                      uint count, uint pixel_base, uint pixel_end, __global const BvhNode *nodes,
                      __global const uint *prims, __global const uint *big) {
     Scene sc = {P, objects, materials, lights, nodes, prims, big};

@@ -65,12 +65,22 @@ typedef struct {
     uint count[4];
 } BvhNode;
 
+/* An emitter and its column of the power alias table (layout.rs, Light;
+ * render/light/alias.rs): index column kept when the low 32 bits of the
+ * pick are below threshold (or threshold is all ones), else alias. */
+typedef struct {
+    uint object;
+    uint threshold;
+    uint alias;
+    float pmf;
+} Light;
+
 /* The scene's buffers, as one argument for the routines that read them. */
 typedef struct {
     __global const Params *P;
     __global const Object *objects;
     __global const Material *materials;
-    __global const uint *lights;
+    __global const Light *lights;
     __global const BvhNode *nodes; /* the objects' BVH (use_bvh) */
     __global const uint *prims;    /* object of each leaf slot */
     __global const uint *big;      /* objects tested before the BVH */

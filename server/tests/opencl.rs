@@ -43,8 +43,8 @@ fn shared_structs_have_the_same_size_on_the_device() {
     let sizes = d.device_layout_sizes().expect("layout kernel");
     assert_eq!(
         sizes,
-        [96, 48, 112, 128],
-        "Object, Material, Params, BvhNode as the device compiler sees them"
+        [96, 48, 112, 128, 16],
+        "Object, Material, Params, BvhNode, Light as the device compiler sees them"
     );
 }
 

@@ -7,6 +7,10 @@
 //! bit) does not depend on how samples were split into passes or threads.
 //! Non-finite samples are rejected, counted, and contribute nothing.
 //!
+//! A sample may also be added to a range of pixels at a time (a slice, so
+//! that a pass on an expensive scene stays short): pixels `0..next` then
+//! hold one sample more than the rest until the last slice commits it.
+//!
 //! Error estimate: with A and B the means of the even and odd halves (n_a
 //! and n_b samples) and M the mean of all n, E[(A - B)^2] = var (1/n_a +
 //! 1/n_b) and var(M) = var / n, so (A - B)^2 n_a n_b / n^2 estimates M's
@@ -51,6 +55,10 @@ pub struct Film {
     pixels: Vec<PixelSums>,
     spp: u64,
     rejected: u64,
+    /// Sample `spp` is in pixels `0..next` (0: no sample in progress).
+    next: usize,
+    /// Rejections among those pixels, counted when the sample completes.
+    partial_rejected: u64,
 }
 
 impl Film {
@@ -61,6 +69,8 @@ impl Film {
             pixels: vec![PixelSums::default(); width as usize * height as usize],
             spp: 0,
             rejected: 0,
+            next: 0,
+            partial_rejected: 0,
         }
     }
 
@@ -87,6 +97,30 @@ impl Film {
         self.pixels.fill(PixelSums::default());
         self.spp = 0;
         self.rejected = 0;
+        self.next = 0;
+        self.partial_rejected = 0;
+    }
+
+    /// Pixels `0..n` already hold sample `spp` (0 when no sample is in
+    /// progress): where the next slice starts.
+    pub fn slice_start(&self) -> usize {
+        self.next
+    }
+
+    /// Records that sample `spp` was added to pixels `slice_start()..end`,
+    /// `rejected` of them refused; the sample counts once it reaches the
+    /// last pixel. Returns whether it did.
+    pub fn commit_slice(&mut self, end: usize, rejected: u64) -> bool {
+        debug_assert!(end >= self.next && end <= self.pixels.len());
+        self.next = end;
+        self.partial_rejected += rejected;
+        if end < self.pixels.len() {
+            return false;
+        }
+        let r = std::mem::take(&mut self.partial_rejected);
+        self.next = 0;
+        self.commit(1, r);
+        true
     }
 
     /// All sums, row-major.
@@ -102,20 +136,25 @@ impl Film {
     /// Records that every pixel received `count` more samples, of which
     /// `rejected` (over the whole film) were refused.
     pub fn commit(&mut self, count: u64, rejected: u64) {
+        debug_assert_eq!(
+            self.next, 0,
+            "whole samples added while a slice is in progress"
+        );
         self.spp += count;
         self.rejected += rejected;
     }
 
     /// Mean radiance per pixel, row-major, top row first.
     pub fn mean(&self) -> Vec<[f32; 3]> {
-        let inv = if self.spp == 0 {
-            0.0
-        } else {
-            1.0 / self.spp as f64
-        };
+        let inv = |n: u64| if n == 0 { 0.0 } else { 1.0 / n as f64 };
+        let (inv_spp, inv_next) = (inv(self.spp), inv(self.spp + 1));
         self.pixels
             .iter()
-            .map(|p| std::array::from_fn(|c| ((p.even[c] + p.odd[c]) * inv) as f32))
+            .enumerate()
+            .map(|(i, p)| {
+                let k = if i < self.next { inv_next } else { inv_spp };
+                std::array::from_fn(|c| ((p.even[c] + p.odd[c]) * k) as f32)
+            })
             .collect()
     }
 
@@ -124,12 +163,15 @@ impl Film {
         if self.spp < 2 {
             return None;
         }
-        let n = self.spp as f64;
-        let n_even = self.spp.div_ceil(2) as f64;
-        let n_odd = (self.spp / 2) as f64;
-        let scale = n_even * n_odd / (n * n);
+        // (n_even, n_odd, n_even n_odd / n^2, n) for n samples.
+        let factors = |n: u64| {
+            let (e, o, n) = (n.div_ceil(2) as f64, (n / 2) as f64, n as f64);
+            (e, o, e * o / (n * n), n)
+        };
+        let (whole, plus_one) = (factors(self.spp), factors(self.spp + 1));
         let (mut err2, mut sig2) = (0.0f64, 0.0f64);
-        for p in &self.pixels {
+        for (i, p) in self.pixels.iter().enumerate() {
+            let (n_even, n_odd, scale, n) = if i < self.next { plus_one } else { whole };
             for c in 0..3 {
                 let d = p.even[c] / n_even - p.odd[c] / n_odd;
                 let m = (p.even[c] + p.odd[c]) / n;

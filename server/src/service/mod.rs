@@ -12,6 +12,7 @@ mod frame;
 mod guard;
 pub mod listen;
 mod metrics;
+mod pass;
 mod routes;
 pub mod session;
 mod static_files;

@@ -8,6 +8,7 @@ use super::change::{patch_quality, Change};
 use super::error::ApiError;
 pub use super::frame::Frame;
 use super::metrics::Metrics;
+use super::pass::{Measured, Pass};
 use super::worker::{BackendInfo, Waker};
 use crate::render::progressive::{self, Progress};
 use crate::render::scene::LightInfo;
@@ -17,10 +18,6 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 use std::time::{Duration, Instant};
 use tokio::sync::watch;
-
-/// How long one pass of one session should take: short enough that a change
-/// shows within a frame or two, long enough to keep the device busy.
-pub const PASS_TARGET: Duration = Duration::from_millis(30);
 
 /// Everything that a change restarts.
 struct SessionState {
@@ -37,7 +34,8 @@ struct SessionState {
     halted: bool,
     /// Why rendering stopped early (a device error).
     pub failure: Option<String>,
-    per_sample: Option<Duration>,
+    /// What the last pass measured (None: no pass yet since the change).
+    measured: Option<Measured>,
 }
 
 pub struct Session {
@@ -127,7 +125,7 @@ impl Session {
                 restarted: Instant::now(),
                 halted: false,
                 failure: None,
-                per_sample: None,
+                measured: None,
             }),
             frames,
             current_generation: AtomicU64::new(0),
@@ -205,6 +203,9 @@ impl Session {
     /// after it. A refused change (an error naming the field) changes nothing.
     pub fn apply(&self, change: Change) -> Result<Status, ApiError> {
         let mut st = lock(&self.state);
+        // A new view of the same scene costs about what the old one did; a
+        // new scene or quality may cost anything.
+        let keeps_cost = matches!(change, Change::Camera(_) | Change::Light(_));
         match change {
             Change::Camera(edit) => st.scene = st.scene.edit_camera(&edit)?,
             Change::Light(edit) => st.scene = st.scene.edit_light(&edit)?,
@@ -223,7 +224,11 @@ impl Session {
         st.restarted = Instant::now();
         st.halted = false;
         st.failure = None;
-        st.per_sample = None;
+        let pixels = u64::from(st.width) * u64::from(st.height);
+        st.measured = st
+            .measured
+            .filter(|_| keeps_cost)
+            .map(|m| m.after_change(pixels));
         let previous = self.latest();
         let frame = Frame::empty(
             self.seq.fetch_add(1, Ordering::Relaxed),
@@ -270,39 +275,37 @@ impl Session {
         !st.halted && st.film.is_some()
     }
 
-    /// One pass on `backend`: about [`PASS_TARGET`] of samples, then a frame.
+    /// One pass on `backend`: about [`super::pass::PASS_TARGET`] of samples, then a
+    /// frame; or, when one sample of the whole image takes longer, that
+    /// long a slice of one sample (a frame when it completes the sample).
     /// A change made meanwhile wins: the pass's film is thrown away.
     pub fn render_pass(&self, backend: &mut Backend, metrics: &Metrics) {
-        let (job, mut film, generation, quality, count) = {
+        let (job, mut film, generation, quality, pass) = {
             let mut st = lock(&self.state);
             if st.halted {
                 return;
             }
             let Some(film) = st.film.take() else { return };
-            let mut count = match st.per_sample {
-                Some(p) if !p.is_zero() => (PASS_TARGET.as_secs_f64() / p.as_secs_f64()) as u64,
-                _ => 1,
-            }
-            .clamp(1, 1 << 16);
-            if let Some(n) = st.quality.spp {
-                count = count.min(n.saturating_sub(film.spp())).max(1);
-            }
-            (st.job.clone(), film, st.generation, st.quality, count)
+            let pass = Pass::plan(&film, st.measured, st.quality.spp);
+            (st.job.clone(), film, st.generation, st.quality, pass)
         };
         let rejected_before = film.rejected();
         let start = Instant::now();
-        tracing::debug!(session = %self.id, generation, count, "pass starts");
+        tracing::debug!(session = %self.id, generation, ?pass, "pass starts");
         let cancelled = || self.current_generation.load(Ordering::Relaxed) != generation;
-        let result = backend
-            .prepare(&job)
-            .and_then(|()| backend.render_unless(&job, &mut film, count, &cancelled));
+        let result = backend.prepare(&job).and_then(|()| match pass.clone() {
+            Pass::Samples(count) => backend.render_unless(&job, &mut film, count, &cancelled),
+            Pass::Slice(range) => backend.render_slice(&job, &mut film, range.end, &cancelled),
+        });
         let took = start.elapsed();
         self.passes.fetch_add(1, Ordering::Relaxed);
         let (name, device) = (backend.name().to_owned(), backend.device());
         // The O(pixels) work on the film happens before taking the lock, so
         // that status requests and changes never wait for it.
         let finished = matches!(result, Ok(true));
-        let (pixels, estimate) = if finished {
+        // A slice that leaves its sample unfinished publishes no frame.
+        let whole = finished && film.slice_start() == 0;
+        let (pixels, estimate) = if whole {
             (film.mean(), film.error_estimate())
         } else {
             (Vec::new(), None)
@@ -324,14 +327,20 @@ impl Session {
             self.publish_status_only(name, device);
             return;
         }
-        metrics.add_samples(
-            &name,
-            count * u64::from(film.width()) * u64::from(film.height()),
-        );
+        let paths = pass.paths(&film);
+        metrics.add_samples(&name, paths);
         metrics
             .rejected_samples
             .fetch_add(film.rejected() - rejected_before, Ordering::Relaxed);
-        st.per_sample = Some(took / count as u32);
+        let full = film.pixels().len() as f64 / paths.max(1) as f64;
+        st.measured = Some(Measured {
+            per_sample: took.mul_f64(full),
+            paths,
+        });
+        if !whole {
+            st.film = Some(film);
+            return;
+        }
         let progress = Progress::with_estimate(&film, st.restarted.elapsed(), estimate);
         st.halted = quality.halts() && progressive::halted(&quality, &progress);
         let frame = Frame {

@@ -98,7 +98,7 @@ impl CpuBackend {
                     if cancelled() {
                         return None;
                     }
-                    Some(render_row(wide, job, y as u32, row, first..first + count))
+                    Some(render_span(wide, job, y * width, row, first..first + count))
                 })
                 .sum()
         };
@@ -114,7 +114,51 @@ impl CpuBackend {
             None => false,
         }
     }
+
+    /// Adds sample `film.spp()` to the pixels from `film.slice_start()` up
+    /// to `end`, in chunks of [`SLICE_CHUNK`] pixels in parallel; gives up
+    /// between chunks once `cancelled` says so (false then, and the film is
+    /// thrown away). Every pixel gets the same number as from
+    /// [`CpuBackend::render`].
+    pub fn render_slice(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        end: usize,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> bool {
+        let (start, sample) = (film.slice_start(), film.spp());
+        let wide = if self.portable_only { None } else { wide_isa() };
+        let work = |pixels: &mut [PixelSums]| -> Option<u64> {
+            pixels[start..end]
+                .par_chunks_mut(SLICE_CHUNK)
+                .enumerate()
+                .map(|(k, chunk)| {
+                    if cancelled() {
+                        return None;
+                    }
+                    let first = start + k * SLICE_CHUNK;
+                    Some(render_span(wide, job, first, chunk, sample..sample + 1))
+                })
+                .sum()
+        };
+        let rejected = match &self.pool {
+            Some(pool) => pool.install(|| work(film.pixels_mut())),
+            None => work(film.pixels_mut()),
+        };
+        match rejected {
+            Some(r) => {
+                film.commit_slice(end, r);
+                true
+            }
+            None => false,
+        }
+    }
 }
+
+/// Pixels one rayon task of a slice renders (small: a slice may be a few
+/// hundred pixels of a very expensive scene, and every core should help).
+pub const SLICE_CHUNK: usize = 16;
 
 /// The nearest hit of every ray (leaving the surface it names), in
 /// parallel on rayon's threads with the widest kernels this CPU has: what
@@ -166,59 +210,68 @@ fn wide_isa() -> Option<Portable> {
     None
 }
 
-/// Adds samples `samples` to every pixel of row `y`; returns how many were
-/// rejected. Runs the wide code when `wide` is given.
+/// Adds samples `samples` to the pixels `span`, which start at pixel
+/// number `first` (row-major); returns how many were rejected. Runs the
+/// wide code when `wide` is given.
 #[cfg(target_arch = "x86_64")]
-fn render_row(
+fn render_span(
     wide: Option<Avx2>,
     job: &RenderJob,
-    y: u32,
-    row: &mut [PixelSums],
+    first: usize,
+    span: &mut [PixelSums],
     samples: Range<u64>,
 ) -> u64 {
     match wide {
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[allow(unsafe_code)]
-        Some(isa) => unsafe { row_avx2(isa, job, y, row, samples) },
-        None => row_with(Portable, job, y, row, samples),
+        Some(isa) => unsafe { span_avx2(isa, job, first, span, samples) },
+        None => span_with(Portable, job, first, span, samples),
     }
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-fn render_row(
+fn render_span(
     _: Option<Portable>,
     job: &RenderJob,
-    y: u32,
-    row: &mut [PixelSums],
+    first: usize,
+    span: &mut [PixelSums],
     samples: Range<u64>,
 ) -> u64 {
-    row_with(Portable, job, y, row, samples)
+    span_with(Portable, job, first, span, samples)
 }
 
-/// `row_with` compiled for AVX2 and FMA.
+/// `span_with` compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn row_avx2(isa: Avx2, job: &RenderJob, y: u32, row: &mut [PixelSums], samples: Range<u64>) -> u64 {
-    row_with(isa, job, y, row, samples)
+fn span_avx2(
+    isa: Avx2,
+    job: &RenderJob,
+    first: usize,
+    span: &mut [PixelSums],
+    samples: Range<u64>,
+) -> u64 {
+    span_with(isa, job, first, span, samples)
 }
 
-/// The samples of one row, with the whole path loop inlined here so that it
+/// The samples of a run of pixels, with the whole path loop inlined here so that it
 /// is compiled for the caller's instruction set. Samples go two at a time,
 /// side by side: each bounce traces both paths' rays before shading either,
 /// so that the processor overlaps the two (independent) intersection tests.
 /// Samples still reach each pixel in index order.
 #[inline(always)]
-fn row_with<I: Isa>(
+fn span_with<I: Isa>(
     isa: I,
     job: &RenderJob,
-    y: u32,
-    row: &mut [PixelSums],
+    first: usize,
+    span: &mut [PixelSums],
     samples: Range<u64>,
 ) -> u64 {
     let (world, settings) = (&job.world, &job.settings);
+    let width = job.width() as usize;
     let mut rejected = 0u64;
-    for (x, px) in row.iter_mut().enumerate() {
-        let x = x as u32;
+    for (i, px) in span.iter_mut().enumerate() {
+        let (x, y) = ((first + i) % width, (first + i) / width);
+        let (x, y) = (x as u32, y as u32);
         let mut s = samples.start;
         while s < samples.end {
             let pair = s + 1 < samples.end;

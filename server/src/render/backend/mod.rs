@@ -148,6 +148,25 @@ impl Backend {
         }
     }
 
+    /// Adds sample `film.spp()` to pixels `film.slice_start()..end` (a pass
+    /// shorter than one sample of the whole image). Ok(false) when a CPU
+    /// slice gave up for `cancelled`; the film must then be thrown away. On
+    /// failure the film is as it was before the call.
+    pub fn render_slice(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        end: usize,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, BackendError> {
+        self.run(
+            job,
+            film,
+            |b, film| b.render_slice(job, film, end).map(|()| true),
+            |c, film| c.render_slice(job, film, end, cancelled),
+        )
+    }
+
     /// Adds `count` samples per pixel to `film`. On failure the film is as
     /// it was before the call.
     pub fn render(
@@ -156,26 +175,40 @@ impl Backend {
         film: &mut Film,
         count: u64,
     ) -> Result<(), BackendError> {
+        self.run(
+            job,
+            film,
+            |b, film| b.render(job, film, count),
+            |c, film| c.render(job, film, count),
+        )
+    }
+
+    /// Runs `on_device` on OpenCL, or `on_cpu` with rayon: for this scene
+    /// only when `auto` chose OpenCL and the kernel does not model it, from
+    /// now on when the device fails.
+    fn run<T>(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        on_device: impl FnOnce(&mut OpenClBackend, &mut Film) -> Result<T, OpenClError>,
+        on_cpu: impl FnOnce(&mut CpuBackend, &mut Film) -> T,
+    ) -> Result<T, BackendError> {
         match self {
-            Backend::Cpu(b) => {
-                b.render(job, film, count);
-                Ok(())
-            }
-            Backend::OpenCl { backend, fallback } => match backend.render(job, film, count) {
-                Ok(()) => Ok(()),
+            Backend::Cpu(b) => Ok(on_cpu(b, film)),
+            Backend::OpenCl { backend, fallback } => match on_device(backend, film) {
+                Ok(t) => Ok(t),
                 Err(OpenClError::Unsupported(why)) if *fallback => {
                     // This scene only: the device keeps serving the others.
                     log_scene_fallback(job, &why);
-                    CpuBackend::fallback(why).render(job, film, count);
-                    Ok(())
+                    Ok(on_cpu(&mut CpuBackend::fallback(why), film))
                 }
                 Err(e) if *fallback => {
                     let why = format!("OpenCL failed on {}: {e}", backend.info().name.trim());
                     tracing::warn!("{why}; falling back to rayon on the CPU");
                     let mut cpu = CpuBackend::fallback(why);
-                    cpu.render(job, film, count);
+                    let t = on_cpu(&mut cpu, film);
                     *self = Backend::Cpu(cpu);
-                    Ok(())
+                    Ok(t)
                 }
                 Err(e) => Err(e.into()),
             },

@@ -86,6 +86,12 @@ impl AliasTable {
     pub fn pmf(&self, i: usize) -> f32 {
         self.pmf[i]
     }
+
+    /// Column `i` as [`AliasTable::pick`] reads it: (threshold, alias,
+    /// pmf of index i); for a device to pick the same index from the same bits.
+    pub fn column(&self, i: usize) -> (u32, u32, f32) {
+        (self.threshold[i], self.alias[i], self.pmf[i])
+    }
 }
 
 #[cfg(test)]

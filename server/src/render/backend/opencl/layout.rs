@@ -92,6 +92,18 @@ pub struct Params {
     pub pad2: u32,
 }
 
+/// An emitter for next-event estimation and its column of the power alias
+/// table (render/light/alias.rs): the kernel picks one as the CPU does.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    pub object: u32,
+    pub threshold: u32,
+    pub alias: u32,
+    pub pmf: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<Light>() == 16);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
 const _: () = assert!(std::mem::size_of::<Material>() == 48);
 const _: () = assert!(std::mem::size_of::<Params>() == 112);
@@ -130,14 +142,40 @@ pub fn device_uses_bvh(w: &World) -> bool {
     }
 }
 
-/// The objects the kernel's next-event estimation aims at: every emissive
-/// sphere and quad (the kernel takes one shadow ray to each).
-pub fn kernel_lights(w: &World) -> Vec<u32> {
-    w.lights
+/// What the kernel's next-event estimation aims at: every emitter, each an
+/// emissive sphere or quad (a scene with other emitters is not rendered on
+/// the device), with the CPU's power alias table (one shadow ray to one
+/// emitter per shading point). None when the CPU would take none either.
+pub fn kernel_lights(w: &World) -> Vec<Light> {
+    let lights = &w.lights;
+    let table = match lights.emitters.len() {
+        0 => return Vec::new(),
+        1 => None,
+        _ => match &lights.table {
+            Some(t) => Some(t),
+            None => return Vec::new(),
+        },
+    };
+    let all_objects = lights
         .emitters
         .iter()
-        .filter(|e| matches!(e.shape, EmitterShape::Sphere(_) | EmitterShape::Quad(_)))
-        .map(|e| e.object)
+        .all(|e| matches!(e.shape, EmitterShape::Sphere(_) | EmitterShape::Quad(_)));
+    if !all_objects {
+        return Vec::new();
+    }
+    lights
+        .emitters
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let (threshold, alias, pmf) = table.map_or((u32::MAX, 0, 1.0), |t| t.column(i));
+            Light {
+                object: e.object,
+                threshold,
+                alias,
+                pmf,
+            }
+        })
         .collect()
 }
 
@@ -146,7 +184,7 @@ pub struct Packed {
     pub params: Params,
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
-    pub lights: Vec<u32>,
+    pub lights: Vec<Light>,
     /// The objects' BVH as the CPU traverses it (empty for a scanned world):
     /// its nodes, the object of each leaf slot, and the objects tested one
     /// by one before it.

@@ -19,6 +19,7 @@ mod check;
 mod devices;
 mod layout;
 mod program;
+mod slice;
 
 pub use check::{CheckArg, Checks};
 pub use devices::{auto_pick, list as list_devices, DeviceInfo};
@@ -110,7 +111,7 @@ struct JobState {
     params: Buffer<layout::Params>,
     objects: Buffer<layout::Object>,
     materials: Buffer<layout::Material>,
-    lights: Buffer<u32>,
+    lights: Buffer<layout::Light>,
     nodes: Buffer<crate::render::bvh::BvhNode>,
     prims: Buffer<u32>,
     big: Buffer<u32>,
@@ -119,6 +120,8 @@ struct JobState {
     pixels: usize,
     /// Samples per pixel the device film holds.
     spp: u64,
+    /// Pixels `0..next` hold sample `spp` too (a slice in progress).
+    next: usize,
     /// Measured launch time per sample per pixel.
     per_sample: Option<Duration>,
     /// Rejections the device counter held at the last read-back.
@@ -276,10 +279,10 @@ impl OpenClBackend {
     }
 
     /// `sizeof` of each shared struct as the device compiler sees it:
-    /// (Object, Material, Params, BvhNode).
-    pub fn device_layout_sizes(&self) -> Result<[u32; 4], OpenClError> {
-        let out: Vec<u32> = self.checks("")?.run("check_layout_sizes", 1, 4, &[])?;
-        Ok([out[0], out[1], out[2], out[3]])
+    /// (Object, Material, Params, BvhNode, Light).
+    pub fn device_layout_sizes(&self) -> Result<[u32; 5], OpenClError> {
+        let out: Vec<u32> = self.checks("")?.run("check_layout_sizes", 1, 5, &[])?;
+        Ok([out[0], out[1], out[2], out[3], out[4]])
     }
 
     /// The device's compensated sum of `count` copies of `value` (hi + lo),
@@ -335,6 +338,7 @@ impl OpenClBackend {
             s.job_id == job.id
                 && &s.key == key
                 && s.spp == film.spp()
+                && s.next == film.slice_start()
                 && s.pixels == film.pixels().len()
         };
         if let Some(i) = self.states.iter().position(matches) {
@@ -380,6 +384,7 @@ impl OpenClBackend {
             rejected: self.upload(Access::ReadWrite, &[0u32])?,
             pixels: film.pixels().len(),
             spp: film.spp(),
+            next: film.slice_start(),
             per_sample,
             rejected_reported: 0,
         };
@@ -556,38 +561,8 @@ impl OpenClBackend {
     }
 
     fn read_back(&mut self, film: &mut Film, count: u64) -> Result<(), OpenClError> {
-        let state = self
-            .states
-            .last_mut()
-            .ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
-        let mut sums = vec![0f32; state.pixels * FILM_FLOATS];
-        let mut rejected = [0u32];
-        #[allow(unsafe_code)]
-        // SAFETY: blocking reads, each into a host slice exactly the size of
-        // its buffer (`pixels` x FILM_FLOATS floats; one u32) that outlives
-        // the call; f32 and u32 take any bytes.
-        unsafe {
-            self.queue
-                .enqueue_read_buffer(&state.film, CL_BLOCKING, 0, &mut sums, &[])
-                .map_err(call("film read"))?;
-            self.queue
-                .enqueue_read_buffer(&state.rejected, CL_BLOCKING, 0, &mut rejected, &[])
-                .map_err(call("film read"))?;
-        }
-        for (px, s) in film
-            .pixels_mut()
-            .iter_mut()
-            .zip(sums.chunks_exact(FILM_FLOATS))
-        {
-            for c in 0..3 {
-                px.even[c] = f64::from(s[c]) + f64::from(s[3 + c]);
-                px.odd[c] = f64::from(s[6 + c]) + f64::from(s[9 + c]);
-            }
-        }
-        // The device counter holds the rejections since the film was uploaded.
-        let total = u64::from(rejected[0]);
-        film.commit(count, total - state.rejected_reported.min(total));
-        state.rejected_reported = total;
+        let rejected = self.read_range(film, 0..film.pixels().len())?;
+        film.commit(count, rejected);
         Ok(())
     }
 }

@@ -82,7 +82,7 @@ impl Features {
         let light_kind = |k: u32| {
             lights
                 .iter()
-                .any(|&i| match w.objects[i as usize].geometry {
+                .any(|l| match w.objects[l.object as usize].geometry {
                     Geometry::Sphere(_) => k == KIND_SPHERE,
                     Geometry::Quad(_) => k == KIND_QUAD,
                     Geometry::Instance(_) => false,
