@@ -31,76 +31,61 @@ inline uint bvh_test(__global const BvhNode *node, float3 o, float3 inv, int3 ne
 }
 #endif
 
-/* Nearest hit along (o, d), never the surface the ray starts on. Returns
- * the distance; *hit is the object index or NO_OBJECT. */
-inline float intersect(const Scene *sc, float3 o, float3 d, uint from, int entering, uint *hit) {
-    __global const Params *P = sc->P;
-    float oo = dot(o, o);
-    float od = dot(o, d);
-    float best = INFINITY;
-    *hit = NO_OBJECT;
 #if HAS_BVH
-    if (USE_BVH) {
-        for (uint j = 0; j < P->num_big; ++j) {
-            offer_object(sc->objects, sc->big[j], o, d, oo, od, from, entering, &best, hit);
-        }
-        float3 inv = (float3)(1.0f) / d;
-        int3 neg = (int3)(signbit(d.x), signbit(d.y), signbit(d.z));
-        /* Entries: child << 3 | count (leaves hold at most 7), and the
-         * entry distance. */
-        uint stack[BVH_STACK];
-        float stack_t[BVH_STACK];
-        int top = 1;
-        stack[0] = 0u;
-        stack_t[0] = 0.0f;
-        while (top > 0) {
-            top -= 1;
-            uint entry = stack[top];
-            if (stack_t[top] > best) {
-                continue;
-            }
-            uint child = entry >> 3;
-            uint count = entry & 7u;
-            if (count > 0u) {
-                for (uint slot = child; slot < child + count; ++slot) {
-                    offer_object(sc->objects, sc->prims[slot], o, d, oo, od, from, entering, &best, hit);
-                }
-                continue;
-            }
-            __global const BvhNode *node = &sc->nodes[child];
-            float4 tv;
-            uint mask = bvh_test(node, o, inv, neg, best, &tv);
-            float tn[4] = {tv.x, tv.y, tv.z, tv.w};
-            /* The children hit, by entry distance, nearest last. */
-            uint hits[4];
-            float hits_t[4];
-            int n = 0;
-            for (int i = 0; i < 4; ++i) {
-                if (!(mask & (1u << i))) {
-                    continue;
-                }
-                uint e = node->child[i] << 3 | node->count[i];
-                int j = n;
-                while (j > 0 && hits_t[j - 1] < tn[i]) {
-                    hits[j] = hits[j - 1];
-                    hits_t[j] = hits_t[j - 1];
-                    j -= 1;
-                }
-                hits[j] = e;
-                hits_t[j] = tn[i];
-                n += 1;
-            }
-            for (int i = 0; i < n; ++i) {
-                stack[top + i] = hits[i];
-                stack_t[top + i] = hits_t[i];
-            }
-            top += n;
-        }
-        return best;
+/* Nearest-first search of the BVH `NODES` (bvh/traverse.rs) for the ray
+ * (O, D) up to T_MAX (an lvalue: leaves may shorten it). At each leaf,
+ * LEAF runs with leaf_first and leaf_count (slots). Stack entries: child
+ * << 3 | count (leaves hold at most 7) and the entry distance. */
+#define BVH_SEARCH(NODES, STACK, O, D, T_MAX, LEAF)                                   \
+    {                                                                                 \
+        float3 inv_ = (float3)(1.0f) / (D);                                           \
+        int3 neg_ = (int3)(signbit((D).x), signbit((D).y), signbit((D).z));            \
+        uint stack_[STACK];                                                           \
+        float stack_t_[STACK];                                                        \
+        int top_ = 1;                                                                 \
+        stack_[0] = 0u;                                                               \
+        stack_t_[0] = 0.0f;                                                           \
+        while (top_ > 0) {                                                            \
+            top_ -= 1;                                                                \
+            uint entry_ = stack_[top_];                                               \
+            if (stack_t_[top_] > (T_MAX)) {                                           \
+                continue;                                                             \
+            }                                                                         \
+            uint child_ = entry_ >> 3;                                                \
+            uint count_ = entry_ & 7u;                                                \
+            if (count_ > 0u) {                                                        \
+                uint leaf_first = child_;                                             \
+                uint leaf_count = count_;                                             \
+                LEAF;                                                                 \
+                continue;                                                             \
+            }                                                                         \
+            float4 tv_;                                                               \
+            uint mask_ = bvh_test(&(NODES)[child_], (O), inv_, neg_, (T_MAX), &tv_);  \
+            float tn_[4] = {tv_.x, tv_.y, tv_.z, tv_.w};                              \
+            /* The children hit, by entry distance, nearest last. */                 \
+            uint hits_[4];                                                            \
+            float hits_t_[4];                                                         \
+            int n_ = 0;                                                               \
+            for (int i_ = 0; i_ < 4; ++i_) {                                          \
+                if (!(mask_ & (1u << i_))) {                                          \
+                    continue;                                                         \
+                }                                                                     \
+                uint e_ = (NODES)[child_].child[i_] << 3 | (NODES)[child_].count[i_]; \
+                int j_ = n_;                                                          \
+                while (j_ > 0 && hits_t_[j_ - 1] < tn_[i_]) {                         \
+                    hits_[j_] = hits_[j_ - 1];                                        \
+                    hits_t_[j_] = hits_t_[j_ - 1];                                    \
+                    j_ -= 1;                                                          \
+                }                                                                     \
+                hits_[j_] = e_;                                                       \
+                hits_t_[j_] = tn_[i_];                                                \
+                n_ += 1;                                                              \
+            }                                                                         \
+            for (int i_ = 0; i_ < n_; ++i_) {                                         \
+                stack_[top_ + i_] = hits_[i_];                                        \
+                stack_t_[top_ + i_] = hits_t_[i_];                                    \
+            }                                                                         \
+            top_ += n_;                                                               \
+        }                                                                             \
     }
 #endif
-    for (uint i = 0; i < OBJECT_COUNT; ++i) {
-        offer_object(sc->objects, i, o, d, oo, od, from, entering, &best, hit);
-    }
-    return best;
-}

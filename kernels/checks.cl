@@ -46,7 +46,7 @@ __kernel void check_pixel_offset(__global float *out, uint n, __global const flo
 __kernel void check_intersect(__global float *out, uint n, __global const float4 *rays,
                               __global const Object *objects, __global const Params *P,
                               __global const BvhNode *nodes, __global const uint *prims, __global const uint *big) {
-    Scene sc = {P, objects, 0, 0, nodes, prims, big};
+    Scene sc = {P, objects, 0, 0, nodes, prims, big, 0, 0, 0, 0, 0};
     uint i = (uint)get_global_id(0);
     if (i >= n) {
         return;
@@ -77,7 +77,7 @@ __kernel void check_scatter(__global float *out, uint n, __global const float4 *
     Sampler s = sampler_new(0UL, (ulong)i, 0UL);
     float3 weight;
     int specular;
-    float3 dir = scatter(&materials[material], in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
+    float3 dir = scatter_outward(&materials[material], in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
     __global float *r = out + (size_t)i * 8u;
     r[0] = dir.x;
     r[1] = dir.y;
@@ -98,10 +98,56 @@ __kernel void check_nearest(__global float *out, uint n, __global const float4 *
     if (i >= n) {
         return;
     }
-    Scene sc = {P, objects, 0, 0, nodes, prims, big};
+    Scene sc = {P, objects, 0, 0, nodes, prims, big, 0, 0, 0, 0, 0};
     uint hit;
     out[2 * i] = intersect(&sc, rays[2 * i].xyz, rays[2 * i + 1].xyz, NO_OBJECT, 0, &hit);
     out[2 * i + 1] = as_float(hit);
+}
+
+/* The nearest hit of ray i (as check_intersect's rays) in a scene with
+ * mesh instances: (t, object, triangle as float bits). */
+__kernel void check_nearest_meshes(__global float *out, uint n, __global const float4 *rays,
+                                   __global const Object *objects, __global const Params *P,
+                                   __global const BvhNode *nodes, __global const uint *prims, __global const uint *big,
+                                   __global const Instance *instances, __global const BvhNode *mesh_nodes,
+                                   __global const TriVerts *tris, __global const float4 *normals,
+                                   __global const uint *slots) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {P, objects, 0, 0, nodes, prims, big, instances, mesh_nodes, tris, normals, slots};
+    Hit h;
+    nearest(&sc, rays[2 * i].xyz, rays[2 * i + 1].xyz, NO_OBJECT, NO_PRIM, 0, &h);
+    out[3 * i] = h.t;
+    out[3 * i + 1] = as_float(h.object);
+    out[3 * i + 2] = as_float(h.prim);
+}
+
+/* The watertight test of ray i (origin, direction: rays[2i], rays[2i+1])
+ * against triangle i (tris[3i..3i+3]): (t, b0, b1, b2), or t = -1 for no
+ * hit. */
+__kernel void check_triangle(__global float *out, uint n, __global const float4 *rays,
+                             __global const float4 *tris) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    TriRay r = tri_ray(rays[2 * i].xyz, rays[2 * i + 1].xyz);
+    float t;
+    float3 b;
+    __global float *o = out + (size_t)i * 4u;
+    if (tri_intersect(&r, tris[3 * i].xyz, tris[3 * i + 1].xyz, tris[3 * i + 2].xyz, INFINITY, &t, &b)) {
+        o[0] = t;
+        o[1] = b.x;
+        o[2] = b.y;
+        o[3] = b.z;
+    } else {
+        o[0] = -1.0f;
+        o[1] = 0.0f;
+        o[2] = 0.0f;
+        o[3] = 0.0f;
+    }
 }
 
 /* sizeof of every shared struct, for the host's layout check. */
@@ -114,6 +160,8 @@ __kernel void check_layout_sizes(__global uint *out, uint n) {
     out[2] = (uint)sizeof(Params);
     out[3] = (uint)sizeof(BvhNode);
     out[4] = (uint)sizeof(Light);
+    out[5] = (uint)sizeof(Instance);
+    out[6] = (uint)sizeof(TriVerts);
 }
 
 /* Adds `value` to a compensated sum `count` times, as the film does: the

@@ -3,31 +3,33 @@
 #define MAX_SURVIVAL 0.99f
 
 #if HAS_DIFFUSE
-/* Le * V * cos / pdf of one shadow ray from p (on object `at`, normal n,
- * nl facing the path) towards emitter `light`, as light/mod.rs's `one`. */
-inline float3 direct_from(const Scene *sc, uint light, float3 p, float3 n, float3 nl, uint at, float2 u) {
-    __global const Object *light_ob = &sc->objects[light];
+/* Le * V * cos / pdf of one shadow ray from surface sf towards emitter L,
+ * as light/mod.rs's `one`. */
+inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u) {
     float3 dir;
     float weight;
-    if (!sample_light(light_ob, light, p, nl, at, u, &dir, &weight)) {
+    if (!sample_emitter(sc, L, sf, nl, ns, u, &dir, &weight)) {
         return (float3)(0.0f);
     }
-    float cos_s = dot(nl, dir);
-    if (!(cos_s > 0.0f)) {
+    float cos_s = dot(ns, dir);
+    if (!(cos_s > 0.0f && dot(nl, dir) > 0.0f)) {
         return (float3)(0.0f);
     }
-    uint shadow_hit;
-    intersect(sc, p, dir, at, dot(dir, n) < 0.0f, &shadow_hit);
-    if (shadow_hit != light) {
+    Hit h;
+    nearest(sc, spawn(sc, sf, dir), dir, sf->object, sf->prim, dot(dir, sf->ng) < 0.0f, &h);
+    int visible = L->kind == LIGHT_ENVIRONMENT
+                      ? h.object == NO_OBJECT
+                      : h.object == L->object && (L->prim == NO_PRIM || h.prim == L->prim);
+    if (!visible) {
         return (float3)(0.0f);
     }
-    return sc->materials[light_ob->material].emission.xyz * (cos_s * weight);
+    return L->emission.xyz * (cos_s * weight);
 }
 #endif
 
+/* One path (integrator.rs, Path::advance until it ends). */
 inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     __global const Params *P = sc->P;
-    __global const Object *objects = sc->objects;
     __global const Material *materials = sc->materials;
     __global const Light *lights = sc->lights;
     int nee = USE_NEE; /* a variable: `x || !CONSTANT` draws a warning */
@@ -35,27 +37,35 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     float3 beta = (float3)(1.0f);
     int specular = 1;
     uint from = NO_OBJECT;
+    uint from_prim = NO_PRIM;
     int entering = 0;
     uint bounces = 0;
     for (;;) {
-        uint hit;
-        float t = intersect(sc, o, d, from, entering, &hit);
-        if (hit == NO_OBJECT) {
+        Hit hit;
+        nearest(sc, o, d, from, from_prim, entering, &hit);
+        if (hit.object == NO_OBJECT) {
+#if HAS_ENV
+            /* Left the scene: the environment, counted as an emitter's hit. */
+            if (specular || !nee) {
+                l += beta * P->environment.xyz;
+            }
+#endif
             break;
         }
-        __global const Object *ob = &objects[hit];
-        __global const Material *m = &materials[ob->material];
+        Surf sf = surface_at(sc, &hit, o, d);
+        __global const Material *m = &materials[sf.material];
         if (m->emissive && (specular || !nee)) {
             l += beta * m->emission.xyz;
         }
         if (MAX_DEPTH != 0u && bounces >= MAX_DEPTH) {
             break;
         }
-        float3 p = o + d * t;
-        float3 n = object_normal(ob, p);
+        /* Geometric and shading normals on the side the ray came from. */
+        int arriving = dot(d, sf.ng) < 0.0f;
+        float3 nl = arriving ? sf.ng : -sf.ng;
+        float3 ns = !sf.smooth ? nl : (dot(sf.ns, nl) < 0.0f ? -sf.ns : sf.ns);
 #if HAS_DIFFUSE
         if (nee && m->kind == MAT_DIFFUSE) {
-            float3 nl = dot(d, n) < 0.0f ? n : -n;
             float3 direct = (float3)(0.0f);
             if (LIGHT_COUNT > 0u) {
                 /* One emitter, picked in proportion to its power
@@ -68,7 +78,7 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
                     int keep = (uint)bits < threshold || threshold == 0xFFFFFFFFu;
                     j = keep ? column : lights[column].alias;
                 }
-                direct = direct_from(sc, lights[j].object, p, n, nl, hit, next_2d(s));
+                direct = direct_from(sc, &lights[j], &sf, nl, ns, next_2d(s));
                 if (LIGHT_COUNT > 1u) {
                     direct = direct / lights[j].pmf;
                 }
@@ -80,7 +90,13 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         }
 #endif
         float3 weight;
-        float3 next = scatter(m, d, n, s, &weight, &specular);
+        int transmitted;
+        float3 next = scatter(m, d, arriving, ns, s, &weight, &specular, &transmitted);
+        /* A shading normal can send a direction to the wrong side of the
+         * actual surface: such a sample has no contribution. */
+        if (sf.smooth && (dot(next, nl) > 0.0f) == transmitted) {
+            break;
+        }
         beta *= weight;
         bounces += 1u;
         if (bounces > RR_DEPTH || !(max3(beta) > 0.0f)) {
@@ -90,9 +106,10 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
             }
             beta /= q;
         }
-        from = hit;
-        entering = dot(next, n) < 0.0f;
-        o = p;
+        from = hit.object;
+        from_prim = hit.prim;
+        entering = dot(next, sf.ng) < 0.0f;
+        o = spawn(sc, &sf, next);
         d = next;
     }
     if (P->clamp > 0.0f) {

@@ -62,3 +62,49 @@ inline int sample_light(__global const Object *light_ob, uint light, float3 p, f
     return 0;
 #endif
 }
+
+/* The direction from p to q on a flat emitter (unit normal n, area) and
+ * 1/pdf in solid angle (emitter.rs, toward_point). */
+inline int toward_point(float3 p, float3 q, float3 n, float area, float3 *dir, float *weight) {
+    float3 w = q - p;
+    float dist2 = dot(w, w);
+    if (!(dist2 > 0.0f)) {
+        return 0;
+    }
+    *dir = w / sqrt(dist2);
+    *weight = fabs(dot(n, *dir)) * area / dist2;
+    return 1;
+}
+
+/* Emitter::sample_direction for emitter L seen from surface sf (nl and ns
+ * its geometric and shading normals on the side the path came from). */
+inline int sample_emitter(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u,
+                          float3 *dir, float *weight) {
+#if HAS_TRI_LIGHTS
+    if (L->kind == LIGHT_TRIANGLE) {
+        if (L->object == sf->object && L->prim == sf->prim) {
+            return 0;
+        }
+        float r = sqrt(u.x);
+        float b1 = 1.0f - r;
+        float b2 = u.y * r;
+        return toward_point(sf->p, L->p0.xyz + L->e1.xyz * b1 + L->e2.xyz * b2, L->n.xyz, L->n.w, dir, weight);
+    }
+#endif
+#if HAS_ENV
+    if (L->kind == LIGHT_ENVIRONMENT) {
+        *dir = cosine_hemisphere(ns, u);
+        float c = dot(ns, *dir);
+        if (!(c > 0.0f)) {
+            return 0;
+        }
+        *weight = M_PI_F / c;
+        return 1;
+    }
+#endif
+#if HAS_SPHERE_LIGHTS || HAS_QUAD_LIGHTS
+    return sample_light(&sc->objects[L->object], L->object, sf->p, nl, sf->object, u, dir, weight);
+#else
+    return 0;
+#endif
+}

@@ -38,13 +38,15 @@ inline float3 reflect_dir(float3 d, float3 n) {
     return d - n * (2.0f * dot(d, n));
 }
 
-/* Samples the continuation of a ray along unit d that hit a surface with
- * outward normal n. Returns the new direction; *weight is BSDF cos / pdf,
- * *specular whether it was a delta lobe. */
-inline float3 scatter(__global const Material *m, float3 d, float3 n, Sampler *s, float3 *weight, int *specular) {
-    int entering = dot(d, n) < 0.0f;
-    float3 nl = entering ? n : -n;
+/* Samples the continuation of a ray along unit d that arrived at a
+ * surface from outside (entering) or inside, nl the shading normal on the
+ * side it came from (material.rs, scatter). Returns the new direction;
+ * *weight is BSDF cos / pdf, *specular whether it was a delta lobe,
+ * *transmitted whether it went through. */
+inline float3 scatter(__global const Material *m, float3 d, int entering, float3 nl, Sampler *s, float3 *weight,
+                      int *specular, int *transmitted) {
     *weight = m->albedo.xyz;
+    *transmitted = 0;
 #if HAS_DIFFUSE
     if (m->kind == MAT_DIFFUSE) {
         *specular = 0;
@@ -57,7 +59,7 @@ inline float3 scatter(__global const Material *m, float3 d, float3 n, Sampler *s
         float ior = m->albedo.w;
         float n1 = entering ? 1.0f : ior;
         float n2 = entering ? ior : 1.0f;
-        float cos_i = fmin(-dot(d, nl), 1.0f);
+        float cos_i = fmin(fmax(-dot(d, nl), 0.0f), 1.0f);
         float cos_t = cos_transmitted(cos_i, n1, n2);
         float r = 1.0f;
         if (cos_t >= 0.0f) {
@@ -72,9 +74,18 @@ inline float3 scatter(__global const Material *m, float3 d, float3 n, Sampler *s
         if (next_f32(s) < r) {
             return reflect_dir(d, nl);
         }
+        *transmitted = 1;
         float eta = n1 / n2;
         return normalize(d * eta + nl * (eta * cos_i - cos_t));
     }
 #endif
     return reflect_dir(d, nl);
+}
+
+/* scatter() off a surface of outward normal n (the routine checks). */
+inline float3 scatter_outward(__global const Material *m, float3 d, float3 n, Sampler *s, float3 *weight,
+                              int *specular) {
+    int entering = dot(d, n) < 0.0f;
+    int transmitted;
+    return scatter(m, d, entering, entering ? n : -n, s, weight, specular, &transmitted);
 }

@@ -24,8 +24,10 @@ inline void add_compensated(__global float *hi, __global float *lo, float x) {
 __kernel void render(__global const Params *P, __global const Object *objects, __global const Material *materials,
                      __global const Light *lights, __global float *film, __global uint *rejected, ulong first,
                      uint count, uint pixel_base, uint pixel_end, __global const BvhNode *nodes,
-                     __global const uint *prims, __global const uint *big) {
-    Scene sc = {P, objects, materials, lights, nodes, prims, big};
+                     __global const uint *prims, __global const uint *big, __global const Instance *instances,
+                     __global const BvhNode *mesh_nodes, __global const TriVerts *tris,
+                     __global const float4 *normals, __global const uint *slots) {
+    Scene sc = {P, objects, materials, lights, nodes, prims, big, instances, mesh_nodes, tris, normals, slots};
     uint gid = pixel_base + (uint)get_global_id(0);
     if (gid >= pixel_end) {
         return;

@@ -35,40 +35,35 @@ inline float quad_intersect(__global const Object *ob, float3 o, float3 d) {
     return (a >= 0.0f && a <= 1.0f && b >= 0.0f && b <= 1.0f) ? t : INFINITY;
 }
 
-/* Offers object i to the nearest hit so far (*best, *hit), never the
- * surface the ray starts on (world/mod.rs, offer_object): a sphere the ray
- * leaves outwards is skipped, one it enters gives its far root; a quad it
- * starts on is skipped. Ties go to the lower object index. */
-inline void offer_object(__global const Object *objects, uint i, float3 o, float3 d, float oo, float od, uint from,
-                         int entering, float *best, uint *hit) {
-    __global const Object *ob = &objects[i];
-    float t;
-#if HAS_SPHERES && HAS_QUADS
-    if (ob->kind == KIND_SPHERE) {
-#endif
-#if HAS_SPHERES
-        if (i == from && !entering) {
-            return;
-        }
-        t = sphere_intersect(ob, o, d, oo, od, i == from);
-#endif
-#if HAS_SPHERES && HAS_QUADS
-    } else {
-#endif
-#if HAS_QUADS
-        if (i == from) {
-            return;
-        }
-        t = quad_intersect(ob, o, d);
-#endif
-#if HAS_SPHERES && HAS_QUADS
-    }
-#endif
-    if (t < *best || (t == *best && t < INFINITY && i < *hit)) {
-        *best = t;
-        *hit = i;
+/* Takes (t, object, prim) if it comes before *h: nearer, or as near with a
+ * lower (object, prim) (world/mod.rs, Hit::offer). */
+inline void offer_hit(Hit *h, float t, uint object, uint prim, uint slot, float3 bary) {
+    if (t < h->t || (t == h->t && t < INFINITY && (object < h->object || (object == h->object && prim < h->prim)))) {
+        h->t = t;
+        h->object = object;
+        h->prim = prim;
+        h->slot = slot;
+        h->bary = bary;
     }
 }
+
+/* Where a path met a surface (world/mod.rs, Surface): for triangles also
+ * what rays leaving it need (instance, object-space point and normal, and
+ * how far off the plane they start). */
+typedef struct {
+    float3 p;
+    float3 ng;  /* unit geometric normal (outward for spheres) */
+    float3 ns;  /* unit shading normal */
+    int smooth; /* ns is a mesh's interpolated normal */
+    uint material;
+    uint object;
+    uint prim;
+    uint instance; /* NO_OBJECT: not a triangle */
+    float3 p_obj;
+    float3 n_obj;
+    float dist;
+} Surf;
+
 inline float3 object_normal(__global const Object *ob, float3 p) {
 #if HAS_SPHERES && HAS_QUADS
     if (ob->kind == KIND_SPHERE) {

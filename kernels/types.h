@@ -52,6 +52,7 @@ typedef struct {
     uint num_big;    /* objects tested one by one before the BVH */
     uint pad1;
     uint pad2;
+    float4 environment; /* radiance of rays that leave the scene */
 } Params;
 
 /* A BVH node (render/bvh/mod.rs, BvhNode): four children's boxes as
@@ -69,11 +70,54 @@ typedef struct {
  * render/light/alias.rs): index column kept when the low 32 bits of the
  * pick are below threshold (or threshold is all ones), else alias. */
 typedef struct {
-    uint object;
+    uint object;     /* the object a shadow ray must hit to see it */
+    uint prim;       /* and its triangle, or NO_PRIM */
     uint threshold;
     uint alias;
     float pmf;
+    uint kind;       /* LIGHT_OBJECT (its Object), LIGHT_TRIANGLE, LIGHT_ENVIRONMENT */
+    uint pad0;
+    uint pad1;
+    float4 emission;
+    float4 p0;       /* a triangle in camera space: p0 + e1 b1 + e2 b2 */
+    float4 e1;
+    float4 e2;
+    float4 n;        /* unit normal; w: area */
 } Light;
+
+/* A triangle as a mesh stores it in leaf order (shape/triangle.rs,
+ * TriVerts): v0.w is its index in the mesh and v1.w its material slot,
+ * both as bits. */
+typedef struct {
+    float4 v0;
+    float4 v1;
+    float4 v2;
+} TriVerts;
+
+/* A placed mesh (opencl/meshes.rs, Instance): glam Affine3A columns. */
+typedef struct {
+    float4 obj_from_cam[4];
+    float4 cam_from_obj[4];
+    float4 normal_from_obj[3];
+    float rt_a;        /* |obj(cam(p)) - p| <= rt_a max|p| + rt_b */
+    float rt_b;
+    uint node_base;    /* the mesh's nodes and triangles in the shared buffers */
+    uint tri_base;
+    uint slot_base;    /* this instance's material of each mesh slot */
+    uint normal_base;  /* 3 vertex normals per triangle from here, or NO_NORMALS */
+    uint pad0;
+    uint pad1;
+} Instance;
+
+/* The nearest hit: object, triangle (NO_PRIM for spheres and quads), the
+ * triangle's slot in the shared buffer, its barycentrics. */
+typedef struct {
+    float t;
+    uint object;
+    uint prim;
+    uint slot;
+    float3 bary;
+} Hit;
 
 /* The scene's buffers, as one argument for the routines that read them. */
 typedef struct {
@@ -84,6 +128,11 @@ typedef struct {
     __global const BvhNode *nodes; /* the objects' BVH (use_bvh) */
     __global const uint *prims;    /* object of each leaf slot */
     __global const uint *big;      /* objects tested before the BVH */
+    __global const Instance *instances;
+    __global const BvhNode *mesh_nodes;
+    __global const TriVerts *tris;
+    __global const float4 *normals;  /* vertex normals per triangle slot */
+    __global const uint *slots;      /* world material of each instance slot */
 } Scene;
 
 /* What the program was specialised for. Without SPECIALISED every feature is
@@ -101,6 +150,10 @@ typedef struct {
 #define HAS_QUAD_LIGHTS 1
 #define HAS_BVH 1
 #define BVH_STACK 196
+#define HAS_MESHES 1
+#define MESH_STACK 196
+#define HAS_TRI_LIGHTS 1
+#define HAS_ENV 1
 #define USE_BVH (P->use_bvh != 0u)
 #define OBJECT_COUNT (P->num_objects)
 #define LIGHT_COUNT (P->num_lights)

@@ -109,6 +109,9 @@ pub struct SessionStatus {
     pub rejected: u64,
     pub backend: String,
     pub device: String,
+    /// Time the device has spent on this session, all generations.
+    #[serde(default)]
+    pub render_ms: f64,
     /// Counts restarts (every change restarts accumulation).
     pub generation: u64,
     #[serde(default, skip_serializing_if = "Option::is_none")]

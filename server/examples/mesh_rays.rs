@@ -16,6 +16,6 @@ fn main() {
         }
         return;
     }
-    let row = meshes::measure(n, 2.0).expect("measure");
+    let row = meshes::measure(n, 2.0, None).expect("measure");
     println!("{row:?}");
 }

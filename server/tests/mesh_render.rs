@@ -1,5 +1,7 @@
 //! Meshes rendered, against closed forms and the analytic shapes they
 //! approximate; many-light sampling; the environment; the camera's near clip.
+//! Every check runs on every backend: rayon, and OpenCL where there is a
+//! device (PoCL in CI, where finding none is a failure).
 
 mod common;
 
@@ -12,6 +14,19 @@ use pathstream::model::MeshData;
 use pathstream::render::light::LightSampling;
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJob, Scene};
 use serde_json::{json, Value};
+
+/// rayon, then OpenCL device 0 if there is one.
+fn backends() -> Vec<(&'static str, Backend)> {
+    let mut all = vec![("cpu", Backend::choose(BackendChoice::Cpu).expect("cpu"))];
+    match Backend::choose(BackendChoice::OpenCl { device: None }) {
+        Ok(b) => all.push(("opencl", b)),
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("CI is set but there is no OpenCL device: {e}")
+        }
+        Err(e) => eprintln!("OpenCL skipped: {e}"),
+    }
+    all
+}
 
 fn q(seed: u64) -> Quality {
     Quality {
@@ -35,23 +50,25 @@ fn triangle_furnace(levels: u32, scale: f64, smooth: bool) -> Scene {
 fn a_closed_triangle_furnace_is_exact_at_every_depth_without_nee() {
     // No path may leak out: every bounce meets the shell, so each sample is
     // E (1 - a^(D+1)) / (1 - a) exactly, at every scale.
-    for scale in [1e-3, 1.0, 1e3] {
-        let s = triangle_furnace(3, scale, false);
-        for depth in [1u32, 4, 9] {
-            let expected = 0.5 * (1.0 - 0.5f64.powi(depth as i32 + 1)) / 0.5;
-            let qq = Quality {
-                max_depth: depth,
-                rr_depth: 1000,
-                nee: false,
-                ..q(1)
-            };
-            let film = render(&s, 12, 12, &qq, 16);
-            assert_clean(&film, "triangle furnace");
-            for v in film.mean().into_iter().flatten() {
-                assert!(
-                    (f64::from(v) - expected).abs() < 1e-5,
-                    "scale {scale} depth {depth}: {v} vs {expected}"
-                );
+    for (backend, mut b) in backends() {
+        for scale in [1e-3, 1.0, 1e3] {
+            let s = triangle_furnace(3, scale, false);
+            for depth in [1u32, 4, 9] {
+                let expected = 0.5 * (1.0 - 0.5f64.powi(depth as i32 + 1)) / 0.5;
+                let qq = Quality {
+                    max_depth: depth,
+                    rr_depth: 1000,
+                    nee: false,
+                    ..q(1)
+                };
+                let film = render_on(&mut b, &s, 12, 12, &qq, 16);
+                assert_clean(&film, "triangle furnace");
+                for v in film.mean().into_iter().flatten() {
+                    assert!(
+                        (f64::from(v) - expected).abs() < 1e-5,
+                        "{backend}: scale {scale} depth {depth}: {v} vs {expected}"
+                    );
+                }
             }
         }
     }
@@ -59,24 +76,26 @@ fn a_closed_triangle_furnace_is_exact_at_every_depth_without_nee() {
 
 #[test]
 fn a_closed_triangle_furnace_has_radiance_one_with_and_without_shading_normals() {
-    for scale in [1e-3, 1e3] {
-        for smooth in [false, true] {
-            let s = triangle_furnace(4, scale, smooth);
-            for nee in [true, false] {
-                let qq = Quality {
-                    max_depth: 0,
-                    rr_depth: 2,
-                    nee,
-                    filter: Filter::Box,
-                    ..q(2)
-                };
-                let film = render(&s, 16, 16, &qq, 256);
-                assert_clean(&film, "triangle furnace");
-                let what = format!("scale {scale}, normals {smooth}, nee {nee}");
-                let all: Vec<f64> = film.mean().into_iter().flatten().map(f64::from).collect();
-                let mean = all.iter().sum::<f64>() / all.len() as f64;
-                assert!((mean - 1.0).abs() < 0.01, "{what}: mean radiance {mean}");
-                assert_mean(&film, 4, 1.0, 4.5, 0.01, &what);
+    for (backend, mut b) in backends() {
+        for scale in [1e-3, 1e3] {
+            for smooth in [false, true] {
+                let s = triangle_furnace(4, scale, smooth);
+                for nee in [true, false] {
+                    let qq = Quality {
+                        max_depth: 0,
+                        rr_depth: 2,
+                        nee,
+                        filter: Filter::Box,
+                        ..q(2)
+                    };
+                    let film = render_on(&mut b, &s, 16, 16, &qq, 256);
+                    assert_clean(&film, "triangle furnace");
+                    let what = format!("{backend}: scale {scale}, normals {smooth}, nee {nee}");
+                    let all: Vec<f64> = film.mean().into_iter().flatten().map(f64::from).collect();
+                    let mean = all.iter().sum::<f64>() / all.len() as f64;
+                    assert!((mean - 1.0).abs() < 0.01, "{what}: mean radiance {mean}");
+                    assert_mean(&film, 4, 1.0, 4.5, 0.01, &what);
+                }
             }
         }
     }
@@ -112,16 +131,26 @@ fn a_finely_tessellated_sphere_renders_as_the_analytic_sphere() {
         ..q(3)
     };
     let analytic = render(&scene("cornell"), 32, 32, &qq, 512);
-    let mesh = render(&tessellated_cornell(), 32, 32, &qq, 512);
-    assert_clean(&mesh, "tessellated");
-    assert_agree(
-        &analytic,
-        &mesh,
-        4,
-        4.5,
-        0.005,
-        "tessellated vs analytic sphere",
-    );
+    let tessellated = tessellated_cornell();
+    for (backend, mut b) in backends() {
+        let mesh = render_on(
+            &mut b,
+            &tessellated,
+            32,
+            32,
+            &Quality { seed: 13, ..qq },
+            512,
+        );
+        assert_clean(&mesh, "tessellated");
+        assert_agree(
+            &analytic,
+            &mesh,
+            4,
+            4.5,
+            0.005,
+            &format!("{backend}: tessellated vs analytic sphere"),
+        );
+    }
 }
 
 #[test]
@@ -152,8 +181,17 @@ fn a_quad_as_two_triangles_renders_as_the_quad() {
         ..q(4)
     };
     let a = render(&scene("cornell-quads"), 32, 32, &qq, 256);
-    let b = render(&two, 32, 32, &qq, 256);
-    assert_agree(&a, &b, 4, 4.5, 0.002, "two triangles vs the quad");
+    for (backend, mut b) in backends() {
+        let mesh = render_on(&mut b, &two, 32, 32, &Quality { seed: 14, ..qq }, 256);
+        assert_agree(
+            &a,
+            &mesh,
+            4,
+            4.5,
+            0.002,
+            &format!("{backend}: two triangles vs the quad"),
+        );
+    }
 }
 
 /// `cornell` lit by an emissive icosphere (320 triangles) instead of its
@@ -187,17 +225,6 @@ fn render_sampling(s: &Scene, qq: &Quality, sampling: LightSampling, spp: u64) -
 fn an_emissive_mesh_converges_to_the_same_image_with_and_without_nee() {
     let s = mesh_lit_cornell();
     assert_eq!(s.light, Some(8), "the emissive mesh is the scene's light");
-    let on = render(
-        &s,
-        24,
-        24,
-        &Quality {
-            max_depth: 3,
-            nee: true,
-            ..q(5)
-        },
-        1024,
-    );
     let off = render(
         &s,
         24,
@@ -209,7 +236,22 @@ fn an_emissive_mesh_converges_to_the_same_image_with_and_without_nee() {
         },
         4096,
     );
-    assert_agree(&on, &off, 6, 4.5, 0.0, "emissive mesh, NEE on vs off");
+    for (backend, mut b) in backends() {
+        let with_nee = Quality {
+            max_depth: 3,
+            nee: true,
+            ..q(5)
+        };
+        let on = render_on(&mut b, &s, 24, 24, &with_nee, 1024);
+        assert_agree(
+            &on,
+            &off,
+            6,
+            4.5,
+            0.0,
+            &format!("{backend}: emissive mesh, NEE on vs off"),
+        );
+    }
 }
 
 #[test]
@@ -256,37 +298,41 @@ fn ball_under_the_sky(mesh: Option<&MeshData>) -> Scene {
 
 #[test]
 fn a_convex_ball_under_a_uniform_sky_reflects_albedo_times_sky() {
-    for (what, s) in [
-        ("sphere", ball_under_the_sky(None)),
-        ("icosphere", ball_under_the_sky(Some(&icosphere(3)))),
-    ] {
-        for nee in [true, false] {
-            let qq = Quality {
-                max_depth: 0,
-                nee,
-                filter: Filter::Box,
-                ..q(8)
-            };
-            let film = render(&s, 32, 32, &qq, 256);
-            assert_clean(&film, what);
-            let r = regions(&film, 4);
-            // The 8x8 blocks: the centre four lie on the ball, the corners on the sky.
-            for &i in &[27usize, 28, 35, 36] {
-                for c in 0..3 {
-                    let z = (r[i].mean[c] - 0.5).abs() / r[i].var[c].sqrt().max(1e-9);
+    for (backend, mut b) in backends() {
+        for (what, s) in [
+            ("sphere", ball_under_the_sky(None)),
+            ("icosphere", ball_under_the_sky(Some(&icosphere(3)))),
+        ] {
+            let what = format!("{backend}, {what}");
+            let what = what.as_str();
+            for nee in [true, false] {
+                let qq = Quality {
+                    max_depth: 0,
+                    nee,
+                    filter: Filter::Box,
+                    ..q(8)
+                };
+                let film = render_on(&mut b, &s, 32, 32, &qq, 256);
+                assert_clean(&film, what);
+                let r = regions(&film, 4);
+                // The 8x8 blocks: the centre four lie on the ball, the corners on the sky.
+                for &i in &[27usize, 28, 35, 36] {
+                    for c in 0..3 {
+                        let z = (r[i].mean[c] - 0.5).abs() / r[i].var[c].sqrt().max(1e-9);
+                        assert!(
+                            z < 4.5,
+                            "{what}, nee {nee}: ball block {i}: {} vs 0.5",
+                            r[i].mean[c]
+                        );
+                    }
+                }
+                for &i in &[0usize, 7, 56, 63] {
                     assert!(
-                        z < 4.5,
-                        "{what}, nee {nee}: ball block {i}: {} vs 0.5",
-                        r[i].mean[c]
+                        (r[i].mean[0] - 1.0).abs() < 1e-6,
+                        "{what}: sky block {i}: {}",
+                        r[i].mean[0]
                     );
                 }
-            }
-            for &i in &[0usize, 7, 56, 63] {
-                assert!(
-                    (r[i].mean[0] - 1.0).abs() < 1e-6,
-                    "{what}: sky block {i}: {}",
-                    r[i].mean[0]
-                );
             }
         }
     }
@@ -314,18 +360,15 @@ fn a_mesh_without_emitters_or_camera_is_framed_and_lit_by_default() {
     // the image and lit: the centre block is the ball (0.5), not the sky (1).
     let d = s.camera.look_at - glam::DVec3::new(10.0, 20.0, 30.0);
     assert!(d.length() < 0.5, "look_at {:?}", s.camera.look_at);
-    let film = render(
-        &s,
-        16,
-        16,
-        &Quality {
+    for (backend, mut b) in backends() {
+        let qq = Quality {
             max_depth: 0,
             ..q(9)
-        },
-        128,
-    );
-    let centre = regions(&film, 8)[0].mean[0].min(regions(&film, 8)[3].mean[0]);
-    assert!(centre < 0.9, "the mesh does not show: {centre}");
+        };
+        let film = render_on(&mut b, &s, 16, 16, &qq, 128);
+        let centre = regions(&film, 8)[0].mean[0].min(regions(&film, 8)[3].mean[0]);
+        assert!(centre < 0.9, "{backend}: the mesh does not show: {centre}");
+    }
     // Round trip: the default environment is now explicit, no new warning.
     let again = s.revalidate(&s.to_json()).expect("revalidate");
     assert_eq!(again.environment, s.environment);

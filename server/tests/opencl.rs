@@ -43,8 +43,8 @@ fn shared_structs_have_the_same_size_on_the_device() {
     let sizes = d.device_layout_sizes().expect("layout kernel");
     assert_eq!(
         sizes,
-        [96, 48, 112, 128, 16],
-        "Object, Material, Params, BvhNode, Light as the device compiler sees them"
+        [96, 48, 128, 128, 112, 208, 48],
+        "Object, Material, Params, BvhNode, Light, Instance, TriVerts as the device compiler sees them"
     );
 }
 
@@ -336,8 +336,18 @@ fn every_feature_combination_builds() {
     let Some(_) = device() else { return };
     use pathstream::render::backend::opencl::{Features, ProgramKey};
     let mut keys = Vec::new();
-    for shapes in [(true, false), (false, true), (true, true)] {
+    // (spheres, quads, meshes); with meshes, diffuse alone or every material.
+    for shapes in [
+        (true, false, false),
+        (false, true, false),
+        (true, true, false),
+        (false, false, true),
+        (true, true, true),
+    ] {
         for materials in 1u8..8 {
+            if shapes.2 && materials != 1 && materials != 7 {
+                continue;
+            }
             let (diffuse, mirror, glass) =
                 (materials & 1 != 0, materials & 2 != 0, materials & 4 != 0);
             let fresnels: &[(bool, bool)] = if glass {
@@ -362,12 +372,15 @@ fn every_feature_combination_builds() {
                         num_objects: 3,
                         num_lights: u32::from(lights != 0),
                         max_depth: u32::from(materials),
-                        // With and without the BVH code.
-                        bvh_stack: if lights % 2 == 0 {
+                        // With and without the BVH code (always with meshes).
+                        bvh_stack: if lights % 2 == 0 || shapes.2 {
                             3 * u32::from(materials) + 4
                         } else {
                             0
                         },
+                        mesh_stack: if shapes.2 { 40 } else { 0 },
+                        tri_lights: shapes.2 && lights & 1 != 0,
+                        environment: shapes.2 && lights & 2 != 0,
                         inject_nan_every: None,
                     }));
                 }
@@ -377,7 +390,7 @@ fn every_feature_combination_builds() {
     keys.push(ProgramKey::Generic {
         inject_nan_every: None,
     });
-    assert_eq!(keys.len(), 3 * 15 * 4 + 1);
+    assert_eq!(keys.len(), 3 * 15 * 4 + 2 * 4 * 4 + 1);
     // Two threads, each with its own context: the compiler is the slow part.
     let failures: Vec<String> = std::thread::scope(|scope| {
         let halves: Vec<_> = keys

@@ -4,9 +4,12 @@
 //! nearest hit and scattering off every material within a few ulps. Runs on
 //! any OpenCL device (PoCL in CI, where a missing device is a failure).
 
+mod parity;
+
+use parity::{checks, device, ulps, uniform, unit};
 use pathstream::render::backend::nearest_hits;
 use pathstream::render::backend::opencl::{
-    device_uses_bvh, pack, CheckArg, Checks, KernelParams, OpenClBackend, Packed,
+    device_uses_bvh, pack, CheckArg, KernelParams, OpenClBackend, Packed,
 };
 use pathstream::render::material::{scatter, Bsdf};
 use pathstream::render::math::{sincos_turns, Vec3A};
@@ -16,51 +19,6 @@ use pathstream::render::shape::Roots;
 use pathstream::render::world::{Geometry, Origin};
 use pathstream::render::{Filter, Quality, RenderJob, Scene};
 
-fn device() -> Option<OpenClBackend> {
-    match OpenClBackend::new(None) {
-        Ok(b) => Some(b),
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but there is no OpenCL device: {e}")
-        }
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            None
-        }
-    }
-}
-
-/// Distance in units in the last place (0 for equal values, infinities
-/// included; u64::MAX when only one is NaN or infinite).
-fn ulps(a: f32, b: f32) -> u64 {
-    if a == b {
-        return 0;
-    }
-    if !(a.is_finite() && b.is_finite()) {
-        return u64::MAX;
-    }
-    let key = |x: f32| {
-        let i = i64::from(x.to_bits() as i32);
-        if i < 0 {
-            i64::from(i32::MIN) - i
-        } else {
-            i
-        }
-    };
-    key(a).abs_diff(key(b))
-}
-
-/// Uniform numbers in [0, 1) from a counter.
-fn uniform(i: u64, salt: u64) -> f32 {
-    (mix64(i ^ mix64(salt)) >> 40) as f32 / 16_777_216.0
-}
-
-fn unit(i: u64, salt: u64) -> Vec3A {
-    let z = 1.0 - 2.0 * uniform(i, salt);
-    let (s, c) = sincos_turns(uniform(i, salt + 1));
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3A::new(r * c, r * s, z)
-}
-
 fn job(scene: &str) -> RenderJob {
     RenderJob::new(
         &Scene::load(scene).expect("built-in"),
@@ -68,13 +26,6 @@ fn job(scene: &str) -> RenderJob {
         16,
         &Quality::default(),
     )
-}
-
-/// The check program; `PARITY_OPTIONS` adds compiler options, to measure
-/// what each floating-point choice changes (docs/OPENCL.md).
-fn checks(d: &OpenClBackend) -> Checks<'_> {
-    let extra = std::env::var("PARITY_OPTIONS").unwrap_or_default();
-    d.checks(&extra).expect("the check program builds")
 }
 
 #[test]
@@ -473,68 +424,4 @@ fn shared_constants_are_written_once_in_rust() {
             "{name} is not passed to the build"
         );
     }
-}
-
-/// Next-event estimation picks one emitter in proportion to its power from
-/// the same random bits on both backends: with the same seed, a scene of
-/// 40 lights of different power renders the same image, pixel for pixel,
-/// but for the rare path that a last-bit difference sends elsewhere. (A
-/// device that aimed at every light, or picked another, would differ in
-/// nearly every pixel.)
-#[test]
-fn the_device_picks_the_emitter_the_cpu_picks() {
-    use pathstream::render::{Backend, BackendChoice, Film};
-    let Some(d) = device() else { return };
-    let mut j =
-        serde_json::to_value(Scene::load("cornell").expect("scene").to_json()).expect("json");
-    for i in 0..40u64 {
-        let c = [
-            10.0 + 80.0 * uniform(i, 1),
-            5.0 + 70.0 * uniform(i, 2),
-            30.0 + 100.0 * uniform(i, 3),
-        ];
-        let name = format!("lamp{i}");
-        let e = 1.0 + 20.0 * f64::from(uniform(i, 4));
-        j["materials"][&name] = serde_json::json!({"type": "diffuse", "albedo": [0.5, 0.5, 0.5], "emission": [e, e * 0.5, e * 0.25]});
-        j["objects"].as_array_mut().expect("objects").push(
-            serde_json::json!({"type": "sphere", "center": c, "radius": 0.5 + 2.0 * uniform(i, 5), "material": name}),
-        );
-    }
-    let s = Scene::from_json_value(j).expect("valid");
-    let q = Quality {
-        seed: 3,
-        max_depth: 2,
-        ..Quality::default()
-    };
-    let job = RenderJob::new(&s, 24, 24, &q);
-    assert!(
-        job.world.lights.emitters.len() > 40,
-        "the lamps and the ceiling light emit"
-    );
-    let mut cpu = Film::new(24, 24);
-    Backend::choose(BackendChoice::Cpu)
-        .expect("cpu")
-        .render(&job, &mut cpu, 4)
-        .expect("render");
-    let mut gpu = Film::new(24, 24);
-    let mut on_device = Backend::OpenCl {
-        backend: Box::new(d),
-        fallback: false,
-    };
-    on_device.render(&job, &mut gpu, 4).expect("render");
-    let (a, b) = (cpu.mean(), gpu.mean());
-    let same = a
-        .iter()
-        .zip(&b)
-        .filter(|(x, y)| {
-            x.iter()
-                .zip(y.iter())
-                .all(|(p, q)| (p - q).abs() <= 1e-4 * p.abs().max(q.abs()).max(1e-3))
-        })
-        .count();
-    assert!(
-        same * 100 >= a.len() * 95,
-        "{same} of {} pixels the same on both backends",
-        a.len()
-    );
 }

@@ -34,6 +34,12 @@ pub struct MeshRow {
     pub bounce_rays_per_sec: f64,
     /// Diffuse paths (max depth 4, NEE on, under a uniform sky) per second.
     pub paths_per_sec: f64,
+    /// The same on the first OpenCL backend, if the benchmark has one.
+    pub opencl_paths_per_sec: Option<f64>,
+    /// Time to pack and upload the scene (BVHs, triangles, instances) and
+    /// the film to that device, and the device memory they take.
+    pub opencl_upload_seconds: Option<f64>,
+    pub opencl_device_bytes: Option<u64>,
 }
 
 /// A mesh scene and the rays to time on it, in camera-relative space.
@@ -123,8 +129,12 @@ pub fn rays_per_sec(world: &World, rays: &[(Ray, Origin)], repeats: u32) -> f64 
 }
 
 /// Measures one mesh size: build, memory, rays/s, and paths/s over
-/// `seconds` of rendering.
-pub fn measure(triangles: usize, seconds: f64) -> Result<MeshRow, BackendError> {
+/// `seconds` of rendering, on the CPU and on `opencl` if given.
+pub fn measure(
+    triangles: usize,
+    seconds: f64,
+    opencl: Option<&mut Backend>,
+) -> Result<MeshRow, BackendError> {
     let set = ray_set(triangles);
     let mesh = &set.scene.imports[0].instances[0].mesh;
     let repeats = if triangles > 2_000_000 { 2 } else { 3 };
@@ -136,11 +146,23 @@ pub fn measure(triangles: usize, seconds: f64) -> Result<MeshRow, BackendError> 
         time_ms: Some((seconds * 1000.0).max(1.0) as u64),
         ..Quality::default()
     };
-    let mut backend = Backend::choose(BackendChoice::Cpu)?;
     let (w, h) = (RAY_IMAGE.0 / 2, RAY_IMAGE.1 / 2);
     let job = RenderJob::new(&set.scene, w, h, &quality);
-    let mut film = Film::new(w, h);
-    let done = crate::render::progressive::render(&job, &mut backend, &mut film, &quality, |_| {})?;
+    let paths = |backend: &mut Backend| -> Result<f64, BackendError> {
+        let mut film = Film::new(w, h);
+        let done = crate::render::progressive::render(&job, backend, &mut film, &quality, |_| {})?;
+        Ok(done.samples_per_sec)
+    };
+    let cpu_paths = paths(&mut Backend::choose(BackendChoice::Cpu)?)?;
+    let (mut opencl_paths, mut upload, mut device_bytes) = (None, None, None);
+    if let Some(b) = opencl {
+        b.prepare(&job)?; // the compiler is not timed
+        opencl_paths = Some(paths(b)?);
+        if let Backend::OpenCl { backend, .. } = b {
+            upload = backend.last_upload.map(|(d, _)| d.as_secs_f64());
+            device_bytes = backend.last_upload.map(|(_, b)| b as u64);
+        }
+    }
     Ok(MeshRow {
         triangles: mesh.triangles.len(),
         build_seconds: set.build_seconds,
@@ -149,7 +171,10 @@ pub fn measure(triangles: usize, seconds: f64) -> Result<MeshRow, BackendError> 
         bvh_depth: mesh.bvh.depth,
         camera_rays_per_sec: camera,
         bounce_rays_per_sec: bounce,
-        paths_per_sec: done.samples_per_sec,
+        paths_per_sec: cpu_paths,
+        opencl_paths_per_sec: opencl_paths,
+        opencl_upload_seconds: upload,
+        opencl_device_bytes: device_bytes,
     })
 }
 

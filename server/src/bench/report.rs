@@ -63,22 +63,23 @@ fn meshes(w: &mut String, r: &Results) {
     if r.meshes.is_empty() {
         return;
     }
-    let _ = writeln!(w, "## Meshes (CPU)\n");
+    let _ = writeln!(w, "## Meshes\n");
     let _ = writeln!(
         w,
         "A closed bumpy sphere of N triangles, framed; camera rays through the centres of 512x512 pixels, one \
          cosine-distributed bounce ray from each hit; paths: 256x256, max depth 4, NEE on, uniform sky. Build: \
-         loading the mesh, checks and the BVH.\n"
+         loading the mesh, checks and the BVH. Rays: on the CPU. OpenCL: the same paths on the first OpenCL \
+         backend, the time to pack and upload the scene and film to it, and the device memory they take.\n"
     );
-    let _ = writeln!(w, "| triangles | build | memory | BVH nodes | depth | camera M rays/s | bounce M rays/s | M paths/s |");
+    let _ = writeln!(w, "| triangles | build | memory | BVH nodes | depth | camera M rays/s | bounce M rays/s | CPU M paths/s | OpenCL M paths/s | OpenCL upload | device memory |");
     let _ = writeln!(
         w,
-        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
     );
     for m in &r.meshes {
         let _ = writeln!(
             w,
-            "| {} | {} | {:.1} MiB | {} | {} | {:.2} | {:.2} | {:.2} |",
+            "| {} | {} | {:.1} MiB | {} | {} | {:.2} | {:.2} | {:.2} | {} | {} | {} |",
             m.triangles,
             secs(m.build_seconds),
             m.memory_bytes as f64 / (1 << 20) as f64,
@@ -86,7 +87,12 @@ fn meshes(w: &mut String, r: &Results) {
             m.bvh_depth,
             m.camera_rays_per_sec / 1e6,
             m.bounce_rays_per_sec / 1e6,
-            m.paths_per_sec / 1e6
+            m.paths_per_sec / 1e6,
+            m.opencl_paths_per_sec
+                .map_or("-".into(), |p| format!("{:.2}", p / 1e6)),
+            m.opencl_upload_seconds.map_or("-".into(), secs),
+            m.opencl_device_bytes
+                .map_or("-".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64))
         );
     }
     let _ = writeln!(w);

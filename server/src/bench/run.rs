@@ -122,11 +122,16 @@ struct Work<'a> {
 }
 
 impl Work<'_> {
-    /// Build, memory, rays/s and paths/s of each mesh size (on the CPU).
+    /// Build, memory, rays/s and paths/s of each mesh size (on the CPU,
+    /// and paths/s and upload time on the first OpenCL backend).
     fn meshes(&mut self) -> Result<(), BenchError> {
         for &n in &self.config.mesh_sizes {
             self.observer.step(&format!("mesh of {n} triangles"));
-            let row = super::meshes::measure(n, self.config.mesh_seconds)?;
+            let opencl = self
+                .backends
+                .iter_mut()
+                .find(|b| matches!(b, Backend::OpenCl { .. }));
+            let row = super::meshes::measure(n, self.config.mesh_seconds, opencl)?;
             self.results.meshes.push(row);
         }
         Ok(())

@@ -20,7 +20,7 @@ pub enum SectionArg {
     Calibration,
     /// OpenCL: scene-specialised vs generic program.
     Specialisation,
-    /// Meshes: BVH build time and memory, rays/s, paths/s (CPU).
+    /// Meshes: BVH build time and memory, rays/s, paths/s (CPU and OpenCL), upload time.
     Meshes,
 }
 

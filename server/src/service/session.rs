@@ -51,6 +51,8 @@ pub struct Session {
     pub clients: AtomicUsize,
     /// Passes rendered, all generations (how the worker shares its device).
     passes: AtomicU64,
+    /// Nanoseconds of those passes.
+    render_ns: AtomicU64,
     /// Set by the worker that renders this session.
     waker: OnceLock<Waker>,
     /// Becomes true when the session is deleted ([`Session::close`]):
@@ -77,6 +79,9 @@ pub struct Status {
     pub rejected: u64,
     pub backend: String,
     pub device: String,
+    /// Time the device has spent rendering this session, all generations
+    /// (how a worker shares its device among its sessions).
+    pub render_ms: f64,
     pub generation: u64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
@@ -133,6 +138,7 @@ impl Session {
             last_active: Mutex::new(Instant::now()),
             clients: AtomicUsize::new(0),
             passes: AtomicU64::new(0),
+            render_ns: AtomicU64::new(0),
             waker: OnceLock::new(),
             deleted: watch::channel(false).0,
         }
@@ -193,6 +199,7 @@ impl Session {
             rejected: if current { frame.rejected } else { 0 },
             backend: frame.backend.clone(),
             device: frame.device.clone(),
+            render_ms: self.render_ns.load(Ordering::Relaxed) as f64 / 1e6,
             generation: st.generation,
             failure: st.failure.clone(),
             warnings: st.scene.warnings.clone(),
@@ -299,6 +306,10 @@ impl Session {
         });
         let took = start.elapsed();
         self.passes.fetch_add(1, Ordering::Relaxed);
+        self.render_ns.fetch_add(
+            took.as_nanos().min(u128::from(u64::MAX)) as u64,
+            Ordering::Relaxed,
+        );
         let (name, device) = (backend.name().to_owned(), backend.device());
         // The O(pixels) work on the film happens before taking the lock, so
         // that status requests and changes never wait for it.

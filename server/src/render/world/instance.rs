@@ -31,8 +31,8 @@ pub struct Instance {
     /// Maps object-space normals to camera space (inverse transpose).
     pub normal_from_obj: Mat3A,
     /// Round trip bound: |obj_from_cam(cam_from_obj(p)) - p| <= rt_a max|p| + rt_b.
-    rt_a: f32,
-    rt_b: f32,
+    pub rt_a: f32,
+    pub rt_b: f32,
     /// World material of each of the mesh's material slots.
     pub materials: Arc<[u32]>,
 }

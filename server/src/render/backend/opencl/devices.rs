@@ -19,6 +19,8 @@ pub struct DeviceInfo {
     pub kind: &'static str,
     pub compute_units: u32,
     pub global_mem_bytes: u64,
+    /// Largest single buffer the device allocates.
+    pub max_alloc_bytes: u64,
     pub fp64: bool,
     pub opencl_c_version: String,
     /// Single-precision division and sqrt can be built correctly rounded
@@ -92,6 +94,7 @@ fn enumerate() -> Result<Vec<DeviceInfo>, String> {
                 kind,
                 compute_units: d.max_compute_units().unwrap_or(0),
                 global_mem_bytes: d.global_mem_size().unwrap_or(0),
+                max_alloc_bytes: d.max_mem_alloc_size().unwrap_or(0),
                 correctly_rounded_divide_sqrt: d
                     .single_fp_config()
                     .map(|c| c & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT != 0)

@@ -13,6 +13,12 @@ use bytemuck::{Pod, Zeroable};
 
 pub const KIND_SPHERE: u32 = 0;
 pub const KIND_QUAD: u32 = 1;
+/// A mesh instance: `Object::pad0` is its index in the instances buffer.
+pub const KIND_INSTANCE: u32 = 2;
+/// Emitter kinds (`Light::kind`).
+pub const LIGHT_OBJECT: u32 = 0;
+pub const LIGHT_TRIANGLE: u32 = 1;
+pub const LIGHT_ENVIRONMENT: u32 = 2;
 pub const MAT_DIFFUSE: u32 = 0;
 pub const MAT_MIRROR: u32 = 1;
 pub const MAT_GLASS: u32 = 2;
@@ -21,14 +27,21 @@ pub const NO_OBJECT: u32 = u32::MAX;
 
 /// The constants host and kernel share, written once: every program is
 /// built with them as `-D NAME=VALUEu` (kernels/types.h defines none).
-pub const SHARED_CONSTANTS: [(&str, u32); 7] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 14] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
+    ("KIND_INSTANCE", KIND_INSTANCE),
+    ("LIGHT_OBJECT", LIGHT_OBJECT),
+    ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
+    ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
+    ("NO_NORMALS", super::meshes::NO_NORMALS),
+    ("NO_PRIM", crate::render::world::NO_PRIM),
     ("MAT_DIFFUSE", MAT_DIFFUSE),
     ("MAT_MIRROR", MAT_MIRROR),
     ("MAT_GLASS", MAT_GLASS),
     ("NO_OBJECT", NO_OBJECT),
     ("BVH_ROBUST_BITS", crate::render::bvh::ROBUST.to_bits()),
+    ("GAMMA7_BITS", crate::render::math::gamma(7).to_bits()),
 ];
 
 /// [`SHARED_CONSTANTS`] as compiler options.
@@ -90,6 +103,8 @@ pub struct Params {
     pub num_big: u32,
     pub pad1: u32,
     pub pad2: u32,
+    /// Radiance of rays that leave the scene (w unused).
+    pub environment: [f32; 4],
 }
 
 /// An emitter for next-event estimation and its column of the power alias
@@ -97,16 +112,30 @@ pub struct Params {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
+    /// The object a shadow ray must hit to see it (not for the environment).
     pub object: u32,
+    /// The triangle of that object, or `NO_PRIM`.
+    pub prim: u32,
     pub threshold: u32,
     pub alias: u32,
     pub pmf: f32,
+    /// `LIGHT_OBJECT` (a sphere or quad: its `Object`), `LIGHT_TRIANGLE`
+    /// (below), `LIGHT_ENVIRONMENT`.
+    pub kind: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub emission: [f32; 4],
+    /// A triangle in camera space: p0 + e1 b1 + e2 b2; n.w its area.
+    pub p0: [f32; 4],
+    pub e1: [f32; 4],
+    pub e2: [f32; 4],
+    pub n: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<Light>() == 16);
+const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
 const _: () = assert!(std::mem::size_of::<Material>() == 48);
-const _: () = assert!(std::mem::size_of::<Params>() == 112);
+const _: () = assert!(std::mem::size_of::<Params>() == 128);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
@@ -128,6 +157,9 @@ pub const DEVICE_SCAN_MAX_COST: usize = 16;
 /// Whether the kernel searches `w` through a BVH: the device's own
 /// measurement, unless the world was built with a fixed choice.
 pub fn device_uses_bvh(w: &World) -> bool {
+    if !w.instances.is_empty() {
+        return true; // as on the CPU: meshes are only ever searched by BVH
+    }
     match w.accel_choice {
         AccelChoice::Bvh => true,
         AccelChoice::Scan => false,
@@ -142,10 +174,10 @@ pub fn device_uses_bvh(w: &World) -> bool {
     }
 }
 
-/// What the kernel's next-event estimation aims at: every emitter, each an
-/// emissive sphere or quad (a scene with other emitters is not rendered on
-/// the device), with the CPU's power alias table (one shadow ray to one
-/// emitter per shading point). None when the CPU would take none either.
+/// What the kernel's next-event estimation aims at: every emitter (sphere,
+/// quad, triangle of an emissive mesh, the environment), with the CPU's
+/// power alias table (one shadow ray to one emitter per shading point).
+/// Empty when the CPU would aim at none either.
 pub fn kernel_lights(w: &World) -> Vec<Light> {
     let lights = &w.lights;
     let table = match lights.emitters.len() {
@@ -156,25 +188,32 @@ pub fn kernel_lights(w: &World) -> Vec<Light> {
             None => return Vec::new(),
         },
     };
-    let all_objects = lights
-        .emitters
-        .iter()
-        .all(|e| matches!(e.shape, EmitterShape::Sphere(_) | EmitterShape::Quad(_)));
-    if !all_objects {
-        return Vec::new();
-    }
     lights
         .emitters
         .iter()
         .enumerate()
         .map(|(i, e)| {
             let (threshold, alias, pmf) = table.map_or((u32::MAX, 0, 1.0), |t| t.column(i));
-            Light {
+            let mut l = Light {
                 object: e.object,
+                prim: e.prim,
                 threshold,
                 alias,
                 pmf,
+                kind: LIGHT_OBJECT,
+                emission: v4(e.emission, 0.0),
+                ..Light::default()
+            };
+            match &e.shape {
+                EmitterShape::Sphere(_) | EmitterShape::Quad(_) => {}
+                EmitterShape::Triangle(t) => {
+                    l.kind = LIGHT_TRIANGLE;
+                    (l.p0, l.e1, l.e2, l.n) =
+                        (v4(t.p0, 0.0), v4(t.e1, 0.0), v4(t.e2, 0.0), v4(t.n, t.area));
+                }
+                EmitterShape::Environment => l.kind = LIGHT_ENVIRONMENT,
             }
+            l
         })
         .collect()
 }
@@ -191,6 +230,7 @@ pub struct Packed {
     pub nodes: Vec<BvhNode>,
     pub prims: Vec<u32>,
     pub big: Vec<u32>,
+    pub meshes: super::meshes::PackedMeshes,
 }
 
 pub fn pack(job: &RenderJob) -> Packed {
@@ -216,7 +256,12 @@ pub fn pack(job: &RenderJob) -> Packed {
                 material: o.material,
                 ..Object::default()
             },
-            Geometry::Instance(_) => unreachable!("scenes with meshes are refused before packing"),
+            Geometry::Instance(i) => Object {
+                kind: KIND_INSTANCE,
+                material: o.material,
+                pad0: *i,
+                ..Object::default()
+            },
         })
         .collect();
     let materials = w
@@ -259,6 +304,7 @@ pub fn pack(job: &RenderJob) -> Packed {
         num_big: 0,
         pad1: 0,
         pad2: 0,
+        environment: v4(w.environment, 0.0),
     };
     let mut packed = Packed {
         params,
@@ -268,6 +314,7 @@ pub fn pack(job: &RenderJob) -> Packed {
         nodes: Vec::new(),
         prims: Vec::new(),
         big: Vec::new(),
+        meshes: super::meshes::pack(w),
     };
     if device_uses_bvh(w) {
         let (bvh, big) = w.device_bvh();

@@ -15,12 +15,15 @@
 //! `bytemuck::Pod` types cross between host and device memory, so any bytes
 //! either side writes are valid values on the other.
 
+mod buffers;
 mod check;
 mod devices;
 mod layout;
+mod meshes;
 mod program;
 mod slice;
 
+pub use buffers::MemoryLimits;
 pub use check::{CheckArg, Checks};
 pub use devices::{auto_pick, list as list_devices, DeviceInfo};
 pub use layout::{
@@ -35,9 +38,9 @@ use bytemuck::Pod;
 use opencl3::command_queue::CommandQueue;
 use opencl3::context::Context;
 use opencl3::kernel::Kernel;
-use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
+use opencl3::memory::{Buffer, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
 use opencl3::program::Program;
-use opencl3::types::{cl_mem_flags, cl_uint, cl_ulong, CL_BLOCKING};
+use opencl3::types::{cl_mem_flags, cl_uint, CL_BLOCKING};
 use std::collections::HashMap;
 use std::ptr;
 use std::time::{Duration, Instant};
@@ -66,17 +69,16 @@ pub enum OpenClError {
     Unsupported(String),
 }
 
-/// Why the kernel cannot render `job`'s scene, if it cannot: it models
-/// spheres and quads lit by their own emission.
-pub fn unsupported(job: &RenderJob) -> Option<String> {
-    let w = &job.world;
-    if !w.instances.is_empty() {
-        Some("it has triangle meshes (rendered on the CPU for now)".into())
-    } else if w.environment.max_element() > 0.0 {
-        Some("it has an environment light (rendered on the CPU for now)".into())
-    } else {
-        None
-    }
+/// Why the kernel cannot render `job`'s scene on `device`, if it cannot:
+/// meshes need double precision (the watertight triangle test's exact
+/// fallback), which NVIDIA's and PoCL's devices have.
+pub fn unsupported(job: &RenderJob, device: &DeviceInfo) -> Option<String> {
+    (!job.world.instances.is_empty() && !device.fp64).then(|| {
+        format!(
+            "it has triangle meshes, and {} has no double precision (cl_khr_fp64)",
+            device.name.trim()
+        )
+    })
 }
 
 /// How kernels use a device buffer. Neither variant lets OpenCL use or copy
@@ -108,13 +110,7 @@ fn call(what: &'static str) -> impl Fn(opencl3::error_codes::ClError) -> OpenClE
 struct JobState {
     job_id: u64,
     key: ProgramKey,
-    params: Buffer<layout::Params>,
-    objects: Buffer<layout::Object>,
-    materials: Buffer<layout::Material>,
-    lights: Buffer<layout::Light>,
-    nodes: Buffer<crate::render::bvh::BvhNode>,
-    prims: Buffer<u32>,
-    big: Buffer<u32>,
+    scene: buffers::SceneBuffers,
     film: Buffer<f32>,
     rejected: Buffer<u32>,
     pixels: usize,
@@ -126,6 +122,8 @@ struct JobState {
     per_sample: Option<Duration>,
     /// Rejections the device counter held at the last read-back.
     rejected_reported: u64,
+    /// Device memory its buffers take.
+    bytes: usize,
 }
 
 pub struct OpenClBackend {
@@ -144,6 +142,11 @@ pub struct OpenClBackend {
     pub fail_launches: bool,
     /// How long one launch should take (default [`LAUNCH_TARGET`]).
     pub launch_target: Duration,
+    /// How long the last upload of a job's scene and film took, and the
+    /// device memory they take.
+    pub last_upload: Option<(Duration, usize)>,
+    /// What the device can hold (from its info; lower it to test).
+    pub memory_limits: MemoryLimits,
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -189,6 +192,11 @@ impl OpenClBackend {
         #[allow(deprecated)] // clCreateCommandQueue: OpenCL 1.2 devices have only this one
         let queue =
             CommandQueue::create_default(&context, 0).map_err(call("command queue creation"))?;
+        let known = |b: u64| if b > 0 { b } else { u64::MAX };
+        let memory_limits = MemoryLimits {
+            max_alloc_bytes: known(info.max_alloc_bytes),
+            total_bytes: known(info.global_mem_bytes),
+        };
         Ok(Self {
             info,
             context,
@@ -199,6 +207,8 @@ impl OpenClBackend {
             inject_nan_every: None,
             fail_launches: false,
             launch_target: LAUNCH_TARGET,
+            last_upload: None,
+            memory_limits,
         })
     }
 
@@ -279,10 +289,10 @@ impl OpenClBackend {
     }
 
     /// `sizeof` of each shared struct as the device compiler sees it:
-    /// (Object, Material, Params, BvhNode, Light).
-    pub fn device_layout_sizes(&self) -> Result<[u32; 5], OpenClError> {
-        let out: Vec<u32> = self.checks("")?.run("check_layout_sizes", 1, 5, &[])?;
-        Ok([out[0], out[1], out[2], out[3], out[4]])
+    /// (Object, Material, Params, BvhNode, Light, Instance, TriVerts).
+    pub fn device_layout_sizes(&self) -> Result<[u32; 7], OpenClError> {
+        let out: Vec<u32> = self.checks("")?.run("check_layout_sizes", 1, 7, &[])?;
+        Ok(std::array::from_fn(|i| out[i]))
     }
 
     /// The device's compensated sum of `count` copies of `value` (hi + lo),
@@ -353,7 +363,18 @@ impl OpenClBackend {
             .find(|s| s.job_id == job.id)
             .and_then(|s| s.per_sample);
         self.states.retain(|s| s.job_id != job.id);
+        let upload_start = Instant::now();
         let packed = layout::pack(job);
+        // Fits the device? (Other jobs' states make room if they must.)
+        let needed = buffers::job_bytes(&packed, film.pixels().len() * FILM_FLOATS * 4);
+        buffers::check_fits(&needed, self.memory_limits).map_err(OpenClError::Unsupported)?;
+        let bytes: usize = needed.iter().map(|(_, b)| b).sum();
+        while !self.states.is_empty()
+            && (self.states.iter().map(|s| s.bytes).sum::<usize>() + bytes) as u64
+                > self.memory_limits.total_bytes
+        {
+            self.states.remove(0);
+        }
         let mut device_film = vec![0f32; film.pixels().len() * FILM_FLOATS];
         if film.spp() > 0 {
             for (px, out) in film
@@ -373,13 +394,7 @@ impl OpenClBackend {
         let state = JobState {
             job_id: job.id,
             key: key.clone(),
-            params: self.upload(Access::ReadOnly, std::slice::from_ref(&packed.params))?,
-            objects: self.upload(Access::ReadOnly, &packed.objects)?,
-            materials: self.upload(Access::ReadOnly, &packed.materials)?,
-            lights: self.upload(Access::ReadOnly, &packed.lights)?,
-            nodes: self.upload(Access::ReadOnly, &packed.nodes)?,
-            prims: self.upload(Access::ReadOnly, &packed.prims)?,
-            big: self.upload(Access::ReadOnly, &packed.big)?,
+            scene: buffers::SceneBuffers::upload(self, &packed)?,
             film: self.upload(Access::ReadWrite, &device_film)?,
             rejected: self.upload(Access::ReadWrite, &[0u32])?,
             pixels: film.pixels().len(),
@@ -387,8 +402,10 @@ impl OpenClBackend {
             next: film.slice_start(),
             per_sample,
             rejected_reported: 0,
+            bytes,
         };
         self.states.push(state);
+        self.last_upload = Some((upload_start.elapsed(), bytes));
         // Keep at most RESIDENT_JOBS states and RESIDENT_FILM_BYTES of films.
         let film_bytes = |s: &JobState| s.pixels * FILM_FLOATS * 4;
         while self.states.len() > 1
@@ -402,7 +419,7 @@ impl OpenClBackend {
 
     /// Builds (or finds) the program `job` needs.
     pub fn prepare_program(&mut self, job: &RenderJob) -> Result<(), OpenClError> {
-        if let Some(why) = unsupported(job) {
+        if let Some(why) = unsupported(job, &self.info) {
             return Err(OpenClError::Unsupported(why));
         }
         let key = self.key_for(job);
@@ -416,7 +433,7 @@ impl OpenClBackend {
         film: &mut Film,
         count: u64,
     ) -> Result<(), OpenClError> {
-        if let Some(why) = unsupported(job) {
+        if let Some(why) = unsupported(job, &self.info) {
             return Err(OpenClError::Unsupported(why));
         }
         let key = self.key_for(job);
@@ -491,51 +508,24 @@ impl OpenClBackend {
             .states
             .last()
             .ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
-        let first: cl_ulong = state.spp;
-        let count: cl_uint = n as cl_uint;
         let kernel = &self
             .programs
             .get(key)
             .ok_or_else(|| OpenClError::Unavailable("program cache".into()))?
             .1;
-        let (base, end) = (offset as cl_uint, (offset + size).min(pixels) as cl_uint);
+        let args = buffers::LaunchArgs {
+            film: &state.film,
+            rejected: &state.rejected,
+            first: state.spp,
+            count: n as cl_uint,
+            pixel_base: offset as cl_uint,
+            pixel_end: (offset + size).min(pixels) as cl_uint,
+        };
         #[allow(unsafe_code)]
-        // SAFETY: the types of `render` in kernels/render.cl, in order: six
-        // `__global` pointers (the cl_mem handles of this job's buffers),
-        // `ulong first`, `uint count`, `uint pixel_base`, `uint pixel_end`,
-        // and three more `__global` pointers (the BVH's buffers).
+        // SAFETY: `kernel` is a `render` kernel (programs are built from
+        // kernels/render.cl and hold that kernel only).
         unsafe {
-            kernel
-                .set_arg(0, &state.params.get())
-                .map_err(call("set_arg"))?;
-            kernel
-                .set_arg(1, &state.objects.get())
-                .map_err(call("set_arg"))?;
-            kernel
-                .set_arg(2, &state.materials.get())
-                .map_err(call("set_arg"))?;
-            kernel
-                .set_arg(3, &state.lights.get())
-                .map_err(call("set_arg"))?;
-            kernel
-                .set_arg(4, &state.film.get())
-                .map_err(call("set_arg"))?;
-            kernel
-                .set_arg(5, &state.rejected.get())
-                .map_err(call("set_arg"))?;
-            kernel.set_arg(6, &first).map_err(call("set_arg"))?;
-            kernel.set_arg(7, &count).map_err(call("set_arg"))?;
-            kernel.set_arg(8, &base).map_err(call("set_arg"))?;
-            kernel.set_arg(9, &end).map_err(call("set_arg"))?;
-            kernel
-                .set_arg(10, &state.nodes.get())
-                .map_err(call("set_arg"))?;
-            kernel
-                .set_arg(11, &state.prims.get())
-                .map_err(call("set_arg"))?;
-            kernel
-                .set_arg(12, &state.big.get())
-                .map_err(call("set_arg"))?;
+            state.scene.set_args(kernel, &args)?;
         }
         let global = [size];
         #[allow(unsafe_code)]
@@ -543,7 +533,9 @@ impl OpenClBackend {
         // the `finish` below. The kernel reads as many objects, materials and
         // lights as `layout::pack` counted into the params with them, BVH
         // nodes and slots only as the nodes it uploaded reach (and only when
-        // the params say the BVH is used), and
+        // the params say the BVH is used), mesh nodes, triangles, normals
+        // and slots only from the bases and within the counts `meshes::pack`
+        // put in each instance, and
         // work-items at or past `pixel_end` (<= the film's pixels) return
         // before touching the film of `pixels` x FILM_FLOATS floats.
         unsafe {

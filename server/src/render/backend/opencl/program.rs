@@ -4,8 +4,8 @@
 //! the source.
 
 use super::layout::{
-    device_uses_bvh, kernel_lights, shared_defines, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE, MAT_GLASS,
-    MAT_MIRROR,
+    device_uses_bvh, kernel_lights, shared_defines, KIND_QUAD, KIND_SPHERE, LIGHT_OBJECT,
+    LIGHT_TRIANGLE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
 };
 use crate::render::job::RenderJob;
 use crate::render::material::Bsdf;
@@ -15,12 +15,14 @@ use opencl3::context::Context;
 use opencl3::program::Program;
 
 /// The kernel's sources in dependency order (`kernels/`, built into the binary).
-pub const SOURCES: [&str; 9] = [
+pub const SOURCES: [&str; 11] = [
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
     include_str!("../../../../../kernels/camera.h"),
     include_str!("../../../../../kernels/shapes.h"),
     include_str!("../../../../../kernels/bvh.h"),
+    include_str!("../../../../../kernels/triangles.h"),
+    include_str!("../../../../../kernels/world.h"),
     include_str!("../../../../../kernels/materials.h"),
     include_str!("../../../../../kernels/lights.h"),
     include_str!("../../../../../kernels/integrator.h"),
@@ -47,6 +49,13 @@ pub struct Features {
     /// Entries of the BVH traversal stack (three per level and four), or 0
     /// when the world is scanned (no BVH code is compiled in).
     pub bvh_stack: u32,
+    /// Entries of the mesh BVHs' stack, or 0 without meshes (no triangle
+    /// code is compiled in).
+    pub mesh_stack: u32,
+    /// Triangles of emissive meshes among the emitters.
+    pub tri_lights: bool,
+    /// A non-black environment (its light and its emitter).
+    pub environment: bool,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
     pub inject_nan_every: Option<u64>,
 }
@@ -65,7 +74,9 @@ impl Features {
             .objects
             .iter()
             .filter(|o| !matches!(o.geometry, Geometry::Instance(_)))
-            .map(|o| w.materials[o.material as usize])
+            .map(|o| o.material)
+            .chain(w.instances.iter().flat_map(|i| i.materials.iter().copied()))
+            .map(|m| w.materials[m as usize])
             .collect();
         let lights = kernel_lights(w);
         let mat = |k: u32| {
@@ -80,13 +91,13 @@ impl Features {
                 .any(|m| matches!(m.bsdf, Bsdf::Glass { schlick, .. } if schlick == want))
         };
         let light_kind = |k: u32| {
-            lights
-                .iter()
-                .any(|l| match w.objects[l.object as usize].geometry {
+            lights.iter().filter(|l| l.kind == LIGHT_OBJECT).any(|l| {
+                match w.objects[l.object as usize].geometry {
                     Geometry::Sphere(_) => k == KIND_SPHERE,
                     Geometry::Quad(_) => k == KIND_QUAD,
                     Geometry::Instance(_) => false,
-                })
+                }
+            })
         };
         Self {
             spheres: kind(KIND_SPHERE),
@@ -112,6 +123,14 @@ impl Features {
             } else {
                 0
             },
+            mesh_stack: w
+                .instances
+                .iter()
+                .map(|i| bvh_stack(i.mesh.bvh.depth))
+                .max()
+                .unwrap_or(0),
+            tri_lights: job.settings.nee && lights.iter().any(|l| l.kind == LIGHT_TRIANGLE),
+            environment: w.environment.max_element() > 0.0,
             inject_nan_every: None,
         }
     }
@@ -123,7 +142,7 @@ impl Features {
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
              -D HAS_GLASS={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
-             -D HAS_BVH={} -D BVH_STACK={}",
+             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -140,6 +159,10 @@ impl Features {
             self.max_depth,
             b(self.bvh_stack > 0),
             self.bvh_stack.max(1),
+            b(self.mesh_stack > 0),
+            self.mesh_stack.max(1),
+            b(self.tri_lights),
+            b(self.environment),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));

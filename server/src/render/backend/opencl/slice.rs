@@ -22,7 +22,7 @@ impl OpenClBackend {
         film: &mut Film,
         end: usize,
     ) -> Result<(), OpenClError> {
-        if let Some(why) = unsupported(job) {
+        if let Some(why) = unsupported(job, &self.info) {
             return Err(OpenClError::Unsupported(why));
         }
         let key = self.key_for(job);

@@ -1,0 +1,185 @@
+/* Mesh instances: world/instance.rs and shape/triangle.rs, operation for
+ * operation (the CPU's error bounds hold only for its rounding). */
+
+#if HAS_MESHES
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+
+/* glam's Mat3A * v: x * v.x + y * v.y + z * v.z, in that order. */
+inline float3 xf_vector(__global const float4 *m, float3 v) {
+    return m[0].xyz * v.x + m[1].xyz * v.y + m[2].xyz * v.z;
+}
+
+/* glam's Affine3A::transform_point3a: the matrix, then the translation. */
+inline float3 xf_point(__global const float4 *m, float3 p) {
+    return xf_vector(m, p) + m[3].xyz;
+}
+
+/* glam's normalize_or_zero: v * (1 / |v|) when that is finite and > 0. */
+inline float3 normalize_or_zero(float3 v) {
+    float rcp = 1.0f / sqrt(dot(v, v));
+    return (isfinite(rcp) && rcp > 0.0f) ? v * rcp : (float3)(0.0f);
+}
+
+inline float3 unit_axis(int k) {
+    return (float3)(k == 0 ? 1.0f : 0.0f, k == 1 ? 1.0f : 0.0f, k == 2 ? 1.0f : 0.0f);
+}
+
+inline float component(float3 v, int k) {
+    return k == 0 ? v.x : (k == 1 ? v.y : v.z);
+}
+
+/* A ray prepared for the watertight test (TriRay): the rows of its
+ * permute-and-shear map. */
+typedef struct {
+    float3 org;
+    float3 rx;
+    float3 ry;
+    float3 rz;
+} TriRay;
+
+inline TriRay tri_ray(float3 o, float3 d) {
+    float3 a = fabs(d);
+    int kz = (a.x > a.y && a.x > a.z) ? 0 : (a.y > a.z ? 1 : 2);
+    int kx = (kz + 1) % 3;
+    int ky = (kz + 2) % 3;
+    if (component(d, kz) < 0.0f) {
+        int k = kx;
+        kx = ky;
+        ky = k;
+    }
+    float dz = component(d, kz);
+    float sx = component(d, kx) / dz;
+    float sy = component(d, ky) / dz;
+    float sz = 1.0f / dz;
+    TriRay r;
+    r.org = o;
+    r.rx = unit_axis(kx) - unit_axis(kz) * sx;
+    r.ry = unit_axis(ky) - unit_axis(kz) * sy;
+    r.rz = unit_axis(kz) * sz;
+    return r;
+}
+
+/* An edge function recomputed where f32 gave an exact zero: in f64, where
+ * products of floats are exact (Woop et al.'s fallback). */
+inline float edge_exact(float p, float q, float r, float s) {
+#ifdef cl_khr_fp64
+    return (float)((double)p * (double)q - (double)r * (double)s);
+#else
+    return p * q - r * s; /* not reached: meshes need fp64 (opencl::unsupported) */
+#endif
+}
+
+/* TriRay::intersect: 1 and (*t, *bary) when the ray meets the triangle
+ * strictly between 0 and t_max. */
+inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2, float t_max, float *t_out,
+                         float3 *bary) {
+    float3 a = p0 - r->org;
+    float3 b = p1 - r->org;
+    float3 c = p2 - r->org;
+    float ax = dot(r->rx, a), ay = dot(r->ry, a);
+    float bx = dot(r->rx, b), by = dot(r->ry, b);
+    float cx = dot(r->rx, c), cy = dot(r->ry, c);
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if (u == 0.0f || v == 0.0f || w == 0.0f) {
+        u = edge_exact(cx, by, cy, bx);
+        v = edge_exact(ax, cy, ay, cx);
+        w = edge_exact(bx, ay, by, ax);
+    }
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) {
+        return 0;
+    }
+    float det = u + v + w;
+    if (det == 0.0f) {
+        return 0;
+    }
+    float t_scaled = u * dot(r->rz, a) + v * dot(r->rz, b) + w * dot(r->rz, c);
+    float t = t_scaled / det;
+    if (!(t > 0.0f && t < t_max)) {
+        return 0;
+    }
+    float inv = 1.0f / det;
+    *t_out = t;
+    *bary = (float3)(u * inv, v * inv, w * inv);
+    return 1;
+}
+
+/* The triangles of leaf slots first .. first+count of instance `in`,
+ * offered to *best (all but triangle `skip`). */
+inline void offer_triangles(const Scene *sc, __global const Instance *in, uint id, const TriRay *r, uint first,
+                            uint count, uint skip, Hit *best) {
+    for (uint k = first; k < first + count; ++k) {
+        uint slot = in->tri_base + k;
+        __global const TriVerts *tri = &sc->tris[slot];
+        uint index = as_uint(tri->v0.w);
+        if (index == skip) {
+            continue;
+        }
+        float t;
+        float3 bary;
+        if (tri_intersect(r, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, best->t, &t, &bary)) {
+            offer_hit(best, t, id, index, slot, bary);
+        }
+    }
+}
+
+/* Instance::offer: the ray mapped into object space (direction not
+ * normalised, so distances stay the camera ray's) meets the mesh's BVH. */
+inline void offer_instance(const Scene *sc, uint id, __global const Object *ob, float3 o, float3 d, uint skip,
+                           Hit *best) {
+    __global const Instance *in = &sc->instances[ob->pad0];
+    float3 oo = xf_point(in->obj_from_cam, o);
+    float3 dd = xf_vector(in->obj_from_cam, d);
+    TriRay r = tri_ray(oo, dd);
+    __global const BvhNode *nodes = sc->mesh_nodes + in->node_base;
+    BVH_SEARCH(nodes, MESH_STACK, oo, dd, best->t,
+               offer_triangles(sc, in, id, &r, leaf_first, leaf_count, skip, best));
+}
+
+/* Instance::surface, into *sf. */
+inline void mesh_surface(const Scene *sc, const Hit *h, Surf *sf) {
+    __global const Instance *in = &sc->instances[sc->objects[h->object].pad0];
+    __global const TriVerts *tri = &sc->tris[h->slot];
+    float3 v0 = tri->v0.xyz, v1 = tri->v1.xyz, v2 = tri->v2.xyz;
+    float3 t0 = v0 * h->bary.x, t1 = v1 * h->bary.y, t2 = v2 * h->bary.z;
+    float3 p_obj = t0 + t1 + t2;
+    float3 err = (fabs(t0) + fabs(t1) + fabs(t2)) * as_float(GAMMA7_BITS);
+    float3 n_obj = normalize_or_zero(cross(v1 - v0, v2 - v0));
+    float3 ng = normalize_or_zero(xf_vector(in->normal_from_obj, n_obj));
+    sf->ng = ng;
+    sf->ns = ng;
+    sf->smooth = 0;
+    if (in->normal_base != NO_NORMALS) {
+        __global const float4 *n = sc->normals + (size_t)(in->normal_base + (h->slot - in->tri_base)) * 3u;
+        float3 sn = n[0].xyz * h->bary.x + n[1].xyz * h->bary.y + n[2].xyz * h->bary.z;
+        float3 m = xf_vector(in->normal_from_obj, sn);
+        float rcp = 1.0f / sqrt(dot(m, m));
+        if (isfinite(rcp) && rcp > 0.0f) {
+            sf->ns = m * rcp;
+            sf->smooth = 1;
+        }
+    }
+    float3 ap = fabs(p_obj);
+    err = err + (float3)(in->rt_a * fmax(fmax(ap.x, ap.y), ap.z) + in->rt_b);
+    sf->p = xf_point(in->cam_from_obj, p_obj);
+    sf->material = sc->slots[in->slot_base + as_uint(tri->v1.w)];
+    sf->instance = sc->objects[h->object].pad0;
+    sf->p_obj = p_obj;
+    sf->n_obj = n_obj;
+    sf->dist = dot(fabs(n_obj), err);
+}
+
+/* Instance::spawn_origin: the object-space hit point moved sf->dist off
+ * the plane to the side dir goes, each coordinate rounded away from it. */
+inline float3 mesh_spawn(const Scene *sc, const Surf *sf, float3 dir) {
+    float3 shift = dot(dir, sf->ng) > 0.0f ? sf->n_obj * sf->dist : sf->n_obj * -sf->dist;
+    float3 p = sf->p_obj + shift;
+    p.x = shift.x > 0.0f ? nextafter(p.x, INFINITY) : (shift.x < 0.0f ? nextafter(p.x, -INFINITY) : p.x);
+    p.y = shift.y > 0.0f ? nextafter(p.y, INFINITY) : (shift.y < 0.0f ? nextafter(p.y, -INFINITY) : p.y);
+    p.z = shift.z > 0.0f ? nextafter(p.z, INFINITY) : (shift.z < 0.0f ? nextafter(p.z, -INFINITY) : p.z);
+    return xf_point(sc->instances[sf->instance].cam_from_obj, p);
+}
+#endif

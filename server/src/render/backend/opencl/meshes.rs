@@ -1,0 +1,119 @@
+//! Mesh instances in the kernel's layout (`kernels/types.h`, `Instance`;
+//! `kernels/triangles.h` reads them): every distinct mesh's BVH nodes and
+//! leaf-ordered triangles once, whatever number of instances place it, and
+//! per instance its transforms, the round-trip bound its ray offsets need,
+//! and where its mesh and material slots start in the shared buffers.
+
+use crate::render::bvh::BvhNode;
+use crate::render::shape::TriVerts;
+use crate::render::world::World;
+use bytemuck::{Pod, Zeroable};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// `normal_base` of an instance whose mesh has no vertex normals.
+pub const NO_NORMALS: u32 = u32::MAX;
+
+/// A placed mesh as the kernel reads it. Matrices are glam's `Affine3A`
+/// columns (x, y, z axes, then the translation), applied as the CPU does:
+/// `x * p.x + y * p.y + z * p.z + t`.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Instance {
+    pub obj_from_cam: [[f32; 4]; 4],
+    pub cam_from_obj: [[f32; 4]; 4],
+    /// Inverse transpose of `cam_from_obj`'s matrix (columns).
+    pub normal_from_obj: [[f32; 4]; 3],
+    /// |obj_from_cam(cam_from_obj(p)) - p| <= rt_a max|p| + rt_b.
+    pub rt_a: f32,
+    pub rt_b: f32,
+    /// Where the mesh's nodes and triangles start in the shared buffers.
+    pub node_base: u32,
+    pub tri_base: u32,
+    /// Where this instance's material of each mesh slot starts (`slots`).
+    pub slot_base: u32,
+    /// Where the mesh's per-slot vertex normals start (3 per triangle), or
+    /// [`NO_NORMALS`].
+    pub normal_base: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<Instance>() == 208);
+
+/// Every instance of a world, and the buffers they point into.
+#[derive(Debug, Default)]
+pub struct PackedMeshes {
+    pub instances: Vec<Instance>,
+    pub nodes: Vec<BvhNode>,
+    /// Triangles in leaf order; `v1[3]` holds the triangle's material slot
+    /// (as bits), `v0[3]` its index in the mesh, as on the CPU.
+    pub tris: Vec<TriVerts>,
+    /// Three unit vertex normals per triangle slot (w unused), for meshes
+    /// that have them.
+    pub normals: Vec<[f32; 4]>,
+    /// World material of each instance's mesh slots.
+    pub slots: Vec<u32>,
+    /// Deepest mesh BVH.
+    pub depth: u32,
+}
+
+fn cols3(m: &crate::render::math::Mat3A) -> [[f32; 4]; 3] {
+    [m.x_axis, m.y_axis, m.z_axis].map(|c| [c.x, c.y, c.z, 0.0])
+}
+
+fn affine(a: &crate::render::math::Affine3A) -> [[f32; 4]; 4] {
+    let [x, y, z] = cols3(&a.matrix3);
+    let t = a.translation;
+    [x, y, z, [t.x, t.y, t.z, 0.0]]
+}
+
+pub fn pack(w: &World) -> PackedMeshes {
+    let mut out = PackedMeshes::default();
+    // (node_base, tri_base, normal_base) of each distinct mesh.
+    let mut placed: HashMap<*const crate::render::shape::Mesh, (u32, u32, u32)> = HashMap::new();
+    for inst in &w.instances {
+        let mesh = &*inst.mesh;
+        let (node_base, tri_base, normal_base) =
+            *placed.entry(Arc::as_ptr(&inst.mesh)).or_insert_with(|| {
+                let bases = (out.nodes.len() as u32, out.tris.len() as u32);
+                out.nodes.extend_from_slice(&mesh.bvh.nodes);
+                out.depth = out.depth.max(mesh.bvh.depth);
+                out.tris.extend(mesh.tris.iter().map(|t| {
+                    let mut t = *t;
+                    t.v1[3] = f32::from_bits(mesh.materials[t.index() as usize]);
+                    t
+                }));
+                let normal_base = match &mesh.normals {
+                    Some(n) => {
+                        let base = (out.normals.len() / 3) as u32;
+                        for t in &mesh.tris {
+                            for v in mesh.triangles[t.index() as usize] {
+                                let [x, y, z] = n[v as usize];
+                                out.normals.push([x, y, z, 0.0]);
+                            }
+                        }
+                        base
+                    }
+                    None => NO_NORMALS,
+                };
+                (bases.0, bases.1, normal_base)
+            });
+        let slot_base = out.slots.len() as u32;
+        out.slots.extend_from_slice(&inst.materials);
+        out.instances.push(Instance {
+            obj_from_cam: affine(&inst.obj_from_cam),
+            cam_from_obj: affine(&inst.cam_from_obj),
+            normal_from_obj: cols3(&inst.normal_from_obj),
+            rt_a: inst.rt_a,
+            rt_b: inst.rt_b,
+            node_base,
+            tri_base,
+            slot_base,
+            normal_base,
+            pad0: 0,
+            pad1: 0,
+        });
+    }
+    out
+}

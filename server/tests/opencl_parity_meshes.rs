@@ -1,0 +1,323 @@
+//! Meshes, emitters and the sky on the device against the CPU: the
+//! watertight triangle test and the nearest hit among mesh instances
+//! routine by routine (check kernels in `kernels/checks.cl`), then whole
+//! images rendered with the same seed on both backends.
+
+mod parity;
+
+use parity::{checks, device, ulps, uniform, unit};
+use pathstream::render::backend::nearest_hits;
+use pathstream::render::backend::opencl::{pack, CheckArg, KernelParams, OpenClBackend, Packed};
+use pathstream::render::math::Vec3A;
+use pathstream::render::ray::Ray;
+use pathstream::render::shape::TriRay;
+use pathstream::render::world::Origin;
+use pathstream::render::{Quality, RenderJob, Scene};
+
+/// Next-event estimation picks one emitter in proportion to its power from
+/// the same random bits on both backends: with the same seed, a scene of
+/// 40 lights of different power renders the same image, pixel for pixel,
+/// but for the rare path that a last-bit difference sends elsewhere. (A
+/// device that aimed at every light, or picked another, would differ in
+/// nearly every pixel.)
+#[test]
+fn the_device_picks_the_emitter_the_cpu_picks() {
+    let Some(d) = device() else { return };
+    let mut j =
+        serde_json::to_value(Scene::load("cornell").expect("scene").to_json()).expect("json");
+    for i in 0..40u64 {
+        let c = [
+            10.0 + 80.0 * uniform(i, 1),
+            5.0 + 70.0 * uniform(i, 2),
+            30.0 + 100.0 * uniform(i, 3),
+        ];
+        let name = format!("lamp{i}");
+        let e = 1.0 + 20.0 * f64::from(uniform(i, 4));
+        j["materials"][&name] = serde_json::json!({"type": "diffuse", "albedo": [0.5, 0.5, 0.5], "emission": [e, e * 0.5, e * 0.25]});
+        j["objects"].as_array_mut().expect("objects").push(
+            serde_json::json!({"type": "sphere", "center": c, "radius": 0.5 + 2.0 * uniform(i, 5), "material": name}),
+        );
+    }
+    let s = Scene::from_json_value(j).expect("valid");
+    let q = Quality {
+        seed: 3,
+        max_depth: 2,
+        ..Quality::default()
+    };
+    let job = RenderJob::new(&s, 24, 24, &q);
+    assert!(
+        job.world.lights.emitters.len() > 40,
+        "the lamps and the ceiling light emit"
+    );
+    let (same, all) = same_pixels(d, &s, &q);
+    assert!(
+        same * 100 >= all * 95,
+        "{same} of {all} pixels the same on both backends"
+    );
+}
+
+/// Renders `s` with the same seed on rayon and on `d`; how many of the
+/// pixels agree to 1e-4 (relative; 1e-7 absolute).
+fn same_pixels(d: OpenClBackend, s: &Scene, q: &Quality) -> (usize, usize) {
+    use pathstream::render::{Backend, BackendChoice, Film};
+    let job = RenderJob::new(s, 24, 24, q);
+    let mut cpu = Film::new(24, 24);
+    Backend::choose(BackendChoice::Cpu)
+        .expect("cpu")
+        .render(&job, &mut cpu, 4)
+        .expect("render");
+    let mut gpu = Film::new(24, 24);
+    let mut on_device = Backend::OpenCl {
+        backend: Box::new(d),
+        fallback: false,
+    };
+    on_device.render(&job, &mut gpu, 4).expect("render");
+    let (a, b) = (cpu.mean(), gpu.mean());
+    let same = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| {
+            x.iter()
+                .zip(y.iter())
+                .all(|(p, q)| (p - q).abs() <= 1e-4 * p.abs().max(q.abs()).max(1e-3))
+        })
+        .count();
+    (same, a.len())
+}
+
+/// A mesh object with inline data: unit-sphere vertices, so that their
+/// normals are their positions.
+fn ball(levels: u32, material: &str, at: [f64; 3], scale: f64, smooth: bool) -> serde_json::Value {
+    let m = pathstream::model::generate::icosphere(levels);
+    let mut data = serde_json::json!({"positions": m.positions, "triangles": m.triangles});
+    if smooth {
+        data["normals"] = serde_json::json!(m.positions);
+    }
+    serde_json::json!({"type": "mesh", "material": material, "data": data,
+                       "transform": {"translate": at, "scale": scale}})
+}
+
+/// Meshes on the device are the CPU's, operation for operation: with the
+/// same seed, a room with a coarse smooth-shaded ball (shading normals
+/// ~10 degrees off the faces'), a mirror ball of 81,920 triangles and an
+/// emissive mesh as its light, and a smooth ball and a glowing mesh under
+/// a sky, render the same images, pixel for pixel, but for the rare path
+/// that a last-bit difference sends elsewhere.
+#[test]
+fn meshes_render_the_cpus_image_on_the_device() {
+    let Some(_) = device() else { return };
+    let mut j =
+        serde_json::to_value(Scene::load("cornell").expect("scene").to_json()).expect("json");
+    let objects = j["objects"].as_array_mut().expect("objects");
+    let lamp = objects
+        .iter()
+        .position(|o| o["material"] == "lamp")
+        .expect("lamp");
+    let right = objects
+        .iter()
+        .position(|o| o["center"] == serde_json::json!([73.0, 16.5, 78.0]))
+        .expect("ball");
+    objects[right] = ball(2, "white", [73.0, 16.5, 78.0], 16.5, true);
+    objects[lamp] = ball(2, "lamp", [50.0, 66.6, 81.6], 7.0, false);
+    objects.push(ball(6, "mirror", [30.0, 50.0, 60.0], 10.0, false));
+    let room = Scene::from_json_value(j).expect("valid");
+    let sky = Scene::from_json_value(serde_json::json!({
+        "camera": {"position": [0, 1, 6], "look_at": [0, 0, 0], "vfov_deg": 40},
+        "materials": {"grey": {"type": "diffuse", "albedo": [0.6, 0.5, 0.4]},
+                      "glow": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5], "emission": [4, 3, 2]}},
+        "objects": [ball(2, "grey", [0.0, 0.0, 0.0], 1.0, true), ball(1, "glow", [1.5, 1.5, 0.0], 0.4, false),
+                    {"type": "quad", "corner": [-5, -1, -5], "edge_u": [10, 0, 0], "edge_v": [0, 0, 10], "material": "grey"}],
+        "environment": [0.3, 0.4, 0.5]
+    }))
+    .expect("valid");
+    for (what, s) in [("room", &room), ("sky", &sky)] {
+        let job = RenderJob::new(s, 24, 24, &Quality::default());
+        assert!(
+            job.world.instances[0].mesh.normals.is_some(),
+            "{what}: {:?}",
+            s.warnings
+        );
+        let q = Quality {
+            seed: 9,
+            max_depth: 3,
+            ..Quality::default()
+        };
+        let (same, all) = same_pixels(device().expect("device"), s, &q);
+        eprintln!("{what}: {same} of {all} pixels the same");
+        assert!(
+            same * 100 >= all * 95,
+            "{what}: {same} of {all} pixels the same on both backends"
+        );
+    }
+}
+
+/// The watertight test on 1e5 rays and triangles: random triangles of
+/// every size and distance, rays aimed at their vertices and edges (where
+/// edge functions come out zero and the f64 fallback decides), and rays
+/// between two triangles sharing an edge. The same hits, distances and
+/// barycentrics, bit for bit.
+#[test]
+fn the_watertight_triangle_test_agrees_bit_for_bit() {
+    let Some(d) = device() else { return };
+    let n = 100_000u64;
+    let mut rays = Vec::new();
+    let mut tris = Vec::new();
+    for i in 0..n {
+        let scale = 10f32.powf(-3.0 + 6.0 * uniform(i, 1));
+        let at =
+            (Vec3A::new(uniform(i, 2), uniform(i, 3), uniform(i, 4)) - 0.5) * 1e3 * uniform(i, 5);
+        let v = [unit(i, 6), unit(i, 8), unit(i, 10)].map(|u| at + u * scale);
+        // Aim at a vertex, the middle of an edge, or inside.
+        let target = match i % 3 {
+            0 => v[(i / 3 % 3) as usize],
+            1 => (v[0] + v[1]) * 0.5,
+            _ => (v[0] + v[1] + v[2]) / 3.0,
+        };
+        let origin = target - unit(i, 12) * (scale * 10.0 * uniform(i, 14));
+        rays.push(Ray::new(origin, (target - origin).normalize()));
+        tris.push(v);
+    }
+    let ray_in: Vec<[f32; 4]> = rays
+        .iter()
+        .flat_map(|r| {
+            [
+                r.origin.extend(0.0).to_array(),
+                r.dir.extend(0.0).to_array(),
+            ]
+        })
+        .collect();
+    let tri_in: Vec<[f32; 4]> = tris
+        .iter()
+        .flat_map(|t| t.map(|v| v.extend(0.0).to_array()))
+        .collect();
+    let out: Vec<f32> = checks(&d)
+        .run(
+            "check_triangle",
+            n as usize,
+            4,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&ray_in)),
+                CheckArg::Buffer(bytemuck::cast_slice(&tri_in)),
+            ],
+        )
+        .expect("run");
+    let mut hits = 0;
+    for (i, (r, t)) in rays.iter().zip(&tris).enumerate() {
+        let cpu = TriRay::new(r.origin, r.dir).intersect(*t, f32::INFINITY);
+        let dev = &out[4 * i..4 * i + 4];
+        match cpu {
+            None => assert_eq!(dev[0], -1.0, "ray {i}: the device hit at {}", dev[0]),
+            Some((t, b)) => {
+                hits += 1;
+                let got = [dev[0], dev[1], dev[2], dev[3]].map(f32::to_bits);
+                let want = [t, b[0], b[1], b[2]].map(f32::to_bits);
+                assert_eq!(got, want, "ray {i}: device {dev:?}, CPU {t} {b:?}");
+            }
+        }
+    }
+    eprintln!("{hits} of {n} rays hit their triangle");
+    assert!(
+        hits > n / 2,
+        "most rays are aimed at their triangle ({hits})"
+    );
+}
+
+/// The arguments of `check_nearest_meshes` after the item count.
+fn mesh_args<'a>(input: &'a [[f32; 4]], p: &'a Packed) -> Vec<CheckArg<'a>> {
+    let m = &p.meshes;
+    vec![
+        CheckArg::Buffer(bytemuck::cast_slice(input)),
+        CheckArg::Buffer(bytemuck::cast_slice(&p.objects)),
+        CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&p.params)),
+        CheckArg::Buffer(bytemuck::cast_slice(&p.nodes)),
+        CheckArg::Buffer(bytemuck::cast_slice(&p.prims)),
+        CheckArg::Buffer(bytemuck::cast_slice(&p.big)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.instances)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.nodes)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.tris)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.normals)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.slots)),
+    ]
+}
+
+/// The nearest hit among mesh instances (a rotated and scaled 81,920-
+/// triangle ball placed twice, a coarse ball, spheres and walls) on 1e5
+/// rays from inside the room: the same object, triangle and distance as
+/// the CPU's, bit for bit.
+#[test]
+fn the_nearest_hit_among_meshes_agrees_on_1e5_rays() {
+    let Some(d) = device() else { return };
+    let mut j =
+        serde_json::to_value(Scene::load("cornell").expect("scene").to_json()).expect("json");
+    let objects = j["objects"].as_array_mut().expect("objects");
+    let mut fine = ball(6, "white", [30.0, 40.0, 60.0], 12.0, true);
+    fine["transform"]["rotate"] = serde_json::json!({"axis": [1, 2, 3], "deg": 37});
+    objects.push(fine);
+    objects.push(ball(6, "mirror", [70.0, 50.0, 100.0], 9.0, false));
+    objects.push(ball(1, "glass", [50.0, 20.0, 90.0], 8.0, false));
+    let s = Scene::from_json_value(j).expect("valid");
+    let job = RenderJob::new(&s, 16, 16, &Quality::default());
+    assert_eq!(job.world.instances.len(), 3);
+    let packed = pack(&job);
+    let n = 100_000u64;
+    let centre = Vec3A::from((job.camera.forward * 200.0).to_array());
+    let rays: Vec<Ray> = (0..n)
+        .map(|i| {
+            let jitter = Vec3A::new(
+                uniform(i, 60) - 0.5,
+                uniform(i, 61) - 0.5,
+                uniform(i, 62) - 0.5,
+            );
+            Ray::new(centre + jitter * 60.0, unit(i, 63))
+        })
+        .collect();
+    let input: Vec<[f32; 4]> = rays
+        .iter()
+        .flat_map(|r| {
+            [
+                r.origin.extend(0.0).to_array(),
+                r.dir.extend(0.0).to_array(),
+            ]
+        })
+        .collect();
+    let out: Vec<f32> = checks(&d)
+        .run(
+            "check_nearest_meshes",
+            n as usize,
+            3,
+            &mesh_args(&input, &packed),
+        )
+        .expect("run");
+    let cpu = nearest_hits(
+        &job.world,
+        &rays.iter().map(|r| (*r, Origin::NONE)).collect::<Vec<_>>(),
+    );
+    let mut on_meshes = 0;
+    for (i, h) in cpu.iter().enumerate() {
+        let (t, object, prim) = (
+            out[3 * i],
+            out[3 * i + 1].to_bits(),
+            out[3 * i + 2].to_bits(),
+        );
+        match h {
+            None => assert_eq!(
+                object,
+                u32::MAX,
+                "ray {i}: the device hit {object} at {t}, the CPU nothing"
+            ),
+            Some(h) => {
+                assert_eq!(
+                    (object, prim, ulps(t, h.t)),
+                    (h.object, h.prim, 0),
+                    "ray {i}: device {t} object {object} triangle {prim}, CPU {} {} {}",
+                    h.t,
+                    h.object,
+                    h.prim
+                );
+                on_meshes += usize::from(h.prim != u32::MAX);
+            }
+        }
+    }
+    eprintln!("{on_meshes} of {n} rays hit a mesh");
+    assert!(on_meshes >= 2000, "the rays meet the meshes ({on_meshes})");
+}
