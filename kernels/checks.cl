@@ -150,6 +150,59 @@ __kernel void check_triangle(__global float *out, uint n, __global const float4 
     }
 }
 
+/* The power pick from 64 bits bits[i] among P->num_lights emitters:
+ * (index, pmf as float bits). */
+__kernel void check_light_pick(__global uint *out, uint n, __global const ulong *bits, __global const Params *P,
+                               __global const Light *lights) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    ulong b = bits[i];
+    uint count = P->num_lights;
+    uint column = (uint)(((b >> 32) * (ulong)count) >> 32);
+    uint threshold = lights[column].threshold;
+    int keep = (uint)b < threshold || threshold == 0xFFFFFFFFu;
+    uint j = keep ? column : lights[column].alias;
+    out[2 * i] = j;
+    out[2 * i + 1] = as_uint(lights[j].pmf);
+}
+
+/* sample_emitter for emitter light[i] from the point in[3i] (xyz; w: the
+ * object it lies on, as bits, or NO_OBJECT) with normal in[3i+1].xyz (as
+ * both nl and ns) and numbers in[3i+2].xy: (dir.xyz, 1/pdf) or w = -1. */
+__kernel void check_light_sample(__global float *out, uint n, __global const float4 *in,
+                                 __global const uint *which, __global const Object *objects,
+                                 __global const Light *lights) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {0, objects, 0, lights, 0, 0, 0, 0, 0, 0, 0, 0};
+    __global const Light *L = &lights[which[i]];
+    Surf sf;
+    sf.p = in[3 * i].xyz;
+    sf.object = as_uint(in[3 * i].w);
+    sf.prim = sf.object == NO_OBJECT ? NO_PRIM : L->prim;
+    float3 n3 = in[3 * i + 1].xyz;
+    sf.ng = n3;
+    sf.ns = n3;
+    float3 dir;
+    float weight;
+    __global float *o = out + (size_t)i * 4u;
+    if (sample_emitter(&sc, L, &sf, n3, n3, in[3 * i + 2].xy, &dir, &weight)) {
+        o[0] = dir.x;
+        o[1] = dir.y;
+        o[2] = dir.z;
+        o[3] = weight;
+    } else {
+        o[0] = 0.0f;
+        o[1] = 0.0f;
+        o[2] = 0.0f;
+        o[3] = -1.0f;
+    }
+}
+
 /* sizeof of every shared struct, for the host's layout check. */
 __kernel void check_layout_sizes(__global uint *out, uint n) {
     if (get_global_id(0) != 0) {

@@ -6,27 +6,14 @@
 mod common;
 
 use common::{
-    assert_agree, assert_clean, assert_mean, mesh_object, regions, render, render_on, scene,
-    scene_json,
+    assert_agree, assert_clean, assert_mean, backends, mesh_object, regions, render, render_on,
+    scene, scene_json,
 };
 use pathstream::model::generate::icosphere;
 use pathstream::model::MeshData;
 use pathstream::render::light::LightSampling;
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJob, Scene};
 use serde_json::{json, Value};
-
-/// rayon, then OpenCL device 0 if there is one.
-fn backends() -> Vec<(&'static str, Backend)> {
-    let mut all = vec![("cpu", Backend::choose(BackendChoice::Cpu).expect("cpu"))];
-    match Backend::choose(BackendChoice::OpenCl { device: None }) {
-        Ok(b) => all.push(("opencl", b)),
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but there is no OpenCL device: {e}")
-        }
-        Err(e) => eprintln!("OpenCL skipped: {e}"),
-    }
-    all
-}
 
 fn q(seed: u64) -> Quality {
     Quality {

@@ -5,36 +5,20 @@
 
 mod common;
 
-use common::{assert_agree, assert_clean, assert_mean, furnace, render, render_on, scene};
+use common::{
+    assert_agree, assert_clean, assert_mean, furnace, opencl_device as device, render, render_on,
+    scene,
+};
 use pathstream::render::backend::opencl::{OpenClBackend, OpenClError, SOURCES};
 use pathstream::render::math::DVec3;
 use pathstream::render::scene::{FresnelJson, GlassJson, MaterialJson, ObjectJson, SphereJson};
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJob, Scene};
 
 fn opencl() -> Option<Backend> {
-    match Backend::choose(BackendChoice::OpenCl { device: None }) {
-        Ok(b) => Some(b),
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but there is no OpenCL device: {e}")
-        }
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            None
-        }
-    }
-}
-
-fn device() -> Option<OpenClBackend> {
-    match OpenClBackend::new(None) {
-        Ok(b) => Some(b),
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but there is no OpenCL device: {e}")
-        }
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            None
-        }
-    }
+    device().map(|d| Backend::OpenCl {
+        backend: Box::new(d),
+        fallback: false,
+    })
 }
 
 #[test]

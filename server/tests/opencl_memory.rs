@@ -6,22 +6,9 @@
 
 mod common;
 
-use common::scene;
-use pathstream::render::backend::opencl::{MemoryLimits, OpenClBackend};
+use common::{opencl_device as device, scene};
+use pathstream::render::backend::opencl::MemoryLimits;
 use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob};
-
-fn device() -> Option<OpenClBackend> {
-    match OpenClBackend::new(None) {
-        Ok(b) => Some(b),
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but there is no OpenCL device: {e}")
-        }
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            None
-        }
-    }
-}
 
 fn cpu_film(job: &RenderJob, spp: u64) -> Film {
     let mut film = Film::new(job.width(), job.height());

@@ -4,9 +4,11 @@
 //! nearest hit and scattering off every material within a few ulps. Runs on
 //! any OpenCL device (PoCL in CI, where a missing device is a failure).
 
+mod common;
 mod parity;
 
-use parity::{checks, device, ulps, uniform, unit};
+use common::opencl_device as device;
+use parity::{checks, ray_input, rays_around, ulps, uniform, unit};
 use pathstream::render::backend::nearest_hits;
 use pathstream::render::backend::opencl::{
     device_uses_bvh, pack, CheckArg, KernelParams, OpenClBackend, Packed,
@@ -109,17 +111,6 @@ fn sincos_and_the_pixel_filters_agree_to_an_ulp() {
 }
 
 /// Rays as the check kernels read them: origin and direction as float4s.
-fn ray_input(rays: &[Ray]) -> Vec<[f32; 4]> {
-    rays.iter()
-        .flat_map(|r| {
-            [
-                r.origin.extend(0.0).to_array(),
-                r.dir.extend(0.0).to_array(),
-            ]
-        })
-        .collect()
-}
-
 /// The arguments of `check_intersect` and `check_nearest` after the item
 /// count: the rays and the scene's buffers.
 fn ray_args<'a>(input: &'a [[f32; 4]], packed: &'a Packed) -> Vec<CheckArg<'a>> {
@@ -275,16 +266,7 @@ fn nearest_agrees(d: &OpenClBackend, label: &str, job: &RenderJob) {
     let packed = pack(job);
     let n = 100_000u64;
     let centre = Vec3A::from((job.camera.forward * 140.0).to_array());
-    let rays: Vec<Ray> = (0..n)
-        .map(|i| {
-            let jitter = Vec3A::new(
-                uniform(i, 60) - 0.5,
-                uniform(i, 61) - 0.5,
-                uniform(i, 62) - 0.5,
-            );
-            Ray::new(centre + jitter * 60.0, unit(i, 63))
-        })
-        .collect();
+    let rays = rays_around(centre, 60.0, n);
     let input = ray_input(&rays);
     let out: Vec<f32> = checks(d)
         .run("check_nearest", n as usize, 2, &ray_args(&input, &packed))

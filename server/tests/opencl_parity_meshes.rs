@@ -3,9 +3,11 @@
 //! routine by routine (check kernels in `kernels/checks.cl`), then whole
 //! images rendered with the same seed on both backends.
 
+mod common;
 mod parity;
 
-use parity::{checks, device, ulps, uniform, unit};
+use common::opencl_device as device;
+use parity::{checks, ray_input, rays_around, ulps, uniform, unit};
 use pathstream::render::backend::nearest_hits;
 use pathstream::render::backend::opencl::{pack, CheckArg, KernelParams, OpenClBackend, Packed};
 use pathstream::render::math::Vec3A;
@@ -177,15 +179,7 @@ fn the_watertight_triangle_test_agrees_bit_for_bit() {
         rays.push(Ray::new(origin, (target - origin).normalize()));
         tris.push(v);
     }
-    let ray_in: Vec<[f32; 4]> = rays
-        .iter()
-        .flat_map(|r| {
-            [
-                r.origin.extend(0.0).to_array(),
-                r.dir.extend(0.0).to_array(),
-            ]
-        })
-        .collect();
+    let ray_in = ray_input(&rays);
     let tri_in: Vec<[f32; 4]> = tris
         .iter()
         .flat_map(|t| t.map(|v| v.extend(0.0).to_array()))
@@ -261,25 +255,8 @@ fn the_nearest_hit_among_meshes_agrees_on_1e5_rays() {
     let packed = pack(&job);
     let n = 100_000u64;
     let centre = Vec3A::from((job.camera.forward * 200.0).to_array());
-    let rays: Vec<Ray> = (0..n)
-        .map(|i| {
-            let jitter = Vec3A::new(
-                uniform(i, 60) - 0.5,
-                uniform(i, 61) - 0.5,
-                uniform(i, 62) - 0.5,
-            );
-            Ray::new(centre + jitter * 60.0, unit(i, 63))
-        })
-        .collect();
-    let input: Vec<[f32; 4]> = rays
-        .iter()
-        .flat_map(|r| {
-            [
-                r.origin.extend(0.0).to_array(),
-                r.dir.extend(0.0).to_array(),
-            ]
-        })
-        .collect();
+    let rays = rays_around(centre, 60.0, n);
+    let input = ray_input(&rays);
     let out: Vec<f32> = checks(&d)
         .run(
             "check_nearest_meshes",
@@ -320,4 +297,121 @@ fn the_nearest_hit_among_meshes_agrees_on_1e5_rays() {
     }
     eprintln!("{on_meshes} of {n} rays hit a mesh");
     assert!(on_meshes >= 2000, "the rays meet the meshes ({on_meshes})");
+}
+
+/// A scene with every kind of emitter: quads (cornell-quads' light), a
+/// sphere, the triangles of a glowing mesh, and the sky.
+fn every_emitter() -> Scene {
+    let mut j =
+        serde_json::to_value(Scene::load("cornell-quads").expect("scene").to_json()).expect("json");
+    j["materials"]["glow"] =
+        serde_json::json!({"type": "diffuse", "albedo": [0.5, 0.5, 0.5], "emission": [3, 2, 1]});
+    let objects = j["objects"].as_array_mut().expect("objects");
+    objects.push(serde_json::json!({"type": "sphere", "center": [30, 60, 70], "radius": 4, "material": "glow"}));
+    objects.push(ball(1, "glow", [70.0, 30.0, 90.0], 6.0, false));
+    j["environment"] = serde_json::json!([0.1, 0.2, 0.3]);
+    Scene::from_json_value(j).expect("valid")
+}
+
+/// Light selection and light sampling, routine by routine: the emitter the
+/// power table picks from 1e5 random 64-bit numbers, and the direction and
+/// 1/pdf towards every kind of emitter from 1e5 random points, normals and
+/// numbers (a quarter of them on the emitter's own object), bit for bit.
+#[test]
+fn light_picks_and_light_samples_agree_bit_for_bit() {
+    use pathstream::render::sampler::mix64;
+    use pathstream::render::world::{Surface, NO_OBJECT, NO_PRIM};
+    let Some(d) = device() else { return };
+    let job = RenderJob::new(&every_emitter(), 16, 16, &Quality::default());
+    let lights = &job.world.lights;
+    let table = lights.table.as_ref().expect("an alias table");
+    assert!(
+        lights.emitters.len() > 80,
+        "quads, sphere, 80 triangles, the sky"
+    );
+    let packed = pack(&job);
+    let n = 100_000usize;
+    let bits: Vec<u64> = (0..n as u64).map(|i| mix64(i ^ 0xABCD)).collect();
+    let picks: Vec<u32> = checks(&d)
+        .run(
+            "check_light_pick",
+            n,
+            2,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&bits)),
+                CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.lights)),
+            ],
+        )
+        .expect("run");
+    for (i, &b) in bits.iter().enumerate() {
+        let (j, pmf) = table.pick(b);
+        assert_eq!(
+            (picks[2 * i], picks[2 * i + 1]),
+            (j as u32, pmf.to_bits()),
+            "pick {i}"
+        );
+    }
+    let count = lights.emitters.len() as u64;
+    let mut input = Vec::new();
+    let mut which = Vec::new();
+    let mut surfaces = Vec::new();
+    for i in 0..n as u64 {
+        let k = (i % count) as usize;
+        let e = &lights.emitters[k];
+        let p = Vec3A::new(uniform(i, 20), uniform(i, 21), uniform(i, 22)) * 120.0 - 60.0;
+        let normal = unit(i, 23);
+        let on = if i % 4 == 0 { e.object } else { NO_OBJECT };
+        let s = Surface {
+            p,
+            ng: normal,
+            ns: normal,
+            smooth: false,
+            material: 0,
+            object: on,
+            prim: if on == NO_OBJECT { NO_PRIM } else { e.prim },
+            offset: None,
+        };
+        input.extend([
+            p.extend(f32::from_bits(on)).to_array(),
+            normal.extend(0.0).to_array(),
+            [uniform(i, 24), uniform(i, 25), 0.0, 0.0],
+        ]);
+        which.push(k as u32);
+        surfaces.push(s);
+    }
+    let out: Vec<f32> = checks(&d)
+        .run(
+            "check_light_sample",
+            n,
+            4,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&input)),
+                CheckArg::Buffer(bytemuck::cast_slice(&which)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.lights)),
+            ],
+        )
+        .expect("run");
+    let mut sampled = 0;
+    for (i, s) in surfaces.iter().enumerate() {
+        let e = &lights.emitters[which[i] as usize];
+        let (u1, u2) = (input[3 * i + 2][0], input[3 * i + 2][1]);
+        let dev = &out[4 * i..4 * i + 4];
+        match e.sample_direction(s, s.ng, s.ns, u1, u2) {
+            None => assert_eq!(dev[3], -1.0, "sample {i}: the device sampled {dev:?}"),
+            Some((dir, w)) => {
+                sampled += 1;
+                let want = [dir.x, dir.y, dir.z, w].map(f32::to_bits);
+                let got = [dev[0], dev[1], dev[2], dev[3]].map(f32::to_bits);
+                assert_eq!(
+                    got, want,
+                    "sample {i} ({:?}): device {dev:?}, CPU {dir} {w}",
+                    e.shape
+                );
+            }
+        }
+    }
+    eprintln!("{sampled} of {n} samples gave a direction");
+    assert!(sampled > n / 2, "most samples give a direction ({sampled})");
 }

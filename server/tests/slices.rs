@@ -6,23 +6,11 @@
 
 mod common;
 
-use common::scene;
+use common::{backends, scene};
 use pathstream::render::backend::opencl::OpenClBackend;
 use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob};
 
 const NEVER: &(dyn Fn() -> bool + Sync) = &|| false;
-
-fn backends() -> Vec<(&'static str, Backend)> {
-    let mut all = vec![("cpu", Backend::choose(BackendChoice::Cpu).expect("cpu"))];
-    match Backend::choose(BackendChoice::OpenCl { device: None }) {
-        Ok(b) => all.push(("opencl", b)),
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but there is no OpenCL device: {e}")
-        }
-        Err(e) => eprintln!("OpenCL skipped: {e}"),
-    }
-    all
-}
 
 fn job(name: &str, w: u32, h: u32) -> RenderJob {
     let q = Quality {

@@ -91,8 +91,10 @@ fn meshes(w: &mut String, r: &Results) {
             m.opencl_paths_per_sec
                 .map_or("-".into(), |p| format!("{:.2}", p / 1e6)),
             m.opencl_upload_seconds.map_or("-".into(), secs),
-            m.opencl_device_bytes
-                .map_or("-".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64))
+            m.opencl_device_bytes.map_or("-".into(), |b| format!(
+                "{:.1} MiB",
+                b as f64 / (1 << 20) as f64
+            ))
         );
     }
     let _ = writeln!(w);

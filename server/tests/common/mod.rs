@@ -21,6 +21,37 @@ pub fn render_on(
     film
 }
 
+/// OpenCL device 0, if there is one (where `CI` is set, none is a failure,
+/// so that a suite cannot pass by skipping).
+pub fn opencl_device() -> Option<pathstream::render::backend::opencl::OpenClBackend> {
+    match pathstream::render::backend::opencl::OpenClBackend::new(None) {
+        Ok(b) => Some(b),
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("CI is set but there is no OpenCL device: {e}")
+        }
+        Err(e) => {
+            eprintln!("skipping OpenCL: {e}");
+            None
+        }
+    }
+}
+
+/// Every backend a check must pass on: rayon, then OpenCL device 0 if
+/// there is one (as [`opencl_device`]).
+pub fn backends() -> Vec<(&'static str, Backend)> {
+    let mut all = vec![("cpu", Backend::choose(BackendChoice::Cpu).expect("cpu"))];
+    if let Some(d) = opencl_device() {
+        all.push((
+            "opencl",
+            Backend::OpenCl {
+                backend: Box::new(d),
+                fallback: false,
+            },
+        ));
+    }
+    all
+}
+
 /// Renders on the CPU backend.
 pub fn render(scene: &Scene, w: u32, h: u32, q: &Quality, spp: u64) -> Film {
     let mut backend = Backend::choose(BackendChoice::Cpu).expect("cpu backend");

@@ -1,23 +1,12 @@
-//! Helpers of the routine-parity tests: the device, counters turned into
-//! uniform numbers and directions, distances in ulps, the check program.
+//! Helpers of the routine-parity tests: counters turned into uniform
+//! numbers and directions, rays as check-kernel input, distances in ulps,
+//! the check program.
 #![allow(dead_code)]
 
 use pathstream::render::backend::opencl::{Checks, OpenClBackend};
 use pathstream::render::math::{sincos_turns, Vec3A};
+use pathstream::render::ray::Ray;
 use pathstream::render::sampler::mix64;
-
-pub fn device() -> Option<OpenClBackend> {
-    match OpenClBackend::new(None) {
-        Ok(b) => Some(b),
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but there is no OpenCL device: {e}")
-        }
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            None
-        }
-    }
-}
 
 /// Distance in units in the last place (0 for equal values, infinities
 /// included; u64::MAX when only one is NaN or infinite).
@@ -56,4 +45,31 @@ pub fn unit(i: u64, salt: u64) -> Vec3A {
 pub fn checks(d: &OpenClBackend) -> Checks<'_> {
     let extra = std::env::var("PARITY_OPTIONS").unwrap_or_default();
     d.checks(&extra).expect("the check program builds")
+}
+
+/// Rays as check kernels read them: origin, then direction, as float4s.
+pub fn ray_input(rays: &[Ray]) -> Vec<[f32; 4]> {
+    rays.iter()
+        .flat_map(|r| {
+            [
+                r.origin.extend(0.0).to_array(),
+                r.dir.extend(0.0).to_array(),
+            ]
+        })
+        .collect()
+}
+
+/// `n` rays from points within a cube of side `size` about `centre`, in
+/// every direction.
+pub fn rays_around(centre: Vec3A, size: f32, n: u64) -> Vec<Ray> {
+    (0..n)
+        .map(|i| {
+            let jitter = Vec3A::new(
+                uniform(i, 60) - 0.5,
+                uniform(i, 61) - 0.5,
+                uniform(i, 62) - 0.5,
+            );
+            Ray::new(centre + jitter * size, unit(i, 63))
+        })
+        .collect()
 }

@@ -426,6 +426,18 @@ impl OpenClBackend {
         self.program(&key).map(|_| ())
     }
 
+    /// Makes the device ready to add to `film` for `job`: the program built
+    /// (or found) and the job's state on the device; the program's key.
+    fn ready(&mut self, job: &RenderJob, film: &Film) -> Result<ProgramKey, OpenClError> {
+        if let Some(why) = unsupported(job, &self.info) {
+            return Err(OpenClError::Unsupported(why));
+        }
+        let key = self.key_for(job);
+        self.program(&key)?;
+        self.prepare(job, film, &key)?;
+        Ok(key)
+    }
+
     /// Adds `count` samples per pixel to `film`.
     pub fn render(
         &mut self,
@@ -433,12 +445,7 @@ impl OpenClBackend {
         film: &mut Film,
         count: u64,
     ) -> Result<(), OpenClError> {
-        if let Some(why) = unsupported(job, &self.info) {
-            return Err(OpenClError::Unsupported(why));
-        }
-        let key = self.key_for(job);
-        self.program(&key)?;
-        self.prepare(job, film, &key)?;
+        let key = self.ready(job, film)?;
         let result = self.launch_all(&key, count, film.pixels().len());
         if result.is_err() {
             self.states.pop(); // the device film may be half updated: start over from the host's

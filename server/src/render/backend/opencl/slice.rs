@@ -7,7 +7,7 @@
 //! to the host film, so that the host always has what the device has and a
 //! device state evicted mid-sample is rebuilt from the host exactly.
 
-use super::{call, unsupported, OpenClBackend, OpenClError, FILM_FLOATS, TILE};
+use super::{call, OpenClBackend, OpenClError, FILM_FLOATS, TILE};
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
 use opencl3::types::CL_BLOCKING;
@@ -22,12 +22,7 @@ impl OpenClBackend {
         film: &mut Film,
         end: usize,
     ) -> Result<(), OpenClError> {
-        if let Some(why) = unsupported(job, &self.info) {
-            return Err(OpenClError::Unsupported(why));
-        }
-        let key = self.key_for(job);
-        self.program(&key)?;
-        self.prepare(job, film, &key)?;
+        let key = self.ready(job, film)?;
         let (start, pixels) = (film.slice_start(), film.pixels().len());
         let tile = pixels.min(TILE);
         let result = (start..end)
