@@ -190,7 +190,7 @@ __kernel void check_light_sample(__global float *out, uint n, __global const flo
     float3 dir;
     float weight;
     __global float *o = out + (size_t)i * 4u;
-    if (sample_emitter(&sc, L, &sf, n3, n3, in[3 * i + 2].xy, &dir, &weight)) {
+    if (sample_emitter(&sc, L, sf.p, sf.object, sf.prim, n3, n3, in[3 * i + 2].xy, &dir, &weight)) {
         o[0] = dir.x;
         o[1] = dir.y;
         o[2] = dir.z;

@@ -4,22 +4,33 @@
 
 #if HAS_DIFFUSE
 /* Le * V * cos / pdf of one shadow ray from surface sf towards emitter L,
- * as light/mod.rs's `one`. */
+ * as light/mod.rs's `one`. What a scene cannot have is decided when the
+ * program is built (on PoCL the cheapest scenes feel every test here). */
 inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u) {
     float3 dir;
     float weight;
-    if (!sample_emitter(sc, L, sf, nl, ns, u, &dir, &weight)) {
+    if (!sample_emitter(sc, L, sf->p, sf->object, sf->prim, nl, ns, u, &dir, &weight)) {
         return (float3)(0.0f);
     }
     float cos_s = dot(ns, dir);
+#if HAS_MESHES
     if (!(cos_s > 0.0f && dot(nl, dir) > 0.0f)) {
+#else
+    if (!(cos_s > 0.0f)) { /* ns is nl */
+#endif
         return (float3)(0.0f);
     }
     Hit h;
     nearest(sc, spawn(sc, sf, dir), dir, sf->object, sf->prim, dot(dir, sf->ng) < 0.0f, &h);
-    int visible = L->kind == LIGHT_ENVIRONMENT
-                      ? h.object == NO_OBJECT
-                      : h.object == L->object && (L->prim == NO_PRIM || h.prim == L->prim);
+    int visible = h.object == L->object;
+#if HAS_TRI_LIGHTS
+    visible = visible && (L->prim == NO_PRIM || h.prim == L->prim);
+#endif
+#if HAS_ENV
+    if (L->kind == LIGHT_ENVIRONMENT) {
+        visible = h.object == NO_OBJECT;
+    }
+#endif
     if (!visible) {
         return (float3)(0.0f);
     }

@@ -76,19 +76,20 @@ inline int toward_point(float3 p, float3 q, float3 n, float area, float3 *dir, f
     return 1;
 }
 
-/* Emitter::sample_direction for emitter L seen from surface sf (nl and ns
- * its geometric and shading normals on the side the path came from). */
-inline int sample_emitter(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u,
-                          float3 *dir, float *weight) {
+/* Emitter::sample_direction for emitter L seen from point p on (object,
+ * prim), nl and ns its geometric and shading normals on the side the path
+ * came from. */
+inline int sample_emitter(const Scene *sc, __global const Light *L, float3 p, uint object, uint prim, float3 nl,
+                          float3 ns, float2 u, float3 *dir, float *weight) {
 #if HAS_TRI_LIGHTS
     if (L->kind == LIGHT_TRIANGLE) {
-        if (L->object == sf->object && L->prim == sf->prim) {
+        if (L->object == object && L->prim == prim) {
             return 0;
         }
         float r = sqrt(u.x);
         float b1 = 1.0f - r;
         float b2 = u.y * r;
-        return toward_point(sf->p, L->p0.xyz + L->e1.xyz * b1 + L->e2.xyz * b2, L->n.xyz, L->n.w, dir, weight);
+        return toward_point(p, L->p0.xyz + L->e1.xyz * b1 + L->e2.xyz * b2, L->n.xyz, L->n.w, dir, weight);
     }
 #endif
 #if HAS_ENV
@@ -103,7 +104,7 @@ inline int sample_emitter(const Scene *sc, __global const Light *L, const Surf *
     }
 #endif
 #if HAS_SPHERE_LIGHTS || HAS_QUAD_LIGHTS
-    return sample_light(&sc->objects[L->object], L->object, sf->p, nl, sf->object, u, dir, weight);
+    return sample_light(&sc->objects[L->object], L->object, p, nl, object, u, dir, weight);
 #else
     return 0;
 #endif
