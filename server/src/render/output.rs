@@ -2,6 +2,7 @@
 //! little-endian f32 RGB, header `PF\n<w> <h>\n-1.0\n`, rows bottom to top).
 
 use crate::render::tonemap::Tonemap;
+use image::codecs::jpeg::JpegEncoder;
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
 use std::path::Path;
@@ -10,7 +11,7 @@ use std::path::Path;
 pub enum OutputError {
     #[error("unsupported output format '{0}' (use .png or .pfm)")]
     Format(String),
-    #[error("PNG encoding failed: {0}")]
+    #[error("image encoding failed: {0}")]
     Png(#[from] image::ImageError),
     #[error("cannot write {path}: {source}")]
     Io {
@@ -54,6 +55,26 @@ pub fn encode_png(
     let mut out = Vec::with_capacity(bytes.len() / 2 + 64);
     PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Adaptive)
         .write_image(&bytes, width, height, ExtendedColorType::Rgb8)?;
+    Ok(out)
+}
+
+/// Tone-mapped 8-bit sRGB JPEG of a linear image at `quality` (1-100):
+/// lossy, for streams over slow links (noise makes PNGs large).
+pub fn encode_jpeg(
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+    tonemap: &Tonemap,
+    quality: u8,
+) -> Result<Vec<u8>, OutputError> {
+    let bytes: Vec<u8> = rgb.iter().flat_map(|p| tonemap.apply(*p)).collect();
+    let mut out = Vec::with_capacity(bytes.len() / 8 + 1024);
+    JpegEncoder::new_with_quality(&mut out, quality.clamp(1, 100)).write_image(
+        &bytes,
+        width,
+        height,
+        ExtendedColorType::Rgb8,
+    )?;
     Ok(out)
 }
 

@@ -2,9 +2,48 @@
 //! carries to the WebSocket streams and the frame endpoints.
 
 use super::error::ApiError;
-use crate::render::output::{encode_pfm, encode_png};
+use crate::render::output::{encode_jpeg, encode_pfm, encode_png};
 use crate::render::tonemap::Tonemap;
-use std::sync::OnceLock;
+use serde::Deserialize;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// How a WebSocket stream encodes its frames: PNG (exact, the default) or
+/// JPEG at a quality (lossy, several times smaller on a noisy image).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase", tag = "format", deny_unknown_fields)]
+pub enum StreamFormat {
+    #[default]
+    Png,
+    Jpeg {
+        #[serde(default = "default_jpeg_quality")]
+        quality: u8,
+    },
+}
+
+fn default_jpeg_quality() -> u8 {
+    85
+}
+
+impl StreamFormat {
+    /// Checks the quality; the message names the field.
+    pub fn validate(self) -> Result<Self, ApiError> {
+        match self {
+            StreamFormat::Jpeg { quality } if !(1..=100).contains(&quality) => {
+                Err(ApiError::BadRequest(format!(
+                    "stream.quality: must be between 1 and 100 (got {quality})"
+                )))
+            }
+            f => Ok(f),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StreamFormat::Png => "png",
+            StreamFormat::Jpeg { .. } => "jpeg",
+        }
+    }
+}
 
 /// A published image and its statistics.
 #[derive(Debug)]
@@ -26,6 +65,8 @@ pub struct Frame {
     /// Mean radiance, row-major, top row first (empty before the first pass).
     pub pixels: Vec<[f32; 3]>,
     pub(super) png: OnceLock<Vec<u8>>,
+    /// JPEGs encoded so far, by quality (each once however many sockets).
+    pub(super) jpegs: Mutex<Vec<(u8, Arc<[u8]>)>>,
 }
 
 impl Frame {
@@ -52,6 +93,7 @@ impl Frame {
             device,
             pixels: Vec::new(),
             png: OnceLock::new(),
+            jpegs: Mutex::new(Vec::new()),
         }
     }
 
@@ -77,6 +119,38 @@ impl Frame {
         )
         .map_err(|e| ApiError::Internal(e.to_string()))?;
         Ok(self.png.get_or_init(|| png))
+    }
+
+    /// The frame encoded as `format` asks. Call off the async runtime.
+    pub fn encoded(&self, format: StreamFormat) -> Result<Arc<[u8]>, ApiError> {
+        let quality = match format {
+            StreamFormat::Png => return self.png().map(Arc::from),
+            StreamFormat::Jpeg { quality } => quality,
+        };
+        let cached = |jpegs: &[(u8, Arc<[u8]>)]| {
+            jpegs
+                .iter()
+                .find(|(q, _)| *q == quality)
+                .map(|(_, b)| b.clone())
+        };
+        if let Some(b) = cached(&self.jpegs.lock().unwrap_or_else(|e| e.into_inner())) {
+            return Ok(b);
+        }
+        let jpeg: Arc<[u8]> = encode_jpeg(
+            self.width,
+            self.height,
+            &self.pixels_or_black(),
+            &Tonemap::default(),
+            quality,
+        )
+        .map_err(|e| ApiError::Internal(e.to_string()))?
+        .into();
+        let mut jpegs = self.jpegs.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(b) = cached(&jpegs) {
+            return Ok(b);
+        }
+        jpegs.push((quality, jpeg.clone()));
+        Ok(jpeg)
     }
 
     pub fn pfm(&self) -> Vec<u8> {

@@ -1,0 +1,183 @@
+//! The WebSocket stream's frame formats: PNG by default, JPEG when a
+//! socket asks (on its URL or by message), each frame's stats naming the
+//! format and its size; bad settings are refused by name.
+
+mod http;
+
+use futures_util::{SinkExt, StreamExt};
+use http::{client, config, create, server};
+use serde_json::{json, Value};
+use std::time::{Duration, Instant};
+use tokio_tungstenite::tungstenite::Message;
+
+type Ws = http::Ws;
+
+async fn connect(base: &str, id: &str, query: &str) -> Ws {
+    let url = format!(
+        "{}/api/sessions/{id}/ws{query}",
+        base.replace("http://", "ws://")
+    );
+    tokio_tungstenite::connect_async(url)
+        .await
+        .expect("ws connects")
+        .0
+}
+
+/// The next frame and the stats that follow it.
+async fn next_frame(ws: &mut Ws) -> (Vec<u8>, Value) {
+    let until = Instant::now() + Duration::from_secs(60);
+    let mut image = None;
+    loop {
+        let msg = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next())
+            .await
+            .expect("a frame in time")
+            .expect("open")
+            .expect("message");
+        match msg {
+            Message::Binary(b) => image = Some(b.to_vec()),
+            Message::Text(t) => {
+                let v: Value = serde_json::from_str(t.as_str()).expect("json");
+                assert_ne!(v["type"], "error", "{v}");
+                if let Some(image) = image.take() {
+                    return (image, v);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+const JPEG: [u8; 3] = [0xFF, 0xD8, 0xFF];
+const PNG: [u8; 4] = [0x89, b'P', b'N', b'G'];
+
+fn mean(image: &[u8]) -> (u32, u32, f64) {
+    let img = image::load_from_memory(image).expect("decodes").to_rgb8();
+    let sum: f64 = img.pixels().flat_map(|p| p.0).map(f64::from).sum();
+    (
+        img.width(),
+        img.height(),
+        sum / f64::from(img.width() * img.height() * 3),
+    )
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_socket_chooses_jpeg_or_png_and_stats_say_which_and_how_big() {
+    let (running, base) = server(config()).await;
+    // Halted at 4 spp: noisy, and every frame the same image.
+    let s = create(
+        &base,
+        json!({"scene": "cornell-glass", "width": 128, "height": 96, "quality": {"spp": 4}}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id");
+    let mut png_ws = connect(&base, id, "").await;
+    let (png, png_stats) = next_frame(&mut png_ws).await;
+    assert_eq!(png[..4], PNG);
+    assert_eq!(png_stats["format"], "png");
+    assert_eq!(png_stats["frame_bytes"], png.len());
+    let mut ws = connect(&base, id, "?format=jpeg&quality=80").await;
+    let (jpeg, stats) = next_frame(&mut ws).await;
+    assert_eq!(jpeg[..3], JPEG);
+    assert_eq!(
+        (stats["format"].clone(), stats["frame_bytes"].clone()),
+        (json!("jpeg"), json!(jpeg.len()))
+    );
+    // The same image, smaller: a noisy frame defeats PNG's compression.
+    let ((w, h, a), (_, _, b)) = (mean(&png), mean(&jpeg));
+    assert_eq!((w, h), (128, 96));
+    assert!(
+        (a - b).abs() < 0.02 * a.max(1.0),
+        "mean {a} (PNG) vs {b} (JPEG)"
+    );
+    assert!(
+        jpeg.len() * 2 < png.len(),
+        "JPEG {} bytes, PNG {}",
+        jpeg.len(),
+        png.len()
+    );
+    eprintln!(
+        "cornell-glass 128x96 at 4 spp: PNG {} bytes, JPEG q80 {} bytes",
+        png.len(),
+        jpeg.len()
+    );
+    // By message: back to PNG, together with a change.
+    ws.send(Message::Text(
+        json!({"stream": {"format": "png"}, "quality": {"spp": 2}})
+            .to_string()
+            .into(),
+    ))
+    .await
+    .expect("send");
+    let until = Instant::now() + Duration::from_secs(60);
+    loop {
+        let (image, stats) = next_frame(&mut ws).await;
+        if stats["quality"]["spp"] == 2 && stats["spp"] == 2 {
+            assert_eq!(image[..4], PNG, "{stats}");
+            break;
+        }
+        assert!(Instant::now() < until, "the change shows");
+    }
+    // A bad setting by message: an error naming it, and the socket stays.
+    ws.send(Message::Text(
+        json!({"stream": {"format": "jpeg", "quality": 101}})
+            .to_string()
+            .into(),
+    ))
+    .await
+    .expect("send");
+    let until = Instant::now() + Duration::from_secs(30);
+    loop {
+        let msg = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next())
+            .await
+            .expect("an answer")
+            .expect("open")
+            .expect("message");
+        if let Message::Text(t) = msg {
+            let v: Value = serde_json::from_str(t.as_str()).expect("json");
+            if v["type"] == "error" {
+                assert!(
+                    v["error"].as_str().unwrap_or("").contains("stream.quality"),
+                    "{v}"
+                );
+                break;
+            }
+        }
+    }
+    ws.send(Message::Text(
+        json!({"stream": {"format": "jpeg"}}).to_string().into(),
+    ))
+    .await
+    .expect("the socket is still open");
+    running.shutdown().await.expect("shutdown");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bad_stream_settings_on_the_url_are_refused_by_name() {
+    let (running, base) = server(config()).await;
+    let s = create(&base, json!({"scene": "cornell", "width": 8, "height": 8})).await;
+    let id = s["id"].as_str().expect("id");
+    for (query, needle) in [
+        ("?format=gif", "format: must be png or jpeg"),
+        (
+            "?format=jpeg&quality=0",
+            "stream.quality: must be between 1 and 100",
+        ),
+        ("?quality=50", "quality: only for format=jpeg"),
+        ("?fromat=jpeg", "fromat"),
+    ] {
+        let r = client()
+            .get(format!("{base}/api/sessions/{id}/ws{query}"))
+            .header("connection", "upgrade")
+            .header("upgrade", "websocket")
+            .header("sec-websocket-version", "13")
+            .header("sec-websocket-key", "dGhlIHNhbXBsZSBub25jZQ==")
+            .send()
+            .await
+            .expect("answer");
+        assert_eq!(r.status(), 400, "{query}");
+        let body: Value = r.json().await.expect("a JSON error");
+        let e = body["error"].as_str().unwrap_or("");
+        assert!(e.contains(needle), "{query}: {e}");
+    }
+    running.shutdown().await.expect("shutdown");
+}
