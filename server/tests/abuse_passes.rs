@@ -8,11 +8,10 @@
 
 mod http;
 
-use http::{client, config, create, server};
+use http::{client, config, create, served_url, server};
 use pathstream::render::BackendChoice;
 use pathstream::service::Running;
 use serde_json::{json, Value};
-use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -178,16 +177,7 @@ fn start_binary() -> Binary {
         .stderr(log.reopen().expect("log"))
         .spawn()
         .expect("starts");
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().expect("stdout"))
-        .read_line(&mut line)
-        .expect("a line");
-    let base = line
-        .split_whitespace()
-        .find(|w| w.starts_with("http://"))
-        .expect("a URL")
-        .trim_end_matches('/')
-        .to_owned();
+    let base = served_url(&mut child);
     Binary { child, base, log }
 }
 

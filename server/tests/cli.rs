@@ -1,6 +1,8 @@
 //! The `pathstream` binary: `render` writes images and one summary line;
 //! bad input exits with code 2 and a one-line message naming the problem.
 
+mod http;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -225,27 +227,17 @@ fn diff_measures_relative_error_against_a_reference() {
 
 #[test]
 fn serve_prints_its_url_and_survives_a_closed_stdout() {
-    use std::io::{BufRead, BufReader, Read, Write};
+    use std::io::{Read, Write};
     let mut child = Command::new(env!("CARGO_BIN_EXE_pathstream"))
         .args(["serve", "--addr", "127.0.0.1:0", "--backend", "cpu"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
         .spawn()
         .expect("starts");
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().expect("stdout"))
-        .read_line(&mut line)
-        .expect("a line");
-    // The reader is gone now: later writes to stdout fail, and must not kill the server.
-    let url = line
-        .split_whitespace()
-        .find(|w| w.starts_with("http://"))
-        .expect("a URL")
-        .to_owned();
-    let addr = url
-        .trim_start_matches("http://")
-        .trim_end_matches('/')
-        .to_owned();
+    // The reader is gone after this: later writes to stdout fail, and must
+    // not kill the server.
+    let url = http::served_url(&mut child);
+    let addr = url.trim_start_matches("http://").to_owned();
     std::thread::sleep(std::time::Duration::from_millis(500));
     let mut stream = std::net::TcpStream::connect(&addr).expect("still listening");
     stream

@@ -164,3 +164,18 @@ pub async fn raw(
     let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
     (code, head.to_ascii_lowercase(), body.to_owned())
 }
+
+/// The URL a `pathstream serve` child prints on its first line of stdout
+/// (without a trailing slash). The pipe is dropped afterwards.
+pub fn served_url(child: &mut std::process::Child) -> String {
+    use std::io::BufRead;
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().expect("stdout piped"))
+        .read_line(&mut line)
+        .expect("a line");
+    line.split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .expect("a URL")
+        .trim_end_matches('/')
+        .to_owned()
+}
