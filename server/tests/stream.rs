@@ -1,6 +1,7 @@
-//! The WebSocket stream's frame formats: PNG by default, JPEG when a
-//! socket asks (on its URL or by message), each frame's stats naming the
-//! format and its size; bad settings are refused by name.
+//! The WebSocket stream's frames: PNG at the film's size by default, JPEG
+//! and a smaller width when a socket asks (on its URL or by message), each
+//! frame's stats naming the format, its bytes and size; bad settings are
+//! refused by name.
 
 mod http;
 
@@ -162,7 +163,7 @@ async fn bad_stream_settings_on_the_url_are_refused_by_name() {
             "?format=jpeg&quality=0",
             "stream.quality: must be between 1 and 100",
         ),
-        ("?quality=50", "quality: only for format=jpeg"),
+        ("?quality=50", "stream.quality: only for format jpeg"),
         ("?fromat=jpeg", "fromat"),
     ] {
         let r = client()
@@ -179,5 +180,92 @@ async fn bad_stream_settings_on_the_url_are_refused_by_name() {
         let e = body["error"].as_str().unwrap_or("");
         assert!(e.contains(needle), "{query}: {e}");
     }
+    running.shutdown().await.expect("shutdown");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn frames_scale_to_the_width_a_socket_asks_for_and_keep_the_image() {
+    let (running, base) = server(config()).await;
+    // A furnace capped at one bounce without NEE or roulette: every sample
+    // of every pixel exactly 0.5 + 0.5 x 0.5, at any size.
+    let furnace = create(
+        &base,
+        json!({"scene": "furnace", "width": 96, "height": 64,
+               "quality": {"spp": 2, "max_depth": 1, "nee": false, "rr_depth": 100}}),
+    )
+    .await;
+    let id = furnace["id"].as_str().expect("id");
+    let mut full = connect(&base, id, "").await;
+    let (png, _) = next_frame(&mut full).await;
+    let mut small = connect(&base, id, "?width=30").await;
+    let (scaled, stats) = next_frame(&mut small).await;
+    assert_eq!(scaled[..4], PNG);
+    assert_eq!(
+        (stats["frame_width"].clone(), stats["frame_height"].clone()),
+        (json!(30), json!(20))
+    );
+    assert_eq!(
+        (stats["width"].clone(), stats["height"].clone()),
+        (json!(96), json!(64)),
+        "the film is unchanged"
+    );
+    let (a, b) = (
+        image::load_from_memory(&png).expect("png").to_rgb8(),
+        image::load_from_memory(&scaled).expect("png").to_rgb8(),
+    );
+    assert_eq!((b.width(), b.height()), (30, 20));
+    assert!(
+        b.pixels().all(|p| *p == *a.get_pixel(0, 0)),
+        "a constant image stays that constant"
+    );
+    // A noisy one, asked by message, as JPEG: the same image as the PNG
+    // of that width (means within JPEG's loss).
+    let s = create(
+        &base,
+        json!({"scene": "cornell-glass", "width": 128, "height": 96, "quality": {"spp": 16}}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id");
+    let mut ws = connect(&base, id, "").await;
+    let _ = next_frame(&mut ws).await;
+    ws.send(Message::Text(
+        json!({"stream": {"format": "jpeg", "quality": 90, "width": 64}})
+            .to_string()
+            .into(),
+    ))
+    .await
+    .expect("send");
+    ws.send(Message::Text(
+        json!({"quality": {"spp": 16, "seed": 1}})
+            .to_string()
+            .into(),
+    ))
+    .await
+    .expect("send");
+    let until = Instant::now() + Duration::from_secs(60);
+    let (jpeg, stats) = loop {
+        let (image, stats) = next_frame(&mut ws).await;
+        if stats["format"] == "jpeg" && stats["spp"] == 16 && stats["quality"]["seed"] == 1 {
+            break (image, stats);
+        }
+        assert!(Instant::now() < until, "the JPEG frames come");
+    };
+    assert_eq!(jpeg[..3], JPEG);
+    assert_eq!(
+        (stats["frame_width"].clone(), stats["frame_height"].clone()),
+        (json!(64), json!(48))
+    );
+    let mut png_ws = connect(&base, id, "?width=64").await;
+    let (png, png_stats) = next_frame(&mut png_ws).await;
+    assert_eq!(
+        png_stats["generation"], stats["generation"],
+        "the same frame"
+    );
+    let ((pw, ph, m_png), (w, h, m_jpeg)) = (mean(&png), mean(&jpeg));
+    assert_eq!((pw, ph, w, h), (64, 48, 64, 48));
+    assert!(
+        (m_png - m_jpeg).abs() < 0.02 * m_png,
+        "mean {m_png} (PNG) vs {m_jpeg} (JPEG 90)"
+    );
     running.shutdown().await.expect("shutdown");
 }

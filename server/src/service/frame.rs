@@ -2,47 +2,17 @@
 //! carries to the WebSocket streams and the frame endpoints.
 
 use super::error::ApiError;
+use super::stream::{downscale, StreamFormat, StreamSettings};
 use crate::render::output::{encode_jpeg, encode_pfm, encode_png};
 use crate::render::tonemap::Tonemap;
-use serde::Deserialize;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// How a WebSocket stream encodes its frames: PNG (exact, the default) or
-/// JPEG at a quality (lossy, several times smaller on a noisy image).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase", tag = "format", deny_unknown_fields)]
-pub enum StreamFormat {
-    #[default]
-    Png,
-    Jpeg {
-        #[serde(default = "default_jpeg_quality")]
-        quality: u8,
-    },
-}
-
-fn default_jpeg_quality() -> u8 {
-    85
-}
-
-impl StreamFormat {
-    /// Checks the quality; the message names the field.
-    pub fn validate(self) -> Result<Self, ApiError> {
-        match self {
-            StreamFormat::Jpeg { quality } if !(1..=100).contains(&quality) => {
-                Err(ApiError::BadRequest(format!(
-                    "stream.quality: must be between 1 and 100 (got {quality})"
-                )))
-            }
-            f => Ok(f),
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            StreamFormat::Png => "png",
-            StreamFormat::Jpeg { .. } => "jpeg",
-        }
-    }
+/// An encoded frame and its size.
+#[derive(Clone, Debug)]
+pub struct Encoded {
+    pub bytes: Arc<[u8]>,
+    pub width: u32,
+    pub height: u32,
 }
 
 /// A published image and its statistics.
@@ -65,8 +35,9 @@ pub struct Frame {
     /// Mean radiance, row-major, top row first (empty before the first pass).
     pub pixels: Vec<[f32; 3]>,
     pub(super) png: OnceLock<Vec<u8>>,
-    /// JPEGs encoded so far, by quality (each once however many sockets).
-    pub(super) jpegs: Mutex<Vec<(u8, Arc<[u8]>)>>,
+    /// Stream encodings made so far, by settings (each once however many
+    /// sockets want it), with their size.
+    pub(super) encodings: Mutex<Vec<(StreamSettings, Encoded)>>,
 }
 
 impl Frame {
@@ -93,7 +64,7 @@ impl Frame {
             device,
             pixels: Vec::new(),
             png: OnceLock::new(),
-            jpegs: Mutex::new(Vec::new()),
+            encodings: Mutex::new(Vec::new()),
         }
     }
 
@@ -121,36 +92,48 @@ impl Frame {
         Ok(self.png.get_or_init(|| png))
     }
 
-    /// The frame encoded as `format` asks. Call off the async runtime.
-    pub fn encoded(&self, format: StreamFormat) -> Result<Arc<[u8]>, ApiError> {
-        let quality = match format {
-            StreamFormat::Png => return self.png().map(Arc::from),
-            StreamFormat::Jpeg { quality } => quality,
-        };
-        let cached = |jpegs: &[(u8, Arc<[u8]>)]| {
-            jpegs
-                .iter()
-                .find(|(q, _)| *q == quality)
+    /// The frame as a stream with `settings` wants it. Call off the async
+    /// runtime (it takes milliseconds).
+    pub fn encoded(&self, settings: StreamSettings) -> Result<Encoded, ApiError> {
+        let full = settings.width.is_none_or(|w| w >= self.width);
+        if full && settings.format == StreamFormat::Png {
+            let png = self.png()?;
+            return Ok(Encoded {
+                bytes: Arc::from(png),
+                width: self.width,
+                height: self.height,
+            });
+        }
+        let cached = |e: &[(StreamSettings, Encoded)]| {
+            e.iter()
+                .find(|(s, _)| *s == settings)
                 .map(|(_, b)| b.clone())
         };
-        if let Some(b) = cached(&self.jpegs.lock().unwrap_or_else(|e| e.into_inner())) {
-            return Ok(b);
+        if let Some(e) = cached(&self.encodings.lock().unwrap_or_else(|e| e.into_inner())) {
+            return Ok(e);
         }
-        let jpeg: Arc<[u8]> = encode_jpeg(
-            self.width,
-            self.height,
-            &self.pixels_or_black(),
-            &Tonemap::default(),
-            quality,
-        )
-        .map_err(|e| ApiError::Internal(e.to_string()))?
-        .into();
-        let mut jpegs = self.jpegs.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(b) = cached(&jpegs) {
-            return Ok(b);
+        let pixels = self.pixels_or_black();
+        let (w, h, pixels) = match settings.width {
+            Some(w) if w < self.width => downscale(&pixels, self.width, self.height, w),
+            _ => (self.width, self.height, pixels.into_owned()),
+        };
+        let t = Tonemap::default();
+        let bytes = match settings.format {
+            StreamFormat::Png => encode_png(w, h, &pixels, &t),
+            StreamFormat::Jpeg { quality } => encode_jpeg(w, h, &pixels, &t, quality),
         }
-        jpegs.push((quality, jpeg.clone()));
-        Ok(jpeg)
+        .map_err(|e| ApiError::Internal(e.to_string()))?;
+        let e = Encoded {
+            bytes: bytes.into(),
+            width: w,
+            height: h,
+        };
+        let mut encodings = self.encodings.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(e) = cached(&encodings) {
+            return Ok(e);
+        }
+        encodings.push((settings, e.clone()));
+        Ok(e)
     }
 
     pub fn pfm(&self) -> Vec<u8> {

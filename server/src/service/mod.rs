@@ -16,6 +16,7 @@ mod pass;
 mod routes;
 pub mod session;
 mod static_files;
+mod stream;
 mod worker;
 mod ws;
 

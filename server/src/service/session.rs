@@ -369,7 +369,7 @@ impl Session {
             device,
             pixels,
             png: OnceLock::new(),
-            jpegs: Mutex::new(Vec::new()),
+            encodings: Mutex::new(Vec::new()),
         };
         st.film = Some(film);
         drop(st);

@@ -1,7 +1,7 @@
-//! The WebSocket frame stream. The server sends binary frames, PNG unless
-//! the socket asks for JPEG (`?format=jpeg&quality=85` on the URL, or the
-//! message `{"stream": {"format": "jpeg", "quality": 85}}`), each followed by
-//! a text message with its stats (`format`, `frame_bytes` included); the
+//! The WebSocket frame stream. The server sends binary frames, PNG at the
+//! film's size unless the socket asks otherwise (`service/stream.rs`: JPEG,
+//! a smaller width), each followed by a text message with its stats
+//! (`format`, `frame_bytes`, `frame_width`, `frame_height` included); the
 //! client sends JSON changes: `{"camera": {...}}`, `{"light": {...}}`,
 //! `{"quality": {...}}`, `{"scene": ...}`. A bad message gets
 //! `{"type": "error", "error": "..."}` and the socket stays open.
@@ -12,8 +12,9 @@
 
 use super::change::Change;
 use super::error::ApiError;
-use super::frame::StreamFormat;
+use super::frame::Encoded;
 use super::session::{Frame, Session, Status};
+use super::stream::{StreamRequest, StreamSettings};
 use super::AppState;
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
@@ -29,58 +30,30 @@ const SEND_TIMEOUT: Duration = Duration::from_secs(30);
 /// Close code of a socket whose session was deleted (application range).
 pub const SESSION_DELETED: u16 = 4404;
 
-/// `?format=png|jpeg&quality=1..100` on the stream's URL.
-#[derive(Debug, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StreamQuery {
-    format: Option<String>,
-    quality: Option<u8>,
-    /// The bearer token may come as a query parameter (browsers cannot set
-    /// headers on a WebSocket); the auth layer reads it.
-    #[allow(dead_code)]
-    token: Option<String>,
-}
-
-impl StreamQuery {
-    fn format(&self) -> Result<StreamFormat, ApiError> {
-        match (self.format.as_deref(), self.quality) {
-            (None | Some("png"), None) => Ok(StreamFormat::Png),
-            (None | Some("png"), Some(_)) => {
-                Err(ApiError::BadRequest("quality: only for format=jpeg".into()))
-            }
-            (Some("jpeg"), q) => StreamFormat::Jpeg {
-                quality: q.unwrap_or(85),
-            }
-            .validate(),
-            (Some(other), _) => Err(ApiError::BadRequest(format!(
-                "format: must be png or jpeg (got '{other}')"
-            ))),
-        }
-    }
-}
-
 pub async fn upgrade(
     State(state): State<Arc<AppState>>,
     Path(id): Path<String>,
-    Query(query): Query<StreamQuery>,
+    Query(query): Query<StreamRequest>,
     ws: WebSocketUpgrade,
 ) -> Result<Response, ApiError> {
     let session = state.session(&id)?;
-    let format = query.format()?;
+    let settings = query.settings()?;
     // Messages from the client are changes: no larger than an HTTP body.
     let limit = state.config.max_body_bytes;
     Ok(ws
         .max_message_size(limit)
         .max_frame_size(limit)
-        .on_upgrade(move |socket| serve(socket, state, session, format)))
+        .on_upgrade(move |socket| serve(socket, state, session, settings)))
 }
 
-fn stats(status: &Status, frame: &Frame, format: StreamFormat, bytes: usize) -> Value {
+fn stats(status: &Status, frame: &Frame, settings: StreamSettings, image: &Encoded) -> Value {
     let mut v = serde_json::to_value(status).unwrap_or_else(|_| json!({}));
     if let Value::Object(m) = &mut v {
         m.insert("type".into(), json!("stats"));
-        m.insert("format".into(), json!(format.name()));
-        m.insert("frame_bytes".into(), json!(bytes));
+        m.insert("format".into(), json!(settings.format.name()));
+        m.insert("frame_bytes".into(), json!(image.bytes.len()));
+        m.insert("frame_width".into(), json!(image.width));
+        m.insert("frame_height".into(), json!(image.height));
         // The stats of the frame just sent, not of whatever came after it.
         if frame.generation == status.generation {
             m.insert("spp".into(), json!(frame.spp));
@@ -100,25 +73,25 @@ fn error_message(e: &str) -> Message {
 
 /// Takes a `stream` setting out of a client message, if it has one; the
 /// rest of the message (if any) is changes.
-fn take_stream(text: &str) -> Result<(Option<StreamFormat>, Option<String>), ApiError> {
+fn take_stream(text: &str) -> Result<(Option<StreamSettings>, Option<String>), ApiError> {
     let Ok(Value::Object(mut m)) = serde_json::from_str::<Value>(text) else {
         return Ok((None, Some(text.to_owned())));
     };
     let Some(stream) = m.remove("stream") else {
         return Ok((None, Some(text.to_owned())));
     };
-    let format = serde_json::from_value::<StreamFormat>(stream)
+    let settings = serde_json::from_value::<StreamRequest>(stream)
         .map_err(|e| ApiError::BadRequest(format!("stream: {e}")))?
-        .validate()?;
+        .settings()?;
     let rest = (!m.is_empty()).then(|| Value::Object(m).to_string());
-    Ok((Some(format), rest))
+    Ok((Some(settings), rest))
 }
 
 async fn serve(
     socket: WebSocket,
     state: Arc<AppState>,
     session: Arc<Session>,
-    mut format: StreamFormat,
+    mut settings: StreamSettings,
 ) {
     session.clients.fetch_add(1, Ordering::Relaxed);
     let (mut sink, mut stream) = socket.split();
@@ -142,13 +115,13 @@ async fn serve(
                 }
                 last_seq = frame.seq;
                 let f = frame.clone();
-                let image = match tokio::task::spawn_blocking(move || f.encoded(format)).await {
+                let image = match tokio::task::spawn_blocking(move || f.encoded(settings)).await {
                     Ok(Ok(image)) => image,
                     _ => break,
                 };
-                let text = stats(&session.status(), &frame, format, image.len()).to_string();
+                let text = stats(&session.status(), &frame, settings, &image).to_string();
                 let send = async {
-                    sink.send(Message::Binary(image.to_vec().into())).await?;
+                    sink.send(Message::Binary(image.bytes.to_vec().into())).await?;
                     sink.send(Message::Text(Utf8Bytes::from(text))).await
                 };
                 match tokio::time::timeout(SEND_TIMEOUT, send).await {
@@ -172,8 +145,8 @@ async fn serve(
                 };
                 session.touch();
                 let result = take_stream(text.as_str()).and_then(|(stream, rest)| {
-                    if let Some(f) = stream {
-                        format = f;
+                    if let Some(new) = stream {
+                        settings = new;
                     }
                     match rest {
                         Some(rest) => Change::parse_message(&rest, &state.scene_rules())
