@@ -34,7 +34,7 @@ pub struct Frame {
     pub device: String,
     /// Mean radiance, row-major, top row first (empty before the first pass).
     pub pixels: Vec<[f32; 3]>,
-    pub(super) png: OnceLock<Vec<u8>>,
+    pub(super) png: OnceLock<Arc<[u8]>>,
     /// Stream encodings made so far, by settings (each once however many
     /// sockets want it), with their size.
     pub(super) encodings: Mutex<Vec<(StreamSettings, Encoded)>>,
@@ -79,6 +79,11 @@ impl Frame {
     /// The frame as PNG, encoded once however many clients want it. Call off
     /// the async runtime (it takes milliseconds).
     pub fn png(&self) -> Result<&[u8], ApiError> {
+        self.png_shared().map(|p| &**p)
+    }
+
+    /// [`Frame::png`], shared (no copy per socket).
+    fn png_shared(&self) -> Result<&Arc<[u8]>, ApiError> {
         if let Some(png) = self.png.get() {
             return Ok(png);
         }
@@ -89,7 +94,7 @@ impl Frame {
             &Tonemap::default(),
         )
         .map_err(|e| ApiError::Internal(e.to_string()))?;
-        Ok(self.png.get_or_init(|| png))
+        Ok(self.png.get_or_init(|| png.into()))
     }
 
     /// The frame as a stream with `settings` wants it. Call off the async
@@ -97,9 +102,8 @@ impl Frame {
     pub fn encoded(&self, settings: StreamSettings) -> Result<Encoded, ApiError> {
         let full = settings.width.is_none_or(|w| w >= self.width);
         if full && settings.format == StreamFormat::Png {
-            let png = self.png()?;
             return Ok(Encoded {
-                bytes: Arc::from(png),
+                bytes: self.png_shared()?.clone(),
                 width: self.width,
                 height: self.height,
             });

@@ -180,14 +180,10 @@ pub fn device_uses_bvh(w: &World) -> bool {
 /// Empty when the CPU would aim at none either.
 pub fn kernel_lights(w: &World) -> Vec<Light> {
     let lights = &w.lights;
-    let table = match lights.emitters.len() {
-        0 => return Vec::new(),
-        1 => None,
-        _ => match &lights.table {
-            Some(t) => Some(t),
-            None => return Vec::new(),
-        },
-    };
+    if kernel_light_count(w) == 0 {
+        return Vec::new();
+    }
+    let table = lights.table.as_ref().filter(|_| lights.emitters.len() > 1);
     lights
         .emitters
         .iter()
@@ -216,6 +212,15 @@ pub fn kernel_lights(w: &World) -> Vec<Light> {
             l
         })
         .collect()
+}
+
+/// How many emitters [`kernel_lights`] gives, without building them (a
+/// program key is made every pass; a mesh may have a million emitters).
+pub fn kernel_light_count(w: &World) -> usize {
+    match w.lights.emitters.len() {
+        n if n > 1 && w.lights.table.is_none() => 0,
+        n => n,
+    }
 }
 
 /// The job's scene and settings in the kernel's layout.
@@ -298,7 +303,7 @@ pub fn pack(job: &RenderJob) -> Packed {
         filter: u32::from(job.filter == Filter::Box),
         clamp: s.clamp,
         num_objects: w.objects.len() as u32,
-        num_lights: kernel_lights(w).len() as u32,
+        num_lights: kernel_light_count(w) as u32,
         pad0: 0,
         use_bvh: 0,
         num_big: 0,

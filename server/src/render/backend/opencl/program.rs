@@ -4,10 +4,11 @@
 //! the source.
 
 use super::layout::{
-    device_uses_bvh, kernel_lights, shared_defines, KIND_QUAD, KIND_SPHERE, LIGHT_OBJECT,
-    LIGHT_TRIANGLE, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
+    device_uses_bvh, kernel_light_count, shared_defines, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE,
+    MAT_GLASS, MAT_MIRROR,
 };
 use crate::render::job::RenderJob;
+use crate::render::light::EmitterShape;
 use crate::render::material::Bsdf;
 use crate::render::world::Geometry;
 use crate::render::Filter;
@@ -78,7 +79,14 @@ impl Features {
             .chain(w.instances.iter().flat_map(|i| i.materials.iter().copied()))
             .map(|m| w.materials[m as usize])
             .collect();
-        let lights = kernel_lights(w);
+        // What the kernel's emitters are, read off the world's (building
+        // them, as `pack` does, costs O(emitters) every pass).
+        let light_count = kernel_light_count(w);
+        let emitters = &w.lights.emitters[..if light_count > 0 {
+            w.lights.emitters.len()
+        } else {
+            0
+        }];
         let mat = |k: u32| {
             used.iter().any(|m| match m.bsdf {
                 Bsdf::Diffuse => k == MAT_DIFFUSE,
@@ -91,12 +99,10 @@ impl Features {
                 .any(|m| matches!(m.bsdf, Bsdf::Glass { schlick, .. } if schlick == want))
         };
         let light_kind = |k: u32| {
-            lights.iter().filter(|l| l.kind == LIGHT_OBJECT).any(|l| {
-                match w.objects[l.object as usize].geometry {
-                    Geometry::Sphere(_) => k == KIND_SPHERE,
-                    Geometry::Quad(_) => k == KIND_QUAD,
-                    Geometry::Instance(_) => false,
-                }
+            emitters.iter().any(|e| match e.shape {
+                EmitterShape::Sphere(_) => k == KIND_SPHERE,
+                EmitterShape::Quad(_) => k == KIND_QUAD,
+                EmitterShape::Triangle(_) | EmitterShape::Environment => false,
             })
         };
         Self {
@@ -109,11 +115,11 @@ impl Features {
             exact: glass_with(false),
             sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
             quad_lights: job.settings.nee && light_kind(KIND_QUAD),
-            nee: job.settings.nee && !lights.is_empty(),
+            nee: job.settings.nee && light_count > 0,
             box_filter: job.filter == Filter::Box,
             num_objects: w.objects.len() as u32,
             num_lights: if job.settings.nee {
-                lights.len() as u32
+                light_count as u32
             } else {
                 0
             },
@@ -129,7 +135,10 @@ impl Features {
                 .map(|i| bvh_stack(i.mesh.bvh.depth))
                 .max()
                 .unwrap_or(0),
-            tri_lights: job.settings.nee && lights.iter().any(|l| l.kind == LIGHT_TRIANGLE),
+            tri_lights: job.settings.nee
+                && emitters
+                    .iter()
+                    .any(|e| matches!(e.shape, EmitterShape::Triangle(_))),
             environment: w.environment.max_element() > 0.0,
             inject_nan_every: None,
         }
