@@ -8,7 +8,15 @@
  * odd lo rgb]. That keeps ~44 bits (the 1e8-sample check) and, since every
  * pixel's samples are added in order, an image that does not depend on how
  * samples were split into launches. Non-finite samples are counted in
- * *rejected and add nothing. */
+ * *rejected and add nothing.
+ *
+ * Adaptive sampling (mode != 0) gives each tile of ADAPTIVE_TILE^2 pixels
+ * its own first sample, in uint4 entries (tile, first low, first high,
+ * flag): a compacted list (WORK_LIST: work-item i renders pixel i mod T^2
+ * of entry i / T^2's tile) or one entry per tile of the image (WORK_DENSE:
+ * work-item i renders pixel i; a flag of 0 skips its tile). Every
+ * work-item renders `count` samples (the host splits tiles' counts into
+ * powers of two, one launch each). */
 
 inline void add_compensated(__global float *hi, __global float *lo, float x) {
     float h = *hi;
@@ -26,11 +34,35 @@ __kernel void render(__global const Params *P, __global const Object *objects, _
                      uint count, uint pixel_base, uint pixel_end, __global const BvhNode *nodes,
                      __global const uint *prims, __global const uint *big, __global const Instance *instances,
                      __global const BvhNode *mesh_nodes, __global const TriVerts *tris,
-                     __global const float4 *normals, __global const uint *slots) {
+                     __global const float4 *normals, __global const uint *slots, __global const uint4 *work,
+                     uint mode) {
     Scene sc = {P, objects, materials, lights, nodes, prims, big, instances, mesh_nodes, tris, normals, slots};
     uint gid = pixel_base + (uint)get_global_id(0);
     if (gid >= pixel_end) {
         return;
+    }
+    /* Adaptive work: an entry is (tile, first sample low, high, flag); the
+     * sample count stays the launch's own, so that the loop bound is the
+     * same for every work-item (drivers vectorise across work-items). */
+    if (mode != 0u) {
+        uint tile_cols = (P->width + ADAPTIVE_TILE - 1u) / ADAPTIVE_TILE;
+        uint4 w;
+        uint lx, ly;
+        if (mode == WORK_LIST) {
+            w = work[gid / (ADAPTIVE_TILE * ADAPTIVE_TILE)];
+            uint l = gid % (ADAPTIVE_TILE * ADAPTIVE_TILE);
+            lx = (w.x % tile_cols) * ADAPTIVE_TILE + l % ADAPTIVE_TILE;
+            ly = (w.x / tile_cols) * ADAPTIVE_TILE + l / ADAPTIVE_TILE;
+        } else {
+            lx = gid % P->width;
+            ly = gid / P->width;
+            w = work[(ly / ADAPTIVE_TILE) * tile_cols + lx / ADAPTIVE_TILE];
+        }
+        if (w.w == 0u || lx >= P->width || ly >= P->height) {
+            return;
+        }
+        gid = ly * P->width + lx;
+        first = ((ulong)w.z << 32) | (ulong)w.y;
     }
     uint x = gid % P->width;
     uint y = gid / P->width;

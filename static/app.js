@@ -8,6 +8,7 @@
 //   session.js   the session, its WebSocket, status, camera/light updates
 //   view.js      frames on the canvas, fitting the render area
 //   hud.js       the HUD;  chart.js  the error chart
+//   samples.js   the samples overlay (where an adaptive render sampled)
 //   camera.js    camera and light input (moves, turns, colours)
 //   input.js     keys, mouse and touch
 //   panels.js    quality and light panels;  export.js  downloads, curl
@@ -23,6 +24,7 @@ import "./js/input.js";
 import { showMessage } from "./js/messages.js";
 import "./js/models.js";
 import "./js/panels.js";
+import "./js/samples.js";
 import { connect, resize, setScene } from "./js/session.js";
 import { intParam, state } from "./js/state.js";
 import { fitResolution, updateSizeInputs } from "./js/view.js";

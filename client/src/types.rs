@@ -15,6 +15,12 @@ pub struct Quality {
     pub filter: String,
     pub clamp: f32,
     pub seed: u64,
+    /// Adaptive sampling: after a uniform warm-up, samples go to the 8x8
+    /// tiles with the most error (`spp` is then the mean). Absent (off) on
+    /// servers before it.
+    #[serde(default)]
+    pub adaptive: bool,
+    /// Halt at this many samples per pixel (adaptive: on average).
     pub spp: Option<u64>,
     pub time_ms: Option<u64>,
     pub target_error: Option<f64>,
@@ -39,6 +45,8 @@ pub struct QualityPatch {
     pub clamp: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adaptive: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spp: Option<Option<u64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -102,7 +110,17 @@ pub struct SessionStatus {
     pub quality: Quality,
     /// `rendering` or `halted`.
     pub state: String,
+    /// Samples per pixel (adaptive: the mean, rounded down).
     pub spp: u64,
+    /// The least, median and most samples of a pixel (all 0 from servers
+    /// before adaptive sampling).
+    #[serde(default)]
+    pub spp_spread: SppSpread,
+    /// Adaptive tiles at their share of the target error, of `tiles`.
+    #[serde(default)]
+    pub tiles_done: u64,
+    #[serde(default)]
+    pub tiles: u64,
     pub error_estimate: Option<f64>,
     pub samples_per_sec: f64,
     pub elapsed_ms: f64,
@@ -125,6 +143,16 @@ impl SessionStatus {
     pub fn halted(&self) -> bool {
         self.state == "halted"
     }
+}
+
+/// How the samples spread over the pixels: uniform sampling gives every
+/// pixel the same count (or one more, mid-pass); adaptive sampling gives the
+/// noisiest tiles the most.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SppSpread {
+    pub min: u64,
+    pub median: u64,
+    pub max: u64,
 }
 
 /// An uploaded model file (`POST /api/assets`).

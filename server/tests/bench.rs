@@ -143,7 +143,7 @@ fn error_estimate_calibration_is_near_one() {
         "--backend",
         "cpu",
         "--sections",
-        "calibration",
+        "calibration,adaptive",
         "--scenes",
         "cornell",
         "--trade-size",
@@ -161,18 +161,22 @@ fn error_estimate_calibration_is_near_one() {
     ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let md = text(&out.stdout);
-    let row = md
-        .lines()
-        .find(|l| l.starts_with("| cpu | cornell |"))
-        .unwrap_or_else(|| panic!("row missing:\n{md}"));
-    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
-    let points: usize = cells[3].parse().expect("count");
-    let median: f64 = cells[4].parse().expect("median");
-    assert!(points >= 5, "{row}");
-    assert!(
-        (0.7..1.4).contains(&median),
-        "estimate/true median {median}: {row}"
-    );
+    // Uniform and adaptive sampling alike.
+    for scene in ["cornell", "cornell (adaptive)"] {
+        let row = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| cpu | {scene} |")))
+            .unwrap_or_else(|| panic!("row {scene} missing:\n{md}"));
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let points: usize = cells[3].parse().expect("count");
+        let median: f64 = cells[4].parse().expect("median");
+        assert!(points >= 5, "{row}");
+        assert!(
+            (0.7..1.4).contains(&median),
+            "estimate/true median {median}: {row}"
+        );
+    }
+    assert!(md.contains("## Adaptive sampling: uniform vs adaptive"), "{md}");
 }
 
 #[test]

@@ -1,5 +1,7 @@
 // The HUD over the image: state, spp, paths/s, error estimate, time, size
-// and device of the latest status or stats.
+// and device of the latest status or stats; with adaptive sampling, spp is
+// the mean, and the HUD adds the spread (least, median and most samples of
+// a pixel) and, with an error target, the tiles that reached it.
 
 import { $ } from "./dom.js";
 import { fmtRate, fmtTime } from "./format.js";
@@ -14,12 +16,28 @@ function setHud(id, text, value) {
 /** Shows a status or stats message. */
 function showStatus(s) {
   setHud("hud-state", s.failure ? `failed: ${s.failure}` : s.state, s.state);
-  setHud("hud-spp", String(s.spp), s.spp);
+  const adaptive = !!(s.quality && s.quality.adaptive);
+  setHud("hud-spp", adaptive ? `${s.spp} (mean)` : String(s.spp), s.spp);
+  showSpread(adaptive ? s : null);
   setHud("hud-sps", `${fmtRate(s.samples_per_sec)}`, s.samples_per_sec);
   setHud("hud-error", s.error_estimate == null ? "–" : `${(100 * s.error_estimate).toPrecision(3)} %`, s.error_estimate);
   setHud("hud-elapsed", fmtTime(s.elapsed_ms), s.elapsed_ms);
   setHud("hud-res", `${s.width} × ${s.height}`);
   setHud("hud-device", `${s.backend}: ${s.device}`);
+}
+
+/** The adaptive rows: the spread (hidden when `s` is null or from a server
+ *  without it) and the tiles done (only with an error target). */
+function showSpread(s) {
+  const spread = s && s.spp_spread;
+  $("hud-spread-row").hidden = !spread;
+  if (spread) {
+    setHud("hud-spread", `${spread.min} / ${spread.median} / ${spread.max}`, `${spread.min},${spread.median},${spread.max}`);
+    Object.assign($("hud-spread").dataset, { min: spread.min, median: spread.median, max: spread.max });
+  }
+  const tiles = !!spread && s.quality.target_error != null && s.tiles > 0;
+  $("hud-tiles-row").hidden = !tiles;
+  if (tiles) setHud("hud-tiles", `${s.tiles_done} / ${s.tiles}`, s.tiles_done);
 }
 
 on("status", showStatus);

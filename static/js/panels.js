@@ -14,7 +14,7 @@ import { same } from "./vec.js";
 // may be needed first).
 let presets = null;
 let presetsLoading = false;
-const PRESET_KNOBS = ["max_depth", "rr_depth", "nee", "filter", "clamp"];
+const PRESET_KNOBS = ["max_depth", "rr_depth", "nee", "filter", "clamp", "adaptive"];
 
 export async function loadPresets() {
   if (presets || presetsLoading) return;
@@ -37,9 +37,10 @@ export async function loadPresets() {
   }
 }
 
-/** The preset whose knobs `q` has, or "" (custom). */
+/** The preset whose knobs `q` has, or "" (custom). A knob the server does
+ *  not list for its presets is not compared. */
 export function presetOf(q) {
-  const p = (presets || []).find((p) => PRESET_KNOBS.every((k) => same(p.quality[k], q[k])));
+  const p = (presets || []).find((p) => PRESET_KNOBS.every((k) => !(k in p.quality) || same(p.quality[k], q[k])));
   return p ? p.name : "";
 }
 
@@ -67,6 +68,8 @@ function fillQuality(q) {
   set("q-max-depth", q.max_depth);
   set("q-rr-depth", q.rr_depth);
   set("q-nee", q.nee);
+  set("q-adaptive", q.adaptive);
+  $("q-adaptive").disabled = !("adaptive" in q); // a server without adaptive sampling
   set("q-filter", q.filter);
   set("q-clamp", q.clamp);
   set("q-spp", q.spp);

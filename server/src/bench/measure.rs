@@ -74,17 +74,25 @@ pub fn trace(
     backend.prepare(&job)?;
     let mut film = Film::new(width, height);
     let budget = Duration::from_secs_f64(seconds);
+    let pixels = u64::from(width) * u64::from(height);
+    // No spp halt: an adaptive render spends as long as it is given.
+    let endless = Quality {
+        spp: Some(u64::MAX),
+        time_ms: None,
+        target_error: None,
+        ..q
+    };
     let mut rendering = Duration::ZERO;
     let mut points = Vec::new();
-    let mut count = 1u64;
+    let mut paths = pixels;
     loop {
         let start = Instant::now();
-        backend.render(&job, &mut film, count)?;
+        progressive::step(&job, backend, &mut film, &endless, paths)?;
         rendering += start.elapsed();
         let error = relative_rms_error(&film.mean(), reference.0);
         points.push(TracePoint {
             seconds: rendering.as_secs_f64(),
-            spp: film.spp(),
+            spp: film.mean_spp(),
             true_error: corrected(error, reference.1),
             estimate: film.error_estimate(),
         });
@@ -92,15 +100,16 @@ pub fn trace(
             return Ok(points);
         }
         // Next checkpoint at 1.5x the samples, but not far past the budget.
-        let per_spp = rendering.as_secs_f64() / film.spp() as f64;
+        let taken = film.total_samples();
+        let per_path = rendering.as_secs_f64() / taken as f64;
         let left = (budget - rendering).as_secs_f64();
-        let wanted = (film.spp() / 2).max(1);
-        let fits = if per_spp > 0.0 {
-            (left / per_spp).ceil() as u64
+        let wanted = (taken / 2).max(pixels);
+        let fits = if per_path > 0.0 {
+            (left / per_path).ceil() as u64
         } else {
             wanted
         };
-        count = wanted.min(fits).max(1);
+        paths = wanted.min(fits).max(1);
     }
 }
 

@@ -11,6 +11,7 @@
 //! [`run`] measures what a [`Config`] asks for and returns [`Results`]; it
 //! draws nothing itself and tells an [`Observer`] what it is doing.
 
+pub mod adaptive;
 pub mod cache;
 pub mod fit;
 pub mod measure;
@@ -39,6 +40,8 @@ pub struct Sections {
     pub specialisation: bool,
     /// BVH build, rays/s and paths/s on generated meshes.
     pub meshes: bool,
+    /// Uniform vs adaptive sampling: time to 5%, 2%, 1% on every scene.
+    pub adaptive: bool,
 }
 
 impl Sections {
@@ -48,6 +51,7 @@ impl Sections {
         calibration: true,
         specialisation: true,
         meshes: true,
+        adaptive: true,
     };
 }
 
@@ -66,6 +70,8 @@ pub struct Config {
     pub trade_size: (u32, u32),
     /// Rendering time per setting.
     pub trade_seconds: f64,
+    /// Scenes of the adaptive section (at the trade size and time).
+    pub adaptive_scenes: Vec<String>,
     /// References are rendered until their error estimate is this low...
     pub reference_error: f64,
     /// ...or for this long.
@@ -99,6 +105,16 @@ impl Config {
             trade_scenes: ["cornell", "cornell-glass", "smallpt"]
                 .map(String::from)
                 .to_vec(),
+            adaptive_scenes: [
+                "cornell",
+                "cornell-glass",
+                "cornell-quads",
+                "smallpt",
+                "furnace",
+                adaptive::MESH_SCENE,
+            ]
+            .map(String::from)
+            .to_vec(),
             trade_size: (64, 64),
             trade_seconds: 10.0,
             reference_error: 0.0025,
@@ -117,6 +133,7 @@ impl Config {
             throughput_sizes: vec![(64, 64), (192, 108)],
             throughput_seconds: 0.1,
             trade_scenes: vec!["cornell".into()],
+            adaptive_scenes: vec!["cornell".into()],
             trade_size: (16, 16),
             trade_seconds: 0.15,
             reference_error: 0.03,
@@ -204,6 +221,9 @@ pub struct Results {
     pub references: Vec<(ReferenceInfo, bool)>,
     pub trade: Vec<TradeCurve>,
     pub calibration: Vec<CalibrationRow>,
+    /// The adaptive section: per scene and backend, the uniform curve then
+    /// the adaptive one.
+    pub adaptive: Vec<TradeCurve>,
     pub specialisation: Vec<SpecialisationRow>,
     pub meshes: Vec<meshes::MeshRow>,
 }

@@ -28,7 +28,7 @@ fn secs(s: f64) -> String {
     }
 }
 
-fn reach(r: Reach) -> String {
+pub(super) fn reach(r: Reach) -> String {
     match r {
         Reach::Measured(s) => secs(s),
         Reach::Extrapolated(s) => format!("~{}", secs(s)),
@@ -53,6 +53,7 @@ pub fn markdown(r: &Results) -> String {
     let _ = writeln!(w, "- Date: {}; renderer {}\n", r.date, r.renderer_version);
     throughput(w, r);
     trade(w, r);
+    super::adaptive::markdown(w, r);
     calibration(w, r);
     specialisation(w, r);
     meshes(w, r);

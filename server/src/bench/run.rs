@@ -4,14 +4,18 @@
 use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
 use super::settings::{self, Setting};
 use super::{
-    fit, measure, report, BenchError, CalibrationRow, Config, Observer, Results, SpecialisationRow,
-    ThroughputRow, TradeCurve,
+    adaptive, fit, measure, report, BenchError, CalibrationRow, Config, Observer, Results,
+    SpecialisationRow, ThroughputRow, TradeCurve,
 };
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use crate::render::{Backend, BackendChoice, Quality, RenderJob, Scene};
 
 fn load_scene(name: &str) -> Result<Scene, BenchError> {
-    Scene::load(name).map_err(|e| BenchError::Usage(format!("--scenes {name}: {e}")))
+    let scene = match name {
+        adaptive::MESH_SCENE => adaptive::mesh_scene(),
+        _ => Scene::load(name),
+    };
+    scene.map_err(|e| BenchError::Usage(format!("--scenes {name}: {e}")))
 }
 
 /// Opens the configured backends; an OpenCL one that cannot start is left
@@ -45,6 +49,10 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     };
     let throughput_scenes = load(&config.throughput_scenes)?;
     let trade_scenes = load(&config.trade_scenes)?;
+    let adaptive_scenes = match s_adaptive(config) {
+        true => load(&config.adaptive_scenes)?,
+        false => Vec::new(),
+    };
     let backends = open_backends(config, observer)?;
     let s = config.sections;
     let settings: Vec<Setting> = if s.trade {
@@ -59,6 +67,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         .iter()
         .filter(|b| matches!(b, Backend::OpenCl { .. }))
         .count() as u64;
+    let na = adaptive_scenes.len() as u64;
     let (nb, nt, nr) = (
         backends.len() as u64,
         throughput_scenes.len() as u64,
@@ -69,7 +78,8 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         u64::from(s.throughput) * nb * nt * config.throughput_sizes.len() as u64
             + u64::from(traced) * nr * (1 + nb * settings.len() as u64)
             + u64::from(s.specialisation) * opencl_count * nt * 2
-            + u64::from(s.meshes) * config.mesh_sizes.len() as u64,
+            + u64::from(s.meshes) * config.mesh_sizes.len() as u64
+            + na * (1 + nb * 2),
     );
 
     let results = Results {
@@ -101,6 +111,9 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
             work.results.calibration.clear();
         }
     }
+    if s.adaptive {
+        work.adaptive(&adaptive_scenes)?;
+    }
     if s.specialisation {
         work.specialisation(&throughput_scenes)?;
     }
@@ -108,6 +121,10 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         work.meshes()?;
     }
     Ok(work.results)
+}
+
+fn s_adaptive(config: &Config) -> bool {
+    config.sections.adaptive
 }
 
 /// Scenes by name.
@@ -171,61 +188,100 @@ impl Work<'_> {
     /// Every setting's trace on every backend, against each scene's reference;
     /// the unbiased setting's traces also go to the calibration.
     fn trade(&mut self, scenes: &Scenes, settings: &[Setting]) -> Result<(), BenchError> {
-        let (config, observer, results, backends) = (
-            self.config,
-            &mut *self.observer,
-            &mut self.results,
-            &mut self.backends,
-        );
         for (name, scene) in scenes {
-            observer.step(&format!(
-                "reference {name} {}x{}",
-                config.trade_size.0, config.trade_size.1
-            ));
-            let reference = reference(config, backends, name, scene, observer)?;
-            results
-                .references
-                .push((reference.info.clone(), reference.cached));
-            let reference_error = reference.info.error_estimate;
-            for backend in backends.iter_mut() {
+            let reference = self.reference(name, scene)?;
+            for b in 0..self.backends.len() {
                 for setting in settings {
-                    observer.step(&format!(
-                        "trade {name}: {} on {}",
-                        setting.label,
-                        backend.name()
-                    ));
-                    let points = measure::trace(
-                        backend,
-                        scene,
-                        config.trade_size,
-                        &setting.quality,
-                        (&reference.pixels, reference_error),
-                        config.trade_seconds,
-                    )?;
-                    if setting.quality == settings::unbiased() {
-                        results.calibration.push(CalibrationRow {
-                            backend: backend.name().into(),
-                            scene: name.clone(),
-                            calibration: fit::calibration(
-                                &points,
-                                reference_error,
-                                MIN_SPP_FOR_TARGET_ERROR,
-                            ),
-                            points: points.clone(),
-                            reference_error,
-                        });
-                    }
-                    results.trade.push(TradeCurve {
-                        backend: backend.name().into(),
-                        scene: name.clone(),
-                        setting: setting.clone(),
-                        fit: fit::fit(&points),
-                        points,
-                    });
+                    let curve = self.curve(b, name, scene, setting, &reference)?;
+                    self.results.trade.push(curve);
                 }
             }
         }
         Ok(())
+    }
+
+    /// The unbiased setting, uniform then adaptive, on every scene and
+    /// backend; the adaptive traces also go to the calibration (as
+    /// "scene (adaptive)").
+    fn adaptive(&mut self, scenes: &Scenes) -> Result<(), BenchError> {
+        for (name, scene) in scenes {
+            let reference = self.reference(name, scene)?;
+            for b in 0..self.backends.len() {
+                for setting in adaptive::pair() {
+                    let curve = self.curve(b, name, scene, &setting, &reference)?;
+                    self.results.adaptive.push(curve);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `name`'s reference (cached or rendered), recorded once in the results.
+    fn reference(&mut self, name: &str, scene: &Scene) -> Result<Reference, BenchError> {
+        let (w, h) = self.config.trade_size;
+        self.observer.step(&format!("reference {name} {w}x{h}"));
+        let r = reference(self.config, &mut self.backends, name, scene, self.observer)?;
+        if !self.results.references.iter().any(|(i, _)| i.scene == name) {
+            self.results.references.push((r.info.clone(), r.cached));
+        }
+        Ok(r)
+    }
+
+    /// `setting`'s error against time on backend `b`; the unbiased
+    /// setting's (uniform or adaptive) also goes to the calibration.
+    fn curve(
+        &mut self,
+        b: usize,
+        name: &str,
+        scene: &Scene,
+        setting: &Setting,
+        reference: &Reference,
+    ) -> Result<TradeCurve, BenchError> {
+        let config = self.config;
+        let backend = &mut self.backends[b];
+        self.observer.step(&format!(
+            "trade {name}: {} on {}",
+            setting.label,
+            backend.name()
+        ));
+        let reference_error = reference.info.error_estimate;
+        let points = measure::trace(
+            backend,
+            scene,
+            config.trade_size,
+            &setting.quality,
+            (&reference.pixels, reference_error),
+            config.trade_seconds,
+        )?;
+        let q = setting.quality;
+        if (Quality {
+            adaptive: false,
+            ..q
+        }) == settings::unbiased()
+        {
+            let calibrated = match q.adaptive {
+                true => format!("{name} (adaptive)"),
+                false => name.to_owned(),
+            };
+            let row = CalibrationRow {
+                backend: backend.name().into(),
+                scene: calibrated,
+                calibration: fit::calibration(&points, reference_error, MIN_SPP_FOR_TARGET_ERROR),
+                points: points.clone(),
+                reference_error,
+            };
+            let known = |r: &CalibrationRow| r.backend == row.backend && r.scene == row.scene;
+            if !self.results.calibration.iter().any(known) {
+                self.results.calibration.push(row);
+            }
+        }
+        Ok(TradeCurve {
+            backend: backend.name().into(),
+            scene: name.to_owned(),
+            setting: setting.clone(),
+            fit: fit::fit(&points),
+            points,
+        })
     }
 
     /// Each OpenCL backend's throughput with the scene-specialised program and

@@ -14,7 +14,10 @@ pub struct Setting {
 
 /// The unbiased setting the references and the calibration use.
 pub fn unbiased() -> Quality {
-    Preset::Reference.apply(Quality::default())
+    Quality {
+        adaptive: false,
+        ..Preset::Reference.apply(Quality::default())
+    }
 }
 
 /// Every setting, each quality once (a preset equal to a knob setting

@@ -22,6 +22,8 @@ pub enum SectionArg {
     Specialisation,
     /// Meshes: BVH build time and memory, rays/s, paths/s (CPU and OpenCL), upload time.
     Meshes,
+    /// Uniform vs adaptive sampling: time to 5/2/1% error on every built-in scene and a mesh scene.
+    Adaptive,
 }
 
 #[derive(clap::Args, Debug)]
@@ -141,11 +143,13 @@ impl BenchArgs {
                 calibration: has(SectionArg::Calibration),
                 specialisation: has(SectionArg::Specialisation),
                 meshes: has(SectionArg::Meshes),
+                adaptive: has(SectionArg::Adaptive),
             };
         }
         if !self.scenes.is_empty() {
             c.throughput_scenes = self.scenes.clone();
             c.trade_scenes = self.scenes.clone();
+            c.adaptive_scenes = self.scenes.clone();
         }
         if let Some(dir) = &self.cache {
             c.cache_dir = dir.clone();

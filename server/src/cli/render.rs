@@ -78,6 +78,11 @@ pub struct RenderArgs {
     /// Largest radiance of one sample; 0 = off (biased; removes fireflies) [default: 0].
     #[arg(long, value_name = "C")]
     clamp: Option<f32>,
+    /// Adaptive sampling: after 16 uniform samples, samples go to the tiles
+    /// with the most error; --spp is then the mean [default: on with the
+    /// final and reference presets, else off].
+    #[arg(long, value_enum)]
+    adaptive: Option<Switch>,
     /// Random seed; the same seed and sample count give the same image.
     #[arg(long, value_name = "S", default_value_t = 0)]
     seed: u64,
@@ -118,6 +123,7 @@ impl RenderArgs {
                 FilterArg::Box => Filter::Box,
             }),
             clamp: self.clamp.unwrap_or(q.clamp),
+            adaptive: self.adaptive.map_or(q.adaptive, |a| a == Switch::On),
             ..q
         }
     }
@@ -188,12 +194,22 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     } else {
         String::new()
     };
+    let spp = match quality.adaptive {
+        true => format!(
+            "{} spp (adaptive: min {}, median {}, max {}; {} rounds)",
+            done.spp,
+            done.spread.min,
+            done.spread.median,
+            done.spread.max,
+            film.rounds()
+        ),
+        false => format!("{} spp", done.spp),
+    };
     println!(
-        "{} {}x{}: {} spp in {:.2} s, {:.2} M paths/s, error estimate {}, backend {} ({}){} -> {}",
+        "{} {}x{}: {spp} in {:.2} s, {:.2} M paths/s, error estimate {}, backend {} ({}){} -> {}",
         args.scene,
         args.width,
         args.height,
-        done.spp,
         done.elapsed.as_secs_f64(),
         done.samples_per_sec / 1e6,
         percent(done.error_estimate),

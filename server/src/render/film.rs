@@ -2,7 +2,8 @@
 //! indices), and the error estimate they give.
 //!
 //! Every pixel holds the same number of samples, indices 0..spp, added in
-//! index order; sums are f64 so a pixel keeps its value to ~1e-12 relative
+//! index order, until adaptive sampling ([`crate::render::adaptive`])
+//! gives each tile a count of its own; sums are f64 so a pixel keeps its value to ~1e-12 relative
 //! after 1e8 samples, and the order of additions (hence the image, bit for
 //! bit) does not depend on how samples were split into passes or threads.
 //! Non-finite samples are rejected, counted, and contribute nothing.
@@ -19,6 +20,7 @@
 //! over all pixels and channels, the same measure as [`relative_rms_error`]
 //! against a reference.
 
+use crate::render::adaptive::{self, Goal, TileError, TileState, TileWork, Tiles};
 use crate::render::math::{is_finite3, Vec3A};
 
 /// Sums of one pixel.
@@ -59,6 +61,17 @@ pub struct Film {
     next: usize,
     /// Rejections among those pixels, counted when the sample completes.
     partial_rejected: u64,
+    tiles: Tiles,
+    /// Adaptive sampling's counts and round (empty until its first round).
+    adaptive: TileState,
+}
+
+/// The spread of samples per pixel over a film's pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SppSpread {
+    pub min: u64,
+    pub median: u64,
+    pub max: u64,
 }
 
 impl Film {
@@ -71,6 +84,8 @@ impl Film {
             rejected: 0,
             next: 0,
             partial_rejected: 0,
+            tiles: Tiles::new(width, height),
+            adaptive: TileState::default(),
         }
     }
 
@@ -82,9 +97,165 @@ impl Film {
         self.height
     }
 
-    /// Samples per pixel accumulated so far.
+    /// Samples per pixel every pixel holds (once adaptive rounds begin,
+    /// those of the warm-up; tiles hold more).
     pub fn spp(&self) -> u64 {
         self.spp
+    }
+
+    /// Samples pixel `i` (row-major) holds.
+    pub fn pixel_spp(&self, i: usize) -> u64 {
+        let w = self.width as usize;
+        self.spp + u64::from(i < self.next) + self.extra_at((i % w) as u32, (i / w) as u32)
+    }
+
+    /// Adaptive samples of pixel (x, y) beyond the uniform ones.
+    fn extra_at(&self, x: u32, y: u32) -> u64 {
+        match self.adaptive.started() {
+            true => self.adaptive.extra[self.tiles.at(x, y)],
+            false => 0,
+        }
+    }
+
+    /// Samples per pixel of tile `t` (whole samples only).
+    pub fn tile_spp(&self, t: usize) -> u64 {
+        self.spp + self.adaptive.extra.get(t).copied().unwrap_or(0)
+    }
+
+    /// The film's tiles (adaptive sampling's unit).
+    pub fn tiles(&self) -> &Tiles {
+        &self.tiles
+    }
+
+    /// Camera paths the film holds (all pixels' samples).
+    pub fn total_samples(&self) -> u64 {
+        let uniform = self.spp * self.pixels.len() as u64 + self.next as u64;
+        let extra: u64 = (self.adaptive.extra.iter().enumerate())
+            .map(|(t, n)| n * self.tiles.pixels(t))
+            .sum();
+        uniform + extra
+    }
+
+    /// Mean samples per pixel, rounded down (equal to [`Film::spp`] until
+    /// adaptive rounds begin).
+    pub fn mean_spp(&self) -> u64 {
+        self.total_samples() / (self.pixels.len() as u64).max(1)
+    }
+
+    /// The least, median and most samples a pixel holds.
+    pub fn spp_spread(&self) -> SppSpread {
+        if !self.adaptive.started() {
+            let top = self.spp + u64::from(self.next > 0);
+            let median = self.pixel_spp(self.pixels.len() / 2);
+            return SppSpread {
+                min: self.spp,
+                median: if self.next > 0 { median } else { self.spp },
+                max: top,
+            };
+        }
+        let mut counts: Vec<(u64, u64)> = (0..self.tiles.count())
+            .map(|t| (self.tile_spp(t), self.tiles.pixels(t)))
+            .collect();
+        counts.sort_unstable();
+        let half = self.pixels.len() as u64 / 2;
+        let mut seen = 0;
+        let median = counts
+            .iter()
+            .find(|(_, p)| {
+                seen += p;
+                seen > half
+            })
+            .map_or(0, |c| c.0);
+        SppSpread {
+            min: counts.first().map_or(0, |c| c.0),
+            median,
+            max: counts.last().map_or(0, |c| c.0),
+        }
+    }
+
+    /// Whether adaptive rounds have begun.
+    pub fn adaptive_started(&self) -> bool {
+        self.adaptive.started()
+    }
+
+    /// Whether every tile reached its share of the target error.
+    pub fn converged(&self) -> bool {
+        self.adaptive.started() && self.adaptive.done.iter().all(|&d| d)
+    }
+
+    /// Which tiles reached their share of the target error.
+    pub fn tiles_done(&self) -> &[bool] {
+        &self.adaptive.done
+    }
+
+    /// Adaptive rounds planned so far.
+    pub fn rounds(&self) -> u64 {
+        self.adaptive.rounds
+    }
+
+    /// The next adaptive work for `goal`: the front of the current round,
+    /// at most `max_paths` camera paths (at least one sample of one tile),
+    /// planning a round first when none is in progress. Empty when there
+    /// is nothing left to do. Starts rounds on a film of whole samples.
+    pub fn adaptive_work(&mut self, goal: Goal, max_paths: u64) -> Vec<TileWork> {
+        self.adaptive_round(goal);
+        self.adaptive.round.front(&self.tiles, max_paths)
+    }
+
+    /// Plans the next adaptive round for `goal` if none is in progress;
+    /// whether there is work left (false: every tile is done, or the
+    /// budget spent).
+    pub fn adaptive_round(&mut self, goal: Goal) -> bool {
+        debug_assert_eq!(self.next, 0, "adaptive rounds start on whole samples");
+        if !self.adaptive.started() {
+            self.adaptive.extra = vec![0; self.tiles.count()];
+            self.adaptive.done = vec![false; self.tiles.count()];
+        }
+        if self.adaptive.round.is_empty() {
+            let counts: Vec<u64> = (0..self.tiles.count()).map(|t| self.tile_spp(t)).collect();
+            let errors = self.tile_errors();
+            let taken = self.total_samples();
+            let done = &mut self.adaptive.done;
+            let round = adaptive::plan_round(&self.tiles, &counts, &errors, done, goal, taken);
+            if !round.is_empty() {
+                self.adaptive.rounds += 1;
+            }
+            self.adaptive.round = adaptive::Round::new(round);
+        }
+        !self.adaptive.round.is_empty()
+    }
+
+    /// Records that `work` (what [`Film::adaptive_work`] returned) was
+    /// added, `rejected` samples of it refused.
+    pub fn commit_tiles(&mut self, work: &[TileWork], rejected: u64) {
+        self.adaptive.commit(work);
+        self.rejected += rejected;
+    }
+
+    /// Each tile's estimated squared error and squared signal.
+    pub fn tile_errors(&self) -> Vec<TileError> {
+        let mut out = vec![TileError::default(); self.tiles.count()];
+        self.for_each_pixel(|x, y, p, f| {
+            let t = &mut out[self.tiles.at(x, y)];
+            let (e, s) = f.error(p);
+            t.err2 += e;
+            t.sig2 += s;
+        });
+        out
+    }
+
+    /// Calls `visit(x, y, sums, factors)` for every pixel, row by row.
+    fn for_each_pixel(&self, mut visit: impl FnMut(u32, u32, &PixelSums, &Factors)) {
+        let w = self.width as usize;
+        let mut cached = Factors::of(0);
+        for (i, p) in self.pixels.iter().enumerate() {
+            let (x, y) = ((i % w) as u32, (i / w) as u32);
+            let n = self.spp + u64::from(i < self.next) + self.extra_at(x, y);
+            if n != cached.n {
+                cached = Factors::of(n);
+            }
+            visit(x, y, p, &cached);
+        }
     }
 
     /// Samples rejected as NaN or infinite.
@@ -94,11 +265,7 @@ impl Film {
 
     /// Starts again from sample 0.
     pub fn clear(&mut self) {
-        self.pixels.fill(PixelSums::default());
-        self.spp = 0;
-        self.rejected = 0;
-        self.next = 0;
-        self.partial_rejected = 0;
+        *self = Film::new(self.width, self.height);
     }
 
     /// Pixels `0..n` already hold sample `spp` (0 when no sample is in
@@ -140,22 +307,23 @@ impl Film {
             self.next, 0,
             "whole samples added while a slice is in progress"
         );
+        debug_assert!(
+            !self.adaptive.started(),
+            "uniform samples after adaptive rounds"
+        );
         self.spp += count;
         self.rejected += rejected;
     }
 
-    /// Mean radiance per pixel, row-major, top row first.
+    /// Mean radiance per pixel (of its own samples), row-major, top row first.
     pub fn mean(&self) -> Vec<[f32; 3]> {
-        let inv = |n: u64| if n == 0 { 0.0 } else { 1.0 / n as f64 };
-        let (inv_spp, inv_next) = (inv(self.spp), inv(self.spp + 1));
-        self.pixels
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let k = if i < self.next { inv_next } else { inv_spp };
-                std::array::from_fn(|c| ((p.even[c] + p.odd[c]) * k) as f32)
-            })
-            .collect()
+        let mut out = Vec::with_capacity(self.pixels.len());
+        self.for_each_pixel(|_, _, p, f| {
+            out.push(std::array::from_fn(|c| {
+                ((p.even[c] + p.odd[c]) * f.inv_n) as f32
+            }))
+        });
+        out
     }
 
     /// Estimated relative RMS error of [`Film::mean`]; None below 2 spp.
@@ -163,23 +331,54 @@ impl Film {
         if self.spp < 2 {
             return None;
         }
-        // (n_even, n_odd, n_even n_odd / n^2, n) for n samples.
-        let factors = |n: u64| {
-            let (e, o, n) = (n.div_ceil(2) as f64, (n / 2) as f64, n as f64);
-            (e, o, e * o / (n * n), n)
-        };
-        let (whole, plus_one) = (factors(self.spp), factors(self.spp + 1));
         let (mut err2, mut sig2) = (0.0f64, 0.0f64);
-        for (i, p) in self.pixels.iter().enumerate() {
-            let (n_even, n_odd, scale, n) = if i < self.next { plus_one } else { whole };
-            for c in 0..3 {
-                let d = p.even[c] / n_even - p.odd[c] / n_odd;
-                let m = (p.even[c] + p.odd[c]) / n;
-                err2 += d * d * scale;
-                sig2 += m * m;
-            }
-        }
+        self.for_each_pixel(|_, _, p, f| {
+            let (e, s) = f.error(p);
+            err2 += e;
+            sig2 += s;
+        });
         Some(relative(err2, sig2))
+    }
+}
+
+/// What a pixel of n samples divides by: n_even and n_odd samples, and
+/// n_even n_odd / n^2 (see the module's note on the estimate).
+#[derive(Clone, Copy, Debug)]
+struct Factors {
+    n: u64,
+    inv_n: f64,
+    n_even: f64,
+    n_odd: f64,
+    scale: f64,
+}
+
+impl Factors {
+    fn of(n: u64) -> Self {
+        let (e, o, nf) = (n.div_ceil(2) as f64, (n / 2) as f64, n as f64);
+        Self {
+            n,
+            inv_n: if n == 0 { 0.0 } else { 1.0 / nf },
+            n_even: e,
+            n_odd: o,
+            scale: if n == 0 { 0.0 } else { e * o / (nf * nf) },
+        }
+    }
+
+    /// The pixel's estimated squared error and squared mean, summed over
+    /// channels (zero below two samples).
+    #[inline]
+    fn error(&self, p: &PixelSums) -> (f64, f64) {
+        if self.n < 2 {
+            return (0.0, 0.0);
+        }
+        let (mut err2, mut sig2) = (0.0, 0.0);
+        for c in 0..3 {
+            let d = p.even[c] / self.n_even - p.odd[c] / self.n_odd;
+            let m = (p.even[c] + p.odd[c]) * self.inv_n;
+            err2 += d * d * self.scale;
+            sig2 += m * m;
+        }
+        (err2, sig2)
     }
 }
 

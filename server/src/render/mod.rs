@@ -9,6 +9,7 @@
 //! - `quality`, `preset`, `job`, `progressive`, `backend`: what to render and where
 //! - `isa`: the instruction sets the CPU hot path is compiled for
 
+pub mod adaptive;
 pub mod backend;
 pub mod bvh;
 pub mod camera;

@@ -2,7 +2,10 @@
 //! the best trade for a purpose (docs/BENCHMARKS.md has the figures).
 //!
 //! A preset sets the path knobs (`max_depth`, `rr_depth`, `nee`, `filter`,
-//! `clamp`); it leaves the seed and the halt conditions alone. Settings given
+//! `clamp`) and `adaptive` (on for the finished images of `final` and
+//! `reference`, whose error is uneven over the image; off for the quick
+//! looks, which are restarted long before a warm-up ends); it leaves the
+//! seed and the halt conditions alone. Settings given
 //! next to a preset override it: `--preset preview --max-depth 4`, or
 //! `{"preset": "preview", "max_depth": 4}` in the API.
 
@@ -54,18 +57,18 @@ impl Preset {
         match self {
             Preset::Preview => "framing a shot: 2 bounces, RR from bounce 1, NEE (fastest; glass and caustics dark)",
             Preset::Interactive => "moving camera or light: 4 bounces, RR from bounce 1, NEE (a few % bias on glass)",
-            Preset::Final => "a finished image: unbounded, RR from bounce 1, NEE (unbiased; soonest to 1%)",
-            Preset::Reference => "ground truth: unbounded, RR from bounce 5, NEE (unbiased, most conservative)",
+            Preset::Final => "a finished image: unbounded, RR from bounce 1, NEE, adaptive (unbiased; soonest to 1%)",
+            Preset::Reference => "ground truth: unbounded, RR from bounce 5, NEE, adaptive (unbiased, most conservative)",
         }
     }
 
     /// `quality` with this preset's path knobs.
     pub fn apply(self, quality: Quality) -> Quality {
-        let (max_depth, rr_depth) = match self {
-            Preset::Preview => (2, 1),
-            Preset::Interactive => (4, 1),
-            Preset::Final => (0, 1),
-            Preset::Reference => (0, 5),
+        let (max_depth, rr_depth, adaptive) = match self {
+            Preset::Preview => (2, 1, false),
+            Preset::Interactive => (4, 1, false),
+            Preset::Final => (0, 1, true),
+            Preset::Reference => (0, 5, true),
         };
         Quality {
             max_depth,
@@ -73,6 +76,7 @@ impl Preset {
             nee: true,
             filter: Filter::Tent2x2,
             clamp: 0.0,
+            adaptive,
             ..quality
         }
     }

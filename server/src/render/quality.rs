@@ -2,7 +2,8 @@
 //!
 //! ```json
 //! {"max_depth": 6, "rr_depth": 5, "nee": true, "filter": "tent2x2",
-//!  "clamp": 0, "seed": 0, "spp": 256, "time_ms": null, "target_error": 0.02}
+//!  "clamp": 0, "seed": 0, "adaptive": false, "spp": 256, "time_ms": null,
+//!  "target_error": 0.02}
 //! ```
 //! Every field is optional (defaults below); unknown fields are refused.
 
@@ -26,7 +27,10 @@ pub struct Quality {
     /// Largest sample radiance (max component); 0 = off. Biased.
     pub clamp: f32,
     pub seed: u64,
-    /// Halt at this many samples per pixel.
+    /// Adaptive sampling: after a uniform warm-up, samples go to the tiles
+    /// with the most error (see [`crate::render::adaptive`]).
+    pub adaptive: bool,
+    /// Halt at this many samples per pixel (adaptive: on average).
     pub spp: Option<u64>,
     /// Halt after this much rendering time.
     pub time_ms: Option<u64>,
@@ -43,6 +47,7 @@ impl Default for Quality {
             filter: Filter::Tent2x2,
             clamp: 0.0,
             seed: 0,
+            adaptive: false,
             spp: None,
             time_ms: None,
             target_error: None,
@@ -97,6 +102,14 @@ impl Quality {
     /// Whether any halt condition is set.
     pub fn halts(&self) -> bool {
         self.spp.is_some() || self.time_ms.is_some() || self.target_error.is_some()
+    }
+
+    /// When an adaptive render stops, as its rounds see it.
+    pub fn goal(&self) -> crate::render::adaptive::Goal {
+        crate::render::adaptive::Goal {
+            target_error: self.target_error,
+            spp: self.spp,
+        }
     }
 
     pub fn path_settings(&self) -> PathSettings {

@@ -1,8 +1,10 @@
 //! A published image and its statistics: what a session's `watch` channel
 //! carries to the WebSocket streams and the frame endpoints.
 
+use super::density::Density;
 use super::error::ApiError;
 use super::stream::{downscale, StreamFormat, StreamSettings};
+use crate::render::film::SppSpread;
 use crate::render::output::{encode_jpeg, encode_pfm, encode_png};
 use crate::render::tonemap::Tonemap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -24,7 +26,11 @@ pub struct Frame {
     pub generation: u64,
     pub width: u32,
     pub height: u32,
+    /// Samples per pixel (adaptive: the mean).
     pub spp: u64,
+    pub spread: SppSpread,
+    /// Samples per tile (None before the first pass).
+    pub density: Option<Arc<Density>>,
     pub error_estimate: Option<f64>,
     pub samples_per_sec: f64,
     pub elapsed_ms: f64,
@@ -55,6 +61,8 @@ impl Frame {
             width,
             height,
             spp: 0,
+            spread: SppSpread::default(),
+            density: None,
             error_estimate: None,
             samples_per_sec: 0.0,
             elapsed_ms: 0.0,

@@ -7,6 +7,7 @@ mod assets_routes;
 mod auth;
 pub mod change;
 pub mod config;
+mod density;
 pub mod error;
 mod frame;
 mod guard;

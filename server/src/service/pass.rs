@@ -1,9 +1,11 @@
 //! What one pass of a session renders: whole samples of every pixel, or,
 //! where one sample of the image takes longer than a pass should, a slice
-//! of one sample. Either way a pass takes about [`PASS_TARGET`], so that a
+//! of one sample; after an adaptive render's warm-up, the next tiles of its
+//! round. Either way a pass takes about [`PASS_TARGET`], so that a
 //! worker's sessions share its device by time whatever their scenes cost.
 
-use crate::render::Film;
+use crate::render::adaptive::{TileWork, WARMUP_SPP};
+use crate::render::{Film, Quality};
 use std::ops::Range;
 use std::time::Duration;
 
@@ -27,6 +29,8 @@ pub enum Pass {
     Samples(u64),
     /// The film's next sample, for these pixels.
     Slice(Range<usize>),
+    /// Adaptive work (empty: the render has nothing left to do).
+    Tiles(Vec<TileWork>),
 }
 
 /// What the last pass measured.
@@ -50,9 +54,10 @@ impl Measured {
 }
 
 impl Pass {
-    /// The pass for `film`, given what the last pass measured (None before
-    /// the first) and the samples per pixel the session halts at.
-    pub fn plan(film: &Film, last: Option<Measured>, spp_target: Option<u64>) -> Pass {
+    /// The pass for `film` rendered with `quality`, given what the last
+    /// pass measured (None before the first). An adaptive render's next
+    /// round is planned here when the last one is done.
+    pub fn plan(film: &mut Film, last: Option<Measured>, quality: &Quality) -> Pass {
         let (start, pixels) = (film.slice_start(), film.pixels().len());
         let Some(last) = last else {
             return Pass::Slice(start..(start + FIRST_PATHS as usize).min(pixels));
@@ -60,11 +65,19 @@ impl Pass {
         let most_paths = last.paths.max(1).saturating_mul(GROWTH);
         let (target, p) = (PASS_TARGET.as_secs_f64(), last.per_sample.as_secs_f64());
         let wanted = if p > 0.0 { target / p } else { f64::INFINITY }; // samples
+        let adaptive = quality.adaptive && start == 0 && film.spp() >= WARMUP_SPP;
+        if adaptive {
+            let paths = (wanted * pixels as f64).min(most_paths as f64) as u64;
+            return Pass::Tiles(film.adaptive_work(quality.goal(), paths.max(1)));
+        }
         if start == 0 && wanted >= 1.0 && pixels as u64 <= most_paths {
             let mut count =
                 (wanted.min(MOST_SAMPLES as f64) as u64).min(most_paths / pixels as u64);
-            if let Some(n) = spp_target {
+            if let Some(n) = quality.spp {
                 count = count.min(n.saturating_sub(film.spp()));
+            }
+            if quality.adaptive {
+                count = count.min(WARMUP_SPP - film.spp());
             }
             return Pass::Samples(count.clamp(1, MOST_SAMPLES));
         }
@@ -77,6 +90,10 @@ impl Pass {
         match self {
             Pass::Samples(n) => n * film.pixels().len() as u64,
             Pass::Slice(r) => r.len() as u64,
+            Pass::Tiles(work) => work
+                .iter()
+                .map(|w| u64::from(w.count) * film.tiles().pixels(w.tile as usize))
+                .sum(),
         }
     }
 }
@@ -87,27 +104,37 @@ mod tests {
 
     const MS: Duration = Duration::from_millis(1);
 
+    fn spp(n: u64) -> Quality {
+        Quality {
+            spp: Some(n),
+            ..Quality::default()
+        }
+    }
+
     fn measured(per_sample: Duration, paths: u64) -> Option<Measured> {
         Some(Measured { per_sample, paths })
     }
 
     #[test]
     fn a_cheap_image_takes_whole_samples_for_the_pass_target() {
-        let film = Film::new(64, 64);
+        let mut film = Film::new(64, 64);
         let big = 1 << 40;
         assert_eq!(
-            Pass::plan(&film, measured(MS, big), None),
+            Pass::plan(&mut film, measured(MS, big), &Quality::default()),
             Pass::Samples(30)
         );
         assert_eq!(
-            Pass::plan(&film, measured(MS, big), Some(8)),
+            Pass::plan(&mut film, measured(MS, big), &spp(8)),
             Pass::Samples(8)
         );
         let free = measured(Duration::ZERO, big);
-        assert_eq!(Pass::plan(&film, free, None), Pass::Samples(MOST_SAMPLES));
+        assert_eq!(
+            Pass::plan(&mut film, free, &Quality::default()),
+            Pass::Samples(MOST_SAMPLES)
+        );
         // At most four times the last pass's paths.
         assert_eq!(
-            Pass::plan(&film, measured(MS, 4096 * 2), None),
+            Pass::plan(&mut film, measured(MS, 4096 * 2), &Quality::default()),
             Pass::Samples(8)
         );
     }
@@ -117,41 +144,59 @@ mod tests {
         let mut film = Film::new(100, 100);
         // 10,000 pixels in 300 ms: 1,000 pixels in 30 ms.
         let slow = measured(300 * MS, 1000);
-        assert_eq!(Pass::plan(&film, slow, None), Pass::Slice(0..1000));
+        assert_eq!(
+            Pass::plan(&mut film, slow, &Quality::default()),
+            Pass::Slice(0..1000)
+        );
         assert!(!film.commit_slice(1000, 0));
-        assert_eq!(Pass::plan(&film, slow, None), Pass::Slice(1000..2000));
+        assert_eq!(
+            Pass::plan(&mut film, slow, &Quality::default()),
+            Pass::Slice(1000..2000)
+        );
         // A slice in progress continues even if samples have become cheap,
         // growing at most fourfold, and stops at the last pixel.
         assert_eq!(
-            Pass::plan(&film, measured(MS, 1000), None),
+            Pass::plan(&mut film, measured(MS, 1000), &Quality::default()),
             Pass::Slice(1000..5000)
         );
         assert_eq!(
-            Pass::plan(&film, measured(MS, 1 << 20), None),
+            Pass::plan(&mut film, measured(MS, 1 << 20), &Quality::default()),
             Pass::Slice(1000..10_000)
         );
         // Never an empty slice, however slow.
         let glacial = measured(Duration::from_secs(1000), 1);
-        assert_eq!(Pass::plan(&film, glacial, None), Pass::Slice(1000..1001));
+        assert_eq!(
+            Pass::plan(&mut film, glacial, &Quality::default()),
+            Pass::Slice(1000..1001)
+        );
     }
 
     #[test]
     fn after_a_camera_change_the_first_pass_is_at_most_one_sample() {
-        let film = Film::new(64, 64);
+        let mut film = Film::new(64, 64);
         let m = measured(MS, 1 << 30).map(|m| m.after_change(4096));
-        assert_eq!(Pass::plan(&film, m, None), Pass::Samples(1));
+        assert_eq!(
+            Pass::plan(&mut film, m, &Quality::default()),
+            Pass::Samples(1)
+        );
         let slow = measured(300 * MS, 1 << 30).map(|m| m.after_change(4096));
-        assert_eq!(Pass::plan(&film, slow, None), Pass::Slice(0..409));
+        assert_eq!(
+            Pass::plan(&mut film, slow, &Quality::default()),
+            Pass::Slice(0..409)
+        );
     }
 
     #[test]
     fn the_first_pass_is_a_short_slice() {
-        let film = Film::new(1000, 1000);
+        let mut film = Film::new(1000, 1000);
         assert_eq!(
-            Pass::plan(&film, None, None),
+            Pass::plan(&mut film, None, &Quality::default()),
             Pass::Slice(0..FIRST_PATHS as usize)
         );
-        let tiny = Film::new(3, 3);
-        assert_eq!(Pass::plan(&tiny, None, None), Pass::Slice(0..9));
+        let mut tiny = Film::new(3, 3);
+        assert_eq!(
+            Pass::plan(&mut tiny, None, &Quality::default()),
+            Pass::Slice(0..9)
+        );
     }
 }

@@ -43,6 +43,7 @@ pub fn app(state: Arc<AppState>) -> Router {
         .route("/sessions/{id}/scene", put(put_scene))
         .route("/sessions/{id}/frame.png", get(frame_png))
         .route("/sessions/{id}/frame.pfm", get(frame_pfm))
+        .route("/sessions/{id}/samples.png", get(samples_png))
         .route("/sessions/{id}/ws", get(ws::upgrade))
         .merge(assets_routes::router(state.config.assets.max_asset_bytes))
         .fallback(api_not_found)
@@ -125,7 +126,7 @@ async fn presets() -> Json<Value> {
                 "name": p.name(),
                 "description": p.description(),
                 "quality": {"max_depth": q.max_depth, "rr_depth": q.rr_depth, "nee": q.nee,
-                            "filter": q.filter, "clamp": q.clamp},
+                            "filter": q.filter, "clamp": q.clamp, "adaptive": q.adaptive},
             })
         })
         .collect();
@@ -384,6 +385,33 @@ async fn frame_pfm(
         )],
         frame_headers(&frame),
         pfm,
+    )
+        .into_response())
+}
+
+/// Where the frame's samples went: one pixel per tile, from the fewest
+/// (dark blue) to the most (yellow) on a log scale, tiles at their share of
+/// the target error green (the page's overlay). Takes the frame routes'
+/// `?min_spp=N&timeout_ms=T`.
+async fn samples_png(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+    query: Result<Query<FrameQuery>, QueryRejection>,
+) -> AppResult<Response> {
+    let frame = wait_frame(&state, &id, query).await?;
+    // Before the first pass: every tile at 0 samples.
+    let density = frame
+        .density
+        .clone()
+        .unwrap_or_else(|| Arc::new(super::density::Density::empty(frame.width, frame.height)));
+    let png = tokio::task::spawn_blocking(move || density.png())
+        .await
+        .map_err(|e| ApiError::Internal(e.to_string()))?
+        .map_err(|e| ApiError::Internal(e.to_string()))?;
+    Ok((
+        [(header::CONTENT_TYPE.as_str(), "image/png".to_owned())],
+        frame_headers(&frame),
+        png,
     )
         .into_response())
 }

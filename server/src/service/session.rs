@@ -10,6 +10,7 @@ pub use super::frame::Frame;
 use super::metrics::Metrics;
 use super::pass::{Measured, Pass};
 use super::worker::{BackendInfo, Waker};
+use crate::render::film::SppSpread;
 use crate::render::progressive::{self, Progress};
 use crate::render::scene::LightInfo;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
@@ -72,7 +73,13 @@ pub struct Status {
     pub quality: Quality,
     /// `rendering` or `halted` (also after a device failure, see `failure`).
     pub state: &'static str,
+    /// Samples per pixel (adaptive: the mean, rounded down).
     pub spp: u64,
+    /// The least, median and most samples of a pixel.
+    pub spp_spread: SppSpread,
+    /// Adaptive tiles at their share of the target error, of `tiles`.
+    pub tiles_done: usize,
+    pub tiles: usize,
     pub error_estimate: Option<f64>,
     pub samples_per_sec: f64,
     pub elapsed_ms: f64,
@@ -193,6 +200,16 @@ impl Session {
             quality: st.quality,
             state: if st.halted { "halted" } else { "rendering" },
             spp: if current { frame.spp } else { 0 },
+            spp_spread: if current {
+                frame.spread
+            } else {
+                SppSpread::default()
+            },
+            tiles_done: match (&frame.density, current) {
+                (Some(d), true) => d.done.iter().filter(|&&d| d).count(),
+                _ => 0,
+            },
+            tiles: crate::render::adaptive::Tiles::new(st.width, st.height).count(),
             error_estimate: if current { frame.error_estimate } else { None },
             samples_per_sec: if current { frame.samples_per_sec } else { 0.0 },
             elapsed_ms: st.restarted.elapsed().as_secs_f64() * 1e3,
@@ -292,8 +309,10 @@ impl Session {
             if st.halted {
                 return;
             }
-            let Some(film) = st.film.take() else { return };
-            let pass = Pass::plan(&film, st.measured, st.quality.spp);
+            let Some(mut film) = st.film.take() else {
+                return;
+            };
+            let pass = Pass::plan(&mut film, st.measured, &st.quality);
             (st.job.clone(), film, st.generation, st.quality, pass)
         };
         let rejected_before = film.rejected();
@@ -303,7 +322,13 @@ impl Session {
         let result = backend.prepare(&job).and_then(|()| match pass.clone() {
             Pass::Samples(count) => backend.render_unless(&job, &mut film, count, &cancelled),
             Pass::Slice(range) => backend.render_slice(&job, &mut film, range.end, &cancelled),
+            Pass::Tiles(work) => backend.render_tiles(&job, &mut film, &work, &cancelled),
         });
+        // An adaptive render plans its next round now, so that the frame
+        // says whether it is done.
+        let finished_rounds = matches!(pass, Pass::Tiles(_))
+            && matches!(result, Ok(true))
+            && !film.adaptive_round(quality.goal());
         let took = start.elapsed();
         self.passes.fetch_add(1, Ordering::Relaxed);
         self.render_ns.fetch_add(
@@ -316,10 +341,11 @@ impl Session {
         let finished = matches!(result, Ok(true));
         // A slice that leaves its sample unfinished publishes no frame.
         let whole = finished && film.slice_start() == 0;
-        let (pixels, estimate) = if whole {
-            (film.mean(), film.error_estimate())
+        let (pixels, estimate, density) = if whole {
+            let density = Arc::new(super::density::Density::of(&film));
+            (film.mean(), film.error_estimate(), Some(density))
         } else {
-            (Vec::new(), None)
+            (Vec::new(), None, None)
         };
         let mut st = lock(&self.state);
         tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
@@ -353,13 +379,16 @@ impl Session {
             return;
         }
         let progress = Progress::with_estimate(&film, st.restarted.elapsed(), estimate);
-        st.halted = quality.halts() && progressive::halted(&quality, &progress);
+        st.halted =
+            finished_rounds || (quality.halts() && progressive::halted(&quality, &progress));
         let frame = Frame {
             seq: self.seq.fetch_add(1, Ordering::Relaxed),
             generation,
             width: film.width(),
             height: film.height(),
             spp: progress.spp,
+            spread: progress.spread,
+            density,
             error_estimate: progress.error_estimate,
             samples_per_sec: progress.samples_per_sec,
             elapsed_ms: progress.elapsed.as_secs_f64() * 1e3,
@@ -388,6 +417,8 @@ impl Session {
         );
         frame.halted = true;
         frame.spp = previous.spp;
+        frame.spread = previous.spread;
+        frame.density = previous.density.clone();
         frame.error_estimate = previous.error_estimate;
         frame.pixels = previous.pixels.clone();
         self.frames.send_replace(Arc::new(frame));

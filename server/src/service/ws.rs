@@ -57,6 +57,7 @@ fn stats(status: &Status, frame: &Frame, settings: StreamSettings, image: &Encod
         // The stats of the frame just sent, not of whatever came after it.
         if frame.generation == status.generation {
             m.insert("spp".into(), json!(frame.spp));
+            m.insert("spp_spread".into(), json!(frame.spread));
             m.insert("error_estimate".into(), json!(frame.error_estimate));
             m.insert("samples_per_sec".into(), json!(frame.samples_per_sec));
         }

@@ -87,8 +87,6 @@ pub struct Region {
 /// halves, (A - B)^2 nA nB / n^2; pixels are independent, so a region's is
 /// the sum over n_pixels^2.
 pub fn region(film: &Film, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -> Region {
-    let n = film.spp() as f64;
-    let (na, nb) = (film.spp().div_ceil(2) as f64, (film.spp() / 2) as f64);
     let w = film.width();
     let mut r = Region {
         mean: [0.0; 3],
@@ -97,7 +95,11 @@ pub fn region(film: &Film, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -
     let mut count = 0.0;
     for y in ys {
         for x in xs.clone() {
-            let p = film.pixels()[(y * w + x) as usize];
+            let i = (y * w + x) as usize;
+            // Each pixel's own samples (adaptive films give tiles more).
+            let spp = film.pixel_spp(i);
+            let (n, na, nb) = (spp as f64, spp.div_ceil(2) as f64, (spp / 2) as f64);
+            let p = film.pixels()[i];
             for c in 0..3 {
                 r.mean[c] += (p.even[c] + p.odd[c]) / n;
                 let d = p.even[c] / na - p.odd[c] / nb;

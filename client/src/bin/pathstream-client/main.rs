@@ -2,14 +2,16 @@
 //! Exit codes: 0 success, 2 bad arguments, 3 server error (message shown),
 //! 4 server unreachable.
 
+mod quality;
 mod scene;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
 use futures_util::StreamExt;
 use indicatif::{ProgressBar, ProgressStyle};
 use pathstream_client::{
     CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SessionStatus,
 };
+use quality::{spp_summary, QualityArgs};
 use scene::{scene_spec, upload};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -103,67 +105,6 @@ enum Command {
         #[arg(long)]
         out_dir: PathBuf,
     },
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum Switch {
-    On,
-    Off,
-}
-
-#[derive(Args, Debug, Default)]
-struct QualityArgs {
-    /// Halt at this many samples per pixel.
-    #[arg(long)]
-    spp: Option<u64>,
-    /// Halt after this many milliseconds.
-    #[arg(long)]
-    time_ms: Option<u64>,
-    /// Halt when the estimated relative error falls below this.
-    #[arg(long)]
-    target_error: Option<f64>,
-    /// Quality preset: preview, interactive, final or reference (the other
-    /// settings given override it).
-    #[arg(long, value_name = "NAME")]
-    preset: Option<String>,
-    /// Most bounces per path; 0 = unbounded.
-    #[arg(long)]
-    max_depth: Option<u32>,
-    /// Bounces after which Russian roulette may end paths.
-    #[arg(long)]
-    rr_depth: Option<u32>,
-    /// Next-event estimation.
-    #[arg(long, value_enum)]
-    nee: Option<Switch>,
-    /// Pixel filter: tent2x2 or box.
-    #[arg(long)]
-    filter: Option<String>,
-    /// Largest sample radiance; 0 = off.
-    #[arg(long)]
-    clamp: Option<f32>,
-    #[arg(long)]
-    seed: Option<u64>,
-}
-
-impl QualityArgs {
-    fn patch(&self) -> QualityPatch {
-        QualityPatch {
-            preset: self.preset.clone(),
-            max_depth: self.max_depth,
-            rr_depth: self.rr_depth,
-            nee: self.nee.map(|n| matches!(n, Switch::On)),
-            filter: self.filter.clone(),
-            clamp: self.clamp,
-            seed: self.seed,
-            spp: self.spp.map(Some),
-            time_ms: self.time_ms.map(Some),
-            target_error: self.target_error.map(Some),
-        }
-    }
-
-    fn halts(&self) -> bool {
-        self.spp.is_some() || self.time_ms.is_some() || self.target_error.is_some()
-    }
 }
 
 #[derive(Args, Debug)]
@@ -387,8 +328,14 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
         let status = loop {
             let s = client.session(&id).await?;
             bar.set_position(s.spp);
+            let spread = if s.quality.adaptive {
+                let p = s.spp_spread;
+                format!("  min/med/max {}/{}/{} spp", p.min, p.median, p.max)
+            } else {
+                String::new()
+            };
             bar.set_message(format!(
-                "error {}  {:.2} M paths/s",
+                "error {}  {:.2} M paths/s{spread}",
                 s.error_estimate
                     .map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),
                 s.samples_per_sec / 1e6
@@ -408,11 +355,11 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
         };
         write(&args.out, &bytes)?;
         println!(
-            "{} {}x{}: {} spp, error estimate {}, {:.2} M paths/s on {} ({}) -> {}",
+            "{} {}x{}: {}, error estimate {}, {:.2} M paths/s on {} ({}) -> {}",
             status.scene,
             status.width,
             status.height,
-            status.spp,
+            spp_summary(&status),
             status
                 .error_estimate
                 .map_or("n/a".into(), |e| format!("{:.2}%", e * 100.0)),

@@ -5,6 +5,7 @@
 //! latter is chosen at run time where the CPU has them. Both give the same
 //! image, bit for bit. Two samples of a pixel are traced side by side.
 
+use crate::render::adaptive::{TileWork, TILE_SIZE};
 use crate::render::film::{Film, PixelSums};
 #[cfg(target_arch = "x86_64")]
 use crate::render::isa::Avx2;
@@ -149,6 +150,70 @@ impl CpuBackend {
         match rejected {
             Some(r) => {
                 film.commit_slice(end, r);
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+impl CpuBackend {
+    /// Adds `work` (adaptive tiles, each from its own next sample on) to
+    /// `film`, the touched rows in parallel; gives up between rows once
+    /// `cancelled` says so (false then, and the film is thrown away).
+    pub fn render_tiles(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        work: &[TileWork],
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> bool {
+        let (Some(first), Some(last)) = (work.first(), work.last()) else {
+            return true;
+        };
+        let tiles = *film.tiles();
+        let width = film.width() as usize;
+        // Each entry with the sample its tile is at; entries by tile row.
+        let entries: Vec<(TileWork, u64)> = work
+            .iter()
+            .map(|w| (*w, film.tile_spp(w.tile as usize)))
+            .collect();
+        let row_of = |w: &TileWork| w.tile / tiles.cols;
+        let (y0, y1) = (
+            (row_of(first) * TILE_SIZE) as usize,
+            ((row_of(last) + 1) * TILE_SIZE).min(tiles.height) as usize,
+        );
+        let wide = if self.portable_only { None } else { wide_isa() };
+        let rows = |pixels: &mut [PixelSums]| -> Option<u64> {
+            pixels[y0 * width..y1 * width]
+                .par_chunks_mut(width)
+                .enumerate()
+                .map(|(k, row)| {
+                    if cancelled() {
+                        return None;
+                    }
+                    let y = y0 + k;
+                    let tile_row = y as u32 / TILE_SIZE;
+                    let from = entries.partition_point(|(w, _)| row_of(w) < tile_row);
+                    let to = entries.partition_point(|(w, _)| row_of(w) <= tile_row);
+                    let mut rejected = 0;
+                    for (w, at) in &entries[from..to] {
+                        let (xs, _) = tiles.rect(w.tile as usize);
+                        let (a, b) = (xs.start as usize, xs.end as usize);
+                        let samples = *at..at + u64::from(w.count);
+                        rejected += render_span(wide, job, y * width + a, &mut row[a..b], samples);
+                    }
+                    Some(rejected)
+                })
+                .sum()
+        };
+        let rejected = match &self.pool {
+            Some(pool) => pool.install(|| rows(film.pixels_mut())),
+            None => rows(film.pixels_mut()),
+        };
+        match rejected {
+            Some(r) => {
+                film.commit_tiles(work, r);
                 true
             }
             None => false,

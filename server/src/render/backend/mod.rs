@@ -12,6 +12,7 @@ mod priority;
 pub use cpu::{nearest_hits, CpuBackend};
 pub use opencl::{OpenClBackend, OpenClError};
 
+use crate::render::adaptive::TileWork;
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
 
@@ -164,6 +165,24 @@ impl Backend {
             film,
             |b, film| b.render_slice(job, film, end).map(|()| true),
             |c, film| c.render_slice(job, film, end, cancelled),
+        )
+    }
+
+    /// Adds adaptive `work` to `film` (see [`Film::adaptive_work`]).
+    /// Ok(false) when a CPU pass gave up for `cancelled`; the film must then
+    /// be thrown away. On failure the film is as it was before the call.
+    pub fn render_tiles(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        work: &[TileWork],
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, BackendError> {
+        self.run(
+            job,
+            film,
+            |b, film| b.render_tiles(job, film, work).map(|()| true),
+            |c, film| c.render_tiles(job, film, work, cancelled),
         )
     }
 

@@ -35,6 +35,9 @@ pub(super) struct LaunchArgs<'a> {
     pub count: cl_uint,
     pub pixel_base: cl_uint,
     pub pixel_end: cl_uint,
+    /// Adaptive work entries (unread when `mode` is `WORK_UNIFORM`).
+    pub work: &'a Buffer<[u32; 4]>,
+    pub mode: cl_uint,
 }
 
 /// What a device can hold: the largest buffer, and all buffers together.
@@ -151,6 +154,7 @@ impl SceneBuffers {
             (15, self.tris.get()),
             (16, self.normals.get()),
             (17, self.slots.get()),
+            (18, a.work.get()),
         ];
         // SAFETY: per the contract above, every index gets the type the
         // kernel declares there.
@@ -163,6 +167,7 @@ impl SceneBuffers {
             kernel.set_arg(7, &a.count).map_err(call("set_arg"))?;
             kernel.set_arg(8, &a.pixel_base).map_err(call("set_arg"))?;
             kernel.set_arg(9, &a.pixel_end).map_err(call("set_arg"))?;
+            kernel.set_arg(19, &a.mode).map_err(call("set_arg"))?;
         }
         Ok(())
     }

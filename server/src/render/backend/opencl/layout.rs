@@ -27,7 +27,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 
 /// The constants host and kernel share, written once: every program is
 /// built with them as `-D NAME=VALUEu` (kernels/types.h defines none).
-pub const SHARED_CONSTANTS: [(&str, u32); 14] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 17] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -42,7 +42,20 @@ pub const SHARED_CONSTANTS: [(&str, u32); 14] = [
     ("NO_OBJECT", NO_OBJECT),
     ("BVH_ROBUST_BITS", crate::render::bvh::ROBUST.to_bits()),
     ("GAMMA7_BITS", crate::render::math::gamma(7).to_bits()),
+    ("ADAPTIVE_TILE", crate::render::adaptive::TILE_SIZE),
+    ("WORK_LIST", WORK_LIST),
+    ("WORK_DENSE", WORK_DENSE),
 ];
+
+/// How a launch finds its pixels and samples (the kernel's `mode`): every
+/// pixel of a range, samples `first..first + count`.
+pub const WORK_UNIFORM: u32 = 0;
+/// Adaptive work as a compacted list: work-item i renders pixel i mod T^2 of
+/// the tile named by entry i / T^2 (T: [`crate::render::adaptive::TILE_SIZE`]).
+pub const WORK_LIST: u32 = 1;
+/// Adaptive work per tile of the image: work-item i renders pixel i, with
+/// the samples its tile's entry gives (none: it returns at once).
+pub const WORK_DENSE: u32 = 2;
 
 /// [`SHARED_CONSTANTS`] as compiler options.
 pub fn shared_defines() -> String {

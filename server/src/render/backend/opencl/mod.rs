@@ -22,6 +22,9 @@ mod layout;
 mod meshes;
 mod program;
 mod slice;
+mod tiles;
+
+pub use tiles::TileDispatch;
 
 pub use buffers::MemoryLimits;
 pub use check::{CheckArg, Checks};
@@ -53,6 +56,9 @@ const RESIDENT_JOBS: usize = 16;
 const RESIDENT_FILM_BYTES: usize = 1 << 30;
 /// Most pixels one launch covers; larger images take several launches.
 pub const TILE: usize = 1 << 16;
+/// Work-items per work-group (a multiple of NVIDIA's warp and AMD's
+/// wavefront, and small enough for any device's limit).
+const LOCAL_SIZE: usize = 64;
 /// Floats per pixel in the device film: [even hi, even lo, odd hi, odd lo] x rgb.
 const FILM_FLOATS: usize = 12;
 
@@ -118,6 +124,12 @@ struct JobState {
     spp: u64,
     /// Pixels `0..next` hold sample `spp` too (a slice in progress).
     next: usize,
+    /// Camera paths the device film holds (adaptive tiles included).
+    samples: u64,
+    /// Adaptive work entries for the next launches (see `tiles.rs`).
+    work: Buffer<[u32; 4]>,
+    /// Entries `work` has room for.
+    work_capacity: usize,
     /// Measured launch time per sample per pixel.
     per_sample: Option<Duration>,
     /// Rejections the device counter held at the last read-back.
@@ -147,6 +159,8 @@ pub struct OpenClBackend {
     pub last_upload: Option<(Duration, usize)>,
     /// What the device can hold (from its info; lower it to test).
     pub memory_limits: MemoryLimits,
+    /// How adaptive work reaches the kernel.
+    pub tile_dispatch: TileDispatch,
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -209,6 +223,7 @@ impl OpenClBackend {
             launch_target: LAUNCH_TARGET,
             last_upload: None,
             memory_limits,
+            tile_dispatch: TileDispatch::default(),
         })
     }
 
@@ -349,6 +364,7 @@ impl OpenClBackend {
                 && &s.key == key
                 && s.spp == film.spp()
                 && s.next == film.slice_start()
+                && s.samples == film.total_samples()
                 && s.pixels == film.pixels().len()
         };
         if let Some(i) = self.states.iter().position(matches) {
@@ -376,7 +392,7 @@ impl OpenClBackend {
             self.states.remove(0);
         }
         let mut device_film = vec![0f32; film.pixels().len() * FILM_FLOATS];
-        if film.spp() > 0 {
+        if film.total_samples() > 0 {
             for (px, out) in film
                 .pixels()
                 .iter()
@@ -400,6 +416,9 @@ impl OpenClBackend {
             pixels: film.pixels().len(),
             spp: film.spp(),
             next: film.slice_start(),
+            samples: film.total_samples(),
+            work: self.buffer(Access::ReadOnly, 1)?,
+            work_capacity: 1,
             per_sample,
             rejected_reported: 0,
             bytes,
@@ -505,6 +524,18 @@ impl OpenClBackend {
         pixels: usize,
         n: u64,
     ) -> Result<(), OpenClError> {
+        self.launch_mode(key, (offset, size, pixels), n, layout::WORK_UNIFORM)
+    }
+
+    /// One launch of `size` work-items from `offset`, those from `end` on
+    /// idle: uniform samples `spp .. spp + n`, or adaptive work by `mode`.
+    fn launch_mode(
+        &mut self,
+        key: &ProgramKey,
+        (offset, size, end): (usize, usize, usize),
+        n: u64,
+        mode: u32,
+    ) -> Result<(), OpenClError> {
         if self.fail_launches {
             return Err(OpenClError::Call {
                 what: "kernel launch",
@@ -526,7 +557,9 @@ impl OpenClBackend {
             first: state.spp,
             count: n as cl_uint,
             pixel_base: offset as cl_uint,
-            pixel_end: (offset + size).min(pixels) as cl_uint,
+            pixel_end: (offset + size).min(end) as cl_uint,
+            work: &state.work,
+            mode,
         };
         #[allow(unsafe_code)]
         // SAFETY: `kernel` is a `render` kernel (programs are built from
@@ -534,7 +567,11 @@ impl OpenClBackend {
         unsafe {
             state.scene.set_args(kernel, &args)?;
         }
-        let global = [size];
+        // Work-groups of a fixed size: an adaptive launch's busy work-items
+        // sit at the start of the range, and a driver free to choose would
+        // put them all in one large group, on one core or one SM.
+        let local = [LOCAL_SIZE];
+        let global = [size.next_multiple_of(LOCAL_SIZE)];
         #[allow(unsafe_code)]
         // SAFETY: every argument is set and the buffers live in `state` past
         // the `finish` below. The kernel reads as many objects, materials and
@@ -543,15 +580,17 @@ impl OpenClBackend {
         // the params say the BVH is used), mesh nodes, triangles, normals
         // and slots only from the bases and within the counts `meshes::pack`
         // put in each instance, and
-        // work-items at or past `pixel_end` (<= the film's pixels) return
-        // before touching the film of `pixels` x FILM_FLOATS floats.
+        // work-items at or past `pixel_end` return before touching the
+        // film of `pixels` x FILM_FLOATS floats: uniform launches end at the
+        // film's pixels; adaptive ones (`tiles.rs`) read entries only below
+        // the count uploaded and name pixels inside the image.
         unsafe {
             self.queue.enqueue_nd_range_kernel(
                 kernel.get(),
                 1,
                 ptr::null(),
                 global.as_ptr(),
-                ptr::null(),
+                local.as_ptr(),
                 &[],
             )
         }
@@ -562,6 +601,14 @@ impl OpenClBackend {
     fn read_back(&mut self, film: &mut Film, count: u64) -> Result<(), OpenClError> {
         let rejected = self.read_range(film, 0..film.pixels().len())?;
         film.commit(count, rejected);
+        self.note_samples(film);
         Ok(())
+    }
+
+    /// Records what the device film now holds (the host film equals it).
+    fn note_samples(&mut self, film: &Film) {
+        if let Some(s) = self.states.last_mut() {
+            s.samples = film.total_samples();
+        }
     }
 }

@@ -44,6 +44,7 @@ impl OpenClBackend {
             }
         }
         film.commit_slice(end, rejected);
+        self.note_samples(film);
         Ok(())
     }
 

@@ -1,0 +1,471 @@
+//! Adaptive sampling: after a uniform warm-up, samples go where the error is.
+//!
+//! The film is cut into [`TILE_SIZE`] squares. Every pixel of a tile holds
+//! the same number of samples, and each pixel's value stays the mean of its
+//! own samples (indices 0..n in order, as in a uniform film), so the image
+//! is the same estimate whatever the counts; only its noise moves.
+//!
+//! Rendering goes in rounds. A round is planned from the film alone (never
+//! from timing), so the same seed and settings give the same rounds and the
+//! same image on every thread count and pass size; passes then render the
+//! round's work in order, as much of it as fits their time.
+//!
+//! Planning a round of B camera paths: tile t has P_t pixels of n_t samples
+//! and the film's even/odd halves estimate its squared error e_t (summed over
+//! its pixels and channels), hence its per-pixel variance v_t = e_t n_t / P_t.
+//! The image's error, sum of v_t P_t / n_t, is least for a given total of
+//! samples when n_t is proportional to sqrt(v_t) (a Lagrange multiplier), so
+//! the round raises every tile towards c sqrt(v_t), with c as large as B
+//! allows ("water filling"). No tile more than doubles in one round (its
+//! estimate is noisy) and none falls below [`RATE_FLOOR`] of the mean rate
+//! (a caustic the warm-up missed still gets found).
+//!
+//! With a target error e, tile t is done once e_t <= e^2 S P_t / P (S: the
+//! image's sum of squared means, P: its pixels): the tiles' shares of the
+//! whole image's allowance, so that when every tile is done the whole image
+//! is at the target. A done tile gets no more samples; a live one gets at
+//! most what its estimate says it still needs.
+
+use std::ops::Range;
+
+/// Side of a tile in pixels. Measured on cornell-glass at 128x128 and 256
+/// spp (docs/BENCHMARKS.md): 16 gains 1.25x, 8 gains 1.4x, and 4 loses the
+/// estimate's calibration (its tiles' errors too noisy to steer by).
+pub const TILE_SIZE: u32 = 8;
+/// Uniform samples per pixel before the first round: enough for every
+/// tile's error estimate to mean something.
+pub const WARMUP_SPP: u64 = 16;
+/// A round adds this fraction of the samples taken so far.
+const ROUND_GROWTH: f64 = 0.5;
+/// No live tile's sampling rate (sqrt of its variance) counts as less than
+/// this fraction of the image's mean rate.
+const RATE_FLOOR: f64 = 0.05;
+
+/// `count` more samples for every pixel of `tile`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileWork {
+    pub tile: u32,
+    pub count: u32,
+}
+
+/// The film's tiles: row-major, those on the right and bottom edges cut short.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tiles {
+    pub width: u32,
+    pub height: u32,
+    pub cols: u32,
+    pub rows: u32,
+}
+
+impl Tiles {
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            cols: width.div_ceil(TILE_SIZE),
+            rows: height.div_ceil(TILE_SIZE),
+        }
+    }
+
+    pub fn count(&self) -> usize {
+        self.cols as usize * self.rows as usize
+    }
+
+    /// The tile of pixel (x, y).
+    pub fn at(&self, x: u32, y: u32) -> usize {
+        (y / TILE_SIZE) as usize * self.cols as usize + (x / TILE_SIZE) as usize
+    }
+
+    /// Columns and rows of pixels in tile `t`.
+    pub fn rect(&self, t: usize) -> (Range<u32>, Range<u32>) {
+        let (tx, ty) = (t as u32 % self.cols, t as u32 / self.cols);
+        let (x0, y0) = (tx * TILE_SIZE, ty * TILE_SIZE);
+        (
+            x0..(x0 + TILE_SIZE).min(self.width),
+            y0..(y0 + TILE_SIZE).min(self.height),
+        )
+    }
+
+    /// Pixels in tile `t`.
+    pub fn pixels(&self, t: usize) -> u64 {
+        let (xs, ys) = self.rect(t);
+        u64::from(xs.len() as u32) * u64::from(ys.len() as u32)
+    }
+}
+
+/// A tile's estimated squared error (sum over its pixels and channels of
+/// the squared error of each mean) and its sum of squared means.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TileError {
+    pub err2: f64,
+    pub sig2: f64,
+}
+
+/// When an adaptive render stops.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Goal {
+    /// Relative RMS error of the whole image.
+    pub target_error: Option<f64>,
+    /// Mean samples per pixel (the budget a uniform render would spend).
+    pub spp: Option<u64>,
+}
+
+/// A round's work and how far it has got. Work goes layer by layer (one
+/// sample of every tile still owed one, then the next), so that every pass
+/// spreads over as many tiles as it can: the pixels a device renders in
+/// parallel. A tile's samples within a pass are still consecutive.
+#[derive(Clone, Debug, Default)]
+pub struct Round {
+    /// Samples per pixel each tile gets in the round, most first.
+    work: Vec<TileWork>,
+    /// Where the next pass starts: layer, and entry within it.
+    cursor: (u32, usize),
+    /// Where the pass handed out last ends.
+    pending: (u32, usize),
+}
+
+impl Round {
+    pub fn new(mut work: Vec<TileWork>) -> Self {
+        work.sort_by(|a, b| b.count.cmp(&a.count).then(a.tile.cmp(&b.tile)));
+        Self {
+            work,
+            ..Self::default()
+        }
+    }
+
+    /// Entries owed a sample in `layer` (a prefix: the most come first).
+    fn width(&self, layer: u32) -> usize {
+        self.work.partition_point(|w| w.count > layer)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.width(self.cursor.0) == 0
+    }
+
+    /// The next work, at most `max_paths` camera paths but at least one
+    /// sample of one tile, in tile order (empty when the round is done);
+    /// [`Round::commit`] then records it.
+    pub fn front(&mut self, tiles: &Tiles, max_paths: u64) -> Vec<TileWork> {
+        let (mut layer, mut at) = self.cursor;
+        let mut taken = vec![0u32; self.work.len()];
+        let (mut paths, mut any) = (0u64, false);
+        'layers: loop {
+            let width = self.width(layer);
+            if width == 0 {
+                break;
+            }
+            while at < width {
+                let cost = tiles.pixels(self.work[at].tile as usize);
+                if any && paths + cost > max_paths {
+                    break 'layers;
+                }
+                taken[at] += 1;
+                (paths, any) = (paths + cost, true);
+                at += 1;
+            }
+            (layer, at) = (layer + 1, 0);
+        }
+        self.pending = (layer, at);
+        let mut out: Vec<TileWork> = (self.work.iter().zip(taken))
+            .filter(|(_, n)| *n > 0)
+            .map(|(w, count)| TileWork {
+                tile: w.tile,
+                count,
+            })
+            .collect();
+        out.sort_by_key(|w| w.tile);
+        out
+    }
+
+    /// Records that the work [`Round::front`] last handed out was rendered.
+    pub fn commit(&mut self) {
+        self.cursor = self.pending;
+    }
+}
+
+/// A film's adaptive state: how far each tile is past the uniform samples,
+/// which tiles are done, and the round in progress.
+#[derive(Clone, Debug, Default)]
+pub struct TileState {
+    /// Samples per pixel of each tile beyond the film's uniform count
+    /// (empty until the first round).
+    pub extra: Vec<u64>,
+    /// Tiles at their share of the target error (they stay done).
+    pub done: Vec<bool>,
+    pub round: Round,
+    /// Rounds planned so far.
+    pub rounds: u64,
+}
+
+impl TileState {
+    /// Whether rounds have begun.
+    pub fn started(&self) -> bool {
+        !self.extra.is_empty()
+    }
+
+    /// Records that `work` (the round's last front) was rendered.
+    pub fn commit(&mut self, work: &[TileWork]) {
+        for w in work {
+            self.extra[w.tile as usize] += u64::from(w.count);
+        }
+        self.round.commit();
+    }
+}
+
+/// Plans the next round. `counts[t]` is tile t's samples per pixel,
+/// `errors[t]` its error; marks tiles done in `done` and returns the
+/// round's work in tile order (empty: nothing left to do, every tile done
+/// or no budget left). `taken` is the camera paths traced so far.
+pub fn plan_round(
+    tiles: &Tiles,
+    counts: &[u64],
+    errors: &[TileError],
+    done: &mut [bool],
+    goal: Goal,
+    taken: u64,
+) -> Vec<TileWork> {
+    let pixels = u64::from(tiles.width) * u64::from(tiles.height);
+    let mut budget = ((taken as f64 * ROUND_GROWTH) as u64).max(pixels);
+    if let Some(spp) = goal.spp {
+        budget = budget.min(spp.saturating_mul(pixels).saturating_sub(taken));
+    }
+    let size: Vec<f64> = (0..tiles.count()).map(|t| tiles.pixels(t) as f64).collect();
+    if let Some(e) = goal.target_error {
+        let allowance = e * e * errors.iter().map(|t| t.sig2).sum::<f64>() / pixels as f64;
+        for (t, err) in errors.iter().enumerate() {
+            done[t] |= err.err2 <= allowance * size[t];
+        }
+    }
+    let live: Vec<usize> = (0..tiles.count()).filter(|&t| !done[t]).collect();
+    if live.is_empty() || budget == 0 {
+        return Vec::new();
+    }
+    // Per-pixel variance (its square root: the rate samples should go at).
+    let rate = |t: usize| {
+        (errors[t].err2 * counts[t] as f64 / size[t])
+            .max(0.0)
+            .sqrt()
+    };
+    let weight: f64 = live.iter().map(|&t| size[t]).sum();
+    let mean_rate = live.iter().map(|&t| rate(t) * size[t]).sum::<f64>() / weight;
+    let rates: Vec<f64> = live
+        .iter()
+        .map(|&t| match mean_rate > 0.0 {
+            true => rate(t).max(RATE_FLOOR * mean_rate),
+            false => 1.0,
+        })
+        .collect();
+    // At most double; with a target, at most what the estimate says is missing.
+    let caps: Vec<f64> = live
+        .iter()
+        .map(|&t| {
+            let n = counts[t] as f64;
+            let needed = goal.target_error.map_or(f64::INFINITY, |e| {
+                let sig: f64 = errors.iter().map(|t| t.sig2).sum();
+                let allowance = e * e * sig / pixels as f64 * size[t];
+                (n * (errors[t].err2 / allowance - 1.0)).ceil().max(1.0)
+            });
+            n.min(needed)
+        })
+        .collect();
+    let wants = |c: f64| -> Vec<f64> {
+        live.iter()
+            .enumerate()
+            .map(|(i, &t)| (c * rates[i] - counts[t] as f64).clamp(0.0, caps[i]))
+            .collect()
+    };
+    let paths = |w: &[f64]| -> f64 { live.iter().zip(w).map(|(&t, n)| n * size[t]).sum() };
+    // The largest c whose round fits the budget.
+    let (mut lo, mut hi) = (0.0f64, 0.0f64);
+    for (i, &t) in live.iter().enumerate() {
+        hi = hi.max((counts[t] as f64 + caps[i]) / rates[i]);
+    }
+    if paths(&wants(hi)) > budget as f64 {
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if paths(&wants(mid)) <= budget as f64 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+    } else {
+        lo = hi;
+    }
+    let want = wants(lo);
+    let mut counts_out: Vec<u64> = want.iter().map(|w| w.floor() as u64).collect();
+    let mut left = budget as f64 - paths(&counts_out.iter().map(|&n| n as f64).collect::<Vec<_>>());
+    // What flooring left over: one sample more for the tiles that lost the
+    // most, then (when the round would be empty) for the noisiest ones.
+    let mut order: Vec<usize> = (0..live.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (fa, fb) = (want[a] - want[a].floor(), want[b] - want[b].floor());
+        fb.total_cmp(&fa).then(a.cmp(&b))
+    });
+    for i in order {
+        let t = live[i];
+        if want[i] - want[i].floor() > 0.0 && size[t] <= left {
+            counts_out[i] += 1;
+            left -= size[t];
+        }
+    }
+    if counts_out.iter().all(|&n| n == 0) {
+        let noisiest = (0..live.len())
+            .filter(|&i| size[live[i]] <= budget as f64)
+            .max_by(|&a, &b| {
+                let per = |i: usize| rates[i] / (counts[live[i]] as f64).sqrt();
+                per(a).total_cmp(&per(b)).then(b.cmp(&a))
+            });
+        if let Some(i) = noisiest {
+            counts_out[i] = 1;
+        }
+    }
+    live.iter()
+        .zip(counts_out)
+        .filter(|(_, n)| *n > 0)
+        .map(|(&t, n)| TileWork {
+            tile: t as u32,
+            count: n.min(u64::from(u32::MAX)) as u32,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flat(tiles: &Tiles, n: u64, err2: impl Fn(usize) -> f64) -> (Vec<u64>, Vec<TileError>) {
+        let counts = vec![n; tiles.count()];
+        let errors = (0..tiles.count())
+            .map(|t| TileError {
+                err2: err2(t),
+                sig2: tiles.pixels(t) as f64 * 3.0,
+            })
+            .collect();
+        (counts, errors)
+    }
+
+    const T: u32 = TILE_SIZE;
+    const P: u64 = (TILE_SIZE * TILE_SIZE) as u64;
+
+    #[test]
+    fn tiles_cover_the_image_once() {
+        let tiles = Tiles::new(2 * T + 3, T + 1);
+        assert_eq!((tiles.cols, tiles.rows), (3, 2));
+        let total: u64 = (0..tiles.count()).map(|t| tiles.pixels(t)).sum();
+        assert_eq!(total, u64::from((2 * T + 3) * (T + 1)));
+        assert_eq!(tiles.rect(5), (2 * T..2 * T + 3, T..T + 1));
+        assert_eq!(tiles.at(2 * T + 2, T), 5);
+        assert_eq!(tiles.pixels(5), 3);
+    }
+
+    #[test]
+    fn samples_go_to_noisy_tiles_in_proportion_to_their_deviation() {
+        // Tile 0 has 4x the variance of the others: sqrt says twice the rate.
+        let tiles = Tiles::new(4 * T, T);
+        let (counts, errors) = flat(&tiles, 16, |t| if t == 0 { 4.0 } else { 1.0 });
+        let mut done = vec![false; 4];
+        let work = plan_round(
+            &tiles,
+            &counts,
+            &errors,
+            &mut done,
+            Goal::default(),
+            16 * 4 * P,
+        );
+        let got: Vec<u32> = work.iter().map(|w| w.count).collect();
+        // A budget of 8 spp on average: tile 0 would take 22.4 more (twice
+        // the others' rate), is capped at doubling (16), the rest share 16.
+        assert_eq!(work.len(), 4, "{work:?}");
+        assert_eq!(got[0], 16, "tile 0 doubles (capped): {got:?}");
+        assert!(got[1..].iter().all(|&n| (5..=6).contains(&n)), "{got:?}");
+        let paths: u64 = work.iter().map(|w| u64::from(w.count) * P).sum();
+        assert_eq!(paths, 8 * 4 * P);
+    }
+
+    #[test]
+    fn done_tiles_get_nothing_and_the_round_ends_when_all_are() {
+        let tiles = Tiles::new(2 * T, T);
+        // Signal 3 per pixel: allowance 0.01^2 * 3 * P per tile.
+        let allowance = 3e-4 * P as f64;
+        let (counts, errors) = flat(&tiles, 16, |t| allowance * if t == 0 { 0.6 } else { 4.0 });
+        let mut done = vec![false; 2];
+        let goal = Goal {
+            target_error: Some(0.01),
+            spp: None,
+        };
+        let work = plan_round(&tiles, &counts, &errors, &mut done, goal, 16 * 2 * P);
+        assert_eq!(done, [true, false]);
+        // Tile 1 needs 16 * (4 - 1) = 48 more by its estimate: capped at 16.
+        assert_eq!(work, [TileWork { tile: 1, count: 16 }]);
+        let (_, quiet) = flat(&tiles, 16, |_| allowance * 0.5);
+        assert!(plan_round(&tiles, &counts, &quiet, &mut done, goal, 16 * 2 * P).is_empty());
+        assert_eq!(done, [true, true]);
+        // Nearly there: a live tile gets what its estimate says it lacks.
+        let mut fresh = vec![false; 2];
+        let (_, close) = flat(&tiles, 16, |_| allowance * 1.25);
+        let work = plan_round(&tiles, &counts, &close, &mut fresh, goal, 16 * 2 * P);
+        assert_eq!(work.iter().map(|w| w.count).collect::<Vec<_>>(), [4, 4]);
+    }
+
+    #[test]
+    fn the_spp_budget_is_never_exceeded() {
+        let tiles = Tiles::new(3 * T, 3 * T);
+        let (counts, errors) = flat(&tiles, 16, |t| 1.0 + t as f64);
+        let mut done = vec![false; 9];
+        let goal = Goal {
+            target_error: None,
+            spp: Some(17),
+        };
+        let work = plan_round(&tiles, &counts, &errors, &mut done, goal, 16 * 9 * P);
+        let paths: u64 = work.iter().map(|w| u64::from(w.count) * P).sum();
+        assert_eq!(
+            paths,
+            9 * P,
+            "one spp left, spent to the last tile: {work:?}"
+        );
+    }
+
+    #[test]
+    fn a_round_goes_layer_by_layer_and_a_pass_may_end_mid_layer() {
+        let tiles = Tiles::new(3 * T, T);
+        let mut state = TileState {
+            extra: vec![0; 3],
+            done: vec![false; 3],
+            round: Round::new(vec![
+                TileWork { tile: 0, count: 1 },
+                TileWork { tile: 1, count: 4 },
+                TileWork { tile: 2, count: 2 },
+            ]),
+            rounds: 1,
+        };
+        // Layer 0 (tiles 1, 2, 0), then tile 1 of layer 1: four samples.
+        let first = state.round.front(&tiles, 4 * P + 10);
+        assert_eq!(
+            first,
+            [
+                TileWork { tile: 0, count: 1 },
+                TileWork { tile: 1, count: 2 },
+                TileWork { tile: 2, count: 1 },
+            ]
+        );
+        state.commit(&first);
+        // At least one sample, however small the pass.
+        assert_eq!(
+            state.round.front(&tiles, 1),
+            [TileWork { tile: 2, count: 1 }]
+        );
+        let rest = state.round.front(&tiles, u64::MAX);
+        assert_eq!(
+            rest,
+            [
+                TileWork { tile: 1, count: 2 },
+                TileWork { tile: 2, count: 1 }
+            ]
+        );
+        state.commit(&rest);
+        assert!(state.round.is_empty());
+        assert!(state.round.front(&tiles, u64::MAX).is_empty());
+        assert_eq!(state.extra, [1, 4, 2]);
+    }
+}

@@ -1,0 +1,92 @@
+//! Adaptive sampling through the service: the quality field, the spread of
+//! samples in status and WebSocket stats, the samples map, and a session
+//! that halts when every tile reaches its share of the target error.
+
+mod http;
+
+use http::{client, config, create, patch, read_frames, server, status, ws_connect};
+use serde_json::{json, Value};
+use std::time::{Duration, Instant};
+
+/// Polls the session until it halts (at most a minute).
+async fn halted(base: &str, id: &str) -> Value {
+    let until = Instant::now() + Duration::from_secs(60);
+    loop {
+        let s = status(base, id).await;
+        if s["state"] == "halted" || Instant::now() > until {
+            return s;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_adaptive_session_spreads_its_samples_and_says_where() {
+    let (_server, base) = server(config()).await;
+    let s = create(
+        &base,
+        json!({"scene": "cornell-glass", "width": 44, "height": 28,
+               "quality": {"adaptive": true, "spp": 64, "seed": 3}}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id").to_owned();
+    let done = halted(&base, &id).await;
+    assert_eq!(done["state"], "halted", "{done}");
+    assert_eq!(done["quality"]["adaptive"], true);
+    assert_eq!(done["spp"], 64, "the mean: a uniform render's budget");
+    let spread = &done["spp_spread"];
+    let (min, median, max) = (
+        spread["min"].as_u64().expect("min"),
+        spread["median"].as_u64().expect("median"),
+        spread["max"].as_u64().expect("max"),
+    );
+    assert!(min >= 16 && min <= median && median <= max && max > 2 * min, "{spread}");
+    assert_eq!(done["tiles"], 6 * 4, "44x28 in 8x8 tiles");
+
+    // The map: one pixel per tile, more than one colour.
+    let r = client()
+        .get(format!("{base}/api/sessions/{id}/samples.png"))
+        .send()
+        .await
+        .expect("request");
+    assert_eq!(r.status(), 200);
+    assert_eq!(r.headers()["content-type"], "image/png");
+    let map = image::load_from_memory(&r.bytes().await.expect("body")).expect("png");
+    assert_eq!((map.width(), map.height()), (6, 4));
+    let map = map.to_rgba8();
+    assert!(map.pixels().any(|p| p != map.get_pixel(0, 0)), "one colour");
+
+    // Off again: the film restarts uniform, the spread collapses.
+    let r = patch(&base, &id, "quality", json!({"adaptive": false})).await;
+    assert_eq!(r.status(), 200);
+    let uniform = halted(&base, &id).await;
+    assert_eq!(uniform["quality"]["adaptive"], false);
+    assert_eq!(uniform["spp_spread"], json!({"min": 64, "median": 64, "max": 64}));
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_target_error_halts_when_the_tiles_are_done_and_the_stream_says_so() {
+    let (_server, base) = server(config()).await;
+    let s = create(
+        &base,
+        json!({"scene": "cornell", "width": 32, "height": 32,
+               "quality": {"preset": "final", "target_error": 0.05, "clamp": 4}}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id").to_owned();
+    assert_eq!(s["quality"]["adaptive"], true, "the final preset samples adaptively");
+    let mut ws = ws_connect(&base, &id).await;
+    let done = halted(&base, &id).await;
+    assert_eq!(done["state"], "halted", "{done}");
+    let estimate = done["error_estimate"].as_f64().expect("estimate");
+    assert!(estimate <= 0.05, "{done}");
+    let (frames, stats) = read_frames(&mut ws, Instant::now() + Duration::from_secs(2)).await;
+    assert!(frames >= 1);
+    assert_eq!(stats["type"], "stats", "{stats}");
+    assert!(stats["spp_spread"]["max"].as_u64() >= stats["spp_spread"]["min"].as_u64());
+    assert_eq!(stats["spp_spread"], done["spp_spread"]);
+    // A preset without adaptive sampling turns it off.
+    let r = patch(&base, &id, "quality", json!({"preset": "interactive"})).await;
+    let v: Value = r.json().await.expect("json");
+    assert_eq!(v["quality"]["adaptive"], false, "{v}");
+}

@@ -1,0 +1,186 @@
+// Adaptive sampling in the browser: the quality panel's toggle reaches the
+// server, the HUD shows how the samples spread over the pixels, and the
+// samples overlay shows the server's map (one pixel per 8x8 tile) over the
+// image, refreshed with the frames but throttled.
+//
+//   node --test tests/browser/adaptive.test.mjs
+
+import assert from "node:assert/strict";
+import { after, before, describe, it } from "node:test";
+import { freePort, launchBrowser, session, sleep, startServer, waitFor, waitFrame, watchConsole } from "./harness.mjs";
+
+// Not multiples of the tile: the last column and row of tiles are cut short.
+const W = 100;
+const H = 60;
+const TILE = 8;
+const T = { timeout: 90000 };
+
+describe("adaptive sampling in the browser", { timeout: 300000 }, () => {
+  let server;
+  let browser;
+  let page;
+  let errors;
+
+  const id = () => page.evaluate(() => window.pathstream.sessionId);
+  const status = async () => session(server.base, await id());
+
+  before(async () => {
+    server = await startServer(await freePort());
+    browser = await launchBrowser();
+    page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+    page.setDefaultTimeout(30000);
+    errors = watchConsole(page);
+  });
+
+  after(async () => {
+    await browser?.close();
+    await server?.stop();
+  });
+
+  it("the adaptive toggle reaches the server; the HUD shows the spread", T, async (t) => {
+    await page.goto(`${server.base}/?scene=cornell&width=${W}&height=${H}`);
+    await waitFrame(page, { spp: 2 });
+    const before = await status();
+    assert.equal(before.quality.adaptive, false);
+    assert.equal(await page.isChecked("#q-adaptive"), false);
+    assert.equal(await page.isVisible("#hud-spread"), false, "no spread while sampling is uniform");
+
+    await page.check("#q-adaptive");
+    const on = await waitFor("adaptive on the server", async () => {
+      const s = await status();
+      return s.quality.adaptive === true ? s : null;
+    });
+    assert.ok(on.generation > before.generation, "the change restarted the film");
+    assert.equal(on.tiles, Math.ceil(W / TILE) * Math.ceil(H / TILE));
+
+    // After the uniform warm-up (16 spp everywhere) the tiles' counts part.
+    const spread = await waitFor("a spread in the HUD", async () => {
+      if (!(await page.isVisible("#hud-spread"))) return null;
+      const d = await page.$eval("#hud-spread", (e) => ({ ...e.dataset, text: e.textContent }));
+      const [min, median, max] = [d.min, d.median, d.max].map(Number);
+      return min >= 16 && max > min ? { min, median, max, text: d.text } : null;
+    }, { timeout: 40000 });
+    t.diagnostic(`HUD spread: ${spread.text}`);
+    assert.ok(spread.min <= spread.median && spread.median <= spread.max, JSON.stringify(spread));
+    assert.equal(spread.text, `${spread.min} / ${spread.median} / ${spread.max}`);
+    assert.match(await page.textContent("#hud-spp"), /^\d+ \(mean\)$/);
+    const s = await status();
+    assert.ok(s.spp_spread.min >= 16 && s.spp_spread.max > s.spp_spread.min, JSON.stringify(s.spp_spread));
+    assert.equal(await page.isVisible("#hud-tiles"), false, "no error target: no tiles to count");
+
+    // With an error target, the HUD counts the tiles that reached their share.
+    await page.fill("#q-target", "5");
+    await page.press("#q-target", "Tab");
+    await waitFor("the target on the server", async () => (await status()).quality.target_error === 0.05);
+    const tiles = await waitFor("tiles in the HUD", async () => {
+      if (!(await page.isVisible("#hud-tiles"))) return null;
+      return page.textContent("#hud-tiles");
+    });
+    assert.match(tiles, new RegExp(`^\\d+ / ${on.tiles}$`));
+    await page.fill("#q-target", "");
+    await page.press("#q-target", "Tab");
+    await waitFor("no target", async () => (await status()).quality.target_error === null);
+    await page.evaluate(() => document.activeElement.blur());
+  });
+
+  it("show samples: the server's map over the image, one pixel per tile, refreshed at most every 500 ms", T, async (t) => {
+    const starts = [];
+    let open = 0;
+    let mostOpen = 0;
+    const isMap = (r) => new URL(r.url()).pathname.endsWith("/samples.png");
+    page.on("request", (r) => {
+      if (!isMap(r)) return;
+      starts.push(Date.now());
+      open += 1;
+      mostOpen = Math.max(mostOpen, open);
+    });
+    const finished = (r) => { if (isMap(r)) open -= 1; };
+    page.on("requestfinished", finished);
+    page.on("requestfailed", finished);
+
+    assert.equal(await page.isVisible("#samples-overlay"), false);
+    await page.check("#show-samples");
+    await waitFor("the map to load", () => page.$eval("#samples", (i) => i.complete && i.naturalWidth > 0 && Number(i.dataset.loads) >= 1));
+    const size = await page.$eval("#samples", (i) => [i.naturalWidth, i.naturalHeight]);
+    assert.deepEqual(size, [Math.ceil(W / TILE), Math.ceil(H / TILE)]);
+
+    // Over the image: the overlay's box is the canvas's; the map inside it
+    // is whole tiles, clipped where the image's last tiles are cut short.
+    const view = await page.locator("#view").boundingBox();
+    const box = await page.locator("#samples-overlay").boundingBox();
+    for (const k of ["x", "y", "width", "height"]) {
+      assert.ok(Math.abs(view[k] - box[k]) <= 1, `overlay ${k} ${box[k]}, image ${view[k]}`);
+    }
+    const map = await page.$eval("#samples", (i) => ({ width: i.offsetWidth, height: i.offsetHeight }));
+    const scale = view.width / W;
+    assert.ok(Math.abs(map.width - size[0] * TILE * scale) <= 1, `map ${map.width} px wide at ${scale} px per pixel`);
+    assert.ok(Math.abs(map.height - size[1] * TILE * scale) <= 1, `map ${map.height} px high`);
+    const look = await page.$eval("#samples", (i) => {
+      const c = getComputedStyle(i);
+      return { rendering: c.imageRendering, opacity: Number(c.opacity), pointer: getComputedStyle(i.parentElement).pointerEvents };
+    });
+    assert.equal(look.rendering, "pixelated");
+    assert.ok(look.opacity > 0.2 && look.opacity < 0.9, `opacity ${look.opacity}`);
+    assert.equal(look.pointer, "none", "the overlay lets the mouse through to the image");
+    // Adaptive: once past the warm-up the tiles differ, so the map (as it
+    // follows the frames) gets more than one colour.
+    const colours = () => page.$eval("#samples", (i) => {
+      const c = document.createElement("canvas");
+      c.width = i.naturalWidth;
+      c.height = i.naturalHeight;
+      const g = c.getContext("2d");
+      g.drawImage(i, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      const set = new Set();
+      for (let k = 0; k < d.length; k += 4) set.add((d[k] << 16) | (d[k + 1] << 8) | d[k + 2]);
+      return set.size;
+    });
+    await waitFor("a map of more than one colour", async () => (await colours()) > 1);
+
+    // New frames bring new maps, but no more than one per 500 ms and one request at a time.
+    const loads0 = Number(await page.getAttribute("#samples", "data-loads"));
+    const frames0 = Number(await page.evaluate(() => document.body.dataset.frames));
+    const n0 = starts.length;
+    await sleep(3000);
+    const loads = Number(await page.getAttribute("#samples", "data-loads"));
+    const frames = Number(await page.evaluate(() => document.body.dataset.frames)) - frames0;
+    const n = starts.length - n0;
+    t.diagnostic(`in 3 s: ${frames} frames, ${n} map requests, ${loads - loads0} maps shown`);
+    assert.ok(loads >= loads0 + 2, `the map followed the frames: ${loads0} -> ${loads} maps`);
+    assert.ok(n <= 3000 / 500 + 1, `${n} requests in 3 s`);
+    const gaps = starts.slice(1).map((s, i) => s - starts[i]);
+    assert.ok(Math.min(...gaps) >= 400, `requests ${gaps.join(", ")} ms apart`);
+    assert.equal(mostOpen, 1, "one request at a time");
+
+    // Off: hidden, and no more requests.
+    await page.uncheck("#show-samples");
+    assert.equal(await page.isVisible("#samples-overlay"), false);
+    await sleep(200);
+    const n1 = starts.length;
+    await sleep(1500);
+    assert.equal(starts.length, n1, "no requests with the overlay off");
+    await page.evaluate(() => document.activeElement.blur());
+  });
+
+  it("a preset sets adaptive, and the toggle follows", T, async () => {
+    await page.waitForSelector("#q-preset option[value=final]", { state: "attached" });
+    await page.selectOption("#q-preset", "preview");
+    await waitFor("preview on the server", async () => {
+      const q = (await status()).quality;
+      return q.adaptive === false && q.max_depth === 2;
+    });
+    await waitFor("the toggle off", async () => !(await page.isChecked("#q-adaptive")));
+    await waitFor("no spread in the HUD", async () => !(await page.isVisible("#hud-spread")));
+    assert.equal(await page.textContent("#hud-spread-row dt"), "min/med/max");
+
+    await page.selectOption("#q-preset", "final");
+    await waitFor("final on the server", async () => {
+      const q = (await status()).quality;
+      return q.adaptive === true && q.max_depth === 0;
+    });
+    await waitFor("the toggle on", async () => page.isChecked("#q-adaptive"));
+    assert.equal(await page.inputValue("#q-preset"), "final");
+    await page.evaluate(() => document.activeElement.blur());
+    assert.deepEqual(errors, []);
+  });
+});
