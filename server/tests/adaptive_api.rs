@@ -40,7 +40,10 @@ async fn an_adaptive_session_spreads_its_samples_and_says_where() {
         spread["median"].as_u64().expect("median"),
         spread["max"].as_u64().expect("max"),
     );
-    assert!(min >= 16 && min <= median && median <= max && max > 2 * min, "{spread}");
+    assert!(
+        min >= 16 && min <= median && median <= max && max > 2 * min,
+        "{spread}"
+    );
     assert_eq!(done["tiles"], 6 * 4, "44x28 in 8x8 tiles");
 
     // The map: one pixel per tile, more than one colour.
@@ -61,7 +64,10 @@ async fn an_adaptive_session_spreads_its_samples_and_says_where() {
     assert_eq!(r.status(), 200);
     let uniform = halted(&base, &id).await;
     assert_eq!(uniform["quality"]["adaptive"], false);
-    assert_eq!(uniform["spp_spread"], json!({"min": 64, "median": 64, "max": 64}));
+    assert_eq!(
+        uniform["spp_spread"],
+        json!({"min": 64, "median": 64, "max": 64})
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -74,7 +80,10 @@ async fn a_target_error_halts_when_the_tiles_are_done_and_the_stream_says_so() {
     )
     .await;
     let id = s["id"].as_str().expect("id").to_owned();
-    assert_eq!(s["quality"]["adaptive"], true, "the final preset samples adaptively");
+    assert_eq!(
+        s["quality"]["adaptive"], true,
+        "the final preset samples adaptively"
+    );
     let mut ws = ws_connect(&base, &id).await;
     let done = halted(&base, &id).await;
     assert_eq!(done["state"], "halted", "{done}");

@@ -176,7 +176,10 @@ fn error_estimate_calibration_is_near_one() {
             "estimate/true median {median}: {row}"
         );
     }
-    assert!(md.contains("## Adaptive sampling: uniform vs adaptive"), "{md}");
+    assert!(
+        md.contains("## Adaptive sampling: uniform vs adaptive"),
+        "{md}"
+    );
 }
 
 #[test]

@@ -84,8 +84,12 @@ pub fn markdown(w: &mut String, r: &Results) {
         return;
     }
     let (tw, th) = r.trade_size;
-    let mut backends: Vec<&str> = r.adaptive.iter().map(|c| c.backend.as_str()).collect();
-    backends.dedup();
+    let mut backends: Vec<&str> = Vec::new();
+    for c in &r.adaptive {
+        if !backends.contains(&c.backend.as_str()) {
+            backends.push(&c.backend);
+        }
+    }
     for backend in backends {
         let _ = writeln!(
             w,

@@ -73,6 +73,14 @@ impl CpuBackend {
         }
     }
 
+    /// Runs `work` on this backend's pool (or rayon's global one).
+    fn in_pool<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
+        match &self.pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }
+    }
+
     /// Adds samples `film.spp() .. film.spp() + count` to every pixel.
     pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) {
         self.render_unless(job, film, count, &|| false);
@@ -103,17 +111,8 @@ impl CpuBackend {
                 })
                 .sum()
         };
-        let rejected = match &self.pool {
-            Some(pool) => pool.install(|| work(film)),
-            None => work(film),
-        };
-        match rejected {
-            Some(r) => {
-                film.commit(count, r);
-                true
-            }
-            None => false,
-        }
+        let rejected = self.in_pool(|| work(film));
+        rejected.map(|r| film.commit(count, r)).is_some()
     }
 
     /// Adds sample `film.spp()` to the pixels from `film.slice_start()` up
@@ -143,17 +142,8 @@ impl CpuBackend {
                 })
                 .sum()
         };
-        let rejected = match &self.pool {
-            Some(pool) => pool.install(|| work(film.pixels_mut())),
-            None => work(film.pixels_mut()),
-        };
-        match rejected {
-            Some(r) => {
-                film.commit_slice(end, r);
-                true
-            }
-            None => false,
-        }
+        let rejected = self.in_pool(|| work(film.pixels_mut()));
+        rejected.map(|r| film.commit_slice(end, r)).is_some()
     }
 }
 
@@ -207,17 +197,8 @@ impl CpuBackend {
                 })
                 .sum()
         };
-        let rejected = match &self.pool {
-            Some(pool) => pool.install(|| rows(film.pixels_mut())),
-            None => rows(film.pixels_mut()),
-        };
-        match rejected {
-            Some(r) => {
-                film.commit_tiles(work, r);
-                true
-            }
-            None => false,
-        }
+        let rejected = self.in_pool(|| rows(film.pixels_mut()));
+        rejected.map(|r| film.commit_tiles(work, r)).is_some()
     }
 }
 

@@ -113,9 +113,11 @@ impl OpenClBackend {
             }
         };
         self.upload_work(&list)?;
+        // The size of the image's uniform launches (one compiled kernel).
+        let size = (tiles.width as usize * tiles.height as usize).min(TILE);
         (base..end)
-            .step_by(TILE)
-            .try_for_each(|offset| self.launch_mode(key, (offset, TILE, end), count, mode))
+            .step_by(size)
+            .try_for_each(|offset| self.launch_mode(key, (offset, size, end), count, mode))
     }
 
     /// Puts `entries` in the current state's work buffer (grown as needed).
