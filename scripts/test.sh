@@ -3,6 +3,8 @@
 # runs every test in release mode (renders are heavy; debug is 30x slower).
 #   - an OpenCL loader and PoCL (a real OpenCL CPU device) for the OpenCL suite;
 #     where CI is set, that suite fails rather than skips without a device;
+#   - Debian's nginx (package `nginx`, /usr/sbin/nginx) for the proxy test
+#     (server/tests/proxy.rs); where CI is set, that test fails without it;
 #   - the Stanford bunny (npm package `bunny`) for the model-file tests;
 #   - Chromium and playwright-core for the browser client's tests
 #     (scripts/browser-tests.sh), which run after the Rust tests.
@@ -25,6 +27,18 @@ if ! have_opencl; then
     export DEBIAN_FRONTEND=noninteractive
     $sudo apt-get update -qq
     $sudo apt-get install -y -qq ocl-icd-libopencl1 pocl-opencl-icd >/dev/null
+fi
+
+# A real reverse proxy in front of three servers: server/tests/proxy.rs runs
+# nginx as its own child process in a temp prefix (not the system service,
+# which the package may start, and not /etc/nginx).
+if [ ! -x /usr/sbin/nginx ]; then
+    echo "test.sh: installing nginx" >&2
+    sudo=""
+    if [ "$(id -u)" != 0 ]; then sudo="sudo"; fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq nginx >/dev/null
 fi
 
 # Real models for the tests (the Stanford bunny, from the npm registry).

@@ -225,8 +225,23 @@ pub struct BackendInfo {
 pub struct Health {
     pub status: String,
     pub version: String,
+    /// The server's `--node-name`, if it was given one.
+    pub node: Option<String>,
     pub sessions: usize,
     pub backends: Vec<BackendInfo>,
+    /// Per worker, in the order of `backends`.
+    pub load: Vec<WorkerLoad>,
+}
+
+/// How loaded one render worker is.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WorkerLoad {
+    pub backend: String,
+    pub device: String,
+    /// Sessions placed on the worker.
+    pub sessions: usize,
+    /// Fraction of the last 5 s spent rendering, 0..1.
+    pub busy: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

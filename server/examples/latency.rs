@@ -1,8 +1,9 @@
 //! Latency from a camera update sent on the WebSocket to the first frame
 //! that reflects it, p50 and p95 over 100 updates, plus PNG encode time and
-//! frames delivered per second. Runs its own server on 127.0.0.1:0.
+//! frames delivered per second. Runs its own server on 127.0.0.1:0, or uses
+//! the one at `--url` (a box, or a proxy in front of boxes: deploy/).
 //!
-//!     cargo run --release --example latency -- [--backend cpu|opencl|auto] [--size 256] [--updates 100]
+//!     cargo run --release --example latency -- [--backend cpu|opencl|auto] [--size 256] [--updates 100] [--url http://HOST:PORT]
 
 use futures_util::{SinkExt, StreamExt};
 use pathstream::render::output::encode_png;
@@ -34,31 +35,50 @@ async fn main() -> anyhow::Result<()> {
     }
     let size: u32 = arg("--size", "256").parse()?;
     let updates: usize = arg("--updates", "100").parse()?;
-    let backend = match arg("--backend", "cpu").as_str() {
+    let backend_arg = arg("--backend", "cpu");
+    let backend = match backend_arg.as_str() {
         "opencl" => BackendChoice::OpenCl { device: None },
         "auto" => BackendChoice::Auto,
         _ => BackendChoice::Cpu,
     };
-    let running = start(ServeConfig {
-        addr: "127.0.0.1:0".parse()?,
-        backend,
-        ..ServeConfig::default()
-    })
-    .await
-    .map_err(anyhow::Error::msg)?;
-    let base = format!("http://{}", running.addr);
-    let created: Value = reqwest::Client::new()
+    let url = arg("--url", "");
+    let (running, base) = if url.is_empty() {
+        let running = start(ServeConfig {
+            addr: "127.0.0.1:0".parse()?,
+            backend,
+            ..ServeConfig::default()
+        })
+        .await
+        .map_err(anyhow::Error::msg)?;
+        let base = format!("http://{}", running.addr);
+        (Some(running), base)
+    } else {
+        (None, url.trim_end_matches('/').to_owned())
+    };
+    let client = reqwest::Client::new();
+    let mut create = json!({"scene": "cornell-glass", "width": size, "height": size});
+    if running.is_none() && std::env::args().any(|a| a == "--backend") {
+        // Another server renders on its default backend unless asked.
+        create["backend"] = json!(backend_arg);
+    }
+    let created: Value = client
         .post(format!("{base}/api/sessions"))
-        .json(&json!({"scene": "cornell-glass", "width": size, "height": size}))
+        .json(&create)
         .send()
         .await?
+        .error_for_status()?
         .json()
         .await?;
     let id = created["id"].as_str().unwrap_or_default().to_owned();
-    println!("session on {} ({})", created["backend"], created["device"]);
-    let (mut ws, _) =
-        tokio_tungstenite::connect_async(format!("ws://{}/api/sessions/{id}/ws", running.addr))
-            .await?;
+    println!(
+        "session {id} on {} ({}) at {base}",
+        created["backend"], created["device"]
+    );
+    let (mut ws, _) = tokio_tungstenite::connect_async(format!(
+        "{}/api/sessions/{id}/ws",
+        base.replacen("http://", "ws://", 1)
+    ))
+    .await?;
 
     // Warm up: a few frames.
     let mut seen = 0;
@@ -130,6 +150,12 @@ async fn main() -> anyhow::Result<()> {
         "PNG encode at {size}x{size}: {:.2} ms per frame",
         t.elapsed().as_secs_f64() * 1e3 / f64::from(n)
     );
-    running.shutdown().await?;
+    client
+        .delete(format!("{base}/api/sessions/{id}"))
+        .send()
+        .await?;
+    if let Some(running) = running {
+        running.shutdown().await?;
+    }
     Ok(())
 }

@@ -60,6 +60,11 @@ pub struct ServeArgs {
     /// keep-alive connection is kept) [default: 10].
     #[arg(long, value_name = "S")]
     header_timeout_s: Option<u64>,
+    /// This box's name behind a proxy that routes by it (deploy/pathstream.conf):
+    /// session ids become NAME-..., and every response carries
+    /// `x-pathstream-node: NAME`. 1 to 32 of a-z, 0-9 and _.
+    #[arg(long, env = "PATHSTREAM_NODE_NAME", value_name = "NAME")]
+    node_name: Option<String>,
 }
 
 pub fn run(args: ServeArgs) -> Result<(), CliError> {
@@ -93,6 +98,10 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         if v == Some(0) {
             return Err(CliError::Usage(format!("{flag}: must be at least 1")));
         }
+    }
+    if let Some(name) = &args.node_name {
+        service::config::check_node_name(name)
+            .map_err(|e| CliError::Usage(format!("--node-name: {e}")))?;
     }
     let max_triangles = args.max_triangles.unwrap_or(defaults.max_triangles);
     let assets = service::assets::AssetLimits {
@@ -129,6 +138,7 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
                 .header_timeout_s
                 .map_or(defaults.connections.header_timeout, Duration::from_secs),
         },
+        node_name: args.node_name,
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
@@ -150,6 +160,9 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
             running.addr
         );
         let _ = writeln!(out, "render workers: {}", backends.join("; "));
+        if let Some(name) = &running.state.config.node_name {
+            let _ = writeln!(out, "node name: {name} (session ids start with {name}-)");
+        }
         if running.state.config.token.is_some() {
             let _ = writeln!(
                 out,

@@ -32,6 +32,33 @@ pub struct ServeConfig {
     /// Open connections (in total, per client address) and the deadline
     /// for a request head.
     pub connections: ConnectionLimits,
+    /// This box's name behind a proxy that routes by it (see `deploy/`):
+    /// session ids start with `NAME-`, and every response carries
+    /// `x-pathstream-node: NAME`. Checked by [`check_node_name`].
+    pub node_name: Option<String>,
+}
+
+/// Most characters of a node name.
+pub const MAX_NODE_NAME: usize = 32;
+
+/// A `--node-name` that [`check_node_name`] refuses.
+#[derive(Debug, PartialEq, Eq, thiserror::Error)]
+#[error("'{0}' is not a node name: 1 to {MAX_NODE_NAME} characters of a-z, 0-9 and _")]
+pub struct BadNodeName(pub String);
+
+/// A node name is 1 to [`MAX_NODE_NAME`] of `a-z`, `0-9` and `_`: it is the
+/// prefix of session ids (up to the first `-`) that a proxy matches, and a
+/// header value.
+pub fn check_node_name(name: &str) -> Result<(), BadNodeName> {
+    let ok = (1..=MAX_NODE_NAME).contains(&name.len())
+        && name
+            .bytes()
+            .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_');
+    if ok {
+        Ok(())
+    } else {
+        Err(BadNodeName(name.to_owned()))
+    }
 }
 
 impl Default for ServeConfig {
@@ -49,6 +76,30 @@ impl Default for ServeConfig {
             assets: AssetLimits::default(),
             max_triangles: 16_000_000,
             connections: ConnectionLimits::default(),
+            node_name: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn node_names_are_short_lowercase_words() {
+        for good in ["box1", "a", "gpu_7", &"x".repeat(MAX_NODE_NAME)] {
+            assert_eq!(check_node_name(good), Ok(()), "{good}");
+        }
+        for bad in [
+            "",
+            "Box1",
+            "box-1",
+            "box 1",
+            "bö",
+            &"x".repeat(MAX_NODE_NAME + 1),
+        ] {
+            let e = check_node_name(bad).expect_err(bad).to_string();
+            assert!(e.contains("not a node name"), "{e}");
         }
     }
 }

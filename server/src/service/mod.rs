@@ -12,6 +12,7 @@ pub mod error;
 mod frame;
 mod guard;
 pub mod listen;
+pub mod load;
 mod metrics;
 mod pass;
 mod routes;
@@ -57,6 +58,9 @@ impl AppState {
     /// Starts one worker for rayon and, as `config.backend` says, one for
     /// an OpenCL device (the default for new sessions when there is one).
     pub fn new(config: ServeConfig) -> Result<Arc<Self>, String> {
+        if let Some(name) = &config.node_name {
+            config::check_node_name(name).map_err(|e| e.to_string())?;
+        }
         let device = match config.backend {
             BackendChoice::Cpu => None,
             choice => {
@@ -155,6 +159,23 @@ impl AppState {
     /// What each worker renders with now.
     pub fn backends(&self) -> Vec<BackendInfo> {
         self.workers.iter().map(Worker::info).collect()
+    }
+
+    /// Each worker's sessions and busy fraction, in the order of
+    /// [`AppState::backends`].
+    pub fn load(&self) -> Vec<load::WorkerLoad> {
+        self.workers
+            .iter()
+            .map(|w| {
+                let info = w.info();
+                load::WorkerLoad {
+                    backend: info.backend,
+                    device: info.device,
+                    sessions: w.session_count(),
+                    busy: (w.busy() * 1000.0).round() / 1000.0,
+                }
+            })
+            .collect()
     }
 
     /// What new sessions render with unless they ask otherwise.

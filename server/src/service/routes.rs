@@ -13,7 +13,7 @@ use crate::render::{Preset, Quality};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
-use axum::http::{header, StatusCode};
+use axum::http::{header, HeaderName, HeaderValue, StatusCode};
 use axum::middleware;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, patch, put};
@@ -24,6 +24,7 @@ use std::sync::Arc;
 use std::time::Duration;
 use tower_http::catch_panic::CatchPanicLayer;
 use tower_http::cors::CorsLayer;
+use tower_http::set_header::SetResponseHeaderLayer;
 use tower_http::trace::TraceLayer;
 
 type AppResult<T> = Result<T, ApiError>;
@@ -56,8 +57,12 @@ pub fn app(state: Arc<AppState>) -> Router {
     with_layers(router, &state).with_state(state)
 }
 
+/// The header naming the box that answered (`serve --node-name`).
+pub const NODE_HEADER: &str = "x-pathstream-node";
+
 /// The layers around every route: the body limit, handler panics answered
-/// as 500 JSON (logged, counted), request traces, CORS when asked for.
+/// as 500 JSON (logged, counted), request traces, CORS when asked for, and
+/// outermost the node's name on every response when it has one.
 fn with_layers(router: Router<Arc<AppState>>, state: &Arc<AppState>) -> Router<Arc<AppState>> {
     let metrics = state.metrics.clone();
     let router = router
@@ -66,10 +71,23 @@ fn with_layers(router: Router<Arc<AppState>>, state: &Arc<AppState>) -> Router<A
             super::guard::panic_response(&metrics, panic)
         }))
         .layer(TraceLayer::new_for_http());
-    if state.config.cors {
+    let router = if state.config.cors {
         router.layer(CorsLayer::permissive())
     } else {
         router
+    };
+    let node = state.config.node_name.as_deref().map(HeaderValue::from_str);
+    match node {
+        Some(Ok(value)) => router.layer(SetResponseHeaderLayer::overriding(
+            HeaderName::from_static(NODE_HEADER),
+            value,
+        )),
+        Some(Err(e)) => {
+            // `AppState::new` refuses such names; `with_device` does not check.
+            tracing::error!(error = %e, "the node name is not a header value; no {NODE_HEADER}");
+            router
+        }
+        None => router,
     }
 }
 
@@ -91,12 +109,17 @@ fn body_bytes(body: Result<Bytes, BytesRejection>, limit: usize) -> AppResult<By
     })
 }
 
+/// Liveness and load: this box's node name (null without `--node-name`),
+/// its sessions, and per worker its sessions and the fraction of the last
+/// 5 s it spent rendering (`"load"`, in the order of `"backends"`).
 async fn health(State(state): State<Arc<AppState>>) -> Json<Value> {
     Json(json!({
         "status": "ok",
         "version": env!("CARGO_PKG_VERSION"),
+        "node": state.config.node_name,
         "sessions": state.session_count(),
         "backends": state.backends(),
+        "load": state.load(),
     }))
 }
 
@@ -163,7 +186,9 @@ fn default_side() -> u64 {
     512
 }
 
-fn new_id() -> String {
+/// A fresh session id: 16 hex digits, after `NODE-` when the box has a
+/// node name (what a proxy routes by).
+fn new_id(node: Option<&str>) -> String {
     use std::sync::atomic::{AtomicU64, Ordering};
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let nanos = std::time::SystemTime::now()
@@ -173,7 +198,10 @@ fn new_id() -> String {
     let id = crate::render::sampler::mix64(
         nanos ^ crate::render::sampler::mix64(n ^ u64::from(std::process::id())),
     );
-    format!("{id:016x}")
+    match node {
+        Some(node) => format!("{node}-{id:016x}"),
+        None => format!("{id:016x}"),
+    }
 }
 
 async fn create_session(
@@ -207,7 +235,7 @@ async fn create_session(
     };
     let worker = state.worker_for(req.backend.as_deref())?;
     let session = Arc::new(Session::new(
-        new_id(),
+        new_id(state.config.node_name.as_deref()),
         name,
         *scene,
         width,

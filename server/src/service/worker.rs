@@ -2,6 +2,7 @@
 //! placed on it, so N busy sessions each get about 1/N of the device.
 //! Rendering never runs on the async runtime.
 
+use super::load::BusyMeter;
 use super::metrics::Metrics;
 use super::session::Session;
 use crate::render::Backend;
@@ -9,7 +10,7 @@ use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, Weak};
 use std::thread::JoinHandle;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// What a worker renders with, as `/api/health` and `/api/devices` report it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
@@ -35,6 +36,8 @@ struct WorkerShared {
     sessions: Mutex<Vec<Arc<Session>>>,
     wake: Condvar,
     stop: AtomicBool,
+    /// Wall time spent rendering, for `/api/health`.
+    busy: BusyMeter,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -75,6 +78,7 @@ impl Worker {
             sessions: Mutex::new(Vec::new()),
             wake: Condvar::new(),
             stop: AtomicBool::new(false),
+            busy: BusyMeter::new(Instant::now()),
         });
         let s = shared.clone();
         let handle = std::thread::Builder::new()
@@ -93,6 +97,17 @@ impl Worker {
     /// What the worker renders with now.
     pub fn info(&self) -> BackendInfo {
         lock(&self.shared.info).clone()
+    }
+
+    /// The fraction of the last few seconds this worker spent rendering
+    /// (see [`super::load`]).
+    pub fn busy(&self) -> f64 {
+        self.shared.busy.fraction(Instant::now())
+    }
+
+    /// How many sessions are placed on this worker.
+    pub fn session_count(&self) -> usize {
+        lock(&self.shared.sessions).len()
     }
 
     /// Places a session on this worker, which starts rendering it.
@@ -141,7 +156,9 @@ fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
             }
         };
         if let Some(session) = session {
+            shared.busy.begin(Instant::now());
             session.render_pass(backend, metrics);
+            shared.busy.end(Instant::now());
             if backend.name() != rendering_with {
                 rendering_with = backend.name();
                 let info = BackendInfo::of(backend);

@@ -10,7 +10,6 @@ use opencl3::types::cl_uint;
 use std::ptr;
 use std::time::{Duration, Instant};
 
-
 impl OpenClBackend {
     /// Adds `count` samples per pixel to `film`.
     pub fn render(

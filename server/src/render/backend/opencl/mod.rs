@@ -18,10 +18,10 @@
 mod buffers;
 mod check;
 mod devices;
+mod launch;
 mod layout;
 mod meshes;
 mod program;
-mod launch;
 mod slice;
 mod tiles;
 
