@@ -1,5 +1,7 @@
 //! A client for the pathstream render service: typed requests and responses
-//! for every route, the frame stream as a `Stream`, and a blocking wrapper.
+//! for every route, the frame stream as a `Stream`, and a blocking wrapper;
+//! linear frames ([`Client::linear_frame`]) and the merge of several renders
+//! of one image into one ([`merge`]).
 //!
 //! ```no_run
 //! # async fn demo() -> pathstream_client::Result<()> {
@@ -15,10 +17,13 @@
 
 pub mod blocking;
 mod error;
+mod linear;
+pub mod merge;
 mod stream;
 mod types;
 
 pub use error::{ClientError, Result};
+pub use linear::{srgb8, ImageError, LinearFrame, LinearImage};
 pub use stream::FrameStream;
 pub use types::*;
 
@@ -164,13 +169,13 @@ impl Client {
         .await
     }
 
-    async fn frame(
+    async fn frame_response(
         &self,
         id: &str,
         kind: &str,
         min_spp: Option<u64>,
         timeout: Option<Duration>,
-    ) -> Result<Vec<u8>> {
+    ) -> Result<Response> {
         let wait = timeout.unwrap_or(Duration::from_secs(30));
         let mut path = format!(
             "/api/sessions/{id}/frame.{kind}?timeout_ms={}",
@@ -182,7 +187,17 @@ impl Client {
         let r = self
             .request(Method::GET, &path)
             .timeout(wait + Duration::from_secs(30));
-        let response = self.send(r).await?;
+        self.send(r).await
+    }
+
+    async fn frame(
+        &self,
+        id: &str,
+        kind: &str,
+        min_spp: Option<u64>,
+        timeout: Option<Duration>,
+    ) -> Result<Vec<u8>> {
+        let response = self.frame_response(id, kind, min_spp, timeout).await?;
         Ok(response
             .bytes()
             .await
@@ -209,6 +224,51 @@ impl Client {
         timeout: Option<Duration>,
     ) -> Result<Vec<u8>> {
         self.frame(id, "pfm", min_spp, timeout).await
+    }
+
+    /// The same decoded, with the samples per pixel and error estimate the
+    /// server sent with it.
+    pub async fn linear_frame(
+        &self,
+        id: &str,
+        min_spp: Option<u64>,
+        timeout: Option<Duration>,
+    ) -> Result<LinearFrame> {
+        let response = self.frame_response(id, "pfm", min_spp, timeout).await?;
+        let header = |name: &str| -> Result<String> {
+            let value = response.headers().get(name).and_then(|v| v.to_str().ok());
+            value
+                .map(str::to_owned)
+                .ok_or_else(|| ClientError::Protocol(format!("frame.pfm without {name}")))
+        };
+        let number = |name: &str, text: &str| {
+            ClientError::Protocol(format!("frame.pfm: {name} '{text}' is not a number"))
+        };
+        let spp_text = header("x-pathstream-spp")?;
+        let spp = spp_text
+            .parse()
+            .map_err(|_| number("x-pathstream-spp", &spp_text))?;
+        let gen_text = header("x-pathstream-generation")?;
+        let generation = gen_text
+            .parse()
+            .map_err(|_| number("x-pathstream-generation", &gen_text))?;
+        let error_text = header("x-pathstream-error-estimate")?;
+        let error_estimate = match error_text.as_str() {
+            "null" => None,
+            t => Some(
+                t.parse()
+                    .map_err(|_| number("x-pathstream-error-estimate", t))?,
+            ),
+        };
+        let bytes = response.bytes().await.map_err(ClientError::from_reqwest)?;
+        let image =
+            LinearImage::decode_pfm(&bytes).map_err(|e| ClientError::Protocol(e.to_string()))?;
+        Ok(LinearFrame {
+            image,
+            spp,
+            error_estimate,
+            generation,
+        })
     }
 
     /// `POST /api/assets`: uploads a model file's bytes under `name` (its

@@ -2,11 +2,14 @@
 //! Exit codes: 0 success, 2 bad arguments, 3 server error (message shown),
 //! 4 server unreachable.
 
+mod fanout;
+mod guard;
 mod quality;
 mod scene;
 
 use clap::{Args, Parser, Subcommand};
 use futures_util::StreamExt;
+use guard::{create_guarded, owning, Interrupt};
 use indicatif::{ProgressBar, ProgressStyle};
 use pathstream_client::{
     CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SessionStatus,
@@ -24,14 +27,15 @@ use std::time::Duration;
     about = "Drive a pathstream render server over HTTP and WebSocket"
 )]
 struct Cli {
-    /// Server URL.
+    /// Server URL. Given more than once (or as a comma-separated list),
+    /// `render` renders one image on all the servers and merges it.
     #[arg(
         long,
         global = true,
         env = "PATHSTREAM_URL",
         default_value = "http://127.0.0.1:8080"
     )]
-    server: String,
+    server: Vec<String>,
     /// Bearer token, when the server requires one.
     #[arg(long, global = true, env = "PATHSTREAM_TOKEN", hide_env_values = true)]
     token: Option<String>,
@@ -41,7 +45,8 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Render a scene to a file: create a session, wait for its halt, save, delete it.
+    /// Render a scene to a file: create a session, wait for its halt, save,
+    /// delete it. With several --server: one session on each, merged.
     Render(RenderArgs),
     /// List sessions.
     Sessions,
@@ -216,97 +221,33 @@ fn print_status(s: &SessionStatus) -> Result<(), Failure> {
     Ok(())
 }
 
-async fn create(
+/// The session `args` ask `client` for (model files uploaded to it); with
+/// `default_spp`, 64 spp when no halt is given.
+async fn session_request(
     client: &Client,
     args: &CreateArgs,
     default_spp: bool,
-) -> Result<SessionStatus, Failure> {
+) -> Result<CreateSession, Failure> {
     let mut quality = args.quality.patch();
     if default_spp && !args.quality.halts() {
         quality.spp = Some(Some(64));
     }
-    let req = CreateSession {
+    Ok(CreateSession {
         scene: Some(scene_spec(client, &args.scene).await?),
         width: Some(args.width),
         height: Some(args.height),
         quality: Some(quality),
         backend: args.backend.clone(),
-    };
+    })
+}
+
+async fn create(
+    client: &Client,
+    args: &CreateArgs,
+    default_spp: bool,
+) -> Result<SessionStatus, Failure> {
+    let req = session_request(client, args, default_spp).await?;
     Ok(client.create_session(&req).await?)
-}
-
-/// Ctrl-C, caught from the moment this is made (before the session it
-/// guards is created): a Ctrl-C no longer ends the process on the spot, and
-/// one that comes before anyone waits for it is kept, not lost.
-struct Interrupt {
-    #[cfg(unix)]
-    signal: tokio::signal::unix::Signal,
-    #[cfg(windows)]
-    signal: tokio::signal::windows::CtrlC,
-}
-
-impl Interrupt {
-    fn install() -> Result<Self, Failure> {
-        #[cfg(unix)]
-        let signal = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::interrupt());
-        #[cfg(windows)]
-        let signal = tokio::signal::windows::ctrl_c();
-        let signal = signal.map_err(|e| Failure(1, format!("cannot catch Ctrl-C: {e}")))?;
-        Ok(Self { signal })
-    }
-
-    async fn received(&mut self) {
-        self.signal.recv().await;
-    }
-}
-
-/// How long a Ctrl-C during session creation waits for the server's answer,
-/// so that the session it made can be deleted.
-const CREATE_GRACE: Duration = Duration::from_secs(10);
-
-/// Creates a session under `interrupt`: on a Ctrl-C while the request is out,
-/// waits (briefly) for the session the server may have made, deletes it, and
-/// fails with exit code 130.
-async fn create_guarded<F>(
-    client: &Client,
-    interrupt: &mut Interrupt,
-    create: F,
-) -> Result<SessionStatus, Failure>
-where
-    F: std::future::Future<Output = Result<SessionStatus, Failure>>,
-{
-    let mut create = std::pin::pin!(create);
-    tokio::select! {
-        biased;
-        created = &mut create => return created,
-        () = interrupt.received() => {}
-    }
-    if let Ok(Ok(session)) = tokio::time::timeout(CREATE_GRACE, create).await {
-        let _ = client.delete_session(&session.id).await;
-    }
-    Err(Failure(130, "interrupted".into()))
-}
-
-/// Runs `work` for a session this command created, then deletes the session
-/// whatever happened, Ctrl-C included (exit code 130).
-async fn owning<F>(
-    client: &Client,
-    id: &str,
-    interrupt: &mut Interrupt,
-    work: F,
-) -> Result<(), Failure>
-where
-    F: std::future::Future<Output = Result<(), Failure>>,
-{
-    let result = tokio::select! {
-        biased;
-        () = interrupt.received() => Err(Failure(130, "interrupted".into())),
-        r = work => r,
-    };
-    let deleted = client.delete_session(id).await;
-    result?;
-    deleted?;
-    Ok(())
 }
 
 async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
@@ -447,8 +388,37 @@ async fn orbit(
     owning(client, &id, &mut interrupt, work).await
 }
 
+/// The servers `--server` (or `PATHSTREAM_URL`) names: every value, split
+/// at commas.
+fn servers(values: &[String], token: Option<&String>) -> Result<Vec<Client>, Failure> {
+    let urls: Vec<&str> = values
+        .iter()
+        .flat_map(|v| v.split(','))
+        .map(str::trim)
+        .filter(|u| !u.is_empty())
+        .collect();
+    if urls.is_empty() {
+        return Err(usage("--server: no server URL given".into()));
+    }
+    urls.into_iter()
+        .map(|u| Ok(Client::new(u)?.token(token.cloned())))
+        .collect()
+}
+
 async fn run(cli: Cli) -> Result<(), Failure> {
-    let client = Client::new(&cli.server)?.token(cli.token.clone());
+    let client = match <[Client; 1]>::try_from(servers(&cli.server, cli.token.as_ref())?) {
+        Ok([client]) => client,
+        Err(clients) => {
+            return match &cli.command {
+                Command::Render(args) => fanout::render(clients, args).await,
+                _ => Err(usage(
+                    "several servers (--server given more than once, or a comma in \
+                     PATHSTREAM_URL) are for `render` only"
+                        .into(),
+                )),
+            }
+        }
+    };
     match cli.command {
         Command::Render(args) => render(&client, &args).await,
         Command::Sessions => {
