@@ -1,72 +1,12 @@
 //! The `pathstream-client` command line against a real `pathstream` server
 //! process (the workspace builds both binaries into the same folder).
 
-use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-struct Server {
-    child: Child,
-    url: String,
-    /// Kept open: the server may print more after its first line.
-    _stdout: BufReader<std::process::ChildStdout>,
-}
+mod common;
 
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn server_binary() -> PathBuf {
-    let cli = PathBuf::from(env!("CARGO_BIN_EXE_pathstream-client"));
-    let server = cli.with_file_name("pathstream");
-    assert!(
-        server.exists(),
-        "{} is missing: build the workspace (cargo test --workspace)",
-        server.display()
-    );
-    server
-}
-
-/// Starts `pathstream serve` on a free port and reads the URL it prints.
-fn start_server() -> Server {
-    let mut child = Command::new(server_binary())
-        .args(["serve", "--addr", "127.0.0.1:0", "--backend", "cpu"])
-        .env("RUST_LOG", "warn")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("server starts");
-    let mut stdout = BufReader::new(child.stdout.take().expect("stdout"));
-    let mut line = String::new();
-    stdout.read_line(&mut line).expect("a first line");
-    let url = line
-        .split_whitespace()
-        .find(|w| w.starts_with("http://"))
-        .map(|u| u.trim_end_matches('/').to_owned())
-        .unwrap_or_else(|| panic!("no URL in: {line}"));
-    Server {
-        child,
-        url,
-        _stdout: stdout,
-    }
-}
-
-fn client(server: &Server, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
-        .arg("--server")
-        .arg(&server.url)
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use common::{client, start_server, text};
 
 #[test]
 fn render_saves_a_png_and_a_pfm_and_deletes_its_session() {
@@ -112,99 +52,6 @@ fn render_saves_a_png_and_a_pfm_and_deletes_its_session() {
         "",
         "render deleted its sessions"
     );
-}
-
-/// Polls `status ID` until the session halts in `generation` or a later
-/// one; its status.
-fn halted(server: &Server, id: &str, generation: u64) -> pathstream_client::SessionStatus {
-    let deadline = Instant::now() + Duration::from_secs(60);
-    loop {
-        let run = client(server, &["status", id]);
-        assert!(run.status.success(), "{}", text(&run.stderr));
-        let s: pathstream_client::SessionStatus =
-            serde_json::from_slice(&run.stdout).expect("status JSON");
-        if s.halted() && s.generation >= generation {
-            return s;
-        }
-        assert!(Instant::now() < deadline, "{id} never halted: {s:?}");
-        std::thread::sleep(Duration::from_millis(100));
-    }
-}
-
-#[test]
-fn adaptive_render_spreads_its_samples_and_says_so() {
-    let server = start_server();
-    let dir = tempfile::tempdir().expect("tempdir");
-    let out = dir.path().join("a.png");
-    let settings = [
-        "--scene",
-        "cornell",
-        "--width",
-        "32",
-        "--height",
-        "32",
-        "--spp",
-        "32",
-        "--adaptive",
-        "on",
-    ];
-    let run = client(
-        &server,
-        &[
-            &["render"][..],
-            &settings,
-            &["-o", out.to_str().expect("utf-8")],
-        ]
-        .concat(),
-    );
-    assert!(run.status.success(), "{}", text(&run.stderr));
-    // "32 spp (mean; min A, median B, max C)": after the uniform warm-up
-    // (16 spp), the noisiest tiles got more samples than the rest.
-    let stdout = text(&run.stdout);
-    let count = |key: &str| -> u64 {
-        let at = stdout
-            .find(key)
-            .unwrap_or_else(|| panic!("no '{key}' in {stdout}"));
-        let digits: String = stdout[at + key.len()..]
-            .chars()
-            .take_while(char::is_ascii_digit)
-            .collect();
-        digits
-            .parse()
-            .unwrap_or_else(|_| panic!("'{key}' in {stdout}"))
-    };
-    assert!(stdout.contains("32 spp (mean; "), "{stdout}");
-    let (min, max) = (count("min "), count("max "));
-    assert!(min >= 16 && max > min, "{stdout}");
-
-    // The session's own status says the same.
-    let created = client(&server, &[&["create"][..], &settings].concat());
-    assert!(created.status.success(), "{}", text(&created.stderr));
-    let s: pathstream_client::SessionStatus =
-        serde_json::from_slice(&created.stdout).expect("status JSON");
-    assert!(s.quality.adaptive);
-    let s = halted(&server, &s.id, s.generation);
-    assert!(s.quality.adaptive);
-    assert!(s.spp >= 32, "{s:?}");
-    let p = s.spp_spread;
-    assert!(p.min <= p.median && p.median <= p.max, "{p:?}");
-    assert!(p.min >= 16 && p.max > 16 && p.max > p.min, "{p:?}");
-    assert_eq!(s.tiles, 16, "32x32 in 8x8 tiles");
-
-    // Off again: every pixel gets the same samples.
-    let off = client(&server, &["quality", &s.id, "--adaptive", "off"]);
-    assert!(off.status.success(), "{}", text(&off.stderr));
-    let changed: pathstream_client::SessionStatus =
-        serde_json::from_slice(&off.stdout).expect("status JSON");
-    assert!(
-        changed.generation > s.generation,
-        "the change restarted the film"
-    );
-    let s = halted(&server, &s.id, changed.generation);
-    assert!(!s.quality.adaptive);
-    let p = s.spp_spread;
-    assert_eq!((p.min, p.median, p.max), (32, 32, 32), "{s:?}");
-    assert!(client(&server, &["delete", &s.id]).status.success());
 }
 
 #[test]

@@ -3,59 +3,13 @@
 //! into the same folder).
 
 use pathstream_client::LinearImage;
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-struct Server {
-    child: Child,
-    url: String,
-    /// Kept open: the server may print more after its first line.
-    _stdout: BufReader<std::process::ChildStdout>,
-}
+mod common;
 
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Starts `pathstream serve --backend cpu` on a free port.
-fn start_server() -> Server {
-    let cli = PathBuf::from(env!("CARGO_BIN_EXE_pathstream-client"));
-    let binary = cli.with_file_name("pathstream");
-    assert!(
-        binary.exists(),
-        "{} is missing: build the workspace (cargo test --workspace)",
-        binary.display()
-    );
-    let mut child = Command::new(binary)
-        .args(["serve", "--addr", "127.0.0.1:0", "--backend", "cpu"])
-        .env("RUST_LOG", "warn")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("server starts");
-    let mut stdout = BufReader::new(child.stdout.take().expect("stdout"));
-    let mut line = String::new();
-    stdout.read_line(&mut line).expect("a first line");
-    let url = line
-        .split_whitespace()
-        .find(|w| w.starts_with("http://"))
-        .map(|u| u.trim_end_matches('/').to_owned())
-        .unwrap_or_else(|| panic!("no URL in: {line}"));
-    Server {
-        child,
-        url,
-        _stdout: stdout,
-    }
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use common::{start_server, text};
 
 /// `pathstream-client --server S1 --server S2 ... ARGS`.
 fn client(servers: &[&str], args: &[&str]) -> Command {
@@ -284,7 +238,7 @@ fn a_server_lost_mid_render_is_dropped_and_the_others_render_its_share() {
         assert!(Instant::now() < deadline, "no session appeared on B");
         std::thread::sleep(Duration::from_millis(20));
     }
-    b.child.kill().expect("kill B");
+    b.kill();
     let run = render.wait_with_output().expect("exits");
     let (stdout, stderr) = (text(&run.stdout), text(&run.stderr));
     assert!(run.status.success(), "{stdout}{stderr}");
