@@ -11,6 +11,7 @@ mod density;
 pub mod error;
 mod frame;
 mod guard;
+mod link;
 pub mod listen;
 pub mod load;
 mod metrics;

@@ -2,8 +2,9 @@
 //! the default, or JPEG at a quality, several times smaller on a noisy
 //! image) and a width to scale them down to (the client's canvas), without
 //! changing the session's film. Asked on the stream's URL
-//! (`?format=jpeg&quality=85&width=640`) or by message
-//! (`{"stream": {"format": "jpeg", "quality": 85, "width": 640}}`).
+//! (`?format=jpeg&quality=85&width=640&progressive=true`) or by message
+//! (`{"stream": {"format": "jpeg", "quality": 85, "width": 640,
+//! "progressive": true}}`).
 
 use super::error::ApiError;
 use serde::Deserialize;
@@ -31,6 +32,9 @@ pub struct StreamSettings {
     pub format: StreamFormat,
     /// Scale frames down to this width (None: the film's).
     pub width: Option<u32>,
+    /// After a change, send the first frame at a quarter of the width and
+    /// the second at half (smaller, so sooner over a slow link).
+    pub progressive: bool,
 }
 
 /// A stream request as the URL or a message gives it.
@@ -40,6 +44,7 @@ pub struct StreamRequest {
     format: Option<String>,
     quality: Option<u8>,
     width: Option<u32>,
+    progressive: Option<bool>,
     /// The bearer token may come on the URL (browsers cannot set headers on
     /// a WebSocket); the auth layer reads it.
     #[serde(default, rename = "token")]
@@ -76,6 +81,7 @@ impl StreamRequest {
         Ok(StreamSettings {
             format,
             width: self.width,
+            progressive: self.progressive.unwrap_or(false),
         })
     }
 }
@@ -140,6 +146,7 @@ mod tests {
             format: f.map(str::to_owned),
             quality: q,
             width: w,
+            progressive: None,
             _token: None,
         };
         assert_eq!(
@@ -150,7 +157,8 @@ mod tests {
             r(Some("jpeg"), None, Some(64)).settings().expect("ok"),
             StreamSettings {
                 format: StreamFormat::Jpeg { quality: 85 },
-                width: Some(64)
+                width: Some(64),
+                progressive: false,
             }
         );
         for (req, needle) in [

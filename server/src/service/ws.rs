@@ -8,11 +8,16 @@
 //!
 //! At most one frame is in flight per client: the stream always sends the
 //! newest frame and skips the ones published meanwhile, so a slow or stalled
-//! client never slows rendering or anyone else.
+//! client never slows rendering or anyone else. A client that acknowledges
+//! frames (`{"ack": FRAME}`) gets the next only once it has the last, and
+//! its stats say how fast frames arrive (`link.rs`). Changes apply as they
+//! arrive, even while a frame is going out. With `progressive` the first
+//! frame after a change goes at a quarter of the width, the next at half.
 
 use super::change::Change;
 use super::error::ApiError;
 use super::frame::Encoded;
+use super::link::{progressive_width, Link};
 use super::session::{Frame, Session, Status};
 use super::stream::{StreamRequest, StreamSettings};
 use super::AppState;
@@ -23,7 +28,8 @@ use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
+use tokio::sync::mpsc;
 
 /// A client that takes longer than this to accept one frame is dropped.
 const SEND_TIMEOUT: Duration = Duration::from_secs(30);
@@ -46,7 +52,14 @@ pub async fn upgrade(
         .on_upgrade(move |socket| serve(socket, state, session, settings)))
 }
 
-fn stats(status: &Status, frame: &Frame, settings: StreamSettings, image: &Encoded) -> Value {
+fn stats(
+    status: &Status,
+    frame: &Frame,
+    settings: StreamSettings,
+    image: &Encoded,
+    link: &Link,
+    now: Instant,
+) -> Value {
     let mut v = serde_json::to_value(status).unwrap_or_else(|_| json!({}));
     if let Value::Object(m) = &mut v {
         m.insert("type".into(), json!("stats"));
@@ -54,6 +67,13 @@ fn stats(status: &Status, frame: &Frame, settings: StreamSettings, image: &Encod
         m.insert("frame_bytes".into(), json!(image.bytes.len()));
         m.insert("frame_width".into(), json!(image.width));
         m.insert("frame_height".into(), json!(image.height));
+        m.insert("progressive".into(), json!(settings.progressive));
+        m.insert("delivered_fps".into(), json!(link.fps(now)));
+        m.insert("link_mbps".into(), json!(link.mbps()));
+        m.insert(
+            "delivery_ms".into(),
+            json!(link.last_delivery().map(|d| d.as_secs_f64() * 1e3)),
+        );
         // The stats of the frame just sent, not of whatever came after it.
         if frame.generation == status.generation {
             m.insert("spp".into(), json!(frame.spp));
@@ -62,6 +82,8 @@ fn stats(status: &Status, frame: &Frame, settings: StreamSettings, image: &Encod
             m.insert("samples_per_sec".into(), json!(frame.samples_per_sec));
         }
         m.insert("frame".into(), json!(frame.seq));
+        // The frame's own restart, which may be older than the session's.
+        m.insert("generation".into(), json!(frame.generation));
     }
     v
 }
@@ -88,21 +110,103 @@ fn take_stream(text: &str) -> Result<(Option<StreamSettings>, Option<String>), A
     Ok((Some(settings), rest))
 }
 
+/// What the reading half of a socket tells the writing half.
+enum Inbound {
+    Settings(StreamSettings),
+    Ack(u64),
+    Error(String),
+}
+
 async fn serve(
     socket: WebSocket,
     state: Arc<AppState>,
     session: Arc<Session>,
-    mut settings: StreamSettings,
+    settings: StreamSettings,
 ) {
     session.clients.fetch_add(1, Ordering::Relaxed);
-    let (mut sink, mut stream) = socket.split();
+    let (sink, stream) = socket.split();
+    // Changes apply as they arrive, even while a large frame is going out.
+    let (to_writer, inbound) = mpsc::channel(16);
+    let reader = tokio::spawn(read(stream, state.clone(), session.clone(), to_writer));
+    write(sink, &state, &session, settings, inbound).await;
+    reader.abort();
+    session.clients.fetch_sub(1, Ordering::Relaxed);
+    session.touch();
+}
+
+/// The client's messages: acknowledgements, stream settings and changes
+/// (applied at once); until the socket closes.
+async fn read(
+    mut stream: futures_util::stream::SplitStream<WebSocket>,
+    state: Arc<AppState>,
+    session: Arc<Session>,
+    to_writer: mpsc::Sender<Inbound>,
+) {
+    while let Some(Ok(message)) = stream.next().await {
+        let text = match message {
+            Message::Text(t) => t,
+            Message::Binary(_) => {
+                let e = "message: expected JSON text, got binary".to_owned();
+                if to_writer.send(Inbound::Error(e)).await.is_err() {
+                    return;
+                }
+                continue;
+            }
+            Message::Close(_) => return,
+            _ => continue,
+        };
+        session.touch();
+        let result = take_ack(text.as_str()).and_then(|(ack, rest)| {
+            if let Some(seq) = ack {
+                // Never blocks the reader: a full channel drops the ack,
+                // which the writer's timeout then covers.
+                let _ = to_writer.try_send(Inbound::Ack(seq));
+            }
+            let Some(rest) = rest else { return Ok(None) };
+            let (stream, rest) = take_stream(&rest)?;
+            match rest {
+                Some(rest) => Change::parse_message(&rest, &state.scene_rules())
+                    .and_then(|changes| {
+                        changes
+                            .into_iter()
+                            .try_for_each(|c| session.apply(c).map(|_| ()))
+                    })
+                    .map(|()| stream),
+                None => Ok(stream),
+            }
+        });
+        let news = match result {
+            Ok(Some(settings)) => Inbound::Settings(settings),
+            Ok(None) => continue,
+            Err(e) => Inbound::Error(e.to_string()),
+        };
+        if to_writer.send(news).await.is_err() {
+            return;
+        }
+    }
+}
+
+/// Sends the newest frame whenever there is one and the link is ready for
+/// it (see `link.rs`), each followed by its stats; errors from the reader;
+/// the close when the session is deleted or the server shuts down.
+async fn write(
+    mut sink: futures_util::stream::SplitSink<WebSocket, Message>,
+    state: &AppState,
+    session: &Session,
+    mut settings: StreamSettings,
+    mut inbound: mpsc::Receiver<Inbound>,
+) {
     let mut frames = session.subscribe();
     frames.mark_changed();
     let mut shutdown = state.shutdown_signal();
     let mut last_seq = 0u64;
+    let mut link = Link::default();
+    // Frames sent of the current generation (progressive resolution).
+    let (mut generation, mut nth) = (u64::MAX, 0u64);
     loop {
+        let ack_wait = link.ack_deadline();
         tokio::select! {
-            changed = frames.changed() => {
+            changed = frames.changed(), if link.ready() => {
                 if changed.is_err() {
                     break;
                 }
@@ -115,52 +219,46 @@ async fn serve(
                     state.metrics.frames_dropped.fetch_add(frame.seq - last_seq - 1, Ordering::Relaxed);
                 }
                 last_seq = frame.seq;
+                if frame.generation != generation {
+                    (generation, nth) = (frame.generation, 0);
+                }
+                let mut wanted = StreamSettings { progressive: false, ..settings };
+                if settings.progressive {
+                    let full = settings.width.unwrap_or(frame.width).min(frame.width);
+                    wanted.width = Some(progressive_width(full, nth, frame.halted));
+                }
+                nth += 1;
                 let f = frame.clone();
-                let image = match tokio::task::spawn_blocking(move || f.encoded(settings)).await {
+                let image = match tokio::task::spawn_blocking(move || f.encoded(wanted)).await {
                     Ok(Ok(image)) => image,
                     _ => break,
                 };
-                let text = stats(&session.status(), &frame, settings, &image).to_string();
+                let start = Instant::now();
+                link.sending(frame.seq, image.bytes.len(), start);
+                let text = stats(&session.status(), &frame, settings, &image, &link, start).to_string();
                 let send = async {
                     sink.send(Message::Binary(image.bytes.to_vec().into())).await?;
                     sink.send(Message::Text(Utf8Bytes::from(text))).await
                 };
                 match tokio::time::timeout(SEND_TIMEOUT, send).await {
                     Ok(Ok(())) => {
+                        link.accepted(Instant::now());
                         state.metrics.frames_sent.fetch_add(1, Ordering::Relaxed);
                     }
                     _ => break,
                 }
             }
-            message = stream.next() => {
-                let text = match message {
-                    Some(Ok(Message::Text(t))) => t,
-                    Some(Ok(Message::Binary(_))) => {
-                        if sink.send(error_message("message: expected JSON text, got binary")).await.is_err() {
-                            break;
-                        }
-                        continue;
-                    }
-                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
-                    Some(Ok(_)) => continue,
-                };
-                session.touch();
-                let result = take_stream(text.as_str()).and_then(|(stream, rest)| {
-                    if let Some(new) = stream {
-                        settings = new;
-                    }
-                    match rest {
-                        Some(rest) => Change::parse_message(&rest, &state.scene_rules())
-                            .and_then(|changes| changes.into_iter().try_for_each(|c| session.apply(c).map(|_| ()))),
-                        None => Ok(()),
-                    }
-                });
-                if let Err(e) = result {
-                    if sink.send(error_message(&e.to_string())).await.is_err() {
+            () = sleep_until(ack_wait), if ack_wait.is_some() => link.give_up(),
+            news = inbound.recv() => match news {
+                Some(Inbound::Ack(seq)) => link.acked(seq, Instant::now()),
+                Some(Inbound::Settings(new)) => settings = new,
+                Some(Inbound::Error(e)) => {
+                    if sink.send(error_message(&e)).await.is_err() {
                         break;
                     }
                 }
-            }
+                None => break, // the client closed the socket
+            },
             () = session.deleted() => {
                 let reason = format!("session '{}' was deleted", session.id);
                 let _ = sink.send(Message::Close(Some(axum::extract::ws::CloseFrame {
@@ -178,6 +276,28 @@ async fn serve(
             }
         }
     }
-    session.clients.fetch_sub(1, Ordering::Relaxed);
-    session.touch();
+}
+
+/// Sleeps until `at` (forever when None; the branch is off then).
+async fn sleep_until(at: Option<Instant>) {
+    match at {
+        Some(at) => tokio::time::sleep_until(at.into()).await,
+        None => std::future::pending().await,
+    }
+}
+
+/// Takes an acknowledgement (`"ack": SEQ`) out of a client message; the
+/// rest of the message, if any.
+fn take_ack(text: &str) -> Result<(Option<u64>, Option<String>), ApiError> {
+    let Ok(Value::Object(mut m)) = serde_json::from_str::<Value>(text) else {
+        return Ok((None, Some(text.to_owned())));
+    };
+    let Some(ack) = m.remove("ack") else {
+        return Ok((None, Some(text.to_owned())));
+    };
+    let seq = ack
+        .as_u64()
+        .ok_or_else(|| ApiError::BadRequest(format!("ack: must be a frame number (got {ack})")))?;
+    let rest = (!m.is_empty()).then(|| Value::Object(m).to_string());
+    Ok((Some(seq), rest))
 }
