@@ -11,7 +11,8 @@
 //   samples.js   the samples overlay (where an adaptive render sampled)
 //   camera.js    camera and light input (moves, turns, colours)
 //   input.js     keys, mouse and touch
-//   panels.js    quality and light panels;  export.js  downloads, curl
+//   panels.js    quality, stream format and light panels;  export.js  downloads, curl
+//   streamfmt.js the stream's format in auto (a pure decision)
 //   models.js    model files: picked or dropped, uploaded, rendered
 //   messages.js  the message bar and connection badge
 //   vec.js, format.js  small helpers

@@ -3,7 +3,14 @@
 //! frames delivered per second. Runs its own server on 127.0.0.1:0, or uses
 //! the one at `--url` (a box, or a proxy in front of boxes: deploy/).
 //!
-//!     cargo run --release --example latency -- [--backend cpu|opencl|auto] [--size 256] [--updates 100] [--url http://HOST:PORT]
+//!     cargo run --release --example latency -- [--backend cpu|opencl|auto] [--size 256]
+//!         [--height H] [--updates 100] [--url http://HOST:PORT]
+//!         [--stream 'format=jpeg&quality=85&progressive=true'] [--ack] [--fov-updates]
+//!
+//! `--stream` is added to the WebSocket's URL; `--ack` answers every frame
+//! with `{"ack": FRAME}` (as the page does), so that one frame is in flight
+//! and the stats measure the link (printed at the end).
+//! `scripts/netem-bench.sh` runs it across a shaped link.
 
 use futures_util::{SinkExt, StreamExt};
 use pathstream::render::output::encode_png;
@@ -34,6 +41,12 @@ async fn main() -> anyhow::Result<()> {
             .init();
     }
     let size: u32 = arg("--size", "256").parse()?;
+    let height: u32 = arg("--height", &size.to_string()).parse()?;
+    let stream_query = arg("--stream", "");
+    let ack = std::env::args().any(|a| a == "--ack");
+    // Field-of-view updates keep the camera looking into the box (the
+    // default moves it, which shows mostly dark walls: small frames).
+    let fov_updates = std::env::args().any(|a| a == "--fov-updates");
     let updates: usize = arg("--updates", "100").parse()?;
     let backend_arg = arg("--backend", "cpu");
     let backend = match backend_arg.as_str() {
@@ -56,7 +69,7 @@ async fn main() -> anyhow::Result<()> {
         (None, url.trim_end_matches('/').to_owned())
     };
     let client = reqwest::Client::new();
-    let mut create = json!({"scene": "cornell-glass", "width": size, "height": size});
+    let mut create = json!({"scene": "cornell-glass", "width": size, "height": height});
     if running.is_none() && std::env::args().any(|a| a == "--backend") {
         // Another server renders on its default backend unless asked.
         create["backend"] = json!(backend_arg);
@@ -74,34 +87,52 @@ async fn main() -> anyhow::Result<()> {
         "session {id} on {} ({}) at {base}",
         created["backend"], created["device"]
     );
+    let query = if stream_query.is_empty() {
+        String::new()
+    } else {
+        format!("?{stream_query}")
+    };
     let (mut ws, _) = tokio_tungstenite::connect_async(format!(
-        "{}/api/sessions/{id}/ws",
+        "{}/api/sessions/{id}/ws{query}",
         base.replacen("http://", "ws://", 1)
     ))
     .await?;
 
     // Warm up: a few frames.
     let mut seen = 0;
+    let mut last_stats = Value::Null;
     while seen < 5 {
-        if let Some(Ok(Message::Binary(_))) = ws.next().await {
-            seen += 1;
+        match ws.next().await {
+            Some(Ok(Message::Text(t))) => {
+                let v: Value = serde_json::from_str(t.as_str())?;
+                if ack && v["type"] == "stats" {
+                    ws.send(Message::Text(json!({"ack": v["frame"]}).to_string().into()))
+                        .await?;
+                }
+                seen += 1;
+            }
+            Some(Ok(_)) => {}
+            _ => anyhow::bail!("stream ended"),
         }
     }
     let mut latencies = Vec::new();
     for i in 0..updates {
         let z = 250.0 + (i % 2) as f64 * 20.0;
+        let update = match fov_updates {
+            true => json!({"camera": {"vfov_deg": 40.0 + (i % 2) as f64}}),
+            false => json!({"camera": {"position": [50, 52, z]}}),
+        };
         let sent = Instant::now();
-        ws.send(Message::Text(
-            json!({"camera": {"position": [50, 52, z]}})
-                .to_string()
-                .into(),
-        ))
-        .await?;
+        ws.send(Message::Text(update.to_string().into())).await?;
         let target = i as u64 + 1; // generation after this update
         loop {
             match tokio::time::timeout(Duration::from_secs(30), ws.next()).await {
                 Ok(Some(Ok(Message::Text(t)))) => {
                     let v: Value = serde_json::from_str(t.as_str())?;
+                    if ack && v["type"] == "stats" {
+                        ws.send(Message::Text(json!({"ack": v["frame"]}).to_string().into()))
+                            .await?;
+                    }
                     if v["type"] == "stats"
                         && v["generation"].as_u64() >= Some(target)
                         && v["spp"].as_u64() > Some(0)
@@ -117,7 +148,7 @@ async fn main() -> anyhow::Result<()> {
     }
     latencies.sort_by(f64::total_cmp);
     println!(
-        "update -> first frame at {size}x{size}: p50 {:.1} ms, p95 {:.1} ms over {updates} updates",
+        "update -> first frame at {size}x{height}: p50 {:.1} ms, p95 {:.1} ms over {updates} updates",
         percentile(&latencies, 0.5),
         percentile(&latencies, 0.95)
     );
@@ -125,29 +156,49 @@ async fn main() -> anyhow::Result<()> {
     // Frames delivered per second to one reading client, steady state.
     let t0 = Instant::now();
     let mut frames = 0;
+    let mut bytes = 0usize;
     while t0.elapsed() < Duration::from_secs(3) {
-        if let Ok(Some(Ok(Message::Binary(_)))) =
-            tokio::time::timeout(Duration::from_secs(3), ws.next()).await
-        {
-            frames += 1;
+        match tokio::time::timeout(Duration::from_secs(3), ws.next()).await {
+            Ok(Some(Ok(Message::Binary(b)))) => {
+                frames += 1;
+                bytes += b.len();
+            }
+            Ok(Some(Ok(Message::Text(t)))) => {
+                let v: Value = serde_json::from_str(t.as_str())?;
+                if v["type"] == "stats" {
+                    if ack {
+                        ws.send(Message::Text(json!({"ack": v["frame"]}).to_string().into()))
+                            .await?;
+                    }
+                    last_stats = v;
+                }
+            }
+            _ => {}
         }
     }
+    if std::env::var_os("LATENCY_STATS").is_some() {
+        println!("last stats: {last_stats}");
+    }
     println!(
-        "frames delivered: {:.1} per second",
-        frames as f64 / t0.elapsed().as_secs_f64()
+        "frames delivered: {:.1} per second, {:.0} KB per frame; stream stats: format {}, link {} Mbit/s, delivery {} ms",
+        frames as f64 / t0.elapsed().as_secs_f64(),
+        bytes as f64 / frames.max(1) as f64 / 1e3,
+        last_stats["format"],
+        last_stats["link_mbps"].as_f64().map_or("-".into(), |m| format!("{m:.1}")),
+        last_stats["delivery_ms"].as_f64().map_or("-".into(), |m| format!("{m:.0}")),
     );
 
     // PNG encode time of one frame of this size (fast compression).
-    let pixels: Vec<[f32; 3]> = (0..size * size)
+    let pixels: Vec<[f32; 3]> = (0..size * height)
         .map(|i| [(i % 7) as f32 / 7.0, 0.5, 0.25])
         .collect();
     let t = Instant::now();
     let n = 20;
     for _ in 0..n {
-        std::hint::black_box(encode_png(size, size, &pixels, &Tonemap::default())?);
+        std::hint::black_box(encode_png(size, height, &pixels, &Tonemap::default())?);
     }
     println!(
-        "PNG encode at {size}x{size}: {:.2} ms per frame",
+        "PNG encode at {size}x{height}: {:.2} ms per frame",
         t.elapsed().as_secs_f64() * 1e3 / f64::from(n)
     );
     client

@@ -1,7 +1,10 @@
 // The HUD over the image: state, spp, paths/s, error estimate, time, size
 // and device of the latest status or stats; with adaptive sampling, spp is
 // the mean, and the HUD adds the spread (least, median and most samples of
-// a pixel) and, with an error target, the tiles that reached it.
+// a pixel) and, with an error target, the tiles that reached it. The stream
+// row (from the socket's stats): format and size of the last frame, frames
+// delivered per second, the link's rate and the last frame's delivery time
+// (the last two once the page's acknowledgements reach the server).
 
 import { $ } from "./dom.js";
 import { fmtRate, fmtTime } from "./format.js";
@@ -24,6 +27,28 @@ function showStatus(s) {
   setHud("hud-elapsed", fmtTime(s.elapsed_ms), s.elapsed_ms);
   setHud("hud-res", `${s.width} × ${s.height}`);
   setHud("hud-device", `${s.backend}: ${s.device}`);
+  if (s.type === "stats") showStream(s);
+}
+
+/** The stream row; a field the stats lack (null) is left out. */
+function showStream(s) {
+  const row = $("hud-stream-row");
+  row.hidden = s.format == null;
+  if (row.hidden) return;
+  const parts = [s.format];
+  if (s.frame_bytes != null) parts.push(`${Math.max(1, Math.round(s.frame_bytes / 1024))} KB`);
+  const more = [];
+  if (s.delivered_fps != null) more.push(`${Math.round(s.delivered_fps)} fps`);
+  if (s.link_mbps != null) more.push(`${s.link_mbps.toPrecision(3)} Mbit/s`);
+  if (s.delivery_ms != null) more.push(`${Math.round(s.delivery_ms)} ms`);
+  setHud("hud-stream", [parts.join(" "), ...more].join(" · "), s.format);
+  const d = $("hud-stream").dataset;
+  d.format = s.format;
+  d.frameBytes = s.frame_bytes ?? "";
+  d.frameWidth = s.frame_width ?? "";
+  d.fps = s.delivered_fps ?? "";
+  d.linkMbps = s.link_mbps ?? "";
+  d.deliveryMs = s.delivery_ms ?? "";
 }
 
 /** The adaptive rows: the spread (hidden when `s` is null or from a server

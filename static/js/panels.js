@@ -1,12 +1,15 @@
 // The side panels: quality (a preset or each knob, sent over HTTP; the
-// server's refusal shown and the server's value restored) and light (colour
-// and intensity, sent with the camera and light updates).
+// server's refusal shown and the server's value restored), the stream format
+// (pinned, or chosen from the measured link: streamfmt.js; sent over the
+// socket) and light (colour and intensity, sent with the camera and light
+// updates).
 
 import { api } from "./api.js";
 import { $, el } from "./dom.js";
 import { lightChanged } from "./camera.js";
 import { showMessage } from "./messages.js";
-import { applyAnswer, edit } from "./session.js";
+import { applyAnswer, edit, send } from "./session.js";
+import { chooseFormat, streamSettings } from "./streamfmt.js";
 import { on, state } from "./state.js";
 import { same } from "./vec.js";
 
@@ -118,6 +121,44 @@ for (const input of document.querySelectorAll("#quality [data-field]")) {
 }
 $("quality").addEventListener("submit", (e) => e.preventDefault());
 $("light").addEventListener("submit", (e) => e.preventDefault());
+
+// ---------------------------------------------------------------- stream format
+
+function setStreamFormat(format) {
+  const st = state.stream;
+  st.format = format;
+  st.lastSwitch = performance.now();
+  el.body.dataset.streamFormat = format;
+  // With the socket down, the next one opens with it (session.js).
+  send({ stream: streamSettings(format) });
+}
+
+$("stream-format").addEventListener("change", () => {
+  const choice = $("stream-format").value;
+  state.stream.choice = choice;
+  if (choice !== "auto") setStreamFormat(choice);
+  $("stream-format").blur(); // keys drive the view again
+});
+
+on("status", (s, fromStream) => {
+  if (!fromStream || s.type !== "stats" || s.format == null) return;
+  const st = state.stream;
+  // Only whole frames tell the stream's need; progressive ones are smaller.
+  const whole = s.frame_width >= s.width;
+  if (whole && s.format === "png") st.pngBytes = s.frame_bytes;
+  // A frame sent before the last switch reached the server says nothing.
+  if (st.choice !== "auto" || !whole || s.format !== st.format) return;
+  const next = chooseFormat({
+    current: st.format,
+    linkMbps: s.link_mbps,
+    frameBytes: s.frame_bytes,
+    pngBytes: st.pngBytes,
+    sinceSwitchMs: performance.now() - st.lastSwitch,
+  });
+  if (next !== st.format) setStreamFormat(next);
+});
+
+// ---------------------------------------------------------------- light
 
 const hex = (v) => Math.round(Math.max(0, Math.min(1, v)) * 255).toString(16).padStart(2, "0");
 

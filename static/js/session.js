@@ -7,6 +7,7 @@ import { api } from "./api.js";
 import { el } from "./dom.js";
 import { setConn, showMessage } from "./messages.js";
 import { QUIET_MS, RETRY_MAX_MS, emit, state } from "./state.js";
+import { streamQuery } from "./streamfmt.js";
 import { clone, length, same } from "./vec.js";
 import { drawFrames, markDisplayed, updateSizeInputs } from "./view.js";
 
@@ -112,8 +113,11 @@ export function scheduleReconnect(why) {
 export function openSocket() {
   closeSocket();
   const proto = location.protocol === "https:" ? "wss" : "ws";
-  const q = state.token ? `?token=${encodeURIComponent(state.token)}` : "";
-  const ws = new WebSocket(`${proto}://${location.host}/api/sessions/${state.sessionId}/ws${q}`);
+  // Progressive: the first frames after a change come small (sooner), and
+  // the format the page streams now (streamfmt.js) survives a reconnect.
+  let q = streamQuery(state.stream.format);
+  if (state.token) q += `&token=${encodeURIComponent(state.token)}`;
+  const ws = new WebSocket(`${proto}://${location.host}/api/sessions/${state.sessionId}/ws?${q}`);
   ws.binaryType = "blob";
   state.ws = ws;
   setConn("connecting", "connecting");
@@ -133,8 +137,13 @@ export function openSocket() {
         // The stats describe the frame sent just before them.
         const f = state.lastReceived;
         if (f && !f.stats) {
-          f.stats = { spp: m.spp, generation: m.generation };
+          f.stats = { spp: m.spp, generation: m.generation, frame: m.frame };
           if (state.displayed === f) markDisplayed(f);
+          // The image is here and handed to drawing: the server may send
+          // the next (it then keeps one frame in flight and measures the
+          // link). A server whose stats lack link_mbps refuses acks.
+          if (m.frame != null && "link_mbps" in m) send({ ack: m.frame });
+          countFrame(m);
         }
         applyStatus(m, true);
       }
@@ -157,6 +166,17 @@ export function openSocket() {
     const why = event.code === 1001 ? "server going away" : "socket closed";
     scheduleReconnect(why);
   };
+}
+
+/** For tests and scripts: the last frame's width and how many frames came
+ *  narrower than the session (progressive ones). */
+function countFrame(m) {
+  if (m.frame_width == null) return;
+  el.body.dataset.frameWidth = String(m.frame_width);
+  if (m.frame_width < m.width) {
+    state.narrowFrames += 1;
+    el.body.dataset.narrowFrames = String(state.narrowFrames);
+  }
 }
 
 export function closeSocket() {

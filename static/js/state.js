@@ -11,7 +11,9 @@
 // and mirrors the essentials on <body> as data attributes: data-session-id,
 // data-conn (starting, connecting, live, reconnecting), data-frames,
 // data-generation, data-spp (latest stats), data-frame-spp and
-// data-frame-generation (the image shown).
+// data-frame-generation (the image shown), data-frame-width and
+// data-narrow-frames (the last frame's width; frames sent narrower than the
+// session, progressive), data-stream-format (the format the page asks for).
 
 export const TOKEN_KEY = "pathstream.token";
 export const THESIS_SCENES = { Digit1: "cornell", Digit2: "cornell-glass" };
@@ -57,6 +59,10 @@ export const state = {
   lastReceived: null,
   displayed: null,
   chart: [], // [{generation, points: [[ms, err]]}]
+  /** The stream's format: chosen in the panel ("auto", "png", "jpeg"), the
+   *  one streamed now, when it last switched, the last whole PNG's bytes. */
+  stream: { choice: "auto", format: "png", lastSwitch: 0, pngBytes: null },
+  narrowFrames: 0, // frames narrower than the session (progressive)
 };
 
 export function intParam(name) {

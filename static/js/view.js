@@ -1,5 +1,6 @@
-// The image: frames from the socket drawn on the canvas (newest wins while
-// one decodes), the canvas scaled to the render area, and the resolution
+// The image: frames from the socket drawn on the canvas at the session's
+// size (newest wins while one decodes; smaller progressive frames
+// stretched over it), the canvas scaled to the render area, and the resolution
 // that fits it.
 
 import { ctx, el } from "./dom.js";
@@ -21,12 +22,17 @@ export async function drawFrames() {
         showMessage(`could not decode a frame: ${e.message}`);
         continue;
       }
-      if (el.view.width !== bitmap.width || el.view.height !== bitmap.height) {
-        el.view.width = bitmap.width;
-        el.view.height = bitmap.height;
+      // The canvas keeps the session's size; a smaller frame (progressive,
+      // just after a change) is stretched over all of it.
+      const w = state.want.width || bitmap.width;
+      const h = state.want.height || bitmap.height;
+      if (el.view.width !== w || el.view.height !== h) {
+        el.view.width = w;
+        el.view.height = h;
         fitCanvas();
       }
-      ctx.drawImage(bitmap, 0, 0);
+      ctx.imageSmoothingEnabled = bitmap.width !== w || bitmap.height !== h;
+      ctx.drawImage(bitmap, 0, 0, w, h);
       bitmap.close();
       state.frames += 1;
       el.body.dataset.frames = String(state.frames);
