@@ -14,14 +14,7 @@ use tokio_tungstenite::tungstenite::Message;
 type Ws = http::Ws;
 
 async fn connect(base: &str, id: &str, query: &str) -> Ws {
-    let url = format!(
-        "{}/api/sessions/{id}/ws{query}",
-        base.replace("http://", "ws://")
-    );
-    tokio_tungstenite::connect_async(url)
-        .await
-        .expect("ws connects")
-        .0
+    http::ws_connect_with(base, id, query).await
 }
 
 /// The next frame and the stats that follow it.
@@ -126,24 +119,8 @@ async fn a_socket_chooses_jpeg_or_png_and_stats_say_which_and_how_big() {
     ))
     .await
     .expect("send");
-    let until = Instant::now() + Duration::from_secs(30);
-    loop {
-        let msg = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next())
-            .await
-            .expect("an answer")
-            .expect("open")
-            .expect("message");
-        if let Message::Text(t) = msg {
-            let v: Value = serde_json::from_str(t.as_str()).expect("json");
-            if v["type"] == "error" {
-                assert!(
-                    v["error"].as_str().unwrap_or("").contains("stream.quality"),
-                    "{v}"
-                );
-                break;
-            }
-        }
-    }
+    let e = http::next_error(&mut ws).await;
+    assert!(e.contains("stream.quality"), "{e}");
     ws.send(Message::Text(
         json!({"stream": {"format": "jpeg"}}).to_string().into(),
     ))

@@ -14,14 +14,7 @@ use tokio_tungstenite::tungstenite::Message;
 type Ws = http::Ws;
 
 async fn connect(base: &str, id: &str, query: &str) -> Ws {
-    let url = format!(
-        "{}/api/sessions/{id}/ws{query}",
-        base.replace("http://", "ws://")
-    );
-    tokio_tungstenite::connect_async(url)
-        .await
-        .expect("ws connects")
-        .0
+    http::ws_connect_with(base, id, query).await
 }
 
 /// The next frame's stats (the image before them is skipped).
@@ -162,22 +155,6 @@ async fn progressive_resolution_sends_a_quarter_then_half_then_the_whole_width()
     }
     // A bad acknowledgement is refused by name; the socket stays open.
     send(&mut plain, json!({"ack": "soon"})).await;
-    let until = Instant::now() + Duration::from_secs(30);
-    loop {
-        let msg = tokio::time::timeout(
-            until.saturating_duration_since(Instant::now()),
-            plain.next(),
-        )
-        .await
-        .expect("an answer")
-        .expect("open")
-        .expect("message");
-        if let Message::Text(t) = msg {
-            let v: Value = serde_json::from_str(t.as_str()).expect("json");
-            if v["type"] == "error" {
-                assert!(v["error"].as_str().unwrap_or("").starts_with("ack:"), "{v}");
-                break;
-            }
-        }
-    }
+    let e = http::next_error(&mut plain).await;
+    assert!(e.starts_with("ack:"), "{e}");
 }

@@ -93,11 +93,37 @@ pub async fn patch(base: &str, id: &str, what: &str, body: Value) -> reqwest::Re
 }
 
 pub async fn ws_connect(base: &str, id: &str) -> Ws {
-    let url = format!("{}/api/sessions/{id}/ws", base.replace("http://", "ws://"));
+    ws_connect_with(base, id, "").await
+}
+
+/// The session's WebSocket with `query` (e.g. `?format=jpeg`) on its URL.
+pub async fn ws_connect_with(base: &str, id: &str, query: &str) -> Ws {
+    let url = format!(
+        "{}/api/sessions/{id}/ws{query}",
+        base.replace("http://", "ws://")
+    );
     tokio_tungstenite::connect_async(url)
         .await
         .expect("ws connects")
         .0
+}
+
+/// Reads `ws` until an error message comes (at most 30 s); its text.
+pub async fn next_error(ws: &mut Ws) -> String {
+    let until = Instant::now() + Duration::from_secs(30);
+    loop {
+        let msg = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next())
+            .await
+            .expect("an answer")
+            .expect("open")
+            .expect("message");
+        if let Message::Text(t) = msg {
+            let v: Value = serde_json::from_str(t.as_str()).expect("json");
+            if v["type"] == "error" {
+                return v["error"].as_str().unwrap_or("").to_owned();
+            }
+        }
+    }
 }
 
 /// Reads frames until `deadline`; returns (frames, last stats).
