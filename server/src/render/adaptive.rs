@@ -18,7 +18,8 @@
 //! the round raises every tile towards c sqrt(v_t), with c as large as B
 //! allows ("water filling"). No tile more than doubles in one round (its
 //! estimate is noisy) and none falls below [`RATE_FLOOR`] of the mean rate
-//! (a caustic the warm-up missed still gets found).
+//! or [`NEIGHBOUR_FLOOR`] of its noisiest neighbour's (a caustic the
+//! warm-up missed still gets found).
 //!
 //! With a target error e, tile t is done once e_t <= e^2 S P_t / P (S: the
 //! image's sum of squared means, P: its pixels): the tiles' shares of the
@@ -40,6 +41,13 @@ const ROUND_GROWTH: f64 = 0.5;
 /// No live tile's sampling rate (sqrt of its variance) counts as less than
 /// this fraction of the image's mean rate.
 const RATE_FLOOR: f64 = 0.05;
+/// No tile's rate counts as less than this fraction of its noisiest edge
+/// neighbour's: a caustic or a glass edge rarely ends at a tile's border,
+/// and a tile whose warm-up missed it reads near zero. Measured (equal
+/// samples, four seeds, 64x64): the variance ratio to uniform on
+/// cornell-glass went from 1.09 to 1.38 and on the glass mesh scene from
+/// 1.10 to 1.37, cornell from 2.23 to 2.16 (0.1-0.5 tried; 0.15 best).
+const NEIGHBOUR_FLOOR: f64 = 0.15;
 
 /// `count` more samples for every pixel of `tile`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -241,10 +249,24 @@ pub fn plan_round(
         return Vec::new();
     }
     // Per-pixel variance (its square root: the rate samples should go at).
-    let rate = |t: usize| {
+    let own = |t: usize| {
         (errors[t].err2 * counts[t] as f64 / size[t])
             .max(0.0)
             .sqrt()
+    };
+    // A tile counts as at least NEIGHBOUR_FLOOR as noisy as its noisiest
+    // edge neighbour.
+    let rate = |t: usize| {
+        let (cols, rows) = (tiles.cols as i64, tiles.rows as i64);
+        let (x, y) = (t as i64 % cols, t as i64 / cols);
+        let mut best = own(t);
+        for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+            let (nx, ny) = (x + dx, y + dy);
+            if nx >= 0 && ny >= 0 && nx < cols && ny < rows {
+                best = best.max(NEIGHBOUR_FLOOR * own((ny * cols + nx) as usize));
+            }
+        }
+        best
     };
     let weight: f64 = live.iter().map(|&t| size[t]).sum();
     let mean_rate = live.iter().map(|&t| rate(t) * size[t]).sum::<f64>() / weight;
