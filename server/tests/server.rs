@@ -95,6 +95,14 @@ async fn session_lifecycle() {
         .expect("text");
     assert!(metrics.contains("pathstream_sessions 1"), "{metrics}");
     assert!(
+        metrics.contains("pathstream_worker_sessions{worker=\"0\",backend=\"cpu\"} 1"),
+        "{metrics}"
+    );
+    assert!(
+        metrics.contains("pathstream_worker_busy_ratio{worker=\"0\",backend=\"cpu\"} "),
+        "{metrics}"
+    );
+    assert!(
         metrics.contains("pathstream_samples_total{backend=\"cpu\"} "),
         "{metrics}"
     );

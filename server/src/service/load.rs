@@ -30,6 +30,36 @@ pub struct WorkerLoad {
     pub busy: f64,
 }
 
+/// The workers' busy fractions and sessions as Prometheus gauges, by
+/// worker number and backend (no device names: `/metrics` holds counts).
+pub fn prometheus(loads: &[WorkerLoad]) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# HELP pathstream_worker_busy_ratio Fraction of the last 5 s each worker spent rendering.\n# TYPE pathstream_worker_busy_ratio gauge"
+    );
+    for (i, l) in loads.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "pathstream_worker_busy_ratio{{worker=\"{i}\",backend=\"{}\"}} {}",
+            l.backend, l.busy
+        );
+    }
+    let _ = writeln!(
+        out,
+        "# HELP pathstream_worker_sessions Sessions placed on each worker.\n# TYPE pathstream_worker_sessions gauge"
+    );
+    for (i, l) in loads.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "pathstream_worker_sessions{{worker=\"{i}\",backend=\"{}\"}} {}",
+            l.backend, l.sessions
+        );
+    }
+    out
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 struct Slot {
     /// Which slot since the meter's origin this holds (stale when older than the window).
@@ -137,6 +167,25 @@ impl BusyMeter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn loads_read_as_prometheus_gauges() {
+        let text = prometheus(&[WorkerLoad {
+            backend: "cpu".into(),
+            device: "rayon, 2 threads".into(),
+            sessions: 3,
+            busy: 0.25,
+        }]);
+        assert!(
+            text.contains("pathstream_worker_busy_ratio{worker=\"0\",backend=\"cpu\"} 0.25\n"),
+            "{text}"
+        );
+        assert!(
+            text.contains("pathstream_worker_sessions{worker=\"0\",backend=\"cpu\"} 3\n"),
+            "{text}"
+        );
+        assert!(!text.contains("rayon"), "no device names: {text}");
+    }
 
     fn ms(n: u64) -> Duration {
         Duration::from_millis(n)

@@ -157,10 +157,9 @@ async fn presets() -> Json<Value> {
 }
 
 async fn metrics(State(state): State<Arc<AppState>>) -> impl IntoResponse {
-    (
-        [(header::CONTENT_TYPE, "text/plain; version=0.0.4")],
-        state.metrics.render(state.session_count()),
-    )
+    let mut text = state.metrics.render(state.session_count());
+    text.push_str(&super::load::prometheus(&state.load()));
+    ([(header::CONTENT_TYPE, "text/plain; version=0.0.4")], text)
 }
 
 #[derive(Deserialize)]
