@@ -136,6 +136,10 @@ fn quick_bench_writes_tables_csv_and_plots_and_caches_references() {
 
 #[test]
 fn error_estimate_calibration_is_near_one() {
+    // 24x24, not 16x16: at 16x16 a few fireflies around cornell's small
+    // lamp decide the median, and on a loaded machine (the checkpoints'
+    // sample counts follow the time) it strayed to 0.69 one run in six;
+    // 24x24 reads 0.92 in every run measured under the same load.
     let cache = tempfile::tempdir().expect("tempdir");
     let out_dir = tempfile::tempdir().expect("tempdir");
     let out = pathstream(&[
@@ -147,7 +151,7 @@ fn error_estimate_calibration_is_near_one() {
         "--scenes",
         "cornell",
         "--trade-size",
-        "16x16",
+        "24x24",
         "--trade-seconds",
         "0.5",
         "--reference-error",
