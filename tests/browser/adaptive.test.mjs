@@ -7,7 +7,7 @@
 
 import assert from "node:assert/strict";
 import { after, before, describe, it } from "node:test";
-import { freePort, launchBrowser, session, sleep, startServer, waitFor, waitFrame, watchConsole } from "./harness.mjs";
+import { openPage, session, sleep, waitFor, waitFrame } from "./harness.mjs";
 
 // Not multiples of the tile: the last column and row of tiles are cut short.
 const W = 100;
@@ -25,11 +25,7 @@ describe("adaptive sampling in the browser", { timeout: 300000 }, () => {
   const status = async () => session(server.base, await id());
 
   before(async () => {
-    server = await startServer(await freePort());
-    browser = await launchBrowser();
-    page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
-    page.setDefaultTimeout(30000);
-    errors = watchConsole(page);
+    ({ server, browser, page, errors } = await openPage());
   });
 
   after(async () => {

@@ -122,6 +122,16 @@ export async function launchBrowser() {
 }
 
 /** One JSON API call; returns {status, body}. */
+/** A server on a free port and a 1280x720 page in Chromium, with its
+ *  console watched: what most browser tests start from. */
+export async function openPage() {
+  const server = await startServer(await freePort());
+  const browser = await launchBrowser();
+  const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+  page.setDefaultTimeout(30000);
+  return { server, browser, page, errors: watchConsole(page) };
+}
+
 export async function api(base, method, route, body, token) {
   const headers = {};
   if (body !== undefined) headers["content-type"] = "application/json";

@@ -7,7 +7,7 @@
 
 import assert from "node:assert/strict";
 import { after, before, describe, it } from "node:test";
-import { canvasStats, freePort, launchBrowser, session, startServer, waitFor, waitFrame, watchConsole } from "./harness.mjs";
+import { canvasStats, openPage, session, waitFor, waitFrame } from "./harness.mjs";
 
 const T = { timeout: 90000 };
 
@@ -31,11 +31,7 @@ describe("model files in the browser", { timeout: 300000 }, () => {
   let errors;
 
   before(async () => {
-    server = await startServer(await freePort());
-    browser = await launchBrowser();
-    page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
-    page.setDefaultTimeout(30000);
-    errors = watchConsole(page);
+    ({ server, browser, page, errors } = await openPage());
   });
 
   after(async () => {

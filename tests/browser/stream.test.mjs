@@ -9,7 +9,7 @@
 import assert from "node:assert/strict";
 import { after, before, describe, it } from "node:test";
 import { chooseFormat, neededMbps } from "../../static/js/streamfmt.js";
-import { canvasStats, freePort, launchBrowser, session, startServer, waitFor, waitFrame, watchConsole } from "./harness.mjs";
+import { canvasStats, openPage, session, waitFor, waitFrame } from "./harness.mjs";
 
 const W = 128;
 const H = 96;
@@ -52,10 +52,9 @@ describe("the frame stream in the browser", { timeout: 300000 }, () => {
 
   const id = () => page.evaluate(() => window.pathstream.sessionId);
   const status = async () => session(server.base, await id());
-  // Whether the server measures the link (stats with `link_mbps`, null or
-  // not) and sends progressive frames: a binary built before they came
-  // lacks the field, and the tests that need them are skipped, saying so.
-  let measuresLink = false;
+  // The server measures the link (stats with `link_mbps`, null or not) and
+  // sends progressive frames; a binary built before them is a failure here,
+  // never a quiet skip.
   const serverMeasuresLink = () => page.evaluate(async () => {
     const ws = new WebSocket(`ws://${location.host}/api/sessions/${window.pathstream.sessionId}/ws`);
     const stats = await new Promise((resolve, reject) => {
@@ -65,22 +64,16 @@ describe("the frame stream in the browser", { timeout: 300000 }, () => {
     ws.close();
     return "link_mbps" in stats;
   });
-  const needsLink = (t) => {
-    if (measuresLink) return false;
-    t.skip(`the server binary (${process.env.PATHSTREAM_BIN || "target/release/pathstream"}) predates acknowledgements and progressive frames: rebuild it`);
-    return true;
-  };
   const streamData = () => page.$eval("#hud-stream", (e) => ({ ...e.dataset, text: e.textContent }));
 
   before(async () => {
-    server = await startServer(await freePort());
-    browser = await launchBrowser();
-    page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
-    page.setDefaultTimeout(30000);
-    errors = watchConsole(page);
+    ({ server, browser, page, errors } = await openPage());
     await page.goto(`${server.base}/?scene=cornell&width=${W}&height=${H}`);
     await waitFrame(page, { spp: 1 });
-    measuresLink = await serverMeasuresLink();
+    assert.ok(
+      await serverMeasuresLink(),
+      `the server binary (${process.env.PATHSTREAM_BIN || "target/release/pathstream"}) predates acknowledgements and progressive frames: rebuild it`,
+    );
   });
 
   after(async () => {
@@ -89,7 +82,6 @@ describe("the frame stream in the browser", { timeout: 300000 }, () => {
   });
 
   it("acknowledges frames: the HUD shows the link's rate", T, async (t) => {
-    if (needsLink(t)) return;
     const d = await waitFor("a link rate in the HUD", async () => {
       const d = await streamData();
       return d.linkMbps !== "" && Number(d.linkMbps) > 0 ? d : null;
@@ -112,7 +104,6 @@ describe("the frame stream in the browser", { timeout: 300000 }, () => {
   });
 
   it("after a camera move, progressive frames arrive and fill the canvas", T, async (t) => {
-    if (needsLink(t)) return;
     const narrow0 = Number((await page.$eval("body", (b) => b.dataset.narrowFrames)) || 0);
     const g0 = (await status()).generation;
     await page.keyboard.press("w");
