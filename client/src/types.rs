@@ -130,6 +130,10 @@ pub struct SessionStatus {
     /// Time the device has spent on this session, all generations.
     #[serde(default)]
     pub render_ms: f64,
+    /// What each device rendered of this generation (several for a session
+    /// on every device, `backend: "all"`).
+    #[serde(default)]
+    pub devices: Vec<DeviceShare>,
     /// Counts restarts (every change restarts accumulation).
     pub generation: u64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -143,6 +147,23 @@ impl SessionStatus {
     pub fn halted(&self) -> bool {
         self.state == "halted"
     }
+}
+
+/// One device's part of a session's samples.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DeviceShare {
+    /// The server's worker number (the order of [`Health::backends`]).
+    pub worker: usize,
+    pub backend: String,
+    pub device: String,
+    /// Camera paths it traced.
+    pub samples: u64,
+    /// Seconds it spent rendering.
+    pub busy_s: f64,
+    pub samples_per_sec: f64,
+    /// Why it dropped out of the session, if it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
 }
 
 /// How the samples spread over the pixels: uniform sampling gives every
@@ -210,7 +231,7 @@ pub struct CreateSession {
     pub height: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub quality: Option<QualityPatch>,
-    /// `auto`, `opencl` or `cpu`.
+    /// `auto`, `opencl`, `cpu` or `all` (every device at once).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub backend: Option<String>,
 }
@@ -242,6 +263,12 @@ pub struct WorkerLoad {
     pub sessions: usize,
     /// Fraction of the last 5 s spent rendering, 0..1.
     pub busy: f64,
+    /// Camera paths per second over the last 5 s.
+    #[serde(default)]
+    pub samples_per_sec: f64,
+    /// Camera paths rendered since the server started.
+    #[serde(default)]
+    pub samples: u64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

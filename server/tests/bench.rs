@@ -283,3 +283,60 @@ fn opencl_throughput_and_specialisation() {
         s / g
     );
 }
+
+#[test]
+fn the_devices_section_measures_each_backend_alone_and_all_at_once() {
+    if pathstream::render::backend::opencl::OpenClBackend::new(None).is_err()
+        && std::env::var_os("CI").is_none()
+    {
+        return; // no second device to split with
+    }
+    let out_dir = tempfile::tempdir().expect("tempdir");
+    let out = pathstream(&[
+        "bench",
+        "--quick",
+        "--backend",
+        "cpu",
+        "--backend",
+        "opencl",
+        "--sections",
+        "devices",
+        "--scenes",
+        "cornell",
+        "--out",
+        path(out_dir.path()),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let md = text(&out.stdout);
+    assert!(md.contains("## Every device at once"), "{md}");
+    let rows = csv_rows(&out_dir.path().join("devices.csv"));
+    assert_eq!(
+        rows[0][3..],
+        [
+            "backend",
+            "device",
+            "alone_paths_per_sec",
+            "together_paths_per_sec"
+        ]
+    );
+    let kinds: Vec<&str> = rows[1..].iter().map(|r| r[3].as_str()).collect();
+    assert_eq!(
+        kinds,
+        ["cpu", "opencl", "all", "cpu", "opencl", "all"],
+        "2 sizes"
+    );
+    let num = |r: &Vec<String>, i: usize| r[i].parse::<f64>().expect("number");
+    for size in rows[1..].chunks(3) {
+        assert!(
+            size.iter().all(|r| num(r, 5) > 0.0 && num(r, 6) > 0.0),
+            "{size:?}"
+        );
+        // The "all" line: the sum alone, and the split render's rate, which
+        // the devices' contributions make up.
+        assert!((num(&size[2], 5) - num(&size[0], 5) - num(&size[1], 5)).abs() < 1.0);
+        assert!(
+            num(&size[2], 6) <= 1.05 * (num(&size[0], 6) + num(&size[1], 6)),
+            "{size:?}"
+        );
+    }
+}

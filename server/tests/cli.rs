@@ -74,6 +74,65 @@ fn render_writes_a_png_and_prints_one_summary_line() {
 }
 
 #[test]
+fn render_on_every_device_prints_each_devices_share_and_the_one_device_image() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let flags = ["--spp", "64", "--seed", "3"];
+    let (all, all_path) = render(
+        dir.path(),
+        "all.pfm",
+        &[&flags[..], &["--backend", "all"]].concat(),
+    );
+    assert!(all.status.success(), "{}", text(&all.stderr));
+    let summary = text(&all.stdout);
+    assert!(summary.contains("backend all ("), "{summary}");
+    let devices: Vec<&str> = summary.lines().skip(1).collect();
+    assert!(
+        devices
+            .iter()
+            .any(|l| l.trim_start().starts_with("cpu (rayon")),
+        "{summary}"
+    );
+    assert!(
+        devices
+            .iter()
+            .all(|l| l.contains("M paths/s") && l.contains("% of the samples")),
+        "{summary}"
+    );
+    let (one, one_path) = render(
+        dir.path(),
+        "one.pfm",
+        &[&flags[..], &["--backend", "cpu"]].concat(),
+    );
+    assert!(one.status.success(), "{}", text(&one.stderr));
+    let read = |p: &Path| {
+        let bytes = std::fs::read(p).expect("pfm");
+        pathstream::render::output::decode_pfm(&bytes)
+            .expect("decodes")
+            .2
+    };
+    let diff = pathstream::render::film::relative_rms_error(&read(&all_path), &read(&one_path));
+    assert!(
+        diff < 1e-4,
+        "every device vs rayon alone, same seed: {diff:e}"
+    );
+    let bad = pathstream(&[
+        "render",
+        "--backend",
+        "all",
+        "--device",
+        "0",
+        "--out",
+        "x.png",
+    ]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(
+        text(&bad.stderr).contains("--device"),
+        "{}",
+        text(&bad.stderr)
+    );
+}
+
+#[test]
 fn render_writes_a_linear_pfm() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (out, path) = render(

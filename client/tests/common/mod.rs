@@ -42,8 +42,13 @@ pub fn server_binary() -> PathBuf {
 /// Starts `pathstream serve --backend cpu` on a free port and reads the URL
 /// it prints.
 pub fn start_server() -> Server {
+    start_server_with("cpu")
+}
+
+/// As [`start_server`], with `--backend BACKEND`.
+pub fn start_server_with(backend: &str) -> Server {
     let mut child = Command::new(server_binary())
-        .args(["serve", "--addr", "127.0.0.1:0", "--backend", "cpu"])
+        .args(["serve", "--addr", "127.0.0.1:0", "--backend", backend])
         .env("RUST_LOG", "warn")
         .stdout(Stdio::piped())
         .stderr(Stdio::null())

@@ -13,6 +13,7 @@
 
 pub mod adaptive;
 pub mod cache;
+pub mod devices;
 pub mod fit;
 pub mod measure;
 pub mod meshes;
@@ -42,6 +43,8 @@ pub struct Sections {
     pub meshes: bool,
     /// Uniform vs adaptive sampling: time to 5%, 2%, 1% on every scene.
     pub adaptive: bool,
+    /// Every backend alone, then all at once on one render.
+    pub devices: bool,
 }
 
 impl Sections {
@@ -52,6 +55,7 @@ impl Sections {
         specialisation: true,
         meshes: true,
         adaptive: true,
+        devices: true,
     };
 }
 
@@ -226,6 +230,7 @@ pub struct Results {
     pub adaptive: Vec<TradeCurve>,
     pub specialisation: Vec<SpecialisationRow>,
     pub meshes: Vec<meshes::MeshRow>,
+    pub devices: Vec<devices::DevicesRow>,
 }
 
 /// A benchmark that could not run.

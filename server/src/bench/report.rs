@@ -57,7 +57,54 @@ pub fn markdown(r: &Results) -> String {
     calibration(w, r);
     specialisation(w, r);
     meshes(w, r);
+    devices(w, r);
     out
+}
+
+fn devices(w: &mut String, r: &Results) {
+    if r.devices.is_empty() {
+        return;
+    }
+    let _ = writeln!(w, "## Every device at once\n");
+    let _ = writeln!(
+        w,
+        "Each backend alone, then all of them on one render (`--backend all`: blocks of samples sized to each \
+         device's speed, merged in sample order). Alone: paths/s rendering by itself. Together: the paths/s it \
+         added to the shared render. All: the shared render's paths/s against the sum of the rates alone. \
+         Devices that share processors (PoCL and rayon on the same cores) compete for them: the sum is not \
+         reachable there.\n"
+    );
+    let _ = writeln!(
+        w,
+        "| scene | size | device | alone M paths/s | together M paths/s |"
+    );
+    let _ = writeln!(w, "| --- | --- | --- | ---: | ---: |");
+    for row in &r.devices {
+        for d in &row.devices {
+            let _ = writeln!(
+                w,
+                "| {} | {}x{} | {} | {:.2} | {:.2} |",
+                row.scene,
+                row.size.0,
+                row.size.1,
+                d.backend,
+                d.alone / 1e6,
+                d.together / 1e6
+            );
+        }
+        let _ = writeln!(
+            w,
+            "| {} | {}x{} | **all** | {:.2} (sum) | **{:.2}** ({:.0}% of the sum, {:.2}x the fastest alone) |",
+            row.scene,
+            row.size.0,
+            row.size.1,
+            row.ideal() / 1e6,
+            row.combined / 1e6,
+            100.0 * row.combined / row.ideal().max(1e-9),
+            row.combined / row.fastest().max(1e-9)
+        );
+    }
+    let _ = writeln!(w);
 }
 
 fn meshes(w: &mut String, r: &Results) {
@@ -313,6 +360,12 @@ pub fn write_csv(r: &Results, dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     if !r.meshes.is_empty() {
         files.push(write_rows(dir.join("meshes.csv"), &r.meshes)?);
+    }
+    if !r.devices.is_empty() {
+        files.push(write_rows(
+            dir.join("devices.csv"),
+            r.devices.iter().flat_map(|d| d.csv()),
+        )?);
     }
     if !r.throughput.is_empty() {
         files.push(write_rows(

@@ -79,6 +79,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
             + u64::from(traced) * nr * (1 + nb * settings.len() as u64)
             + u64::from(s.specialisation) * opencl_count * nt * 2
             + u64::from(s.meshes) * config.mesh_sizes.len() as u64
+            + u64::from(s.devices) * nt * config.throughput_sizes.len() as u64
             + na * (1 + nb * 2),
     );
 
@@ -120,6 +121,9 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     if s.meshes {
         work.meshes()?;
     }
+    if s.devices {
+        work.devices(&throughput_scenes)?;
+    }
     Ok(work.results)
 }
 
@@ -150,6 +154,31 @@ impl Work<'_> {
                 .find(|b| matches!(b, Backend::OpenCl { .. }));
             let row = super::meshes::measure(n, self.config.mesh_seconds, opencl)?;
             self.results.meshes.push(row);
+        }
+        Ok(())
+    }
+
+    /// Each backend alone, then all of them on one render, per throughput
+    /// scene and size (nothing to split with one backend).
+    fn devices(&mut self, scenes: &Scenes) -> Result<(), BenchError> {
+        if self.backends.len() < 2 {
+            self.observer
+                .note("devices: one backend only, nothing to split across");
+            return Ok(());
+        }
+        for (name, scene) in scenes {
+            for &size in &self.config.throughput_sizes {
+                self.observer
+                    .step(&format!("every device: {name} {}x{}", size.0, size.1));
+                let row = super::devices::measure(
+                    &mut self.backends,
+                    name,
+                    scene,
+                    size,
+                    self.config.throughput_seconds,
+                )?;
+                self.results.devices.push(row);
+            }
         }
         Ok(())
     }

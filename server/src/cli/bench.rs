@@ -24,6 +24,8 @@ pub enum SectionArg {
     Meshes,
     /// Uniform vs adaptive sampling: time to 5/2/1% error on every built-in scene and a mesh scene.
     Adaptive,
+    /// Every backend alone, then all at once on one render (--backend all): paths/s of each and combined.
+    Devices,
 }
 
 #[derive(clap::Args, Debug)]
@@ -121,6 +123,11 @@ impl BenchArgs {
                     BackendArg::Opencl => BackendChoice::OpenCl {
                         device: self.device,
                     },
+                    BackendArg::All => {
+                        return Err(CliError::Usage(
+                            "--backend all: the devices section measures every device at once (--sections devices)".into(),
+                        ))
+                    }
                 };
                 if !c.backends.contains(&choice) {
                     c.backends.push(choice);
@@ -144,6 +151,7 @@ impl BenchArgs {
                 specialisation: has(SectionArg::Specialisation),
                 meshes: has(SectionArg::Meshes),
                 adaptive: has(SectionArg::Adaptive),
+                devices: has(SectionArg::Devices),
             };
         }
         if !self.scenes.is_empty() {

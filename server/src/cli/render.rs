@@ -6,6 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pathstream::render::job::check_size;
 use pathstream::render::output::{write_image, ImageFormat};
 use pathstream::render::progressive::{self, DEFAULT_SPP};
+use pathstream::render::split::{render_split, DeviceShare};
 use pathstream::render::tonemap::Tonemap;
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Preset, Quality, RenderJob, Scene};
 use std::path::PathBuf;
@@ -25,6 +26,9 @@ pub enum BackendArg {
     Opencl,
     /// rayon on the CPU.
     Cpu,
+    /// Every OpenCL device and rayon at once, each taking blocks of samples
+    /// sized to its speed, merged exactly into one image.
+    All,
 }
 
 impl BackendArg {
@@ -33,6 +37,7 @@ impl BackendArg {
             BackendArg::Auto => BackendChoice::Auto,
             BackendArg::Opencl => BackendChoice::OpenCl { device },
             BackendArg::Cpu => BackendChoice::Cpu,
+            BackendArg::All => BackendChoice::All,
         }
     }
 }
@@ -147,34 +152,45 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     }
 
     let backend_arg = match (args.backend, args.device) {
-        (BackendArg::Cpu, Some(_)) => {
+        (BackendArg::Cpu | BackendArg::All, Some(_)) => {
             return Err(usage("--device: only with --backend opencl or auto".into()))
         }
         (BackendArg::Auto, Some(_)) => BackendArg::Opencl,
         (b, _) => b,
     };
-    let mut backend = Backend::choose(backend_arg.choice(args.device))
-        .map_err(|e| CliError::Failed(e.to_string()))?;
-    if let Backend::OpenCl { backend, .. } = &mut backend {
-        backend.generic = args.generic_kernel;
-    }
-    tracing::info!(backend = backend.name(), device = %backend.device(), "rendering");
-
+    let mut backends = match backend_arg {
+        BackendArg::All => Backend::all(),
+        arg => vec![Backend::choose(arg.choice(args.device))
+            .map_err(|e| CliError::Failed(e.to_string()))?],
+    };
     let job = RenderJob::new(&scene, args.width, args.height, &quality);
-    backend
-        .prepare(&job)
-        .map_err(|e| CliError::Failed(e.to_string()))?;
+    for backend in &mut backends {
+        if let Backend::OpenCl { backend, .. } = backend {
+            backend.generic = args.generic_kernel;
+        }
+        tracing::info!(backend = backend.name(), device = %backend.device(), "rendering");
+        backend
+            .prepare(&job)
+            .map_err(|e| CliError::Failed(e.to_string()))?;
+    }
     let mut film = Film::new(args.width, args.height);
     let bar = progress_bar(&quality);
-    let done = progressive::render(&job, &mut backend, &mut film, &quality, |p| {
+    let show = |p: &progressive::Progress| {
         bar.set_position(p.spp);
         bar.set_message(format!(
             "error {}  {:.2} M paths/s",
             percent(p.error_estimate),
             p.samples_per_sec / 1e6
         ));
-    })
-    .map_err(|e| CliError::Failed(e.to_string()))?;
+    };
+    let failed = |e: pathstream::render::BackendError| CliError::Failed(e.to_string());
+    let (done, shares) = match &mut backends[..] {
+        [one] => (
+            progressive::render(&job, one, &mut film, &quality, show).map_err(failed)?,
+            vec![DeviceShare::of(one)],
+        ),
+        all => render_split(&job, all, &mut film, &quality, show).map_err(failed)?,
+    };
     bar.finish_and_clear();
 
     let tonemap = Tonemap {
@@ -205,19 +221,36 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         ),
         false => format!("{} spp", done.spp),
     };
+    let backend = match &shares[..] {
+        [one] => format!("backend {} ({})", one.backend, one.device),
+        all => format!("backend all ({} devices)", all.len()),
+    };
     println!(
-        "{} {}x{}: {spp} in {:.2} s, {:.2} M paths/s, error estimate {}, backend {} ({}){} -> {}",
+        "{} {}x{}: {spp} in {:.2} s, {:.2} M paths/s, error estimate {}, {backend}{} -> {}",
         args.scene,
         args.width,
         args.height,
         done.elapsed.as_secs_f64(),
         done.samples_per_sec / 1e6,
         percent(done.error_estimate),
-        backend.name(),
-        backend.device(),
         rejected,
         args.out.display()
     );
+    if shares.len() > 1 {
+        for s in &shares {
+            let failure = s
+                .failure
+                .as_ref()
+                .map_or_else(String::new, |f| format!("; dropped out: {f}"));
+            println!(
+                "  {} ({}): {:.2} M paths/s, {:.1}% of the samples{failure}",
+                s.backend,
+                s.device,
+                s.samples_per_sec / 1e6,
+                100.0 * s.samples as f64 / done.samples.max(1) as f64
+            );
+        }
+    }
     Ok(())
 }
 

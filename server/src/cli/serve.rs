@@ -70,7 +70,7 @@ pub struct ServeArgs {
 pub fn run(args: ServeArgs) -> Result<(), CliError> {
     let defaults = ServeConfig::default();
     let backend = match (args.backend.unwrap_or(BackendArg::Auto), args.device) {
-        (BackendArg::Cpu, Some(_)) => {
+        (BackendArg::Cpu | BackendArg::All, Some(_)) => {
             return Err(CliError::Usage(
                 "--device: only with --backend opencl or auto".into(),
             ))

@@ -64,6 +64,9 @@ pub struct Film {
     tiles: Tiles,
     /// Adaptive sampling's counts and round (empty until its first round).
     adaptive: TileState,
+    /// The index of the film's first sample: 0, except for a block of
+    /// samples rendered on one of several devices ([`Film::block`]).
+    first: u64,
 }
 
 /// The spread of samples per pixel over a film's pixels.
@@ -86,7 +89,55 @@ impl Film {
             partial_rejected: 0,
             tiles: Tiles::new(width, height),
             adaptive: TileState::default(),
+            first: 0,
         }
+    }
+
+    /// An empty film for samples `first..` only: one device's share of a
+    /// render split across several, added to the whole with [`Film::absorb`].
+    pub fn block(width: u32, height: u32, first: u64) -> Self {
+        Self {
+            first,
+            ..Self::new(width, height)
+        }
+    }
+
+    /// The index of the film's first sample (0 but for a [`Film::block`]).
+    pub fn first_sample(&self) -> u64 {
+        self.first
+    }
+
+    /// The index of the next whole sample a backend adds: `spp` on a film
+    /// that starts at sample 0.
+    pub fn next_sample(&self) -> u64 {
+        self.first + self.spp
+    }
+
+    /// Adds `block`, which holds whole samples `spp()..` of this film's
+    /// pixels, as if they had been rendered here: afterwards the film holds
+    /// samples `0..spp() + block.spp()`, split into even and odd halves as
+    /// ever. Refused (false, nothing added) for a block that does not start
+    /// at this film's next sample, that is of another size, holds part of a
+    /// sample, or when either film has begun adaptive rounds.
+    pub fn absorb(&mut self, block: &Film) -> bool {
+        let fits = block.first == self.next_sample()
+            && (block.width, block.height) == (self.width, self.height)
+            && block.next == 0
+            && self.next == 0
+            && !block.adaptive.started()
+            && !self.adaptive.started();
+        if !fits {
+            return false;
+        }
+        for (p, b) in self.pixels.iter_mut().zip(&block.pixels) {
+            for c in 0..3 {
+                p.even[c] += b.even[c];
+                p.odd[c] += b.odd[c];
+            }
+        }
+        self.spp += block.spp;
+        self.rejected += block.rejected;
+        true
     }
 
     pub fn width(&self) -> u32 {
@@ -263,9 +314,9 @@ impl Film {
         self.rejected
     }
 
-    /// Starts again from sample 0.
+    /// Starts again from sample 0 (a block: from its first sample).
     pub fn clear(&mut self) {
-        *self = Film::new(self.width, self.height);
+        *self = Film::block(self.width, self.height, self.first);
     }
 
     /// Pixels `0..n` already hold sample `spp` (0 when no sample is in

@@ -7,6 +7,7 @@
 //! - `material`, `fresnel`, `light`, `integrator`: the path tracer
 //! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
 //! - `quality`, `preset`, `job`, `progressive`, `backend`: what to render and where
+//! - `split`: one render on several devices at once
 //! - `isa`: the instruction sets the CPU hot path is compiled for
 
 pub mod adaptive;
@@ -30,6 +31,7 @@ pub mod ray;
 pub mod sampler;
 pub mod scene;
 pub mod shape;
+pub mod split;
 pub mod tonemap;
 pub mod world;
 

@@ -28,7 +28,19 @@ pub struct WorkerLoad {
     pub sessions: usize,
     /// Fraction of the last [`WINDOW`] spent rendering, 0..1 to 3 decimals.
     pub busy: f64,
+    /// Camera paths per second over the last [`WINDOW`] (all its sessions).
+    pub samples_per_sec: f64,
+    /// Camera paths rendered since the service started.
+    pub samples: u64,
 }
+
+/// A per-worker series: name, type, help, and the value of one worker.
+type Series = (
+    &'static str,
+    &'static str,
+    &'static str,
+    fn(&WorkerLoad) -> String,
+);
 
 /// The workers' busy fractions and sessions as Prometheus gauges, by
 /// worker number and backend (no device names: `/metrics` holds counts).
@@ -46,16 +58,36 @@ pub fn prometheus(loads: &[WorkerLoad]) -> String {
             l.backend, l.busy
         );
     }
-    let _ = writeln!(
-        out,
-        "# HELP pathstream_worker_sessions Sessions placed on each worker.\n# TYPE pathstream_worker_sessions gauge"
-    );
-    for (i, l) in loads.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "pathstream_worker_sessions{{worker=\"{i}\",backend=\"{}\"}} {}",
-            l.backend, l.sessions
-        );
+    let lines: [Series; 3] = [
+        (
+            "pathstream_worker_sessions",
+            "gauge",
+            "Sessions placed on each worker.",
+            |l| l.sessions.to_string(),
+        ),
+        (
+            "pathstream_worker_samples_per_second",
+            "gauge",
+            "Camera paths per second each worker rendered over the last 5 s.",
+            |l| format!("{:.0}", l.samples_per_sec),
+        ),
+        (
+            "pathstream_worker_samples_total",
+            "counter",
+            "Camera paths each worker rendered.",
+            |l| l.samples.to_string(),
+        ),
+    ];
+    for (name, kind, help, value) in lines {
+        let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} {kind}");
+        for (i, l) in loads.iter().enumerate() {
+            let _ = writeln!(
+                out,
+                "{name}{{worker=\"{i}\",backend=\"{}\"}} {}",
+                l.backend,
+                value(l)
+            );
+        }
     }
     out
 }
@@ -65,6 +97,8 @@ struct Slot {
     /// Which slot since the meter's origin this holds (stale when older than the window).
     index: u64,
     busy: Duration,
+    /// Camera paths finished in the slot.
+    samples: u64,
 }
 
 #[derive(Debug)]
@@ -132,11 +166,42 @@ impl BusyMeter {
             if slot.index != index {
                 *slot = Slot {
                     index,
-                    busy: Duration::ZERO,
+                    ..Slot::default()
                 };
             }
             slot.busy += to - from;
             from = to;
+        }
+    }
+
+    /// Counts `paths` camera paths finished at `now`.
+    pub fn count(&self, now: Instant, paths: u64) {
+        let index = self.slot_index(now);
+        let mut inner = self.lock();
+        let slot = &mut inner.slots[(index % SLOTS as u64) as usize];
+        if slot.index != index {
+            *slot = Slot {
+                index,
+                ..Slot::default()
+            };
+        }
+        slot.samples += paths;
+    }
+
+    /// Camera paths per second over the window before `now` (over the time
+    /// since the origin while that is shorter than the window).
+    pub fn rate(&self, now: Instant) -> f64 {
+        let inner = self.lock();
+        let now_index = self.slot_index(now);
+        let oldest = now_index.saturating_sub(SLOTS as u64 - 1);
+        let span = now.saturating_duration_since(self.slot_start(oldest).max(self.origin));
+        let samples: u64 = (inner.slots.iter())
+            .filter(|s| (oldest..=now_index).contains(&s.index))
+            .map(|s| s.samples)
+            .sum();
+        match span.is_zero() {
+            true => 0.0,
+            false => samples as f64 / span.as_secs_f64(),
         }
     }
 
@@ -175,6 +240,8 @@ mod tests {
             device: "rayon, 2 threads".into(),
             sessions: 3,
             busy: 0.25,
+            samples_per_sec: 1234.4,
+            samples: 99,
         }]);
         assert!(
             text.contains("pathstream_worker_busy_ratio{worker=\"0\",backend=\"cpu\"} 0.25\n"),
@@ -184,11 +251,35 @@ mod tests {
             text.contains("pathstream_worker_sessions{worker=\"0\",backend=\"cpu\"} 3\n"),
             "{text}"
         );
+        assert!(
+            text.contains(
+                "pathstream_worker_samples_per_second{worker=\"0\",backend=\"cpu\"} 1234\n"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("pathstream_worker_samples_total{worker=\"0\",backend=\"cpu\"} 99\n"),
+            "{text}"
+        );
         assert!(!text.contains("rayon"), "no device names: {text}");
     }
 
     fn ms(n: u64) -> Duration {
         Duration::from_millis(n)
+    }
+
+    #[test]
+    fn the_rate_counts_paths_in_the_window_only() {
+        let t0 = Instant::now();
+        let m = BusyMeter::new(t0);
+        assert_eq!(m.rate(t0), 0.0);
+        m.count(t0 + ms(500), 1000);
+        m.count(t0 + ms(1500), 3000);
+        assert!((m.rate(t0 + ms(2000)) - 2000.0).abs() < 1e-6);
+        // A window later the old slots are out: only the new paths count.
+        m.count(t0 + ms(20_000), 5000);
+        let r = m.rate(t0 + ms(20_000) + WINDOW / 2);
+        assert!((r - 5000.0 / WINDOW.as_secs_f64()).abs() < 200.0, "{r}");
     }
 
     #[test]

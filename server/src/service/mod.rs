@@ -42,28 +42,47 @@ use std::time::Duration;
 use tokio::sync::{oneshot, watch};
 use worker::Worker;
 
+/// Where a session renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Placement {
+    /// On this worker.
+    One(usize),
+    /// On every worker at once (`backend: "all"`).
+    All,
+}
+
 /// Shared state of a running service.
 pub struct AppState {
     pub config: ServeConfig,
     /// Uploaded model files; the resolver of every scene the API takes.
     pub assets: AssetStore,
-    sessions: RwLock<HashMap<String, (Arc<Session>, usize)>>,
-    /// Rayon first; then the OpenCL device, if the service has one.
+    sessions: RwLock<HashMap<String, (Arc<Session>, Placement)>>,
+    /// Rayon first; then the OpenCL devices, if the service has any.
     workers: Vec<Worker>,
-    default_worker: usize,
+    default_placement: Placement,
     pub metrics: Arc<Metrics>,
     shutdown: watch::Sender<bool>,
 }
 
 impl AppState {
     /// Starts one worker for rayon and, as `config.backend` says, one for
-    /// an OpenCL device (the default for new sessions when there is one).
+    /// an OpenCL device (the default for new sessions when there is one),
+    /// or with `all`, one for every OpenCL device (new sessions render on
+    /// every worker at once).
     pub fn new(config: ServeConfig) -> Result<Arc<Self>, String> {
         if let Some(name) = &config.node_name {
             config::check_node_name(name).map_err(|e| e.to_string())?;
         }
         let device = match config.backend {
             BackendChoice::Cpu => None,
+            BackendChoice::All => {
+                let devices = Backend::opencl_devices();
+                tracing::info!(
+                    devices = devices.len(),
+                    "sessions render on every OpenCL device and rayon at once"
+                );
+                return Ok(Self::with_devices(config, devices, Placement::All));
+            }
             choice => {
                 let backend = Backend::choose(choice).map_err(|e| e.to_string())?;
                 if backend.name() == "opencl" {
@@ -80,20 +99,28 @@ impl AppState {
     /// As [`AppState::new`], with the device backend given (`config.backend`
     /// is not read): new sessions render on it by default.
     pub fn with_device(config: ServeConfig, device: Option<Backend>) -> Arc<Self> {
+        let default = Placement::One(usize::from(device.is_some()));
+        Self::with_devices(config, device.into_iter().collect(), default)
+    }
+
+    /// A worker for rayon (worker 0) and one for each of `devices`; new
+    /// sessions go to `default` unless they ask otherwise.
+    pub fn with_devices(
+        config: ServeConfig,
+        devices: Vec<Backend>,
+        default: Placement,
+    ) -> Arc<Self> {
         let metrics = Arc::new(Metrics::default());
-        let mut workers = vec![Worker::start(
-            Backend::Cpu(CpuBackend::low_priority()),
-            metrics.clone(),
-        )];
-        if let Some(backend) = device {
-            workers.push(Worker::start(backend, metrics.clone()));
-        }
+        let cpu = Backend::Cpu(CpuBackend::low_priority());
+        let workers: Vec<Worker> = (std::iter::once(cpu).chain(devices).enumerate())
+            .map(|(i, backend)| Worker::start(i, backend, metrics.clone()))
+            .collect();
         let (shutdown, _) = watch::channel(false);
         Arc::new(Self {
             assets: AssetStore::new(config.assets),
             config,
             sessions: RwLock::new(HashMap::new()),
-            default_worker: workers.len() - 1,
+            default_placement: default,
             workers,
             metrics,
             shutdown,
@@ -131,11 +158,16 @@ impl AppState {
             .len()
     }
 
-    /// The worker a new session asking for `backend` goes to.
-    pub fn worker_for(&self, backend: Option<&str>) -> Result<usize, ApiError> {
+    /// Where a new session asking for `backend` renders.
+    pub fn placement_for(&self, backend: Option<&str>) -> Result<Placement, ApiError> {
         match backend {
-            None | Some("auto") => Ok(self.default_worker),
-            Some("cpu") => Ok(0),
+            None => Ok(self.default_placement),
+            Some("auto") => Ok(match self.default_placement {
+                Placement::All => Placement::One(self.workers.len() - 1),
+                one => one,
+            }),
+            Some("all") => Ok(Placement::All),
+            Some("cpu") => Ok(Placement::One(0)),
             Some("opencl") => self
                 .workers
                 .iter()
@@ -150,9 +182,10 @@ impl AppState {
                         None => "this server has no OpenCL device".to_owned(),
                     };
                     ApiError::BadRequest(format!("backend: {why}"))
-                }),
+                })
+                .map(Placement::One),
             Some(other) => Err(ApiError::BadRequest(format!(
-                "backend: unknown backend '{other}' (expected auto, opencl or cpu)"
+                "backend: unknown backend '{other}' (expected auto, opencl, cpu or all)"
             ))),
         }
     }
@@ -174,6 +207,8 @@ impl AppState {
                     device: info.device,
                     sessions: w.session_count(),
                     busy: (w.busy() * 1000.0).round() / 1000.0,
+                    samples_per_sec: w.rate().round(),
+                    samples: w.samples(),
                 }
             })
             .collect()
@@ -181,15 +216,38 @@ impl AppState {
 
     /// What new sessions render with unless they ask otherwise.
     pub fn default_backend(&self) -> BackendInfo {
-        self.worker_info(self.default_worker)
+        self.placement_info(self.default_placement)
     }
 
-    pub fn worker_info(&self, worker: usize) -> BackendInfo {
-        self.workers[worker].info()
+    /// What a session placed so renders with.
+    pub fn placement_info(&self, placement: Placement) -> BackendInfo {
+        match placement {
+            Placement::One(worker) => self.workers[worker].info(),
+            Placement::All => BackendInfo {
+                backend: "all".into(),
+                device: (self.workers.iter())
+                    .map(|w| w.info().device)
+                    .collect::<Vec<_>>()
+                    .join("; "),
+            },
+        }
+    }
+
+    /// How many workers the service has (a session on every device renders on all).
+    pub fn worker_count(&self) -> usize {
+        self.workers.len()
+    }
+
+    /// The workers a session placed so renders on.
+    fn placed_on(&self, placement: Placement) -> std::ops::Range<usize> {
+        match placement {
+            Placement::One(w) => w..w + 1,
+            Placement::All => 0..self.workers.len(),
+        }
     }
 
     /// Registers and starts a session, unless the session limit is reached.
-    pub fn add_session(&self, session: Arc<Session>, worker: usize) -> Result<(), ApiError> {
+    pub fn add_session(&self, session: Arc<Session>, placement: Placement) -> Result<(), ApiError> {
         {
             let mut sessions = self.sessions.write().unwrap_or_else(|e| e.into_inner());
             if sessions.len() >= self.config.max_sessions {
@@ -198,12 +256,14 @@ impl AppState {
                     self.config.max_sessions
                 )));
             }
-            sessions.insert(session.id.clone(), (session.clone(), worker));
+            sessions.insert(session.id.clone(), (session.clone(), placement));
         }
         self.metrics
             .sessions_created
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        self.workers[worker].add(session);
+        for w in self.placed_on(placement) {
+            self.workers[w].add(session.clone());
+        }
         Ok(())
     }
 
@@ -213,8 +273,10 @@ impl AppState {
             .write()
             .unwrap_or_else(|e| e.into_inner())
             .remove(id);
-        let (session, worker) = removed.ok_or_else(|| ApiError::unknown_session(id))?;
-        self.workers[worker].remove(id);
+        let (session, placement) = removed.ok_or_else(|| ApiError::unknown_session(id))?;
+        for w in self.placed_on(placement) {
+            self.workers[w].remove(id);
+        }
         session.close();
         Ok(())
     }
@@ -283,6 +345,17 @@ pub async fn start_with_device(
 ) -> Result<Running, String> {
     let listener = bind(&config).await?;
     serve(listener, AppState::with_device(config, device))
+}
+
+/// As [`start`], with the device backends and where new sessions go given
+/// (tests: several devices, one that fails on purpose).
+pub async fn start_with_devices(
+    config: ServeConfig,
+    devices: Vec<Backend>,
+    default: Placement,
+) -> Result<Running, String> {
+    let listener = bind(&config).await?;
+    serve(listener, AppState::with_devices(config, devices, default))
 }
 
 async fn bind(config: &ServeConfig) -> Result<tokio::net::TcpListener, String> {

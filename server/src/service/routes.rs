@@ -6,7 +6,7 @@ use super::auth::require_token;
 use super::change::{patch_quality, Change};
 use super::error::{parse_json, ApiError};
 use super::session::{Frame, Session, Status};
-use super::{assets_routes, static_files, ws, AppState};
+use super::{assets_routes, static_files, ws, AppState, Placement};
 use crate::render::job::check_size;
 use crate::render::scene::{CameraEdit, LightEdit, BUILTIN_NAMES};
 use crate::render::{Preset, Quality};
@@ -232,17 +232,21 @@ async fn create_session(
             "Change::scene made another change".into(),
         ));
     };
-    let worker = state.worker_for(req.backend.as_deref())?;
-    let session = Arc::new(Session::new(
+    let placement = state.placement_for(req.backend.as_deref())?;
+    let mut session = Session::new(
         new_id(state.config.node_name.as_deref()),
         name,
         *scene,
         width,
         height,
         quality,
-        state.worker_info(worker),
-    ));
-    state.add_session(session.clone(), worker)?;
+        state.placement_info(placement),
+    );
+    if placement == Placement::All {
+        session = session.on_every_device(state.worker_count());
+    }
+    let session = Arc::new(session);
+    state.add_session(session.clone(), placement)?;
     tracing::info!(session = %session.id, width, height, "session created");
     Ok((StatusCode::CREATED, Json(session.status())))
 }

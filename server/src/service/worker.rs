@@ -7,7 +7,7 @@ use super::metrics::Metrics;
 use super::session::Session;
 use crate::render::Backend;
 use serde::Serialize;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, Weak};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -38,6 +38,8 @@ struct WorkerShared {
     stop: AtomicBool,
     /// Wall time spent rendering, for `/api/health`.
     busy: BusyMeter,
+    /// Camera paths rendered, for `/metrics`.
+    samples: AtomicU64,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -72,18 +74,20 @@ pub struct Worker {
 }
 
 impl Worker {
-    pub fn start(mut backend: Backend, metrics: Arc<Metrics>) -> Worker {
+    /// Starts worker number `index` (its place in the service's list).
+    pub fn start(index: usize, mut backend: Backend, metrics: Arc<Metrics>) -> Worker {
         let shared = Arc::new(WorkerShared {
             info: Mutex::new(BackendInfo::of(&backend)),
             sessions: Mutex::new(Vec::new()),
             wake: Condvar::new(),
             stop: AtomicBool::new(false),
             busy: BusyMeter::new(Instant::now()),
+            samples: AtomicU64::new(0),
         });
         let s = shared.clone();
         let handle = std::thread::Builder::new()
             .name(format!("render-{}", backend.name()))
-            .spawn(move || run(&mut backend, &s, &metrics))
+            .spawn(move || run(index, &mut backend, &s, &metrics))
             .ok();
         if handle.is_none() {
             tracing::error!("could not start a render thread");
@@ -103,6 +107,16 @@ impl Worker {
     /// (see [`super::load`]).
     pub fn busy(&self) -> f64 {
         self.shared.busy.fraction(Instant::now())
+    }
+
+    /// Camera paths per second over the last few seconds.
+    pub fn rate(&self) -> f64 {
+        self.shared.busy.rate(Instant::now())
+    }
+
+    /// Camera paths this worker has rendered.
+    pub fn samples(&self) -> u64 {
+        self.shared.samples.load(Ordering::Relaxed)
     }
 
     /// How many sessions are placed on this worker.
@@ -131,7 +145,7 @@ impl Worker {
     }
 }
 
-fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
+fn run(index: usize, backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
     let mut next = 0usize;
     let mut rendering_with = backend.name();
     while !shared.stop.load(Ordering::Relaxed) {
@@ -140,7 +154,7 @@ fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
             let n = sessions.len();
             let found = (0..n)
                 .map(|k| (next + k) % n.max(1))
-                .find(|&i| sessions[i].wants_render());
+                .find(|&i| sessions[i].wants_render(index));
             match found {
                 Some(i) => {
                     next = i + 1;
@@ -157,8 +171,10 @@ fn run(backend: &mut Backend, shared: &WorkerShared, metrics: &Metrics) {
         };
         if let Some(session) = session {
             shared.busy.begin(Instant::now());
-            session.render_pass(backend, metrics);
+            let paths = session.render_pass(index, backend, metrics);
             shared.busy.end(Instant::now());
+            shared.samples.fetch_add(paths, Ordering::Relaxed);
+            shared.busy.count(Instant::now(), paths);
             if backend.name() != rendering_with {
                 rendering_with = backend.name();
                 let info = BackendInfo::of(backend);

@@ -122,7 +122,7 @@ struct CreateArgs {
     width: u32,
     #[arg(long, default_value_t = 512)]
     height: u32,
-    /// auto, opencl or cpu.
+    /// auto, opencl, cpu or all (every device of the server at once).
     #[arg(long)]
     backend: Option<String>,
     #[command(flatten)]
@@ -309,6 +309,19 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
             status.device,
             args.out.display()
         );
+        if status.devices.len() > 1 {
+            for d in &status.devices {
+                let failure = (d.failure.as_ref())
+                    .map_or_else(String::new, |f| format!("; dropped out: {f}"));
+                println!(
+                    "  {} ({}): {:.2} M paths/s, {} paths{failure}",
+                    d.backend,
+                    d.device,
+                    d.samples_per_sec / 1e6,
+                    d.samples
+                );
+            }
+        }
         Ok(())
     };
     owning(client, &id, &mut interrupt, work).await

@@ -81,7 +81,7 @@ impl CpuBackend {
         }
     }
 
-    /// Adds samples `film.spp() .. film.spp() + count` to every pixel.
+    /// Adds samples `film.next_sample() ..` `+ count` to every pixel.
     pub fn render(&mut self, job: &RenderJob, film: &mut Film, count: u64) {
         self.render_unless(job, film, count, &|| false);
     }
@@ -96,7 +96,7 @@ impl CpuBackend {
         count: u64,
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
-        let first = film.spp();
+        let first = film.next_sample();
         let width = film.width() as usize;
         let wide = if self.portable_only { None } else { wide_isa() };
         let work = |film: &mut Film| -> Option<u64> {
@@ -115,7 +115,7 @@ impl CpuBackend {
         rejected.map(|r| film.commit(count, r)).is_some()
     }
 
-    /// Adds sample `film.spp()` to the pixels from `film.slice_start()` up
+    /// Adds sample `film.next_sample()` to the pixels from `film.slice_start()` up
     /// to `end`, in chunks of [`SLICE_CHUNK`] pixels in parallel; gives up
     /// between chunks once `cancelled` says so (false then, and the film is
     /// thrown away). Every pixel gets the same number as from
@@ -127,7 +127,7 @@ impl CpuBackend {
         end: usize,
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
-        let (start, sample) = (film.slice_start(), film.spp());
+        let (start, sample) = (film.slice_start(), film.next_sample());
         let wide = if self.portable_only { None } else { wide_isa() };
         let work = |pixels: &mut [PixelSums]| -> Option<u64> {
             pixels[start..end]

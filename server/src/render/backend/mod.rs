@@ -27,16 +27,19 @@ pub enum BackendChoice {
     OpenCl {
         device: Option<usize>,
     },
+    /// Every OpenCL device and rayon at once (see [`crate::render::split`]).
+    All,
 }
 
 impl BackendChoice {
-    pub const NAMES: [&'static str; 3] = ["auto", "opencl", "cpu"];
+    pub const NAMES: [&'static str; 4] = ["auto", "opencl", "cpu", "all"];
 
     pub fn parse(s: &str, device: Option<usize>) -> Option<Self> {
         match s {
             "auto" => Some(Self::Auto),
             "cpu" => Some(Self::Cpu),
             "opencl" => Some(Self::OpenCl { device }),
+            "all" => Some(Self::All),
             _ => None,
         }
     }
@@ -73,9 +76,37 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// The one place that decides where rendering runs.
+    /// Every OpenCL device that starts, each asked for by number (a device
+    /// that fails drops out of a split render rather than fall back: rayon
+    /// is there already). Devices that do not start are logged and left out.
+    pub fn opencl_devices() -> Vec<Backend> {
+        let count = opencl::list_devices().map_or(0, |d| d.len());
+        (0..count)
+            .filter_map(|i| match OpenClBackend::new(Some(i)) {
+                Ok(b) => Some(Backend::OpenCl {
+                    backend: Box::new(b),
+                    fallback: false,
+                }),
+                Err(e) => {
+                    tracing::warn!(device = i, error = %e, "an OpenCL device did not start; leaving it out");
+                    None
+                }
+            })
+            .collect()
+    }
+
+    /// Every backend `all` renders on: each OpenCL device, then rayon.
+    pub fn all() -> Vec<Backend> {
+        let mut all = Self::opencl_devices();
+        all.push(Backend::Cpu(CpuBackend::default()));
+        all
+    }
+
+    /// The one place that decides where rendering runs (for `all`, the
+    /// several backends, see [`Backend::all`]: here the first of them).
     pub fn choose(choice: BackendChoice) -> Result<Backend, BackendError> {
         match choice {
+            BackendChoice::All => Ok(Backend::all().remove(0)),
             BackendChoice::Cpu => Ok(Backend::Cpu(CpuBackend::default())),
             BackendChoice::OpenCl { device } => Ok(Backend::OpenCl {
                 backend: Box::new(OpenClBackend::new(device)?),

@@ -90,6 +90,11 @@ impl OpenClBackend {
         n: u64,
         mode: u32,
     ) -> Result<(), OpenClError> {
+        match &mut self.fail_after_launches {
+            Some(0) => self.fail_launches = true,
+            Some(n) => *n -= 1,
+            None => {}
+        }
         if self.fail_launches {
             return Err(OpenClError::Call {
                 what: "kernel launch",
@@ -108,7 +113,7 @@ impl OpenClBackend {
         let args = buffers::LaunchArgs {
             film: &state.film,
             rejected: &state.rejected,
-            first: state.spp,
+            first: state.first + state.spp,
             count: n as cl_uint,
             pixel_base: offset as cl_uint,
             pixel_end: (offset + size).min(end) as cl_uint,

@@ -121,6 +121,8 @@ struct JobState {
     film: Buffer<f32>,
     rejected: Buffer<u32>,
     pixels: usize,
+    /// The index of the device film's first sample (see [`Film::block`]).
+    first: u64,
     /// Samples per pixel the device film holds.
     spp: u64,
     /// Pixels `0..next` hold sample `spp` too (a slice in progress).
@@ -153,6 +155,8 @@ pub struct OpenClBackend {
     pub inject_nan_every: Option<u64>,
     /// Test hook: fail every launch from now on, as a lost device would.
     pub fail_launches: bool,
+    /// Test hook: set `fail_launches` after this many more launches.
+    pub fail_after_launches: Option<u64>,
     /// How long one launch should take (default [`LAUNCH_TARGET`]).
     pub launch_target: Duration,
     /// How long the last upload of a job's scene and film took, and the
@@ -221,6 +225,7 @@ impl OpenClBackend {
             generic: false,
             inject_nan_every: None,
             fail_launches: false,
+            fail_after_launches: None,
             launch_target: LAUNCH_TARGET,
             last_upload: None,
             memory_limits,
@@ -363,6 +368,7 @@ impl OpenClBackend {
         let matches = |s: &JobState| {
             s.job_id == job.id
                 && &s.key == key
+                && s.first == film.first_sample()
                 && s.spp == film.spp()
                 && s.next == film.slice_start()
                 && s.samples == film.total_samples()
@@ -370,6 +376,32 @@ impl OpenClBackend {
         };
         if let Some(i) = self.states.iter().position(matches) {
             let s = self.states.remove(i);
+            self.states.push(s);
+            return Ok(());
+        }
+        // A new, empty block of the same job (a render split across
+        // devices takes one per pass): zero the device film in place and
+        // keep the scene.
+        let empty = film.total_samples() == 0 && film.slice_start() == 0;
+        let same_job =
+            |s: &JobState| s.job_id == job.id && &s.key == key && s.pixels == film.pixels().len();
+        if let Some(i) = self.states.iter().position(same_job).filter(|_| empty) {
+            let mut s = self.states.remove(i);
+            #[allow(unsafe_code)]
+            // SAFETY: fills the film buffer's `pixels` x FILM_FLOATS floats
+            // (its whole size) with zeros; the in-order queue runs it before
+            // any later launch or read.
+            unsafe {
+                self.queue.enqueue_fill_buffer(
+                    &mut s.film,
+                    &[0f32],
+                    0,
+                    s.pixels * FILM_FLOATS * std::mem::size_of::<f32>(),
+                    &[],
+                )
+            }
+            .map_err(call("film clear"))?;
+            (s.first, s.spp, s.next, s.samples) = (film.first_sample(), 0, 0, 0);
             self.states.push(s);
             return Ok(());
         }
@@ -415,6 +447,7 @@ impl OpenClBackend {
             film: self.upload(Access::ReadWrite, &device_film)?,
             rejected: self.upload(Access::ReadWrite, &[0u32])?,
             pixels: film.pixels().len(),
+            first: film.first_sample(),
             spp: film.spp(),
             next: film.slice_start(),
             samples: film.total_samples(),

@@ -14,7 +14,7 @@ use opencl3::types::CL_BLOCKING;
 use std::ops::Range;
 
 impl OpenClBackend {
-    /// Adds sample `film.spp()` to pixels `film.slice_start()..end`. On
+    /// Adds sample `film.next_sample()` to pixels `film.slice_start()..end`. On
     /// failure the film is as it was before the call.
     pub fn render_slice(
         &mut self,

@@ -4,17 +4,21 @@
 //! (camera, light, quality, scene) come in through [`Session::apply`], from
 //! HTTP and the WebSocket alike.
 
+mod lanes;
+mod status;
+
 use super::change::{patch_quality, Change};
 use super::error::ApiError;
 pub use super::frame::Frame;
 use super::metrics::Metrics;
 use super::pass::{Measured, Pass};
 use super::worker::{BackendInfo, Waker};
-use crate::render::film::SppSpread;
 use crate::render::progressive::{self, Progress};
-use crate::render::scene::LightInfo;
+use crate::render::split::DeviceShare;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
-use serde::Serialize;
+use lanes::Lanes;
+pub use status::{Status, WorkerShare};
+use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 use std::time::{Duration, Instant};
@@ -35,8 +39,12 @@ struct SessionState {
     halted: bool,
     /// Why rendering stopped early (a device error).
     pub failure: Option<String>,
-    /// What the last pass measured (None: no pass yet since the change).
-    measured: Option<Measured>,
+    /// What the last pass on each worker measured (none yet since the change).
+    measured: HashMap<usize, Measured>,
+    /// Set for a session on every device (`backend: "all"`): who has which samples.
+    split: Option<Lanes>,
+    /// What each worker rendered of this generation.
+    devices: BTreeMap<usize, DeviceShare>,
 }
 
 pub struct Session {
@@ -54,54 +62,70 @@ pub struct Session {
     passes: AtomicU64,
     /// Nanoseconds of those passes.
     render_ns: AtomicU64,
-    /// Set by the worker that renders this session.
-    waker: OnceLock<Waker>,
+    /// Set by the workers that render this session.
+    wakers: Mutex<Vec<Waker>>,
     /// Becomes true when the session is deleted ([`Session::close`]):
     /// waiting requests and WebSockets are answered at once.
     deleted: watch::Sender<bool>,
-}
-
-/// Status as `GET /api/sessions/{id}` reports it.
-#[derive(Debug, Serialize)]
-pub struct Status {
-    pub id: String,
-    pub scene: String,
-    pub width: u32,
-    pub height: u32,
-    pub camera: crate::render::scene::CameraJson,
-    pub light: Option<LightInfo>,
-    pub quality: Quality,
-    /// `rendering` or `halted` (also after a device failure, see `failure`).
-    pub state: &'static str,
-    /// Samples per pixel (adaptive: the mean, rounded down).
-    pub spp: u64,
-    /// The least, median and most samples of a pixel.
-    pub spp_spread: SppSpread,
-    /// Adaptive tiles at their share of the target error, of `tiles`.
-    pub tiles_done: usize,
-    pub tiles: usize,
-    pub error_estimate: Option<f64>,
-    pub samples_per_sec: f64,
-    pub elapsed_ms: f64,
-    pub rejected: u64,
-    pub backend: String,
-    pub device: String,
-    /// Time the device has spent rendering this session, all generations
-    /// (how a worker shares its device among its sessions).
-    pub render_ms: f64,
-    pub generation: u64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub failure: Option<String>,
-    /// What the scene holds that is not rendered as given (unsupported
-    /// material features, a default sky, automatic framing).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A panic while holding the lock cannot leave the state half-written in a
     // way that matters more than stopping the service: carry on.
     m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// What a frame shows of a film: computed before taking the session's
+/// lock (O(pixels)).
+struct Image {
+    pixels: Vec<[f32; 3]>,
+    estimate: Option<f64>,
+    density: Arc<super::density::Density>,
+}
+
+impl Image {
+    fn of(film: &Film) -> Self {
+        Self {
+            pixels: film.mean(),
+            estimate: film.error_estimate(),
+            density: Arc::new(super::density::Density::of(film)),
+        }
+    }
+}
+
+impl SessionState {
+    /// Records a pass on `worker` of `paths` camera paths on a film of
+    /// `pixels` that took `took`: what the next pass there is sized by,
+    /// and the worker's share.
+    fn record(
+        &mut self,
+        worker: usize,
+        backend: &Backend,
+        paths: u64,
+        took: Duration,
+        pixels: usize,
+    ) {
+        let full = pixels as f64 / paths.max(1) as f64;
+        self.measured.insert(
+            worker,
+            Measured {
+                per_sample: took.mul_f64(full),
+                paths,
+            },
+        );
+        let share = self
+            .devices
+            .entry(worker)
+            .or_insert_with(|| DeviceShare::of(backend));
+        (share.backend, share.device) = (backend.name().to_owned(), backend.device());
+        share.add(paths, took);
+    }
+
+    /// The devices a session on every device renders on, for its frames.
+    fn device_list(&self) -> String {
+        let names: Vec<&str> = self.devices.values().map(|d| d.device.as_str()).collect();
+        names.join("; ")
+    }
 }
 
 impl Session {
@@ -137,7 +161,9 @@ impl Session {
                 restarted: Instant::now(),
                 halted: false,
                 failure: None,
-                measured: None,
+                measured: HashMap::new(),
+                split: None,
+                devices: BTreeMap::new(),
             }),
             frames,
             current_generation: AtomicU64::new(0),
@@ -146,14 +172,35 @@ impl Session {
             clients: AtomicUsize::new(0),
             passes: AtomicU64::new(0),
             render_ns: AtomicU64::new(0),
-            waker: OnceLock::new(),
+            wakers: Mutex::new(Vec::new()),
             deleted: watch::channel(false).0,
         }
     }
 
-    /// Called once by the worker the session is placed on.
-    pub(super) fn attach(&self, waker: Waker) {
-        let _ = self.waker.set(waker);
+    /// Makes this a session rendered on `workers` workers at once (each
+    /// places it with [`Session::attach`]).
+    pub fn on_every_device(self, workers: usize) -> Self {
+        {
+            let mut st = lock(&self.state);
+            st.split = Some(Lanes::new(workers, &st.quality));
+        }
+        self
+    }
+
+    /// Whether the session renders on every device.
+    pub fn is_split(&self) -> bool {
+        lock(&self.state).split.is_some()
+    }
+
+    /// Called by each worker the session is placed on.
+    pub(in crate::service) fn attach(&self, waker: Waker) {
+        lock(&self.wakers).push(waker);
+    }
+
+    fn wake_workers(&self) {
+        for w in lock(&self.wakers).iter() {
+            w.wake();
+        }
     }
 
     /// Passes rendered so far, all generations included.
@@ -184,45 +231,6 @@ impl Session {
         lock(&self.state).generation
     }
 
-    pub fn status(&self) -> Status {
-        let st = lock(&self.state);
-        let frame = self.latest();
-        let current = frame.generation == st.generation;
-        // Only the camera, not the whole scene (this runs for every frame sent).
-        let c = st.scene.camera.to_json();
-        Status {
-            id: self.id.clone(),
-            scene: st.scene_name.clone(),
-            width: st.width,
-            height: st.height,
-            camera: c,
-            light: st.scene.light_info(),
-            quality: st.quality,
-            state: if st.halted { "halted" } else { "rendering" },
-            spp: if current { frame.spp } else { 0 },
-            spp_spread: if current {
-                frame.spread
-            } else {
-                SppSpread::default()
-            },
-            tiles_done: match (&frame.density, current) {
-                (Some(d), true) => d.done.iter().filter(|&&d| d).count(),
-                _ => 0,
-            },
-            tiles: crate::render::adaptive::Tiles::new(st.width, st.height).count(),
-            error_estimate: if current { frame.error_estimate } else { None },
-            samples_per_sec: if current { frame.samples_per_sec } else { 0.0 },
-            elapsed_ms: st.restarted.elapsed().as_secs_f64() * 1e3,
-            rejected: if current { frame.rejected } else { 0 },
-            backend: frame.backend.clone(),
-            device: frame.device.clone(),
-            render_ms: self.render_ns.load(Ordering::Relaxed) as f64 / 1e6,
-            generation: st.generation,
-            failure: st.failure.clone(),
-            warnings: st.scene.warnings.clone(),
-        }
-    }
-
     /// Applies a change and restarts accumulation at sample 0; the status
     /// after it. A refused change (an error naming the field) changes nothing.
     pub fn apply(&self, change: Change) -> Result<Status, ApiError> {
@@ -249,10 +257,17 @@ impl Session {
         st.halted = false;
         st.failure = None;
         let pixels = u64::from(st.width) * u64::from(st.height);
-        st.measured = st
-            .measured
-            .filter(|_| keeps_cost)
-            .map(|m| m.after_change(pixels));
+        if !keeps_cost {
+            st.measured.clear();
+        }
+        for m in st.measured.values_mut() {
+            *m = m.after_change(pixels);
+        }
+        st.devices.clear();
+        let quality = st.quality;
+        if let Some(split) = &mut st.split {
+            split.restart(&quality);
+        }
         let previous = self.latest();
         let frame = Frame::empty(
             self.seq.fetch_add(1, Ordering::Relaxed),
@@ -264,9 +279,7 @@ impl Session {
         );
         drop(st);
         self.frames.send_replace(Arc::new(frame));
-        if let Some(waker) = self.waker.get() {
-            waker.wake();
-        }
+        self.wake_workers();
         Ok(self.status())
     }
 
@@ -293,26 +306,42 @@ impl Session {
         let _ = rx.wait_for(|d| *d).await;
     }
 
-    /// Whether a worker should give this session a pass.
-    pub fn wants_render(&self) -> bool {
+    /// Whether worker `worker` should give this session a pass.
+    pub fn wants_render(&self, worker: usize) -> bool {
         let st = lock(&self.state);
-        !st.halted && st.film.is_some()
+        if st.halted {
+            return false;
+        }
+        match &st.split {
+            None => st.film.is_some(),
+            Some(split) if split.dropped(worker) => false,
+            Some(split) if split.uniform() => split.has_work_for(worker),
+            // Adaptive rounds: on the fastest device, one pass at a time.
+            Some(split) => st.film.is_some() && split.fastest(&st.devices) == Some(worker),
+        }
     }
 
-    /// One pass on `backend`: about [`super::pass::PASS_TARGET`] of samples, then a
-    /// frame; or, when one sample of the whole image takes longer, that
-    /// long a slice of one sample (a frame when it completes the sample).
-    /// A change made meanwhile wins: the pass's film is thrown away.
-    pub fn render_pass(&self, backend: &mut Backend, metrics: &Metrics) {
+    /// One pass on `backend` (worker `worker`): about
+    /// [`super::pass::PASS_TARGET`] of samples, then a frame; or, when one
+    /// sample of the whole image takes longer, that long a slice of one
+    /// sample (a frame when it completes the sample). A change made
+    /// meanwhile wins: the pass's film is thrown away. A session on every
+    /// device renders a block of its own here instead (see [`lanes`]).
+    /// Returns the camera paths traced.
+    pub fn render_pass(&self, worker: usize, backend: &mut Backend, metrics: &Metrics) -> u64 {
+        if lock(&self.state).split.as_ref().is_some_and(Lanes::uniform) {
+            return self.render_lane(worker, backend, metrics);
+        }
         let (job, mut film, generation, quality, pass) = {
             let mut st = lock(&self.state);
             if st.halted {
-                return;
+                return 0;
             }
             let Some(mut film) = st.film.take() else {
-                return;
+                return 0;
             };
-            let pass = Pass::plan(&mut film, st.measured, &st.quality);
+            let measured = st.measured.get(&worker).copied();
+            let pass = Pass::plan(&mut film, measured, &st.quality);
             (st.job.clone(), film, st.generation, st.quality, pass)
         };
         let rejected_before = film.rejected();
@@ -329,31 +358,21 @@ impl Session {
         let finished_rounds = matches!(pass, Pass::Tiles(_))
             && matches!(result, Ok(true))
             && !film.adaptive_round(quality.goal());
-        let took = start.elapsed();
-        self.passes.fetch_add(1, Ordering::Relaxed);
-        self.render_ns.fetch_add(
-            took.as_nanos().min(u128::from(u64::MAX)) as u64,
-            Ordering::Relaxed,
-        );
+        let took = self.count_pass(start);
         let (name, device) = (backend.name().to_owned(), backend.device());
         // The O(pixels) work on the film happens before taking the lock, so
         // that status requests and changes never wait for it.
         let finished = matches!(result, Ok(true));
         // A slice that leaves its sample unfinished publishes no frame.
         let whole = finished && film.slice_start() == 0;
-        let (pixels, estimate, density) = if whole {
-            let density = Arc::new(super::density::Density::of(&film));
-            (film.mean(), film.error_estimate(), Some(density))
-        } else {
-            (Vec::new(), None, None)
-        };
+        let image = whole.then(|| Image::of(&film));
         let mut st = lock(&self.state);
         tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
         if st.generation != generation || self.is_deleted() {
-            return; // changed while rendering (that film is stale) or deleted
+            return 0; // changed while rendering (that film is stale) or deleted
         }
         if matches!(result, Ok(false)) {
-            return; // given up for a change; the state has a fresh film
+            return 0; // given up for a change; the state has a fresh film
         }
         if let Err(e) = result {
             tracing::error!(session = %self.id, error = %e, "rendering failed");
@@ -362,47 +381,73 @@ impl Session {
             st.film = Some(film);
             drop(st);
             self.publish_status_only(name, device);
-            return;
+            return 0;
         }
         let paths = pass.paths(&film);
         metrics.add_samples(&name, paths);
         metrics
             .rejected_samples
             .fetch_add(film.rejected() - rejected_before, Ordering::Relaxed);
-        let full = film.pixels().len() as f64 / paths.max(1) as f64;
-        st.measured = Some(Measured {
-            per_sample: took.mul_f64(full),
-            paths,
-        });
-        if !whole {
+        st.record(worker, backend, paths, took, film.pixels().len());
+        let Some(image) = image else {
             st.film = Some(film);
-            return;
-        }
-        let progress = Progress::with_estimate(&film, st.restarted.elapsed(), estimate);
+            return paths;
+        };
+        let (backend, device) = match st.split.is_some() {
+            true => (lanes::NAME.to_owned(), st.device_list()),
+            false => (name, device),
+        };
+        let frame = self.frame(&mut st, &film, image, (backend, device), finished_rounds);
+        st.film = Some(film);
+        drop(st);
+        self.frames.send_replace(Arc::new(frame));
+        paths
+    }
+
+    /// Counts a pass that began at `start`; how long it took.
+    fn count_pass(&self, start: Instant) -> Duration {
+        let took = start.elapsed();
+        self.passes.fetch_add(1, Ordering::Relaxed);
+        self.render_ns.fetch_add(
+            took.as_nanos().min(u128::from(u64::MAX)) as u64,
+            Ordering::Relaxed,
+        );
+        took
+    }
+
+    /// The frame of `film` (whole samples) for generation `st.generation`,
+    /// rendered with `by` (backend, device); settles whether the session
+    /// halts with it.
+    fn frame(
+        &self,
+        st: &mut SessionState,
+        film: &Film,
+        image: Image,
+        by: (String, String),
+        finished_rounds: bool,
+    ) -> Frame {
+        let progress = Progress::with_estimate(film, st.restarted.elapsed(), image.estimate);
         st.halted =
-            finished_rounds || (quality.halts() && progressive::halted(&quality, &progress));
-        let frame = Frame {
+            finished_rounds || (st.quality.halts() && progressive::halted(&st.quality, &progress));
+        Frame {
             seq: self.seq.fetch_add(1, Ordering::Relaxed),
-            generation,
+            generation: st.generation,
             width: film.width(),
             height: film.height(),
             spp: progress.spp,
             spread: progress.spread,
-            density,
+            density: Some(image.density),
             error_estimate: progress.error_estimate,
             samples_per_sec: progress.samples_per_sec,
             elapsed_ms: progress.elapsed.as_secs_f64() * 1e3,
             rejected: progress.rejected,
             halted: st.halted,
-            backend: name,
-            device,
-            pixels,
+            backend: by.0,
+            device: by.1,
+            pixels: image.pixels,
             png: OnceLock::new(),
             encodings: Mutex::new(Vec::new()),
-        };
-        st.film = Some(film);
-        drop(st);
-        self.frames.send_replace(Arc::new(frame));
+        }
     }
 
     fn publish_status_only(&self, backend: String, device: String) {

@@ -1,0 +1,113 @@
+//! Every device at once (`--backend all`): each of the benchmark's backends
+//! alone, then all of them on one render ([`crate::render::split`]), per
+//! scene and size: each device's paths/s alone and within the split, and the
+//! combined rate against the sum of the rates alone (what splitting could
+//! reach if the devices shared nothing).
+
+use super::measure;
+use crate::render::split::render_split;
+use crate::render::{Backend, BackendError, Film, Quality, RenderJob, Scene};
+use std::time::Duration;
+
+/// One device in one measurement.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct DeviceRate {
+    pub backend: String,
+    pub device: String,
+    /// Camera paths per second rendering alone.
+    pub alone: f64,
+    /// Camera paths per wall-clock second it added to the split render.
+    pub together: f64,
+}
+
+/// One scene and size on every device.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DevicesRow {
+    pub scene: String,
+    pub size: (u32, u32),
+    pub devices: Vec<DeviceRate>,
+    /// Camera paths per second of the split render.
+    pub combined: f64,
+}
+
+impl DevicesRow {
+    /// The sum of the devices' rates alone.
+    pub fn ideal(&self) -> f64 {
+        self.devices.iter().map(|d| d.alone).sum()
+    }
+
+    /// The best rate alone.
+    pub fn fastest(&self) -> f64 {
+        self.devices.iter().map(|d| d.alone).fold(0.0, f64::max)
+    }
+}
+
+/// A CSV line: one device, or `all` for the combined rate.
+#[derive(serde::Serialize)]
+pub struct DevicesCsv<'a> {
+    pub scene: &'a str,
+    pub width: u32,
+    pub height: u32,
+    pub backend: &'a str,
+    pub device: &'a str,
+    pub alone_paths_per_sec: f64,
+    pub together_paths_per_sec: f64,
+}
+
+impl DevicesRow {
+    pub fn csv(&self) -> Vec<DevicesCsv<'_>> {
+        let line = |backend, device, alone, together| DevicesCsv {
+            scene: &self.scene,
+            width: self.size.0,
+            height: self.size.1,
+            backend,
+            device,
+            alone_paths_per_sec: alone,
+            together_paths_per_sec: together,
+        };
+        let mut out: Vec<_> = (self.devices.iter())
+            .map(|d| line(&d.backend, &d.device, d.alone, d.together))
+            .collect();
+        out.push(line("all", "every device", self.ideal(), self.combined));
+        out
+    }
+}
+
+/// Measures `scene` at `size` on each backend alone for `seconds`, then on
+/// all of them at once for as long.
+pub fn measure(
+    backends: &mut [Backend],
+    name: &str,
+    scene: &Scene,
+    size: (u32, u32),
+    seconds: f64,
+) -> Result<DevicesRow, BackendError> {
+    let quality = Quality::default();
+    let mut devices = Vec::with_capacity(backends.len());
+    for b in backends.iter_mut() {
+        let alone = measure::throughput(b, scene, size, &quality, seconds)?;
+        devices.push(DeviceRate {
+            backend: b.name().to_owned(),
+            device: b.device(),
+            alone: alone.paths_per_sec,
+            together: 0.0,
+        });
+    }
+    let timed = Quality {
+        time_ms: Some(Duration::from_secs_f64(seconds).as_millis().max(1) as u64),
+        ..quality
+    };
+    let job = RenderJob::new(scene, size.0, size.1, &timed);
+    let mut film = Film::new(size.0, size.1);
+    let (progress, shares) = render_split(&job, backends, &mut film, &timed, |_| {})?;
+    let wall = progress.elapsed.as_secs_f64().max(1e-9);
+    for (d, s) in devices.iter_mut().zip(&shares) {
+        d.together = s.samples as f64 / wall;
+    }
+    Ok(DevicesRow {
+        scene: name.to_owned(),
+        size,
+        devices,
+        combined: progress.samples as f64 / wall,
+    })
+}
