@@ -322,11 +322,20 @@ fn the_devices_section_measures_each_backend_alone_and_all_at_once() {
     let kinds: Vec<&str> = rows[1..].iter().map(|r| r[3].as_str()).collect();
     assert_eq!(
         kinds,
-        ["cpu", "opencl", "all", "cpu", "opencl", "all"],
+        [
+            "cpu",
+            "opencl",
+            "all",
+            "split-fastest",
+            "cpu",
+            "opencl",
+            "all",
+            "split-fastest"
+        ],
         "2 sizes"
     );
     let num = |r: &Vec<String>, i: usize| r[i].parse::<f64>().expect("number");
-    for size in rows[1..].chunks(3) {
+    for size in rows[1..].chunks(4) {
         assert!(
             size.iter().all(|r| num(r, 5) > 0.0 && num(r, 6) > 0.0),
             "{size:?}"

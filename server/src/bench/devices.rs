@@ -2,7 +2,8 @@
 //! alone, then all of them on one render ([`crate::render::split`]), per
 //! scene and size: each device's paths/s alone and within the split, and the
 //! combined rate against the sum of the rates alone (what splitting could
-//! reach if the devices shared nothing).
+//! reach if the devices shared nothing); and the fastest device alone through
+//! the split machinery, against its rate alone (what the machinery costs).
 
 use super::measure;
 use crate::render::split::render_split;
@@ -28,6 +29,9 @@ pub struct DevicesRow {
     pub devices: Vec<DeviceRate>,
     /// Camera paths per second of the split render.
     pub combined: f64,
+    /// The fastest device alone through the split machinery (blocks,
+    /// block films, merges): what the machinery itself costs.
+    pub split_fastest: f64,
 }
 
 impl DevicesRow {
@@ -69,6 +73,12 @@ impl DevicesRow {
             .map(|d| line(&d.backend, &d.device, d.alone, d.together))
             .collect();
         out.push(line("all", "every device", self.ideal(), self.combined));
+        out.push(line(
+            "split-fastest",
+            "the fastest device alone, through the split",
+            self.fastest(),
+            self.split_fastest,
+        ));
         out
     }
 }
@@ -98,16 +108,24 @@ pub fn measure(
         ..quality
     };
     let job = RenderJob::new(scene, size.0, size.1, &timed);
-    let mut film = Film::new(size.0, size.1);
-    let (progress, shares) = render_split(&job, backends, &mut film, &timed, |_| {})?;
+    let split = |backends: &mut [Backend]| {
+        let mut film = Film::new(size.0, size.1);
+        render_split(&job, backends, &mut film, &timed, |_| {})
+    };
+    let (progress, shares) = split(backends)?;
     let wall = progress.elapsed.as_secs_f64().max(1e-9);
     for (d, s) in devices.iter_mut().zip(&shares) {
         d.together = s.samples as f64 / wall;
     }
+    let fastest = (0..devices.len())
+        .max_by(|&a, &b| devices[a].alone.total_cmp(&devices[b].alone))
+        .unwrap_or(0);
+    let (one, _) = split(&mut backends[fastest..=fastest])?;
     Ok(DevicesRow {
         scene: name.to_owned(),
         size,
         devices,
         combined: progress.samples as f64 / wall,
+        split_fastest: one.samples as f64 / one.elapsed.as_secs_f64().max(1e-9),
     })
 }

@@ -70,8 +70,8 @@ fn devices(w: &mut String, r: &Results) {
         w,
         "Each backend alone, then all of them on one render (`--backend all`: blocks of samples sized to each \
          device's speed, merged in sample order). Alone: paths/s rendering by itself. Together: the paths/s it \
-         added to the shared render. All: the shared render's paths/s against the sum of the rates alone. \
-         Devices that share processors (PoCL and rayon on the same cores) compete for them: the sum is not \
+         added to the shared render. All: the shared render's paths/s against the sum of the rates alone. Fastest alone, split: \
+         that device rendering alone through the same blocks and merges (what they cost). Devices that share processors (PoCL and rayon on the same cores) compete for them: the sum is not \
          reachable there.\n"
     );
     let _ = writeln!(
@@ -102,6 +102,16 @@ fn devices(w: &mut String, r: &Results) {
             row.combined / 1e6,
             100.0 * row.combined / row.ideal().max(1e-9),
             row.combined / row.fastest().max(1e-9)
+        );
+        let _ = writeln!(
+            w,
+            "| {} | {}x{} | fastest alone, split | {:.2} | {:.2} ({:.0}%) |",
+            row.scene,
+            row.size.0,
+            row.size.1,
+            row.fastest() / 1e6,
+            row.split_fastest / 1e6,
+            100.0 * row.split_fastest / row.fastest().max(1e-9)
         );
     }
     let _ = writeln!(w);

@@ -31,6 +31,15 @@ pub struct PixelSums {
 }
 
 impl PixelSums {
+    /// Adds another pixel's sums (of other samples) to these.
+    #[inline(always)]
+    pub fn absorb(&mut self, other: &PixelSums) {
+        for c in 0..3 {
+            self.even[c] += other.even[c];
+            self.odd[c] += other.odd[c];
+        }
+    }
+
     /// Adds sample number `sample`; returns false (and adds nothing) when
     /// it is NaN or infinite.
     #[inline(always)]
@@ -80,16 +89,24 @@ pub struct SppSpread {
 impl Film {
     pub fn new(width: u32, height: u32) -> Self {
         Self {
+            pixels: vec![PixelSums::default(); width as usize * height as usize],
+            ..Self::empty(width, height, 0)
+        }
+    }
+
+    /// A film with no pixel storage (the callers give it some).
+    fn empty(width: u32, height: u32, first: u64) -> Self {
+        Self {
             width,
             height,
-            pixels: vec![PixelSums::default(); width as usize * height as usize],
+            pixels: Vec::new(),
             spp: 0,
             rejected: 0,
             next: 0,
             partial_rejected: 0,
             tiles: Tiles::new(width, height),
             adaptive: TileState::default(),
-            first: 0,
+            first,
         }
     }
 
@@ -120,24 +137,52 @@ impl Film {
     /// at this film's next sample, that is of another size, holds part of a
     /// sample, or when either film has begun adaptive rounds.
     pub fn absorb(&mut self, block: &Film) -> bool {
-        let fits = block.first == self.next_sample()
-            && (block.width, block.height) == (self.width, self.height)
-            && block.next == 0
-            && self.next == 0
-            && !block.adaptive.started()
-            && !self.adaptive.started();
-        if !fits {
+        if !self.continued_by(block) {
             return false;
         }
         for (p, b) in self.pixels.iter_mut().zip(&block.pixels) {
-            for c in 0..3 {
-                p.even[c] += b.even[c];
-                p.odd[c] += b.odd[c];
-            }
+            p.absorb(b);
         }
         self.spp += block.spp;
         self.rejected += block.rejected;
         true
+    }
+
+    /// As [`Film::absorb`], and leaves `block`'s sums zero (in the same pass
+    /// over memory), ready for [`Film::reuse_block`].
+    pub fn absorb_emptying(&mut self, block: &mut Film) -> bool {
+        if !self.continued_by(block) {
+            return false;
+        }
+        for (p, b) in self.pixels.iter_mut().zip(block.pixels.iter_mut()) {
+            p.absorb(b);
+            *b = PixelSums::default();
+        }
+        self.spp += block.spp;
+        self.rejected += block.rejected;
+        block.spp = 0;
+        true
+    }
+
+    /// Makes a block emptied by [`Film::absorb_emptying`] an empty block
+    /// for samples `first..`, keeping its memory.
+    pub fn reuse_block(&mut self, first: u64) {
+        debug_assert_eq!(self.spp, 0, "an emptied block");
+        let pixels = std::mem::take(&mut self.pixels);
+        *self = Self {
+            pixels,
+            ..Self::empty(self.width, self.height, first)
+        };
+    }
+
+    /// Whether `block` holds whole samples that continue this film.
+    fn continued_by(&self, block: &Film) -> bool {
+        block.first == self.next_sample()
+            && (block.width, block.height) == (self.width, self.height)
+            && block.next == 0
+            && self.next == 0
+            && !block.adaptive.started()
+            && !self.adaptive.started()
     }
 
     pub fn width(&self) -> u32 {

@@ -71,8 +71,7 @@ impl Pass {
             return Pass::Tiles(film.adaptive_work(quality.goal(), paths.max(1)));
         }
         if start == 0 && wanted >= 1.0 && pixels as u64 <= most_paths {
-            let mut count =
-                (wanted.min(MOST_SAMPLES as f64) as u64).min(most_paths / pixels as u64);
+            let mut count = whole_samples(pixels, last);
             if let Some(n) = quality.spp {
                 count = count.min(n.saturating_sub(film.spp()));
             }
@@ -96,6 +95,24 @@ impl Pass {
                 .sum(),
         }
     }
+}
+
+/// Whole samples per pixel a pass on a film of `pixels` pixels with no
+/// sample in progress takes, given what the last pass measured (1 where
+/// it would take a slice of one sample instead).
+pub fn whole_samples(pixels: usize, last: Measured) -> u64 {
+    let most_paths = last.paths.max(1).saturating_mul(GROWTH);
+    let p = last.per_sample.as_secs_f64();
+    let wanted = if p > 0.0 {
+        PASS_TARGET.as_secs_f64() / p
+    } else {
+        f64::INFINITY
+    };
+    if wanted < 1.0 || pixels as u64 > most_paths {
+        return 1;
+    }
+    let count = (wanted.min(MOST_SAMPLES as f64) as u64).min(most_paths / pixels.max(1) as u64);
+    count.clamp(1, MOST_SAMPLES)
 }
 
 #[cfg(test)]

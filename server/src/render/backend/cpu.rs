@@ -267,11 +267,16 @@ fn render_span(
     span: &mut [PixelSums],
     samples: Range<u64>,
 ) -> u64 {
-    match wide {
+    let one = samples.end - samples.start == 1;
+    match (wide, one) {
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[allow(unsafe_code)]
-        Some(isa) => unsafe { span_avx2(isa, job, first, span, samples) },
-        None => span_with(Portable, job, first, span, samples),
+        (Some(isa), false) => unsafe { span_avx2(isa, job, first, span, samples) },
+        // SAFETY: as above.
+        #[allow(unsafe_code)]
+        (Some(isa), true) => unsafe { pairs_avx2(isa, job, first, span, samples.start) },
+        (None, false) => span_with(Portable, job, first, span, samples),
+        (None, true) => pairs_with(Portable, job, first, span, samples.start),
     }
 }
 
@@ -283,7 +288,10 @@ fn render_span(
     span: &mut [PixelSums],
     samples: Range<u64>,
 ) -> u64 {
-    span_with(Portable, job, first, span, samples)
+    match samples.end - samples.start == 1 {
+        true => pairs_with(Portable, job, first, span, samples.start),
+        false => span_with(Portable, job, first, span, samples),
+    }
 }
 
 /// `span_with` compiled for AVX2 and FMA.
@@ -299,11 +307,49 @@ fn span_avx2(
     span_with(isa, job, first, span, samples)
 }
 
-/// The samples of a run of pixels, with the whole path loop inlined here so that it
-/// is compiled for the caller's instruction set. Samples go two at a time,
-/// side by side: each bounce traces both paths' rays before shading either,
-/// so that the processor overlaps the two (independent) intersection tests.
-/// Samples still reach each pixel in index order.
+/// `pairs_with` compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn pairs_avx2(
+    isa: Avx2,
+    job: &RenderJob,
+    first: usize,
+    span: &mut [PixelSums],
+    sample: u64,
+) -> u64 {
+    pairs_with(isa, job, first, span, sample)
+}
+
+/// Traces paths `$a` and, if `$pair`, `$b` to their ends, bounce by
+/// bounce: each bounce traces both paths' rays before shading either, so
+/// that the processor overlaps the two (independent) intersection tests.
+/// A macro, not a function: the loop stays in its caller's body, compiled
+/// and inlined as before (as a function it cost smallpt 15%, measured).
+macro_rules! trace_two {
+    ($isa:expr, $job:expr, $a:ident, $b:ident, $pair:expr) => {{
+        let (world, settings) = (&$job.world, &$job.settings);
+        let (mut live_a, mut live_b) = (true, $pair);
+        while live_a || live_b {
+            let hit_a = if live_a {
+                world.intersect($isa, &$a.ray, $a.from)
+            } else {
+                None
+            };
+            let hit_b = if live_b {
+                world.intersect($isa, &$b.ray, $b.from)
+            } else {
+                None
+            };
+            live_a = live_a && $a.advance($isa, world, settings, hit_a);
+            live_b = live_b && $b.advance($isa, world, settings, hit_b);
+        }
+    }};
+}
+
+/// The samples of a run of pixels, with the whole path loop inlined here
+/// so that it is compiled for the caller's instruction set. Samples go two
+/// at a time, side by side ([`trace_two`]), and reach each pixel in index
+/// order.
 #[inline(always)]
 fn span_with<I: Isa>(
     isa: I,
@@ -312,7 +358,7 @@ fn span_with<I: Isa>(
     span: &mut [PixelSums],
     samples: Range<u64>,
 ) -> u64 {
-    let (world, settings) = (&job.world, &job.settings);
+    let settings = &job.settings;
     let width = job.width() as usize;
     let mut rejected = 0u64;
     for (i, px) in span.iter_mut().enumerate() {
@@ -327,26 +373,42 @@ fn span_with<I: Isa>(
             } else {
                 a
             };
-            let (mut live_a, mut live_b) = (true, pair);
-            while live_a || live_b {
-                let hit_a = if live_a {
-                    world.intersect(isa, &a.ray, a.from)
-                } else {
-                    None
-                };
-                let hit_b = if live_b {
-                    world.intersect(isa, &b.ray, b.from)
-                } else {
-                    None
-                };
-                live_a = live_a && a.advance(isa, world, settings, hit_a);
-                live_b = live_b && b.advance(isa, world, settings, hit_b);
-            }
+            trace_two!(isa, job, a, b, pair);
             rejected += u64::from(!px.add(s, a.radiance(settings)));
             if pair {
                 rejected += u64::from(!px.add(s + 1, b.radiance(settings)));
             }
             s += 2;
+        }
+    }
+    rejected
+}
+
+/// One sample (`sample`) of a run of pixels, two neighbouring pixels side by
+/// side: a pass of one sample (a slice, or a 512x512 pass on two cores)
+/// pairs its paths too (20% faster than one path at a time, measured).
+#[inline(always)]
+fn pairs_with<I: Isa>(
+    isa: I,
+    job: &RenderJob,
+    first: usize,
+    span: &mut [PixelSums],
+    sample: u64,
+) -> u64 {
+    let settings = &job.settings;
+    let width = job.width() as usize;
+    let at = |i: usize| (((first + i) % width) as u32, ((first + i) / width) as u32);
+    let mut rejected = 0u64;
+    for (k, two) in span.chunks_mut(2).enumerate() {
+        let pair = two.len() == 2;
+        let (xa, ya) = at(2 * k);
+        let (xb, yb) = at(2 * k + usize::from(pair));
+        let mut a = job.camera_path(xa, ya, sample);
+        let mut b = job.camera_path(xb, yb, sample);
+        trace_two!(isa, job, a, b, pair);
+        rejected += u64::from(!two[0].add(sample, a.radiance(settings)));
+        if pair {
+            rejected += u64::from(!two[1].add(sample, b.radiance(settings)));
         }
     }
     rejected

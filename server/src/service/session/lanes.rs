@@ -11,7 +11,7 @@ use crate::render::adaptive::WARMUP_SPP;
 use crate::render::split::{DeviceShare, Ledger};
 use crate::render::{Backend, Film, Quality};
 use crate::service::metrics::Metrics;
-use crate::service::pass::Pass;
+use crate::service::pass::{whole_samples, Pass};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::ops::Range;
 use std::sync::atomic::Ordering;
@@ -181,13 +181,10 @@ impl Session {
         let (mut film, range) = match split.blocks.remove(&worker) {
             Some(b) => b,
             None => {
-                let mut fresh = Film::block(width, height, 0);
-                let want = match Pass::plan(&mut fresh, measured, &quality) {
-                    Pass::Samples(n) => n,
-                    _ => 1,
-                };
+                let pixels = width as usize * height as usize;
+                let want = measured.map_or(1, |m| whole_samples(pixels, m));
                 let range = split.ledger.claim(want)?;
-                (Film::block(width, height, range.start), range)
+                (split.ledger.block_film(width, height, &range), range)
             }
         };
         let pass = match Pass::plan(&mut film, measured, &quality) {
@@ -223,13 +220,19 @@ impl Session {
                 return;
             }
             drop(st);
-            for b in &blocks {
-                film.absorb(b);
+            let mut emptied = Vec::with_capacity(blocks.len());
+            for mut b in blocks {
+                if film.absorb_emptying(&mut b) {
+                    emptied.push(b);
+                }
             }
             let image = Image::of(&film);
             let mut st = lock(&self.state);
             if st.generation != generation || self.is_deleted() {
                 return; // the state has a fresh film
+            }
+            for b in emptied {
+                split_of(&mut st).ledger.recycle(b);
             }
             let by = (NAME.to_owned(), st.device_list());
             let frame = self.frame(&mut st, &film, image, by, false);
