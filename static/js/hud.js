@@ -26,8 +26,22 @@ function showStatus(s) {
   setHud("hud-error", s.error_estimate == null ? "–" : `${(100 * s.error_estimate).toPrecision(3)} %`, s.error_estimate);
   setHud("hud-elapsed", fmtTime(s.elapsed_ms), s.elapsed_ms);
   setHud("hud-res", `${s.width} × ${s.height}`);
-  setHud("hud-device", `${s.backend}: ${s.device}`);
+  showDevice(s);
   if (s.type === "stats") showStream(s);
+}
+
+/** Where the session renders; a session on every device (`backend: all`)
+ *  lists each device's rate instead of their long names. */
+function showDevice(s) {
+  const devices = s.devices || [];
+  if (s.backend !== "all" || devices.length === 0) {
+    setHud("hud-device", `${s.backend}: ${s.device}`, s.backend);
+    return;
+  }
+  const each = devices.map((d) => `${d.backend} ${d.failure ? "dropped out" : fmtRate(d.samples_per_sec)}`);
+  setHud("hud-device", `all: ${each.join(" · ")}`, s.backend);
+  $("hud-device").title = devices.map((d) => `${d.backend}: ${d.device}${d.failure ? ` (${d.failure})` : ""}`).join("\n");
+  $("hud-device").dataset.devices = String(devices.length);
 }
 
 /** The stream row; a field the stats lack (null) is left out. */

@@ -58,11 +58,11 @@ export async function waitFor(what, fn, { timeout = 20000, interval = 100 } = {}
 }
 
 /** Starts `pathstream serve` on the port, serving this checkout's static/. */
-export async function startServer(port, { token } = {}) {
+export async function startServer(port, { token, backend = "cpu" } = {}) {
   if (!fs.existsSync(BIN)) {
     throw new Error(`no server binary at ${BIN}: build it (cargo build --release) or set PATHSTREAM_BIN`);
   }
-  const args = ["serve", "--addr", `127.0.0.1:${port}`, "--backend", "cpu"];
+  const args = ["serve", "--addr", `127.0.0.1:${port}`, "--backend", backend];
   if (token) args.push("--token", token);
   const env = { ...process.env, PATHSTREAM_STATIC_DIR: STATIC_DIR, RUST_LOG: process.env.RUST_LOG || "warn" };
   delete env.PATHSTREAM_TOKEN;
@@ -122,10 +122,11 @@ export async function launchBrowser() {
 }
 
 /** One JSON API call; returns {status, body}. */
-/** A server on a free port and a 1280x720 page in Chromium, with its
- *  console watched: what most browser tests start from. */
-export async function openPage() {
-  const server = await startServer(await freePort());
+/** A server on a free port (`options` as startServer's) and a 1280x720
+ *  page in Chromium, with its console watched: what most browser tests
+ *  start from. */
+export async function openPage(options = {}) {
+  const server = await startServer(await freePort(), options);
   const browser = await launchBrowser();
   const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
   page.setDefaultTimeout(30000);
