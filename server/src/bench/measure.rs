@@ -90,12 +90,21 @@ pub fn trace(
         progressive::step(&job, backend, &mut film, &endless, paths)?;
         rendering += start.elapsed();
         let error = relative_rms_error(&film.mean(), reference.0);
-        points.push(TracePoint {
+        let point = TracePoint {
             seconds: rendering.as_secs_f64(),
             spp: film.mean_spp(),
             true_error: corrected(error, reference.1),
             estimate: film.error_estimate(),
-        });
+        };
+        // An adaptive step short of a whole image's paths may leave the
+        // mean spp (rounded down) where it was: that point replaces the last.
+        if points
+            .last()
+            .is_some_and(|p: &TracePoint| p.spp == point.spp)
+        {
+            points.pop();
+        }
+        points.push(point);
         if rendering >= budget {
             return Ok(points);
         }
@@ -109,7 +118,7 @@ pub fn trace(
         } else {
             wanted
         };
-        paths = wanted.min(fits).max(1);
+        paths = wanted.min(fits).max(pixels);
     }
 }
 
