@@ -6,7 +6,7 @@
 mod http;
 
 use futures_util::{SinkExt, StreamExt};
-use http::{client, config, create, server};
+use http::{client, config, create, pfm, server};
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
@@ -64,6 +64,8 @@ async fn a_socket_chooses_jpeg_or_png_and_stats_say_which_and_how_big() {
     )
     .await;
     let id = s["id"].as_str().expect("id");
+    // Both sockets must see the halted frame, not one of the frames before.
+    pfm(&base, id, 4).await;
     let mut png_ws = connect(&base, id, "").await;
     let (png, png_stats) = next_frame(&mut png_ws).await;
     assert_eq!(png[..4], PNG);
