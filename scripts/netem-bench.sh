@@ -58,20 +58,21 @@ for end in "$srv veth-s$$" "$cli veth-c$$"; do
     fi
 done
 
+# Waits (5 s at most) until HOST/PORT accepts connections from the client's namespace.
+reachable() {
+    for _ in $(seq 50); do
+        ip netns exec "$cli" bash -c "exec 3<>/dev/tcp/$1" 2>/dev/null && return
+        sleep 0.1
+    done
+}
 ip netns exec "$srv" "$bin" serve --addr 10.77.0.1:8080 --backend cpu >/dev/null 2>&1 &
 server_pid=$!
-for _ in $(seq 50); do
-    ip netns exec "$cli" bash -c 'exec 3<>/dev/tcp/10.77.0.1/8080' 2>/dev/null && break
-    sleep 0.1
-done
+reachable 10.77.0.1/8080
 url=http://10.77.0.1:8080
 if [ "$netem" = no ] && [ "$half" -gt 0 ]; then
     ip netns exec "$cli" "$relay" 127.0.0.1:9090 10.77.0.1:8080 "$half" >/dev/null &
     relay_pid=$!
-    for _ in $(seq 50); do
-        ip netns exec "$cli" bash -c 'exec 3<>/dev/tcp/127.0.0.1/9090' 2>/dev/null && break
-        sleep 0.1
-    done
+    reachable 127.0.0.1/9090
     url=http://127.0.0.1:9090
 fi
 echo "link: ${shaped}; ${width}x${height}, ${updates} updates"

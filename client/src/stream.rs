@@ -22,7 +22,9 @@ pub struct FrameStream {
 
 impl FrameStream {
     pub(crate) async fn connect(url: &str) -> Result<Self> {
-        let (socket, _) = tokio_tungstenite::connect_async(url)
+        // Without Nagle (as browsers do): small messages (changes) go out at
+        // once instead of waiting for the server's delayed TCP ACK.
+        let (socket, _) = tokio_tungstenite::connect_async_with_config(url, None, true)
             .await
             .map_err(|e| match e {
                 tokio_tungstenite::tungstenite::Error::Http(r) => ClientError::Server {

@@ -92,10 +92,17 @@ async fn main() -> anyhow::Result<()> {
     } else {
         format!("?{stream_query}")
     };
-    let (mut ws, _) = tokio_tungstenite::connect_async(format!(
-        "{}/api/sessions/{id}/ws{query}",
-        base.replacen("http://", "ws://", 1)
-    ))
+    // Without Nagle, as browsers open WebSockets: a small acknowledgement
+    // held back until the server's TCP acknowledges the one before it can
+    // wait for a delayed ACK (40 ms on Linux).
+    let (mut ws, _) = tokio_tungstenite::connect_async_with_config(
+        format!(
+            "{}/api/sessions/{id}/ws{query}",
+            base.replacen("http://", "ws://", 1)
+        ),
+        None,
+        true,
+    )
     .await?;
 
     // Warm up: a few frames.
