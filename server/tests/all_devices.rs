@@ -9,7 +9,7 @@ mod http;
 use common::{opencl_device, render, scene};
 use http::{client, config, create, patch, pfm, status};
 use pathstream::render::film::relative_rms_error;
-use pathstream::render::{Backend, Quality};
+use pathstream::render::{Backend, Quality, RenderJob};
 use pathstream::service::{start_with_device, start_with_devices, Placement, Running};
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
@@ -20,6 +20,12 @@ const SIDE: u32 = 32;
 /// `fail_after` launches make the device fail.
 async fn both(fail_after: Option<u64>) -> Option<(Running, String)> {
     let mut device = opencl_device()?;
+    // The kernel built before the clock starts (a cold PoCL cache takes
+    // seconds, in which rayon alone would finish the small renders here).
+    for name in ["cornell-glass", "cornell"] {
+        let job = RenderJob::new(&scene(name), SIDE, SIDE, &Quality::default());
+        device.prepare_program(&job).expect("the kernel builds");
+    }
     device.fail_after_launches = fail_after;
     let backend = Backend::OpenCl {
         backend: Box::new(device),
@@ -57,7 +63,9 @@ async fn session(base: &str, spp: u64, seed: u64) -> String {
 }
 
 /// The session's image against rayon's alone with the same seed: the same
-/// samples, so the same image up to the devices' rounding (1e-7 measured).
+/// samples, so the same image up to the devices' rounding, which turns a few
+/// paths another way (1e-7 to 1.2e-4 relative RMS measured): far below the
+/// noise, where samples of another seed, or a block missing, would be.
 async fn assert_one_device_image(base: &str, id: &str, spp: u64, seed: u64) {
     let image = pfm(base, id, spp).await;
     let q = Quality {
@@ -66,9 +74,10 @@ async fn assert_one_device_image(base: &str, id: &str, spp: u64, seed: u64) {
     };
     let alone = render(&scene("cornell-glass"), SIDE, SIDE, &q, spp);
     let diff = relative_rms_error(&image, &alone.mean());
+    let noise = alone.error_estimate().expect("estimate");
     assert!(
-        diff < 1e-4,
-        "relative RMS difference {diff:e} from the one-device image"
+        diff < noise / 20.0,
+        "relative RMS difference {diff:e} from the one-device image (noise {noise:e})"
     );
 }
 
@@ -81,9 +90,9 @@ async fn both_devices_render_one_image_and_say_how_fast() {
     let Some((_server, base)) = both(None).await else {
         return;
     };
-    let id = session(&base, 256, 4).await;
+    let id = session(&base, 1024, 4).await;
     let done = halted(&base, &id, 0).await;
-    assert_eq!(done["spp"], 256);
+    assert_eq!(done["spp"], 1024);
     let d = devices(&done);
     assert_eq!(d.len(), 2, "{done}");
     assert_eq!(
@@ -100,14 +109,14 @@ async fn both_devices_render_one_image_and_say_how_fast() {
         .sum();
     assert_eq!(
         total,
-        256 * u64::from(SIDE * SIDE),
+        1024 * u64::from(SIDE * SIDE),
         "every path counted once: {done}"
     );
     for x in &d {
         assert!(x["samples"].as_u64() > Some(0), "{x}");
         assert!(x["samples_per_sec"].as_f64() > Some(0.0), "{x}");
     }
-    assert_one_device_image(&base, &id, 256, 4).await;
+    assert_one_device_image(&base, &id, 1024, 4).await;
     let metrics = client()
         .get(format!("{base}/metrics"))
         .send()

@@ -111,9 +111,19 @@ fn render_on_every_device_prints_each_devices_share_and_the_one_device_image() {
             .2
     };
     let diff = pathstream::render::film::relative_rms_error(&read(&all_path), &read(&one_path));
+    // The same samples: only the devices' rounding differs, far below the
+    // noise (the summary's "error estimate N%").
+    let one_summary = text(&one.stdout);
+    let noise: f64 = one_summary
+        .split("error estimate ")
+        .nth(1)
+        .and_then(|r| r.split('%').next())
+        .and_then(|n| n.parse::<f64>().ok())
+        .expect("an error estimate")
+        / 100.0;
     assert!(
-        diff < 1e-4,
-        "every device vs rayon alone, same seed: {diff:e}"
+        diff < noise / 20.0,
+        "every device vs rayon alone, same seed: {diff:e} (noise {noise:e})"
     );
     let bad = pathstream(&[
         "render",

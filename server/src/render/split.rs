@@ -178,11 +178,21 @@ pub struct DeviceShare {
 
 impl DeviceShare {
     pub fn of(backend: &Backend) -> Self {
+        Self::named(backend.name(), &backend.device())
+    }
+
+    /// A device that has rendered nothing yet.
+    pub fn named(backend: &str, device: &str) -> Self {
         Self {
-            backend: backend.name().to_owned(),
-            device: backend.device(),
+            backend: backend.to_owned(),
+            device: device.to_owned(),
             ..Self::default()
         }
+    }
+
+    /// Counts from zero again (a new generation); a failure stays.
+    pub fn restart(&mut self) {
+        (self.samples, self.busy_s, self.samples_per_sec) = (0, 0.0, 0.0);
     }
 
     /// Counts a pass of `paths` camera paths that took `took`.

@@ -233,11 +233,6 @@ impl AppState {
         }
     }
 
-    /// How many workers the service has (a session on every device renders on all).
-    pub fn worker_count(&self) -> usize {
-        self.workers.len()
-    }
-
     /// The workers a session placed so renders on.
     fn placed_on(&self, placement: Placement) -> std::ops::Range<usize> {
         match placement {

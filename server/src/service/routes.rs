@@ -243,7 +243,7 @@ async fn create_session(
         state.placement_info(placement),
     );
     if placement == Placement::All {
-        session = session.on_every_device(state.worker_count());
+        session = session.on_every_device(&state.backends());
     }
     let session = Arc::new(session);
     state.add_session(session.clone(), placement)?;

@@ -177,12 +177,16 @@ impl Session {
         }
     }
 
-    /// Makes this a session rendered on `workers` workers at once (each
-    /// places it with [`Session::attach`]).
-    pub fn on_every_device(self, workers: usize) -> Self {
+    /// Makes this a session rendered on every one of `workers` (what each
+    /// renders with, by worker number) at once; each places it with
+    /// [`Session::attach`]. Status lists every device from the start.
+    pub fn on_every_device(self, workers: &[BackendInfo]) -> Self {
         {
             let mut st = lock(&self.state);
-            st.split = Some(Lanes::new(workers, &st.quality));
+            st.split = Some(Lanes::new(workers.len(), &st.quality));
+            st.devices = (workers.iter().enumerate())
+                .map(|(i, w)| (i, DeviceShare::named(&w.backend, &w.device)))
+                .collect();
         }
         self
     }
@@ -263,7 +267,9 @@ impl Session {
         for m in st.measured.values_mut() {
             *m = m.after_change(pixels);
         }
-        st.devices.clear();
+        for share in st.devices.values_mut() {
+            share.restart();
+        }
         let quality = st.quality;
         if let Some(split) = &mut st.split {
             split.restart(&quality);
