@@ -4,21 +4,9 @@
 
 mod http;
 
-use http::{client, config, create, patch, read_frames, server, status, ws_connect};
+use http::{client, config, create, halted, patch, read_frames, server, ws_connect};
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
-
-/// Polls the session until it halts (at most a minute).
-async fn halted(base: &str, id: &str) -> Value {
-    let until = Instant::now() + Duration::from_secs(60);
-    loop {
-        let s = status(base, id).await;
-        if s["state"] == "halted" || Instant::now() > until {
-            return s;
-        }
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_adaptive_session_spreads_its_samples_and_says_where() {
@@ -30,7 +18,7 @@ async fn an_adaptive_session_spreads_its_samples_and_says_where() {
     )
     .await;
     let id = s["id"].as_str().expect("id").to_owned();
-    let done = halted(&base, &id).await;
+    let done = halted(&base, &id, None).await;
     assert_eq!(done["state"], "halted", "{done}");
     assert_eq!(done["quality"]["adaptive"], true);
     assert_eq!(done["spp"], 64, "the mean: a uniform render's budget");
@@ -62,7 +50,7 @@ async fn an_adaptive_session_spreads_its_samples_and_says_where() {
     // Off again: the film restarts uniform, the spread collapses.
     let r = patch(&base, &id, "quality", json!({"adaptive": false})).await;
     assert_eq!(r.status(), 200);
-    let uniform = halted(&base, &id).await;
+    let uniform = halted(&base, &id, None).await;
     assert_eq!(uniform["quality"]["adaptive"], false);
     assert_eq!(
         uniform["spp_spread"],
@@ -85,7 +73,7 @@ async fn a_target_error_halts_when_the_tiles_are_done_and_the_stream_says_so() {
         "the final preset samples adaptively"
     );
     let mut ws = ws_connect(&base, &id).await;
-    let done = halted(&base, &id).await;
+    let done = halted(&base, &id, None).await;
     assert_eq!(done["state"], "halted", "{done}");
     let estimate = done["error_estimate"].as_f64().expect("estimate");
     assert!(estimate <= 0.05, "{done}");

@@ -7,12 +7,12 @@ mod common;
 mod http;
 
 use common::{opencl_device, render, scene};
-use http::{client, config, create, patch, pfm, status};
+use http::{client, config, create, halted, patch, pfm, status};
 use pathstream::render::film::relative_rms_error;
 use pathstream::render::{Backend, Quality, RenderJob};
 use pathstream::service::{start_with_device, start_with_devices, Placement, Running};
 use serde_json::{json, Value};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const SIDE: u32 = 32;
 
@@ -36,19 +36,6 @@ async fn both(fail_after: Option<u64>) -> Option<(Running, String)> {
         .expect("server starts");
     let base = format!("http://{}", running.addr);
     Some((running, base))
-}
-
-/// Polls the session until it halts in generation `generation` (at most a minute).
-async fn halted(base: &str, id: &str, generation: u64) -> Value {
-    let until = Instant::now() + Duration::from_secs(60);
-    loop {
-        let s = status(base, id).await;
-        if (s["state"] == "halted" && s["generation"] == generation) || Instant::now() > until {
-            assert_eq!(s["state"], "halted", "{s}");
-            return s;
-        }
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
 }
 
 async fn session(base: &str, spp: u64, seed: u64) -> String {
@@ -91,7 +78,7 @@ async fn both_devices_render_one_image_and_say_how_fast() {
         return;
     };
     let id = session(&base, 1024, 4).await;
-    let done = halted(&base, &id, 0).await;
+    let done = halted(&base, &id, Some(0)).await;
     assert_eq!(done["spp"], 1024);
     let d = devices(&done);
     assert_eq!(d.len(), 2, "{done}");
@@ -159,7 +146,7 @@ async fn a_change_mid_render_lets_no_stale_block_in() {
     // Blocks of seed 1 are in flight on both devices when seed 5 arrives.
     let r = patch(&base, &id, "quality", json!({"seed": 5, "spp": 96})).await;
     assert_eq!(r.status(), 200);
-    let done = halted(&base, &id, 1).await;
+    let done = halted(&base, &id, Some(1)).await;
     assert_eq!(done["spp"], 96);
     assert_one_device_image(&base, &id, 96, 5).await;
 }
@@ -170,7 +157,7 @@ async fn a_device_that_fails_drops_out_and_nothing_is_lost() {
         return;
     };
     let id = session(&base, 300, 2).await;
-    let done = halted(&base, &id, 0).await;
+    let done = halted(&base, &id, Some(0)).await;
     assert!(done.get("failure").is_none(), "the session goes on: {done}");
     assert_eq!(done["spp"], 300);
     let d = devices(&done);
@@ -180,7 +167,7 @@ async fn a_device_that_fails_drops_out_and_nothing_is_lost() {
     assert_one_device_image(&base, &id, 300, 2).await;
     // New sessions still render, on the devices left.
     let again = session(&base, 16, 3).await;
-    assert_eq!(halted(&base, &again, 0).await["spp"], 16);
+    assert_eq!(halted(&base, &again, Some(0)).await["spp"], 16);
     assert_one_device_image(&base, &again, 16, 3).await;
 }
 
@@ -196,7 +183,7 @@ async fn an_adaptive_session_on_every_device_warms_up_on_both_then_goes_on() {
     )
     .await;
     let id = s["id"].as_str().expect("id");
-    let done = halted(&base, id, 0).await;
+    let done = halted(&base, id, Some(0)).await;
     assert_eq!(done["spp"], 48, "{done}");
     let spread = &done["spp_spread"];
     assert!(spread["max"].as_u64() > spread["min"].as_u64(), "{done}");
@@ -214,7 +201,7 @@ async fn any_server_takes_backend_all_and_names_it_in_errors() {
     .await;
     assert_eq!(s["backend"], "all");
     let id = s["id"].as_str().expect("id");
-    halted(&base, id, 0).await;
+    halted(&base, id, Some(0)).await;
     assert_one_device_image(&base, id, 24, 6).await;
     let r = client()
         .post(format!("{base}/api/sessions"))
@@ -251,7 +238,7 @@ async fn serve_backend_all_starts_a_worker_per_device_and_places_sessions_on_all
         .collect();
     assert_eq!(kinds, ["cpu", "opencl"], "{health}");
     let id = session(&base, 32, 8).await;
-    let done = halted(&base, &id, 0).await;
+    let done = halted(&base, &id, Some(0)).await;
     assert_eq!(devices(&done).len(), 2, "{done}");
     assert_one_device_image(&base, &id, 32, 8).await;
 }

@@ -5,41 +5,11 @@
 
 mod http;
 
-use futures_util::{SinkExt, StreamExt};
-use http::{client, config, create, pfm, server};
+use futures_util::SinkExt;
+use http::{client, config, create, next_frame, pfm, server, ws_connect_with as connect};
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
-
-type Ws = http::Ws;
-
-async fn connect(base: &str, id: &str, query: &str) -> Ws {
-    http::ws_connect_with(base, id, query).await
-}
-
-/// The next frame and the stats that follow it.
-async fn next_frame(ws: &mut Ws) -> (Vec<u8>, Value) {
-    let until = Instant::now() + Duration::from_secs(60);
-    let mut image = None;
-    loop {
-        let msg = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next())
-            .await
-            .expect("a frame in time")
-            .expect("open")
-            .expect("message");
-        match msg {
-            Message::Binary(b) => image = Some(b.to_vec()),
-            Message::Text(t) => {
-                let v: Value = serde_json::from_str(t.as_str()).expect("json");
-                assert_ne!(v["type"], "error", "{v}");
-                if let Some(image) = image.take() {
-                    return (image, v);
-                }
-            }
-            _ => {}
-        }
-    }
-}
 
 const JPEG: [u8; 3] = [0xFF, 0xD8, 0xFF];
 const PNG: [u8; 4] = [0x89, b'P', b'N', b'G'];

@@ -5,33 +5,17 @@
 
 mod http;
 
-use futures_util::{SinkExt, StreamExt};
-use http::{config, create, server, status};
+use futures_util::SinkExt;
+use http::{config, create, next_frame, server, status, ws_connect_with as connect};
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
 
 type Ws = http::Ws;
 
-async fn connect(base: &str, id: &str, query: &str) -> Ws {
-    http::ws_connect_with(base, id, query).await
-}
-
 /// The next frame's stats (the image before them is skipped).
 async fn next_stats(ws: &mut Ws) -> Value {
-    let until = Instant::now() + Duration::from_secs(60);
-    loop {
-        let msg = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next())
-            .await
-            .expect("a frame in time")
-            .expect("open")
-            .expect("message");
-        if let Message::Text(t) = msg {
-            let v: Value = serde_json::from_str(t.as_str()).expect("json");
-            assert_ne!(v["type"], "error", "{v}");
-            return v;
-        }
-    }
+    next_frame(ws).await.1
 }
 
 async fn send(ws: &mut Ws, v: Value) {

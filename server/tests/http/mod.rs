@@ -108,6 +108,46 @@ pub async fn ws_connect_with(base: &str, id: &str, query: &str) -> Ws {
         .0
 }
 
+/// The next frame and the stats that follow it (at most 60 s); an error
+/// message on the way fails the test.
+pub async fn next_frame(ws: &mut Ws) -> (Vec<u8>, Value) {
+    let until = Instant::now() + Duration::from_secs(60);
+    let mut image = None;
+    loop {
+        let msg = tokio::time::timeout(until.saturating_duration_since(Instant::now()), ws.next())
+            .await
+            .expect("a frame in time")
+            .expect("open")
+            .expect("message");
+        match msg {
+            Message::Binary(b) => image = Some(b.to_vec()),
+            Message::Text(t) => {
+                let v: Value = serde_json::from_str(t.as_str()).expect("json");
+                assert_ne!(v["type"], "error", "{v}");
+                if let Some(image) = image.take() {
+                    return (image, v);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Polls the session until it halts (in `generation`, when given); fails
+/// the test after a minute.
+pub async fn halted(base: &str, id: &str, generation: Option<u64>) -> Value {
+    let until = Instant::now() + Duration::from_secs(60);
+    loop {
+        let s = status(base, id).await;
+        let current = generation.is_none_or(|g| s["generation"] == g);
+        if s["state"] == "halted" && current {
+            return s;
+        }
+        assert!(Instant::now() < until, "never halted: {s}");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
+
 /// Reads `ws` until an error message comes (at most 30 s); its text.
 pub async fn next_error(ws: &mut Ws) -> String {
     let until = Instant::now() + Duration::from_secs(30);

@@ -102,11 +102,13 @@ impl Backend {
         all
     }
 
-    /// The one place that decides where rendering runs (for `all`, the
-    /// several backends, see [`Backend::all`]: here the first of them).
+    /// The one place that decides where rendering runs (`all` is several
+    /// backends: [`Backend::all`]).
     pub fn choose(choice: BackendChoice) -> Result<Backend, BackendError> {
         match choice {
-            BackendChoice::All => Ok(Backend::all().remove(0)),
+            BackendChoice::All => Err(BackendError::Unavailable(
+                "'all' is every device at once, not one backend".into(),
+            )),
             BackendChoice::Cpu => Ok(Backend::Cpu(CpuBackend::default())),
             BackendChoice::OpenCl { device } => Ok(Backend::OpenCl {
                 backend: Box::new(OpenClBackend::new(device)?),
