@@ -9,8 +9,8 @@
 #
 #   scripts/netem-bench.sh [RATE_MBIT=100] [RTT_MS=30] [WIDTH=512] [HEIGHT=512] [UPDATES=50]
 #
-# Runs PNG, then JPEG 85 with progressive resolution, both acknowledging
-# frames; prints examples/latency's lines for each.
+# Runs PNG, then JPEG 85 and WebP 85 with progressive resolution, all
+# acknowledging frames; prints examples/latency's lines for each.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rate="${1:-100}" rtt="${2:-30}" width="${3:-512}" height="${4:-512}" updates="${5:-50}"
@@ -76,7 +76,7 @@ if [ "$netem" = no ] && [ "$half" -gt 0 ]; then
     url=http://127.0.0.1:9090
 fi
 echo "link: ${shaped}; ${width}x${height}, ${updates} updates"
-for stream in "format=png" "format=jpeg&quality=85&progressive=true"; do
+for stream in "format=png" "format=jpeg&quality=85&progressive=true" "format=webp&quality=85&progressive=true"; do
     echo "-- $stream"
     ip netns exec "$cli" "$ex" --url "$url" --size "$width" --height "$height" \
         --updates "$updates" --stream "$stream" --ack --fov-updates | grep -v '^session\|^PNG encode'

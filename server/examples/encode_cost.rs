@@ -1,6 +1,7 @@
-//! Bytes and encode time of one stream frame as PNG and as JPEG:
+//! Bytes and encode time (tone mapping included; the best of three, one
+//! thread) of one stream frame as PNG, JPEG and WebP:
 //! `cargo run --release --example encode_cost -- [scene] [width] [height] [spp]`.
-use pathstream::render::output::{encode_jpeg, encode_png};
+use pathstream::render::output::{encode_jpeg, encode_png, encode_webp};
 use pathstream::render::tonemap::Tonemap;
 use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene};
 use std::time::Instant;
@@ -45,6 +46,13 @@ fn main() {
             jpeg as f64 / 1e6,
             s * 1e3,
             png as f64 / jpeg as f64
+        );
+        let (webp, s) = time(&|| encode_webp(w, h, &pixels, &t, q).expect("webp"));
+        println!(
+            "WebP q{q}: {:.2} MB in {:.0} ms ({:.1}x smaller)",
+            webp as f64 / 1e6,
+            s * 1e3,
+            png as f64 / webp as f64
         );
     }
 }

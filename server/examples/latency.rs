@@ -1,5 +1,7 @@
 //! Latency from a camera update sent on the WebSocket to the first frame
-//! that reflects it, p50 and p95 over 100 updates, plus PNG encode time and
+//! that reflects it (a whole sample, or the server's reduced-resolution
+//! preview where one sample of the image is slow), p50 and p95 over 100
+//! updates, plus PNG encode time and
 //! frames delivered per second. Runs its own server on 127.0.0.1:0, or uses
 //! the one at `--url` (a box, or a proxy in front of boxes: deploy/).
 //!
@@ -123,6 +125,7 @@ async fn main() -> anyhow::Result<()> {
         }
     }
     let mut latencies = Vec::new();
+    let mut previews = 0;
     for i in 0..updates {
         let z = 250.0 + (i % 2) as f64 * 20.0;
         let update = match fov_updates {
@@ -140,11 +143,15 @@ async fn main() -> anyhow::Result<()> {
                         ws.send(Message::Text(json!({"ack": v["frame"]}).to_string().into()))
                             .await?;
                     }
+                    // The first image of the new view: a whole sample, or
+                    // a reduced-resolution preview of it.
+                    let preview = v["preview"].as_u64().is_some();
                     if v["type"] == "stats"
                         && v["generation"].as_u64() >= Some(target)
-                        && v["spp"].as_u64() > Some(0)
+                        && (v["spp"].as_u64() > Some(0) || preview)
                     {
                         latencies.push(sent.elapsed().as_secs_f64() * 1e3);
+                        previews += usize::from(preview);
                         break;
                     }
                 }
@@ -155,7 +162,7 @@ async fn main() -> anyhow::Result<()> {
     }
     latencies.sort_by(f64::total_cmp);
     println!(
-        "update -> first frame at {size}x{height}: p50 {:.1} ms, p95 {:.1} ms over {updates} updates",
+        "update -> first frame at {size}x{height}: p50 {:.1} ms, p95 {:.1} ms over {updates} updates ({previews} of them previews)",
         percentile(&latencies, 0.5),
         percentile(&latencies, 0.95)
     );

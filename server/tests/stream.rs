@@ -1,5 +1,5 @@
 //! The WebSocket stream's frames: PNG at the film's size by default, JPEG
-//! and a smaller width when a socket asks (on its URL or by message), each
+//! or WebP and a smaller width when a socket asks (on its URL or by message), each
 //! frame's stats naming the format, its bytes and size; bad settings are
 //! refused by name.
 
@@ -61,10 +61,34 @@ async fn a_socket_chooses_jpeg_or_png_and_stats_say_which_and_how_big() {
         jpeg.len(),
         png.len()
     );
+    // Lossy WebP: a RIFF/WEBP file of the same image, smaller than the PNG.
+    let mut webp_ws = connect(&base, id, "?format=webp&quality=80").await;
+    let (webp, webp_stats) = next_frame(&mut webp_ws).await;
+    assert_eq!((&webp[..4], &webp[8..12]), (&b"RIFF"[..], &b"WEBP"[..]));
+    assert_eq!(
+        (
+            webp_stats["format"].clone(),
+            webp_stats["frame_bytes"].clone()
+        ),
+        (json!("webp"), json!(webp.len()))
+    );
+    let (ww, wh, c) = mean(&webp);
+    assert_eq!((ww, wh), (128, 96));
+    assert!(
+        (a - c).abs() < 0.02 * a.max(1.0),
+        "mean {a} (PNG) vs {c} (WebP)"
+    );
+    assert!(
+        webp.len() * 2 < png.len(),
+        "WebP {} bytes, PNG {}",
+        webp.len(),
+        png.len()
+    );
     eprintln!(
-        "cornell-glass 128x96 at 4 spp: PNG {} bytes, JPEG q80 {} bytes",
+        "cornell-glass 128x96 at 4 spp: PNG {} bytes, JPEG q80 {} bytes, WebP q80 {} bytes",
         png.len(),
-        jpeg.len()
+        jpeg.len(),
+        webp.len()
     );
     // By message: back to PNG, together with a change.
     ws.send(Message::Text(
@@ -107,12 +131,15 @@ async fn bad_stream_settings_on_the_url_are_refused_by_name() {
     let s = create(&base, json!({"scene": "cornell", "width": 8, "height": 8})).await;
     let id = s["id"].as_str().expect("id");
     for (query, needle) in [
-        ("?format=gif", "format: must be png or jpeg"),
+        ("?format=gif", "format: must be png, jpeg or webp"),
         (
             "?format=jpeg&quality=0",
             "stream.quality: must be between 1 and 100",
         ),
-        ("?quality=50", "stream.quality: only for format jpeg"),
+        (
+            "?quality=50",
+            "stream.quality: only for format jpeg or webp",
+        ),
         ("?fromat=jpeg", "fromat"),
     ] {
         let r = client()

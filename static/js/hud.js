@@ -20,7 +20,9 @@ function setHud(id, text, value) {
 function showStatus(s) {
   setHud("hud-state", s.failure ? `failed: ${s.failure}` : s.state, s.state);
   const adaptive = !!(s.quality && s.quality.adaptive);
-  setHud("hud-spp", adaptive ? `${s.spp} (mean)` : String(s.spp), s.spp);
+  // A preview (the view at 1/k resolution, before the first sample) says so.
+  const spp = s.preview ? `${s.spp} (preview 1/${s.preview})` : String(s.spp);
+  setHud("hud-spp", adaptive ? `${s.spp} (mean)` : spp, s.spp);
   showSpread(adaptive ? s : null);
   setHud("hud-sps", `${fmtRate(s.samples_per_sec)}`, s.samples_per_sec);
   setHud("hud-error", s.error_estimate == null ? "–" : `${(100 * s.error_estimate).toPrecision(3)} %`, s.error_estimate);

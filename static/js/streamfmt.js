@@ -38,10 +38,11 @@ export function chooseFormat({ current, linkMbps, frameBytes, pngBytes, sinceSwi
   return pngBytes > 0 && PNG_MARGIN * neededMbps(pngBytes) <= linkMbps ? "png" : "jpeg";
 }
 
-/** The `stream` settings of a format (progressive always on). */
+/** The `stream` settings of a format, "png", "jpeg" or "webp" (pinned in
+ * the panel only: smaller than JPEG, slower to encode); progressive always on. */
 export function streamSettings(format) {
-  return format === "jpeg"
-    ? { format: "jpeg", quality: JPEG_QUALITY, progressive: true }
+  return format === "jpeg" || format === "webp"
+    ? { format, quality: JPEG_QUALITY, progressive: true }
     : { format: "png", progressive: true };
 }
 

@@ -94,10 +94,15 @@ describe("the frame stream in the browser", { timeout: 300000 }, () => {
     assert.equal(d.format, "png");
   });
 
-  it("pinning jpeg in the panel makes the stream JPEG; png brings it back", T, async () => {
+  it("pinning jpeg or webp in the panel streams it; png brings it back", T, async () => {
     await page.selectOption("#stream-format", "jpeg");
     await waitFor("a JPEG frame", async () => (await streamData()).format === "jpeg");
     assert.equal(await page.$eval("body", (b) => b.dataset.streamFormat), "jpeg");
+    await page.selectOption("#stream-format", "webp");
+    await waitFor("a WebP frame on the canvas", async () =>
+      (await page.$eval("body", (b) => b.dataset.frameFormat)) === "webp");
+    const c = await canvasStats(page);
+    assert.ok(c.mean > 5, `a decoded WebP frame is drawn: canvas mean ${c.mean}`);
     await page.selectOption("#stream-format", "png");
     await waitFor("a PNG frame", async () => (await streamData()).format === "png");
     await page.selectOption("#stream-format", "auto");

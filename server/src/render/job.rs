@@ -34,6 +34,11 @@ pub fn check_size(width: u32, height: u32) -> Result<(), String> {
     Ok(())
 }
 
+fn next_id() -> u64 {
+    static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+    NEXT_ID.fetch_add(1, Ordering::Relaxed)
+}
+
 #[derive(Clone, Debug)]
 pub struct RenderJob {
     /// Unique per `RenderJob::new` (clones share it): lets a device know
@@ -49,14 +54,22 @@ pub struct RenderJob {
 impl RenderJob {
     /// `scene` and `quality` are already validated; width and height >= 1.
     pub fn new(scene: &Scene, width: u32, height: u32, quality: &Quality) -> Self {
-        static NEXT_ID: AtomicU64 = AtomicU64::new(1);
         Self {
-            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            id: next_id(),
             world: World::new(scene, scene.camera.position),
             camera: CameraRays::new(&scene.camera, width, height),
             settings: quality.path_settings(),
             filter: quality.filter,
             seed: quality.seed,
+        }
+    }
+
+    /// A copy that devices treat as another job (its own state on a device:
+    /// a caller then changes what the id stands for, such as the camera).
+    pub fn with_new_id(&self) -> Self {
+        Self {
+            id: next_id(),
+            ..self.clone()
         }
     }
 

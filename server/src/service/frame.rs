@@ -3,9 +3,10 @@
 
 use super::density::Density;
 use super::error::ApiError;
+use super::session::Preview;
 use super::stream::{downscale, StreamFormat, StreamSettings};
 use crate::render::film::SppSpread;
-use crate::render::output::{encode_jpeg, encode_pfm, encode_png};
+use crate::render::output::{encode_jpeg, encode_pfm, encode_png, encode_webp, WEBP_MAX_SIDE};
 use crate::render::tonemap::Tonemap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -16,6 +17,9 @@ pub struct Encoded {
     pub width: u32,
     pub height: u32,
 }
+
+/// One encoding of a frame, made once.
+pub(super) type EncodedOnce = OnceLock<Result<Encoded, String>>;
 
 /// A published image and its statistics.
 #[derive(Debug)]
@@ -38,12 +42,18 @@ pub struct Frame {
     pub halted: bool,
     pub backend: String,
     pub device: String,
+    /// Set (to k) when the image shows a 1/k-resolution preview, in whole
+    /// or where the film has no sample yet (`session/preview.rs`).
+    pub preview: Option<u32>,
+    /// The preview itself, for a frame that is nothing else: streams
+    /// scale it, not its scaled-up copy in `pixels`.
+    pub(super) preview_image: Option<Arc<Preview>>,
     /// Mean radiance, row-major, top row first (empty before the first pass).
     pub pixels: Vec<[f32; 3]>,
     pub(super) png: OnceLock<Arc<[u8]>>,
-    /// Stream encodings made so far, by settings (each once however many
-    /// sockets want it), with their size.
-    pub(super) encodings: Mutex<Vec<(StreamSettings, Encoded)>>,
+    /// Stream encodings, by settings: each made once however many sockets
+    /// want it (a second asker waits for the first's).
+    pub(super) encodings: Mutex<Vec<(StreamSettings, Arc<EncodedOnce>)>>,
 }
 
 impl Frame {
@@ -70,6 +80,8 @@ impl Frame {
             halted: false,
             backend,
             device,
+            preview: None,
+            preview_image: None,
             pixels: Vec::new(),
             png: OnceLock::new(),
             encodings: Mutex::new(Vec::new()),
@@ -116,36 +128,49 @@ impl Frame {
                 height: self.height,
             });
         }
-        let cached = |e: &[(StreamSettings, Encoded)]| {
-            e.iter()
-                .find(|(s, _)| *s == settings)
-                .map(|(_, b)| b.clone())
+        let cell = {
+            let mut encodings = self.encodings.lock().unwrap_or_else(|e| e.into_inner());
+            match encodings.iter().find(|(s, _)| *s == settings) {
+                Some((_, cell)) => cell.clone(),
+                None => {
+                    let cell = Arc::new(EncodedOnce::new());
+                    encodings.push((settings, cell.clone()));
+                    cell
+                }
+            }
         };
-        if let Some(e) = cached(&self.encodings.lock().unwrap_or_else(|e| e.into_inner())) {
-            return Ok(e);
-        }
+        cell.get_or_init(|| self.encode(settings))
+            .clone()
+            .map_err(ApiError::Internal)
+    }
+
+    /// Encodes the frame as `settings` asks (see [`Frame::encoded`]).
+    fn encode(&self, settings: StreamSettings) -> Result<Encoded, String> {
         let pixels = self.pixels_or_black();
-        let (w, h, pixels) = match settings.width {
-            Some(w) if w < self.width => downscale(&pixels, self.width, self.height, w),
-            _ => (self.width, self.height, pixels.into_owned()),
+        let mut width = settings.width.unwrap_or(self.width).min(self.width);
+        if matches!(settings.format, StreamFormat::Webp { .. }) {
+            // WebP's sides are at most 16383 pixels: larger frames go scaled down.
+            let tall =
+                (u64::from(WEBP_MAX_SIDE) * u64::from(self.width) / u64::from(self.height)) as u32;
+            width = width.min(WEBP_MAX_SIDE).min(tall.max(1));
+        }
+        let (w, h, pixels) = match (&self.preview_image, width < self.width) {
+            (Some(preview), _) => preview.resized(width),
+            (None, true) => downscale(&pixels, self.width, self.height, width),
+            (None, false) => (self.width, self.height, pixels.into_owned()),
         };
         let t = Tonemap::default();
         let bytes = match settings.format {
             StreamFormat::Png => encode_png(w, h, &pixels, &t),
             StreamFormat::Jpeg { quality } => encode_jpeg(w, h, &pixels, &t, quality),
+            StreamFormat::Webp { quality } => encode_webp(w, h, &pixels, &t, quality),
         }
-        .map_err(|e| ApiError::Internal(e.to_string()))?;
-        let e = Encoded {
+        .map_err(|e| e.to_string())?;
+        Ok(Encoded {
             bytes: bytes.into(),
             width: w,
             height: h,
-        };
-        let mut encodings = self.encodings.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(e) = cached(&encodings) {
-            return Ok(e);
-        }
-        encodings.push((settings, e.clone()));
-        Ok(e)
+        })
     }
 
     pub fn pfm(&self) -> Vec<u8> {

@@ -1,6 +1,6 @@
 //! What a WebSocket stream asks of its frames: the format (PNG, exact and
-//! the default, or JPEG at a quality, several times smaller on a noisy
-//! image) and a width to scale them down to (the client's canvas), without
+//! the default; JPEG at a quality, several times smaller on a noisy image
+//! and the cheapest to encode; or lossy WebP, smaller again) and a width to scale them down to (the client's canvas), without
 //! changing the session's film. Asked on the stream's URL
 //! (`?format=jpeg&quality=85&width=640&progressive=true`) or by message
 //! (`{"stream": {"format": "jpeg", "quality": 85, "width": 640,
@@ -16,6 +16,9 @@ pub enum StreamFormat {
     Jpeg {
         quality: u8,
     },
+    Webp {
+        quality: u8,
+    },
 }
 
 impl StreamFormat {
@@ -23,6 +26,7 @@ impl StreamFormat {
         match self {
             StreamFormat::Png => "png",
             StreamFormat::Jpeg { .. } => "jpeg",
+            StreamFormat::Webp { .. } => "webp",
         }
     }
 }
@@ -58,20 +62,23 @@ impl StreamRequest {
         let format = match (self.format.as_deref(), self.quality) {
             (None | Some("png"), None) => StreamFormat::Png,
             (None | Some("png"), Some(_)) => {
-                return bad("stream.quality: only for format jpeg".into())
+                return bad("stream.quality: only for format jpeg or webp".into())
             }
-            (Some("jpeg"), q) => {
+            (Some(lossy @ ("jpeg" | "webp")), q) => {
                 let quality = q.unwrap_or(85);
                 if !(1..=100).contains(&quality) {
                     return bad(format!(
                         "stream.quality: must be between 1 and 100 (got {quality})"
                     ));
                 }
-                StreamFormat::Jpeg { quality }
+                match lossy {
+                    "jpeg" => StreamFormat::Jpeg { quality },
+                    _ => StreamFormat::Webp { quality },
+                }
             }
             (Some(other), _) => {
                 return bad(format!(
-                    "stream.format: must be png or jpeg (got '{other}')"
+                    "stream.format: must be png, jpeg or webp (got '{other}')"
                 ))
             }
         };
@@ -154,6 +161,13 @@ mod tests {
             StreamSettings::default()
         );
         assert_eq!(
+            r(Some("webp"), Some(60), None)
+                .settings()
+                .expect("ok")
+                .format,
+            StreamFormat::Webp { quality: 60 }
+        );
+        assert_eq!(
             r(Some("jpeg"), None, Some(64)).settings().expect("ok"),
             StreamSettings {
                 format: StreamFormat::Jpeg { quality: 85 },
@@ -169,7 +183,7 @@ mod tests {
             ),
             (
                 r(None, Some(50), None),
-                "stream.quality: only for format jpeg",
+                "stream.quality: only for format jpeg or webp",
             ),
             (r(None, None, Some(0)), "stream.width"),
         ] {

@@ -26,7 +26,7 @@ use axum::extract::{Path, Query, State};
 use axum::response::Response;
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::mpsc;
@@ -68,6 +68,7 @@ fn stats(
         m.insert("frame_width".into(), json!(image.width));
         m.insert("frame_height".into(), json!(image.height));
         m.insert("progressive".into(), json!(settings.progressive));
+        m.insert("preview".into(), json!(frame.preview));
         m.insert("delivered_fps".into(), json!(link.fps(now)));
         m.insert("link_mbps".into(), json!(link.mbps()));
         m.insert(
@@ -156,6 +157,7 @@ async fn read(
             _ => continue,
         };
         session.touch();
+        tracing::trace!(session = %session.id, bytes = text.len(), "message in");
         let result = take_ack(text.as_str()).and_then(|(ack, rest)| {
             if let Some(seq) = ack {
                 // Never blocks the reader: a full channel drops the ack,
@@ -198,6 +200,10 @@ async fn write(
 ) {
     let mut frames = session.subscribe();
     frames.mark_changed();
+    // Frames encoded while the one before is in flight, so that the next
+    // goes out as soon as the link is ready (one at a time).
+    let mut ahead = session.subscribe();
+    let encoding_ahead = Arc::new(AtomicBool::new(false));
     let mut shutdown = state.shutdown_signal();
     let mut last_seq = 0u64;
     let mut link = Link::default();
@@ -206,13 +212,29 @@ async fn write(
     loop {
         let ack_wait = link.ack_deadline();
         tokio::select! {
+            changed = ahead.changed(), if !link.ready() && !encoding_ahead.load(Ordering::Acquire) => {
+                if changed.is_err() {
+                    break;
+                }
+                let frame = ahead.borrow_and_update().clone();
+                if !frame.pixels.is_empty() {
+                    let n = if frame.generation == generation { nth } else { 0 };
+                    let wanted = wanted(settings, &frame, n);
+                    let busy = encoding_ahead.clone();
+                    busy.store(true, Ordering::Release);
+                    tokio::task::spawn_blocking(move || {
+                        let _ = frame.encoded(wanted);
+                        busy.store(false, Ordering::Release);
+                    });
+                }
+            }
             changed = frames.changed(), if link.ready() => {
                 if changed.is_err() {
                     break;
                 }
                 let frame = frames.borrow_and_update().clone();
-                // Restarts publish an empty frame; wait for the first pass.
-                if frame.spp == 0 && !frame.halted {
+                // Restarts publish an empty frame; wait for the first image.
+                if frame.pixels.is_empty() && !frame.halted {
                     continue;
                 }
                 if last_seq != 0 && frame.seq > last_seq + 1 {
@@ -222,18 +244,22 @@ async fn write(
                 if frame.generation != generation {
                     (generation, nth) = (frame.generation, 0);
                 }
-                let mut wanted = StreamSettings { progressive: false, ..settings };
-                if settings.progressive {
-                    let full = settings.width.unwrap_or(frame.width).min(frame.width);
-                    wanted.width = Some(progressive_width(full, nth, frame.halted));
-                }
+                let wanted = wanted(settings, &frame, nth);
                 nth += 1;
                 let f = frame.clone();
+                let encode = Instant::now();
                 let image = match tokio::task::spawn_blocking(move || f.encoded(wanted)).await {
                     Ok(Ok(image)) => image,
                     _ => break,
                 };
                 let start = Instant::now();
+                tracing::trace!(
+                    frame = frame.seq,
+                    generation = frame.generation,
+                    width = image.width,
+                    encode_ms = (start - encode).as_secs_f64() * 1e3,
+                    "frame out"
+                );
                 link.sending(frame.seq, image.bytes.len(), start);
                 let text = stats(&session.status(), &frame, settings, &image, &link, start).to_string();
                 let send = async {
@@ -251,7 +277,12 @@ async fn write(
             () = sleep_until(ack_wait), if ack_wait.is_some() => link.give_up(),
             news = inbound.recv() => match news {
                 Some(Inbound::Ack(seq)) => link.acked(seq, Instant::now()),
-                Some(Inbound::Settings(new)) => settings = new,
+                Some(Inbound::Settings(new)) => {
+                    // The newest frame again, as now asked for (a halted
+                    // session publishes no more).
+                    settings = new;
+                    frames.mark_changed();
+                }
                 Some(Inbound::Error(e)) => {
                     if sink.send(error_message(&e)).await.is_err() {
                         break;
@@ -276,6 +307,20 @@ async fn write(
             }
         }
     }
+}
+
+/// What `frame` goes out as, the `nth` of its generation on this socket:
+/// with progressive resolution, narrower for the first two.
+fn wanted(settings: StreamSettings, frame: &Frame, nth: u64) -> StreamSettings {
+    let mut wanted = StreamSettings {
+        progressive: false,
+        ..settings
+    };
+    if settings.progressive {
+        let full = settings.width.unwrap_or(frame.width).min(frame.width);
+        wanted.width = Some(progressive_width(full, nth, frame.halted));
+    }
+    wanted
 }
 
 /// Sleeps until `at` (forever when None; the branch is off then).

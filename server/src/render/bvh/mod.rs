@@ -112,6 +112,36 @@ impl Bvh {
         bvh
     }
 
+    /// Moves every leaf to slots `4k .. 4k + count` for its number k in
+    /// slot order, the slots past its count holding its last primitive
+    /// again (traversals read `count` slots: they never see them). A
+    /// mesh's leaves are then numbered by `first / 4` (its SIMD packs).
+    /// None when the padded slots would be more than [`Bvh::MAX_PRIMS`].
+    pub fn aligned_leaves(mut self) -> Option<Bvh> {
+        let mut leaves: Vec<(u32, usize, usize)> = Vec::new(); // (first, node, child)
+        for (n, node) in self.nodes.iter().enumerate() {
+            for i in 0..4 {
+                if node.count[i] > 0 {
+                    leaves.push((node.child[i], n, i));
+                }
+            }
+        }
+        if leaves.len() * MAX_LEAF > Self::MAX_PRIMS {
+            return None;
+        }
+        leaves.sort_unstable();
+        let mut prims = Vec::with_capacity(leaves.len() * MAX_LEAF);
+        for (k, &(first, n, i)) in leaves.iter().enumerate() {
+            let count = self.nodes[n].count[i];
+            for lane in 0..MAX_LEAF as u32 {
+                prims.push(self.prims[(first + lane.min(count - 1)) as usize]);
+            }
+            self.nodes[n].child[i] = (k * MAX_LEAF) as u32;
+        }
+        self.prims = prims;
+        Some(self)
+    }
+
     /// Bytes held by the nodes and the slot list.
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<BvhNode>() + self.prims.len() * 4

@@ -8,9 +8,9 @@
 //! the indexed form stays for shading normals and materials.
 
 use crate::model::MeshData;
-use crate::render::bvh::{Aabb, Bvh};
+use crate::render::bvh::{Aabb, Bvh, MAX_LEAF};
 use crate::render::math::Vec3A;
-use crate::render::shape::TriVerts;
+use crate::render::shape::{TriPack, TriVerts};
 use rayon::prelude::*;
 
 #[derive(Debug)]
@@ -28,6 +28,10 @@ pub struct Mesh {
     pub bvh: Bvh,
     /// The triangles in leaf-slot order.
     pub tris: Vec<TriVerts>,
+    /// Each leaf's triangles packed for the CPU's four-wide test: the
+    /// leaf at slot `first` is pack `first / 4` (the BVH's leaves are
+    /// aligned, [`Bvh::aligned_leaves`]).
+    pub packs: Vec<TriPack>,
 }
 
 /// Why mesh data cannot be used; the caller adds where it came from.
@@ -45,6 +49,8 @@ pub enum MeshError {
     Index(usize, u32, usize),
     #[error("{0} material indices for {1} triangles")]
     MaterialCount(usize, usize),
+    #[error("{0} triangles are more than one mesh can hold")]
+    TooMany(usize),
 }
 
 impl Mesh {
@@ -93,11 +99,19 @@ impl Mesh {
             .into_par_iter()
             .map(|i| Aabb::of_points(verts(i).map(Vec3A::from)))
             .collect();
-        let bvh = Bvh::build(&boxes);
-        let tris = bvh
+        if boxes.len() > Bvh::MAX_PRIMS / MAX_LEAF {
+            return Err(MeshError::TooMany(boxes.len()));
+        }
+        let bvh = Bvh::build(&boxes)
+            .aligned_leaves()
+            .ok_or(MeshError::TooMany(boxes.len()))?;
+        let tris: Vec<TriVerts> = bvh
             .prims
             .par_iter()
             .map(|&p| TriVerts::new(p, verts(p as usize)))
+            .collect();
+        let packs = (leaf_counts(&bvh).into_par_iter().enumerate())
+            .map(|(k, count)| TriPack::new(&tris, (k * MAX_LEAF) as u32, count))
             .collect();
         Ok(Mesh {
             name,
@@ -108,6 +122,7 @@ impl Mesh {
             material_slots,
             bvh,
             tris,
+            packs,
         })
     }
 
@@ -138,5 +153,19 @@ impl Mesh {
             + self.triangles.len() * 16
             + self.bvh.memory_bytes()
             + self.tris.len() * std::mem::size_of::<TriVerts>()
+            + self.packs.len() * std::mem::size_of::<TriPack>()
     }
+}
+
+/// Triangles in each leaf of an aligned BVH, by leaf number.
+fn leaf_counts(bvh: &Bvh) -> Vec<u32> {
+    let mut counts = vec![0; bvh.prims.len() / MAX_LEAF];
+    for node in &bvh.nodes {
+        for (&first, &count) in node.child.iter().zip(&node.count) {
+            if count > 0 {
+                counts[first as usize / MAX_LEAF] = count;
+            }
+        }
+    }
+    counts
 }

@@ -8,6 +8,7 @@ mod sphere;
 mod sphere_batch;
 #[cfg(target_arch = "x86_64")]
 mod sphere_batch_avx2;
+mod tri_pack;
 mod triangle;
 
 pub use mesh::{Mesh, MeshError};
@@ -16,4 +17,5 @@ pub use sphere::{Roots, Sphere};
 pub use sphere_batch::{Leaving, SphereBatch, LANES as SPHERE_BATCH_LANES};
 #[cfg(target_arch = "x86_64")]
 pub use sphere_batch_avx2::nearest as nearest_sphere_avx2;
+pub use tri_pack::{PackHits, TriPack};
 pub use triangle::{hit_point, TriRay, TriVerts};

@@ -66,9 +66,9 @@ pub struct TriRay {
     pub origin: Vec3A,
     /// Rows of the permute-and-shear map: x' = row_x . v, y' = row_y . v,
     /// z' = row_z . v for v relative to the origin.
-    row_x: Vec3A,
-    row_y: Vec3A,
-    row_z: Vec3A,
+    pub(super) row_x: Vec3A,
+    pub(super) row_y: Vec3A,
+    pub(super) row_z: Vec3A,
 }
 
 impl TriRay {

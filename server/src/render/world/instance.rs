@@ -17,7 +17,7 @@
 //! epsilon, so meshes stay clean from 1e-3 to 1e3 units and beyond.
 
 use super::{Hit, Surface};
-use crate::render::bvh::BoxRay;
+use crate::render::bvh::{BoxRay, MAX_LEAF};
 use crate::render::math::{gamma, Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::shape::{hit_point, Mesh, TriRay};
@@ -99,13 +99,31 @@ impl Instance {
         };
         if BRUTE {
             test(&mesh.tris, best);
-        } else {
-            mesh.bvh
-                .traverse(&BoxRay::new(o, d), best.t, |first, count, _| {
-                    test(&mesh.tris[first as usize..(first + count) as usize], best);
-                    best.t
-                });
+            return;
         }
+        // A leaf's triangles four at a time, offered in slot order as the
+        // scalar loop above offers them (see `shape::tri_pack`).
+        mesh.bvh
+            .traverse(&BoxRay::new(o, d), best.t, |first, _, _| {
+                let pack = &mesh.packs[first as usize / MAX_LEAF];
+                let found = tri_ray.intersect4(pack, best.t);
+                let mut lanes = (found.hits | found.scalar) & pack.lanes();
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let tri = &mesh.tris[first as usize + lane];
+                    let index = tri.index();
+                    if index == skip {
+                        continue;
+                    }
+                    if found.scalar & (1 << lane) != 0 {
+                        test(std::slice::from_ref(tri), best);
+                    } else if found.t[lane] < best.t {
+                        best.offer(found.t[lane], id, index, found.bary(lane));
+                    }
+                }
+                best.t
+            });
     }
 
     /// The surface at `hit` on this instance (number `index`).

@@ -5,6 +5,7 @@
 //! HTTP and the WebSocket alike.
 
 mod lanes;
+mod preview;
 mod status;
 
 use super::change::{patch_quality, Change};
@@ -17,6 +18,7 @@ use crate::render::progressive::{self, Progress};
 use crate::render::split::DeviceShare;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
 use lanes::Lanes;
+pub(in crate::service) use preview::Preview;
 pub use status::{Status, WorkerShare};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -45,6 +47,12 @@ struct SessionState {
     split: Option<Lanes>,
     /// What each worker rendered of this generation.
     devices: BTreeMap<usize, DeviceShare>,
+    /// This generation's preview, once rendered (see [`preview`]).
+    preview: Option<Arc<Preview>>,
+    /// Whether this generation's preview was weighed (rendered or not).
+    preview_weighed: bool,
+    /// When the last frame with an image was published.
+    last_frame: Instant,
 }
 
 pub struct Session {
@@ -81,6 +89,10 @@ struct Image {
     pixels: Vec<[f32; 3]>,
     estimate: Option<f64>,
     density: Arc<super::density::Density>,
+    /// Whether the film holds whole samples (else a sample is in progress).
+    whole: bool,
+    /// The preview factor, where the image shows the preview.
+    preview: Option<u32>,
 }
 
 impl Image {
@@ -89,6 +101,25 @@ impl Image {
             pixels: film.mean(),
             estimate: film.error_estimate(),
             density: Arc::new(super::density::Density::of(film)),
+            whole: true,
+            preview: None,
+        }
+    }
+
+    /// The film while a sample is in progress, the preview (if any) where
+    /// it has no sample yet; no error estimate (the last frame's stands).
+    fn partial(film: &Film, preview: Option<&Preview>) -> Self {
+        let mut pixels = film.mean();
+        let preview = preview.filter(|_| film.spp() == 0);
+        if let Some(p) = preview {
+            p.fill(&mut pixels, film.width(), film.slice_start());
+        }
+        Self {
+            pixels,
+            estimate: None,
+            density: Arc::new(super::density::Density::of(film)),
+            whole: false,
+            preview: preview.map(|p| p.factor),
         }
     }
 }
@@ -164,6 +195,9 @@ impl Session {
                 measured: HashMap::new(),
                 split: None,
                 devices: BTreeMap::new(),
+                preview: None,
+                preview_weighed: false,
+                last_frame: Instant::now(),
             }),
             frames,
             current_generation: AtomicU64::new(0),
@@ -260,6 +294,7 @@ impl Session {
         st.restarted = Instant::now();
         st.halted = false;
         st.failure = None;
+        (st.preview, st.preview_weighed) = (None, false);
         let pixels = u64::from(st.width) * u64::from(st.height);
         if !keeps_cost {
             st.measured.clear();
@@ -338,7 +373,10 @@ impl Session {
         if lock(&self.state).split.as_ref().is_some_and(Lanes::uniform) {
             return self.render_lane(worker, backend, metrics);
         }
-        let (job, mut film, generation, quality, pass) = {
+        if let Some(plan) = self.plan_preview(worker) {
+            return self.render_preview(backend, metrics, plan);
+        }
+        let (job, mut film, generation, quality, pass, preview, partial_due) = {
             let mut st = lock(&self.state);
             if st.halted {
                 return 0;
@@ -348,7 +386,20 @@ impl Session {
             };
             let measured = st.measured.get(&worker).copied();
             let pass = Pass::plan(&mut film, measured, &st.quality);
-            (st.job.clone(), film, st.generation, st.quality, pass)
+            let watched = self.clients.load(Ordering::Relaxed) > 0;
+            // Due if it will be by the time the pass ends.
+            let partial_due = watched
+                && st.last_frame.elapsed() + super::pass::PASS_TARGET >= preview::PARTIAL_EVERY;
+            let preview = st.preview.clone();
+            (
+                st.job.clone(),
+                film,
+                st.generation,
+                st.quality,
+                pass,
+                preview,
+                partial_due,
+            )
         };
         let rejected_before = film.rejected();
         let start = Instant::now();
@@ -369,9 +420,15 @@ impl Session {
         // The O(pixels) work on the film happens before taking the lock, so
         // that status requests and changes never wait for it.
         let finished = matches!(result, Ok(true));
-        // A slice that leaves its sample unfinished publishes no frame.
+        // A slice that leaves its sample unfinished publishes a frame only
+        // while someone watches, and not too often (see [`preview`]).
         let whole = finished && film.slice_start() == 0;
-        let image = whole.then(|| Image::of(&film));
+        let partial = finished && !whole && partial_due && matches!(pass, Pass::Slice(_));
+        let image = match (whole, partial) {
+            (true, _) => Some(Image::of(&film)),
+            (false, true) => Some(Image::partial(&film, preview.as_deref())),
+            (false, false) => None,
+        };
         let mut st = lock(&self.state);
         tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
         if st.generation != generation || self.is_deleted() {
@@ -421,9 +478,9 @@ impl Session {
         took
     }
 
-    /// The frame of `film` (whole samples) for generation `st.generation`,
-    /// rendered with `by` (backend, device); settles whether the session
-    /// halts with it.
+    /// The frame of `film` for generation `st.generation`, rendered with
+    /// `by` (backend, device); settles whether the session halts with it
+    /// (when the film holds whole samples).
     fn frame(
         &self,
         st: &mut SessionState,
@@ -432,9 +489,19 @@ impl Session {
         by: (String, String),
         finished_rounds: bool,
     ) -> Frame {
-        let progress = Progress::with_estimate(film, st.restarted.elapsed(), image.estimate);
-        st.halted =
-            finished_rounds || (st.quality.halts() && progressive::halted(&st.quality, &progress));
+        let mut estimate = image.estimate;
+        if !image.whole {
+            // A sample in progress: the last whole frame's estimate stands.
+            let last = self.latest();
+            estimate = last
+                .error_estimate
+                .filter(|_| last.generation == st.generation);
+        }
+        let progress = Progress::with_estimate(film, st.restarted.elapsed(), estimate);
+        st.halted = image.whole
+            && (finished_rounds
+                || (st.quality.halts() && progressive::halted(&st.quality, &progress)));
+        st.last_frame = Instant::now();
         Frame {
             seq: self.seq.fetch_add(1, Ordering::Relaxed),
             generation: st.generation,
@@ -450,6 +517,8 @@ impl Session {
             halted: st.halted,
             backend: by.0,
             device: by.1,
+            preview: image.preview,
+            preview_image: None,
             pixels: image.pixels,
             png: OnceLock::new(),
             encodings: Mutex::new(Vec::new()),
@@ -472,6 +541,8 @@ impl Session {
         frame.density = previous.density.clone();
         frame.error_estimate = previous.error_estimate;
         frame.pixels = previous.pixels.clone();
+        frame.preview = previous.preview;
+        frame.preview_image = previous.preview_image.clone();
         self.frames.send_replace(Arc::new(frame));
     }
 
