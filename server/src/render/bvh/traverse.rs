@@ -134,10 +134,18 @@ impl Bvh {
         }
         const MASK: u32 = (1 << COUNT_BITS) - 1;
         let mut stack = [(0u32, 0.0f32); N];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (entry, t_near) = stack[top];
+        let mut top = 0;
+        // The nearest child hit goes on at once, without the stack.
+        let mut next = Some((0u32, 0.0f32));
+        loop {
+            let (entry, t_near) = match next.take() {
+                Some(e) => e,
+                None if top == 0 => break,
+                None => {
+                    top -= 1;
+                    stack[top]
+                }
+            };
             if t_near > t_max {
                 continue;
             }
@@ -165,8 +173,11 @@ impl Bvh {
                 hits[j] = entry;
                 n += 1;
             }
-            stack[top..top + n].copy_from_slice(&hits[..n]);
-            top += n;
+            if n > 0 {
+                next = Some(hits[n - 1]);
+                stack[top..top + n - 1].copy_from_slice(&hits[..n - 1]);
+                top += n - 1;
+            }
         }
         t_max
     }
