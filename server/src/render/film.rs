@@ -373,18 +373,6 @@ impl Film {
         }
     }
 
-    /// `per_row(y, row's sums, row's output)` for every row, in parallel.
-    fn par_rows<T: Send>(
-        &self,
-        out: &mut [T],
-        per_row: impl Fn(u32, &[PixelSums], &mut [T]) + Sync,
-    ) {
-        let w = self.width as usize;
-        (out.par_chunks_mut(w).zip(self.pixels.par_chunks(w)))
-            .enumerate()
-            .for_each(|(y, (o, row))| per_row(y as u32, row, o));
-    }
-
     /// Samples rejected as NaN or infinite.
     pub fn rejected(&self) -> u64 {
         self.rejected
@@ -446,11 +434,15 @@ impl Film {
     /// first. Rows in parallel (a frame of a large film is published often).
     pub fn mean(&self) -> Vec<[f32; 3]> {
         let mut out = vec![[0.0f32; 3]; self.pixels.len()];
-        self.par_rows(&mut out, |y, row, o| {
-            self.for_each_in_row(y, row, |x, _, p, f| {
-                o[x as usize] = std::array::from_fn(|c| ((p.even[c] + p.odd[c]) * f.inv_n) as f32);
+        let w = self.width as usize;
+        (out.par_chunks_mut(w).zip(self.pixels.par_chunks(w)))
+            .enumerate()
+            .for_each(|(y, (o, row))| {
+                self.for_each_in_row(y as u32, row, |x, _, p, f| {
+                    o[x as usize] =
+                        std::array::from_fn(|c| ((p.even[c] + p.odd[c]) * f.inv_n) as f32);
+                });
             });
-        });
         out
     }
 

@@ -8,6 +8,7 @@ use super::stream::{downscale, StreamFormat, StreamSettings};
 use crate::render::film::SppSpread;
 use crate::render::output::{encode_jpeg, encode_pfm, encode_png, encode_webp, WEBP_MAX_SIDE};
 use crate::render::tonemap::Tonemap;
+use std::borrow::Cow;
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// An encoded frame and its size.
@@ -50,7 +51,6 @@ pub struct Frame {
     pub(super) preview_image: Option<Arc<Preview>>,
     /// Mean radiance, row-major, top row first (empty before the first pass).
     pub pixels: Vec<[f32; 3]>,
-    pub(super) png: OnceLock<Arc<[u8]>>,
     /// Stream encodings, by settings: each made once however many sockets
     /// want it (a second asker waits for the first's).
     pub(super) encodings: Mutex<Vec<(StreamSettings, Arc<EncodedOnce>)>>,
@@ -83,51 +83,35 @@ impl Frame {
             preview: None,
             preview_image: None,
             pixels: Vec::new(),
-            png: OnceLock::new(),
             encodings: Mutex::new(Vec::new()),
         }
     }
 
-    fn pixels_or_black(&self) -> std::borrow::Cow<'_, [[f32; 3]]> {
+    fn pixels_or_black(&self) -> Cow<'_, [[f32; 3]]> {
         if self.pixels.is_empty() {
-            std::borrow::Cow::Owned(vec![[0.0; 3]; self.width as usize * self.height as usize])
+            Cow::Owned(vec![[0.0; 3]; self.width as usize * self.height as usize])
         } else {
-            std::borrow::Cow::Borrowed(&self.pixels)
+            Cow::Borrowed(&self.pixels)
         }
     }
 
-    /// The frame as PNG, encoded once however many clients want it. Call off
-    /// the async runtime (it takes milliseconds).
-    pub fn png(&self) -> Result<&[u8], ApiError> {
-        self.png_shared().map(|p| &**p)
+    /// The frame as PNG at its own size, encoded once however many clients
+    /// want it (the frame endpoints; a stream's default). Call off the
+    /// async runtime (it takes milliseconds).
+    pub fn png(&self) -> Result<Arc<[u8]>, ApiError> {
+        self.encoded(StreamSettings::default()).map(|e| e.bytes)
     }
 
-    /// [`Frame::png`], shared (no copy per socket).
-    fn png_shared(&self) -> Result<&Arc<[u8]>, ApiError> {
-        if let Some(png) = self.png.get() {
-            return Ok(png);
-        }
-        let png = encode_png(
-            self.width,
-            self.height,
-            &self.pixels_or_black(),
-            &Tonemap::default(),
-        )
-        .map_err(|e| ApiError::Internal(e.to_string()))?;
-        Ok(self.png.get_or_init(|| png.into()))
-    }
-
-    /// The frame as a stream with `settings` wants it. Call off the async
-    /// runtime (it takes milliseconds).
+    /// The frame as a stream with `settings` wants it, each encoding made
+    /// once. Call off the async runtime (it takes milliseconds).
     pub fn encoded(&self, settings: StreamSettings) -> Result<Encoded, ApiError> {
-        let full = settings.width.is_none_or(|w| w >= self.width);
-        if full && settings.format == StreamFormat::Png {
-            return Ok(Encoded {
-                bytes: self.png_shared()?.clone(),
-                width: self.width,
-                height: self.height,
-            });
-        }
+        // The same encoding however it is asked for: no width at or above
+        // the frame's (progressive resolution is the caller's business).
+        let settings = StreamSettings {
+            width: settings.width.filter(|&w| w < self.width),
+            progressive: false,
+            ..settings
+        };
         let cell = {
             let mut encodings = self.encodings.lock().unwrap_or_else(|e| e.into_inner());
             match encodings.iter().find(|(s, _)| *s == settings) {
@@ -155,9 +139,15 @@ impl Frame {
             width = width.min(WEBP_MAX_SIDE).min(tall.max(1));
         }
         let (w, h, pixels) = match (&self.preview_image, width < self.width) {
-            (Some(preview), _) => preview.resized(width),
-            (None, true) => downscale(&pixels, self.width, self.height, width),
-            (None, false) => (self.width, self.height, pixels.into_owned()),
+            (Some(preview), _) => {
+                let (w, h, p) = preview.resized(width);
+                (w, h, Cow::Owned(p))
+            }
+            (None, true) => {
+                let (w, h, p) = downscale(&pixels, self.width, self.height, width);
+                (w, h, Cow::Owned(p))
+            }
+            (None, false) => (self.width, self.height, pixels),
         };
         let t = Tonemap::default();
         let bytes = match settings.format {

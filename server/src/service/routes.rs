@@ -388,7 +388,7 @@ async fn frame_png(
 ) -> AppResult<Response> {
     let frame = wait_frame(&state, &id, query).await?;
     let f = frame.clone();
-    let png = tokio::task::spawn_blocking(move || f.png().map(<[u8]>::to_vec))
+    let png = tokio::task::spawn_blocking(move || f.png().map(|png| png.to_vec()))
         .await
         .map_err(|e| ApiError::Internal(e.to_string()))??;
     Ok((

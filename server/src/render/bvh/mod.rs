@@ -116,8 +116,9 @@ impl Bvh {
     /// slot order, the slots past its count holding its last primitive
     /// again (traversals read `count` slots: they never see them). A
     /// mesh's leaves are then numbered by `first / 4` (its SIMD packs).
-    /// None when the padded slots would be more than [`Bvh::MAX_PRIMS`].
-    pub fn aligned_leaves(mut self) -> Option<Bvh> {
+    /// For at most [`Bvh::MAX_PRIMS`] / [`MAX_LEAF`] primitives (the padded
+    /// slots stay within [`Bvh::MAX_PRIMS`]).
+    pub fn aligned_leaves(mut self) -> Bvh {
         let mut leaves: Vec<(u32, usize, usize)> = Vec::new(); // (first, node, child)
         for (n, node) in self.nodes.iter().enumerate() {
             for i in 0..4 {
@@ -126,9 +127,10 @@ impl Bvh {
                 }
             }
         }
-        if leaves.len() * MAX_LEAF > Self::MAX_PRIMS {
-            return None;
-        }
+        assert!(
+            leaves.len() * MAX_LEAF <= Self::MAX_PRIMS,
+            "too many primitives to align"
+        );
         leaves.sort_unstable();
         let mut prims = Vec::with_capacity(leaves.len() * MAX_LEAF);
         for (k, &(first, n, i)) in leaves.iter().enumerate() {
@@ -139,7 +141,7 @@ impl Bvh {
             self.nodes[n].child[i] = (k * MAX_LEAF) as u32;
         }
         self.prims = prims;
-        Some(self)
+        self
     }
 
     /// Bytes held by the nodes and the slot list.

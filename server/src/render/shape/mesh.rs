@@ -102,9 +102,7 @@ impl Mesh {
         if boxes.len() > Bvh::MAX_PRIMS / MAX_LEAF {
             return Err(MeshError::TooMany(boxes.len()));
         }
-        let bvh = Bvh::build(&boxes)
-            .aligned_leaves()
-            .ok_or(MeshError::TooMany(boxes.len()))?;
+        let bvh = Bvh::build(&boxes).aligned_leaves();
         let tris: Vec<TriVerts> = bvh
             .prims
             .par_iter()

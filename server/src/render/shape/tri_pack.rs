@@ -26,8 +26,7 @@ pub struct TriPack {
     /// x, y, z of vertex 0, of vertex 1, of vertex 2: one row per
     /// coordinate, one lane per triangle.
     p: [[f32; 4]; 9],
-    /// The leaf's first slot and its number of triangles.
-    pub first: u32,
+    /// Triangles in the leaf.
     pub count: u32,
 }
 
@@ -67,7 +66,7 @@ impl TriPack {
                 }
             }
         }
-        Self { p, first, count }
+        Self { p, count }
     }
 
     /// Lanes that hold the leaf's triangles.

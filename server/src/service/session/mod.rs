@@ -22,7 +22,7 @@ pub(in crate::service) use preview::Preview;
 pub use status::{Status, WorkerShare};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 use tokio::sync::watch;
 
@@ -520,7 +520,6 @@ impl Session {
             preview: image.preview,
             preview_image: None,
             pixels: image.pixels,
-            png: OnceLock::new(),
             encodings: Mutex::new(Vec::new()),
         }
     }
