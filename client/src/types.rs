@@ -121,6 +121,10 @@ pub struct SessionStatus {
     pub tiles_done: u64,
     #[serde(default)]
     pub tiles: u64,
+    /// Side of an adaptive tile in pixels (0 from servers before it was
+    /// reported).
+    #[serde(default)]
+    pub tile_size: u32,
     pub error_estimate: Option<f64>,
     pub samples_per_sec: f64,
     pub elapsed_ms: f64,

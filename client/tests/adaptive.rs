@@ -80,7 +80,9 @@ fn adaptive_render_spreads_its_samples_and_says_so() {
     let p = s.spp_spread;
     assert!(p.min <= p.median && p.median <= p.max, "{p:?}");
     assert!(p.min >= 16 && p.max > 16 && p.max > p.min, "{p:?}");
-    assert_eq!(s.tiles, 16, "32x32 in 8x8 tiles");
+    let t = u64::from(s.tile_size);
+    assert!(t >= 1, "{s:?}");
+    assert_eq!(s.tiles, 32u64.div_ceil(t).pow(2), "32x32 in {t}x{t} tiles");
 
     // Off again: every pixel gets the same samples.
     let off = client(&server, &["quality", &s.id, "--adaptive", "off"]);

@@ -128,9 +128,9 @@ fn done_tiles_get_no_more_samples_and_the_target_error_holds_against_the_truth()
 
 #[test]
 fn the_same_seed_gives_the_same_bits_whatever_threads_and_pass_sizes() {
-    // 44 x 20: tiles cut short on the right and at the bottom.
+    // 45 x 21: tiles cut short on the right and at the bottom.
     let s = scene("cornell-glass");
-    let size = (44, 20);
+    let size = (45, 21);
     assert!(size.0 % TILE_SIZE != 0 && size.1 % TILE_SIZE != 0);
     let q = adaptive(9, 64);
     let run = |threads: usize, max_paths: u64| {
@@ -172,7 +172,7 @@ fn opencl_list_and_dense_dispatch_give_the_same_bits_and_every_tile_its_samples(
         return;
     };
     let s = scene("cornell-glass");
-    let size = (44, 20);
+    let size = (45, 21);
     let q = adaptive(5, 48);
     let mut device = device;
     device.tile_dispatch = TileDispatch::List;

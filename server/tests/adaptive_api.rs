@@ -5,6 +5,7 @@
 mod http;
 
 use http::{client, config, create, halted, patch, read_frames, server, ws_connect};
+use pathstream::render::adaptive::TILE_SIZE;
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 
@@ -32,7 +33,10 @@ async fn an_adaptive_session_spreads_its_samples_and_says_where() {
         min >= 16 && min <= median && median <= max && max > 2 * min,
         "{spread}"
     );
-    assert_eq!(done["tiles"], 6 * 4, "44x28 in 8x8 tiles");
+    let tile = done["tile_size"].as_u64().expect("tile_size") as u32;
+    assert_eq!(tile, TILE_SIZE);
+    let (cols, rows) = (44u32.div_ceil(tile), 28u32.div_ceil(tile));
+    assert_eq!(done["tiles"], cols * rows, "44x28 in {tile}x{tile} tiles");
 
     // The map: one pixel per tile, more than one colour.
     let r = client()
@@ -43,7 +47,7 @@ async fn an_adaptive_session_spreads_its_samples_and_says_where() {
     assert_eq!(r.status(), 200);
     assert_eq!(r.headers()["content-type"], "image/png");
     let map = image::load_from_memory(&r.bytes().await.expect("body")).expect("png");
-    assert_eq!((map.width(), map.height()), (6, 4));
+    assert_eq!((map.width(), map.height()), (cols, rows));
     let map = map.to_rgba8();
     assert!(map.pixels().any(|p| p != map.get_pixel(0, 0)), "one colour");
 

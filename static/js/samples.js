@@ -1,6 +1,6 @@
 // The samples overlay: where the render put its samples, drawn over the
-// image. GET /api/sessions/{id}/samples.png has one pixel per 8x8 tile
-// (dark blue fewest samples, yellow most, green done); it is stretched over
+// image. GET /api/sessions/{id}/samples.png has one pixel per tile (the
+// status's tile_size square of pixels; dark blue fewest samples, yellow most, green done); it is stretched over
 // the canvas, crisp and half transparent. It follows the frames as they
 // arrive, but at most once per REFRESH_MS and one request at a time (the
 // frames may come far faster than anyone can read the map).
@@ -12,7 +12,6 @@ import { $, el } from "./dom.js";
 import { showMessage } from "./messages.js";
 import { on, state } from "./state.js";
 
-const TILE = 8; // the server's adaptive tiles, in pixels
 const REFRESH_MS = 500;
 
 const toggle = $("show-samples");
@@ -37,11 +36,12 @@ function place() {
   box.style.width = `${v.offsetWidth}px`;
   box.style.height = `${v.offsetHeight}px`;
   const s = state.status;
+  const tile = s?.tile_size;
   const cols = img.naturalWidth;
   const rows = img.naturalHeight;
-  const fits = s && cols === Math.ceil(s.width / TILE) && rows === Math.ceil(s.height / TILE);
-  img.style.width = fits ? `${(100 * cols * TILE) / s.width}%` : "100%";
-  img.style.height = fits ? `${(100 * rows * TILE) / s.height}%` : "100%";
+  const fits = tile && cols === Math.ceil(s.width / tile) && rows === Math.ceil(s.height / tile);
+  img.style.width = fits ? `${(100 * cols * tile) / s.width}%` : "100%";
+  img.style.height = fits ? `${(100 * rows * tile) / s.height}%` : "100%";
 }
 
 function pump() {

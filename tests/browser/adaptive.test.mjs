@@ -1,6 +1,6 @@
 // Adaptive sampling in the browser: the quality panel's toggle reaches the
 // server, the HUD shows how the samples spread over the pixels, and the
-// samples overlay shows the server's map (one pixel per 8x8 tile) over the
+// samples overlay shows the server's map (one pixel per 2x2 tile) over the
 // image, refreshed with the frames but throttled.
 //
 //   node --test tests/browser/adaptive.test.mjs
@@ -10,9 +10,10 @@ import { after, before, describe, it } from "node:test";
 import { openPage, session, sleep, waitFor, waitFrame } from "./harness.mjs";
 
 // Not multiples of the tile: the last column and row of tiles are cut short.
-const W = 100;
-const H = 60;
-const TILE = 8;
+// Odd sizes: the last column and row of tiles are cut short.
+const W = 101;
+const H = 61;
+const TILE = 2;
 const T = { timeout: 90000 };
 
 describe("adaptive sampling in the browser", { timeout: 300000 }, () => {
@@ -47,6 +48,7 @@ describe("adaptive sampling in the browser", { timeout: 300000 }, () => {
       return s.quality.adaptive === true ? s : null;
     });
     assert.ok(on.generation > before.generation, "the change restarted the film");
+    assert.equal(on.tile_size, TILE);
     assert.equal(on.tiles, Math.ceil(W / TILE) * Math.ceil(H / TILE));
 
     // After the uniform warm-up (16 spp everywhere) the tiles' counts part.

@@ -9,7 +9,8 @@ use crate::render::progressive::{self, Progress};
 use crate::render::{Backend, BackendError, Film, Quality, RenderJob, Scene};
 use std::time::{Duration, Instant};
 
-/// Seed of the measured renders (the references use another).
+/// Seed of the measured renders (the references use another); the
+/// adaptive section's further seeds count on from it.
 pub const TRACE_SEED: u64 = 1;
 
 /// Camera paths and samples per pixel per second.
@@ -55,7 +56,7 @@ pub fn throughput(
     })
 }
 
-/// Renders with `quality` (seed [`TRACE_SEED`]) for `seconds` of rendering
+/// Renders with `quality` (seed `seed`) for `seconds` of rendering
 /// time, measuring the error against `reference` (whose own error estimate
 /// is `reference_error`) at sample counts growing by half each time.
 pub fn trace(
@@ -65,11 +66,9 @@ pub fn trace(
     quality: &Quality,
     reference: (&[[f32; 3]], f64),
     seconds: f64,
+    seed: u64,
 ) -> Result<Vec<TracePoint>, BackendError> {
-    let q = Quality {
-        seed: TRACE_SEED,
-        ..*quality
-    };
+    let q = Quality { seed, ..*quality };
     let job = RenderJob::new(scene, width, height, &q);
     backend.prepare(&job)?;
     let mut film = Film::new(width, height);

@@ -76,6 +76,9 @@ pub struct Config {
     pub trade_seconds: f64,
     /// Scenes of the adaptive section (at the trade size and time).
     pub adaptive_scenes: Vec<String>,
+    /// Seeds of the adaptive section: each pair of curves is rendered with
+    /// every one (a single curve's time to 1% varies by 10-15%).
+    pub adaptive_seeds: u64,
     /// References are rendered until their error estimate is this low...
     pub reference_error: f64,
     /// ...or for this long.
@@ -119,6 +122,7 @@ impl Config {
             ]
             .map(String::from)
             .to_vec(),
+            adaptive_seeds: 3,
             trade_size: (64, 64),
             trade_seconds: 10.0,
             reference_error: 0.0025,
@@ -138,6 +142,7 @@ impl Config {
             throughput_seconds: 0.1,
             trade_scenes: vec!["cornell".into()],
             adaptive_scenes: vec!["cornell".into()],
+            adaptive_seeds: 1,
             trade_size: (16, 16),
             trade_seconds: 0.15,
             reference_error: 0.03,
@@ -177,6 +182,8 @@ pub struct TradeCurve {
     pub backend: String,
     pub scene: String,
     pub setting: Setting,
+    /// The renders' seed.
+    pub seed: u64,
     pub points: Vec<TracePoint>,
     pub fit: Option<Fit>,
 }
@@ -225,8 +232,8 @@ pub struct Results {
     pub references: Vec<(ReferenceInfo, bool)>,
     pub trade: Vec<TradeCurve>,
     pub calibration: Vec<CalibrationRow>,
-    /// The adaptive section: per scene and backend, the uniform curve then
-    /// the adaptive one.
+    /// The adaptive section: per scene, backend and seed, the uniform curve
+    /// then the adaptive one.
     pub adaptive: Vec<TradeCurve>,
     pub specialisation: Vec<SpecialisationRow>,
     pub meshes: Vec<meshes::MeshRow>,

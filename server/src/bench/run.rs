@@ -2,6 +2,7 @@
 //! references and traces, specialisation.
 
 use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
+use super::measure::TRACE_SEED;
 use super::settings::{self, Setting};
 use super::{
     adaptive, fit, measure, report, BenchError, CalibrationRow, Config, Observer, Results,
@@ -80,7 +81,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
             + u64::from(s.specialisation) * opencl_count * nt * 2
             + u64::from(s.meshes) * config.mesh_sizes.len() as u64
             + u64::from(s.devices) * nt * config.throughput_sizes.len() as u64
-            + na * (1 + nb * 2),
+            + na * (1 + nb * 2 * config.adaptive_seeds),
     );
 
     let results = Results {
@@ -221,7 +222,7 @@ impl Work<'_> {
             let reference = self.reference(name, scene)?;
             for b in 0..self.backends.len() {
                 for setting in settings {
-                    let curve = self.curve(b, name, scene, setting, &reference)?;
+                    let curve = self.curve(b, name, scene, setting, &reference, TRACE_SEED)?;
                     self.results.trade.push(curve);
                 }
             }
@@ -236,9 +237,11 @@ impl Work<'_> {
         for (name, scene) in scenes {
             let reference = self.reference(name, scene)?;
             for b in 0..self.backends.len() {
-                for setting in adaptive::pair() {
-                    let curve = self.curve(b, name, scene, &setting, &reference)?;
-                    self.results.adaptive.push(curve);
+                for seed in (0..self.config.adaptive_seeds).map(|k| TRACE_SEED + k) {
+                    for setting in adaptive::pair() {
+                        let curve = self.curve(b, name, scene, &setting, &reference, seed)?;
+                        self.results.adaptive.push(curve);
+                    }
                 }
             }
         }
@@ -265,11 +268,12 @@ impl Work<'_> {
         scene: &Scene,
         setting: &Setting,
         reference: &Reference,
+        seed: u64,
     ) -> Result<TradeCurve, BenchError> {
         let config = self.config;
         let backend = &mut self.backends[b];
         self.observer.step(&format!(
-            "trade {name}: {} on {}",
+            "trade {name}: {} on {} (seed {seed})",
             setting.label,
             backend.name()
         ));
@@ -281,6 +285,7 @@ impl Work<'_> {
             &setting.quality,
             (&reference.pixels, reference_error),
             config.trade_seconds,
+            seed,
         )?;
         let q = setting.quality;
         if (Quality {
@@ -308,6 +313,7 @@ impl Work<'_> {
             backend: backend.name().into(),
             scene: name.to_owned(),
             setting: setting.clone(),
+            seed,
             fit: fit::fit(&points),
             points,
         })

@@ -70,6 +70,11 @@ pub struct BenchArgs {
     /// Seconds per throughput measurement [default: 3; 0.1 with --quick].
     #[arg(long, value_name = "S")]
     throughput_seconds: Option<f64>,
+    /// Seeds of the adaptive section: uniform and adaptive are rendered
+    /// with each, and its table gives the median speed-up and the range
+    /// [default: 3; 1 with --quick].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100))]
+    seeds: Option<u64>,
     /// Triangle counts of the mesh section, comma-separated [default:
     /// 10000,100000,1000000,4000000; 2000,20000 with --quick].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
@@ -164,6 +169,9 @@ impl BenchArgs {
         }
         if let Some(size) = self.trade_size {
             c.trade_size = size;
+        }
+        if let Some(n) = self.seeds {
+            c.adaptive_seeds = n;
         }
         if !self.mesh_sizes.is_empty() {
             if let Some(bad) = self

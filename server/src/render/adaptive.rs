@@ -16,23 +16,30 @@
 //! The image's error, sum of v_t P_t / n_t, is least for a given total of
 //! samples when n_t is proportional to sqrt(v_t) (a Lagrange multiplier), so
 //! the round raises every tile towards c sqrt(v_t), with c as large as B
-//! allows ("water filling"). No tile more than doubles in one round (its
-//! estimate is noisy) and none falls below [`RATE_FLOOR`] of the mean rate
-//! or [`NEIGHBOUR_FLOOR`] of its noisiest neighbour's (a caustic the
-//! warm-up missed still gets found).
+//! allows ("water filling"). A 2x2 tile's own estimate is too noisy to
+//! steer by, so v_t is averaged with its eight neighbours' ([`SMOOTHING`]:
+//! as if the tile were grown by a pixel on every side). No tile more than
+//! doubles in one round and none falls below [`RATE_FLOOR`] of the mean
+//! rate (a caustic the warm-up missed still gets found).
 //!
-//! With a target error e, tile t is done once e_t <= e^2 S P_t / P (S: the
-//! image's sum of squared means, P: its pixels): the tiles' shares of the
-//! whole image's allowance, so that when every tile is done the whole image
+//! With a target error e, tile t is done once its (smoothed) error
+//! v_t P_t / n_t <= e^2 S P_t / P (S: the image's sum of squared means, P:
+//! its pixels): the tiles' shares of the whole image's allowance. Judging a
+//! tile by its own estimate would stop the tiles whose few samples happen
+//! to agree, and leave the image's estimate too low; so that when every tile is done the whole image
 //! is at the target. A done tile gets no more samples; a live one gets at
 //! most what its estimate says it still needs.
 
 use std::ops::Range;
 
-/// Side of a tile in pixels. Measured on cornell-glass at 128x128 and 256
-/// spp (docs/BENCHMARKS.md): 16 gains 1.25x, 8 gains 1.4x, and 4 loses the
-/// estimate's calibration (its tiles' errors too noisy to steer by).
-pub const TILE_SIZE: u32 = 8;
+/// Side of a tile in pixels. Measured at equal samples (64x64, 1024 spp,
+/// four seeds, `examples/adaptive_bound.rs`; docs/RENDERER.md), with the
+/// neighbours' smoothing: uniform's squared error over adaptive's on
+/// cornell-glass is 1.53 with 4x4 tiles, 1.72 with 2x2 and 1.89 per pixel,
+/// but per pixel `furnace` (even noise) loses 4% to estimates too noisy to
+/// steer by; 2x2 keeps it at 1.00. 8x8 tiles cannot pass 1.39 there (the
+/// unevenness of the true variance over them).
+pub const TILE_SIZE: u32 = 2;
 /// Uniform samples per pixel before the first round: enough for every
 /// tile's error estimate to mean something.
 pub const WARMUP_SPP: u64 = 16;
@@ -41,13 +48,12 @@ const ROUND_GROWTH: f64 = 0.5;
 /// No live tile's sampling rate (sqrt of its variance) counts as less than
 /// this fraction of the image's mean rate.
 const RATE_FLOOR: f64 = 0.05;
-/// No tile's rate counts as less than this fraction of its noisiest edge
-/// neighbour's: a caustic or a glass edge rarely ends at a tile's border,
-/// and a tile whose warm-up missed it reads near zero. Measured (equal
-/// samples, four seeds, 64x64): the variance ratio to uniform on
-/// cornell-glass went from 1.09 to 1.38 and on the glass mesh scene from
-/// 1.10 to 1.37, cornell from 2.23 to 2.16 (0.1-0.5 tried; 0.15 best).
-const NEIGHBOUR_FLOOR: f64 = 0.15;
+/// Weights of a tile's own variance, its edge neighbours' and its corner
+/// neighbours' in its rate: a 2x2 tile grown by a pixel on every side
+/// covers half of each edge neighbour and a quarter of each corner one.
+/// Measured against a plain 3x3 average (1, 1, 1): 1.72 against 1.63 on
+/// cornell-glass at equal samples, the same on furnace.
+const SMOOTHING: [f64; 3] = [1.0, 0.5, 0.25];
 
 /// `count` more samples for every pixel of `tile`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -238,42 +244,26 @@ pub fn plan_round(
         budget = budget.min(spp.saturating_mul(pixels).saturating_sub(taken));
     }
     let size: Vec<f64> = (0..tiles.count()).map(|t| tiles.pixels(t) as f64).collect();
-    if let Some(e) = goal.target_error {
-        let allowance = e * e * errors.iter().map(|t| t.sig2).sum::<f64>() / pixels as f64;
-        for (t, err) in errors.iter().enumerate() {
-            done[t] |= err.err2 <= allowance * size[t];
+    let var = smoothed_variances(tiles, counts, errors);
+    // A pixel's allowance of squared error, with a target.
+    let signal: f64 = errors.iter().map(|t| t.sig2).sum();
+    let allowance = goal.target_error.map(|e| e * e * signal / pixels as f64);
+    if let Some(a) = allowance {
+        for (t, d) in done.iter_mut().enumerate() {
+            *d |= var[t] / counts[t] as f64 <= a;
         }
     }
     let live: Vec<usize> = (0..tiles.count()).filter(|&t| !done[t]).collect();
     if live.is_empty() || budget == 0 {
         return Vec::new();
     }
-    // Per-pixel variance (its square root: the rate samples should go at).
-    let own = |t: usize| {
-        (errors[t].err2 * counts[t] as f64 / size[t])
-            .max(0.0)
-            .sqrt()
-    };
-    // A tile counts as at least NEIGHBOUR_FLOOR as noisy as its noisiest
-    // edge neighbour.
-    let rate = |t: usize| {
-        let (cols, rows) = (tiles.cols as i64, tiles.rows as i64);
-        let (x, y) = (t as i64 % cols, t as i64 / cols);
-        let mut best = own(t);
-        for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
-            let (nx, ny) = (x + dx, y + dy);
-            if nx >= 0 && ny >= 0 && nx < cols && ny < rows {
-                best = best.max(NEIGHBOUR_FLOOR * own((ny * cols + nx) as usize));
-            }
-        }
-        best
-    };
+    let rate: Vec<f64> = var.iter().map(|v| v.sqrt()).collect();
     let weight: f64 = live.iter().map(|&t| size[t]).sum();
-    let mean_rate = live.iter().map(|&t| rate(t) * size[t]).sum::<f64>() / weight;
+    let mean_rate = live.iter().map(|&t| rate[t] * size[t]).sum::<f64>() / weight;
     let rates: Vec<f64> = live
         .iter()
         .map(|&t| match mean_rate > 0.0 {
-            true => rate(t).max(RATE_FLOOR * mean_rate),
+            true => rate[t].max(RATE_FLOOR * mean_rate),
             false => 1.0,
         })
         .collect();
@@ -282,11 +272,7 @@ pub fn plan_round(
         .iter()
         .map(|&t| {
             let n = counts[t] as f64;
-            let needed = goal.target_error.map_or(f64::INFINITY, |e| {
-                let sig: f64 = errors.iter().map(|t| t.sig2).sum();
-                let allowance = e * e * sig / pixels as f64 * size[t];
-                (n * (errors[t].err2 / allowance - 1.0)).ceil().max(1.0)
-            });
+            let needed = allowance.map_or(f64::INFINITY, |a| (var[t] / a - n).ceil().max(1.0));
             n.min(needed)
         })
         .collect();
@@ -352,6 +338,40 @@ pub fn plan_round(
         .collect()
 }
 
+/// Each tile's per-pixel variance averaged with its eight neighbours'
+/// (weights [`SMOOTHING`], by pixels): what its rate and its error are
+/// judged by.
+fn smoothed_variances(tiles: &Tiles, counts: &[u64], errors: &[TileError]) -> Vec<f64> {
+    let (cols, rows) = (tiles.cols as i64, tiles.rows as i64);
+    // Per tile: variance times pixels (err2 n), and pixels.
+    let own: Vec<(f64, f64)> = (0..tiles.count())
+        .map(|t| {
+            (
+                errors[t].err2.max(0.0) * counts[t] as f64,
+                tiles.pixels(t) as f64,
+            )
+        })
+        .collect();
+    (0..tiles.count())
+        .map(|t| {
+            let (x, y) = (t as i64 % cols, t as i64 / cols);
+            let (mut v, mut p) = (0.0, 0.0);
+            for dy in -1..=1i64 {
+                for dx in -1..=1i64 {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx >= 0 && ny >= 0 && nx < cols && ny < rows {
+                        let k = SMOOTHING[(dx.abs() + dy.abs()) as usize];
+                        let (vn, pn) = own[(ny * cols + nx) as usize];
+                        v += k * vn;
+                        p += k * pn;
+                    }
+                }
+            }
+            v / p
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -372,62 +392,100 @@ mod tests {
 
     #[test]
     fn tiles_cover_the_image_once() {
-        let tiles = Tiles::new(2 * T + 3, T + 1);
+        let tiles = Tiles::new(2 * T + 1, T + 1);
         assert_eq!((tiles.cols, tiles.rows), (3, 2));
         let total: u64 = (0..tiles.count()).map(|t| tiles.pixels(t)).sum();
-        assert_eq!(total, u64::from((2 * T + 3) * (T + 1)));
-        assert_eq!(tiles.rect(5), (2 * T..2 * T + 3, T..T + 1));
-        assert_eq!(tiles.at(2 * T + 2, T), 5);
-        assert_eq!(tiles.pixels(5), 3);
+        assert_eq!(total, u64::from((2 * T + 1) * (T + 1)));
+        assert_eq!(tiles.rect(5), (2 * T..2 * T + 1, T..T + 1));
+        assert_eq!(tiles.at(2 * T, T), 5);
+        assert_eq!(tiles.pixels(5), 1);
+    }
+
+    #[test]
+    fn a_rate_is_the_deviation_of_the_tile_and_its_neighbours() {
+        // 3x3 tiles of 16 samples; the middle one has 9x the variance.
+        let tiles = Tiles::new(3 * T, 3 * T);
+        let (counts, errors) = flat(&tiles, 16, |t| if t == 4 { 9.0 } else { 1.0 });
+        let var = smoothed_variances(&tiles, &counts, &errors);
+        let rate: Vec<f64> = var.iter().map(|v| v.sqrt()).collect();
+        let per_pixel = |e: f64| e * 16.0 / P as f64;
+        let expect = |sum: f64, weight: f64| (per_pixel(sum) / weight).sqrt();
+        // Middle: itself, 4 edge and 4 corner neighbours of variance 1.
+        assert!((rate[4] - expect(9.0 + 4.0 * 0.5 + 4.0 * 0.25, 4.0)).abs() < 1e-12);
+        // Top middle: itself, 3 edge neighbours (one the middle), 2 corners.
+        assert!((rate[1] - expect(1.0 + 0.5 * 11.0 + 0.25 * 2.0, 3.0)).abs() < 1e-12);
+        // Corner: itself, 2 edge neighbours, the middle as its corner.
+        assert!((rate[0] - expect(1.0 + 0.5 * 2.0 + 0.25 * 9.0, 2.25)).abs() < 1e-12);
     }
 
     #[test]
     fn samples_go_to_noisy_tiles_in_proportion_to_their_deviation() {
-        // Tile 0 has 4x the variance of the others: sqrt says twice the rate.
-        let tiles = Tiles::new(4 * T, T);
-        let (counts, errors) = flat(&tiles, 16, |t| if t == 0 { 4.0 } else { 1.0 });
-        let mut done = vec![false; 4];
-        let work = plan_round(
-            &tiles,
-            &counts,
-            &errors,
-            &mut done,
-            Goal::default(),
-            16 * 4 * P,
-        );
-        let got: Vec<u32> = work.iter().map(|w| w.count).collect();
-        // A budget of 8 spp on average: tile 0 would take 22.4 more (twice
-        // the others' rate), is capped at doubling (16), the rest share 16.
-        assert_eq!(work.len(), 4, "{work:?}");
-        assert_eq!(got[0], 16, "tile 0 doubles (capped): {got:?}");
-        assert!(got[1..].iter().all(|&n| (5..=6).contains(&n)), "{got:?}");
+        // A row of 12 tiles: the left half has 4x the variance of the right
+        // and already twice its samples (as the allocation wants), so the
+        // round keeps the proportion: the left's inner tiles get twice what
+        // the right's get.
+        let tiles = Tiles::new(12 * T, T);
+        let counts: Vec<u64> = (0..12).map(|t| if t < 6 { 32 } else { 16 }).collect();
+        let errors: Vec<TileError> = (0..12)
+            .map(|t| TileError {
+                // err2 = v P / n with v = 4 on the left, 1 on the right.
+                err2: if t < 6 {
+                    4.0 * P as f64 / 32.0
+                } else {
+                    P as f64 / 16.0
+                },
+                sig2: P as f64 * 3.0,
+            })
+            .collect();
+        let mut done = vec![false; 12];
+        let taken = (6 * 32 + 6 * 16) * P;
+        let work = plan_round(&tiles, &counts, &errors, &mut done, Goal::default(), taken);
+        let got: Vec<u32> = (0..12)
+            .map(|t| work.iter().find(|w| w.tile == t).map_or(0, |w| w.count))
+            .collect();
+        // (Tiles 5 and 6 see both halves; flooring moves a count by one.)
+        for (l, r) in got[..5].iter().zip(&got[7..]) {
+            assert!(*r > 0 && l.abs_diff(2 * r) <= 1, "{got:?}");
+        }
         let paths: u64 = work.iter().map(|w| u64::from(w.count) * P).sum();
-        assert_eq!(paths, 8 * 4 * P);
+        assert_eq!(paths, taken / 2, "the round adds half the samples taken");
     }
 
     #[test]
     fn done_tiles_get_nothing_and_the_round_ends_when_all_are() {
-        let tiles = Tiles::new(2 * T, T);
         // Signal 3 per pixel: allowance 0.01^2 * 3 * P per tile.
         let allowance = 3e-4 * P as f64;
-        let (counts, errors) = flat(&tiles, 16, |t| allowance * if t == 0 { 0.6 } else { 4.0 });
-        let mut done = vec![false; 2];
         let goal = Goal {
             target_error: Some(0.01),
             spp: None,
         };
-        let work = plan_round(&tiles, &counts, &errors, &mut done, goal, 16 * 2 * P);
-        assert_eq!(done, [true, false]);
-        // Tile 1 needs 16 * (4 - 1) = 48 more by its estimate: capped at 16.
-        assert_eq!(work, [TileWork { tile: 1, count: 16 }]);
+        // A row of 4 tiles: two quiet, two noisy. Smoothed (in allowances):
+        // 0.6, (0.6 + 0.5 * 4.6) / 2 = 1.45, (4 + 0.5 * 4.6) / 2 = 3.15, 4.
+        let tiles = Tiles::new(4 * T, T);
+        let (counts, errors) = flat(&tiles, 16, |t| allowance * if t < 2 { 0.6 } else { 4.0 });
+        let mut done = vec![false; 4];
+        let work = plan_round(&tiles, &counts, &errors, &mut done, goal, 16 * 4 * P);
+        assert_eq!(done, [true, false, false, false]);
+        let got: Vec<(u32, u32)> = work.iter().map(|w| (w.tile, w.count)).collect();
+        // Tile 1 lacks 16 * 0.45 = 7.2 samples by its estimate (so 8), 2
+        // and 3 lack 34 and 48, capped at doubling (16); the budget is 32 a
+        // tile, so c is cut and tile 3 gets the most.
+        assert_eq!(got.len(), 3, "{got:?}");
+        assert!(got
+            .iter()
+            .all(|&(t, n)| t > 0 && n <= if t == 1 { 8 } else { 16 }));
+        assert!(got[0].1 < got[1].1 && got[1].1 <= got[2].1, "{got:?}");
+        let paths: u64 = work.iter().map(|w| u64::from(w.count) * P).sum();
+        assert_eq!(paths, 16 * 4 * P / 2, "{got:?}");
+        // Quiet everywhere: everything done, nothing to do.
         let (_, quiet) = flat(&tiles, 16, |_| allowance * 0.5);
-        assert!(plan_round(&tiles, &counts, &quiet, &mut done, goal, 16 * 2 * P).is_empty());
-        assert_eq!(done, [true, true]);
+        assert!(plan_round(&tiles, &counts, &quiet, &mut done, goal, 16 * 4 * P).is_empty());
+        assert_eq!(done, [true; 4]);
         // Nearly there: a live tile gets what its estimate says it lacks.
-        let mut fresh = vec![false; 2];
+        let mut fresh = vec![false; 4];
         let (_, close) = flat(&tiles, 16, |_| allowance * 1.25);
-        let work = plan_round(&tiles, &counts, &close, &mut fresh, goal, 16 * 2 * P);
-        assert_eq!(work.iter().map(|w| w.count).collect::<Vec<_>>(), [4, 4]);
+        let work = plan_round(&tiles, &counts, &close, &mut fresh, goal, 16 * 4 * P);
+        assert_eq!(work.iter().map(|w| w.count).collect::<Vec<_>>(), [4; 4]);
     }
 
     #[test]
@@ -462,7 +520,7 @@ mod tests {
             rounds: 1,
         };
         // Layer 0 (tiles 1, 2, 0), then tile 1 of layer 1: four samples.
-        let first = state.round.front(&tiles, 4 * P + 10);
+        let first = state.round.front(&tiles, 4 * P + P / 2);
         assert_eq!(
             first,
             [

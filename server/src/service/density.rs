@@ -11,29 +11,30 @@ use image::{ExtendedColorType, ImageEncoder};
 pub struct Density {
     pub cols: u32,
     pub rows: u32,
-    pub spp: Vec<u64>,
-    pub done: Vec<bool>,
+    /// Every tile's count while the film is uniform (no vectors then: a
+    /// frame of a large uniform film is published many times a second).
+    uniform: u64,
+    /// Per tile once adaptive rounds begin (else empty).
+    spp: Vec<u64>,
+    done: Vec<bool>,
 }
 
 impl Density {
-    /// The film's tiles (a uniform film: every tile at its spp).
+    /// The film's tiles.
     pub fn of(film: &Film) -> Self {
         let tiles = film.tiles();
-        let done = film.tiles_done();
-        Self {
+        let mut d = Self {
             cols: tiles.cols,
             rows: tiles.rows,
-            spp: (0..tiles.count()).map(|t| film.tile_spp(t)).collect(),
-            done: (0..tiles.count())
-                .map(|t| done.get(t).copied().unwrap_or(false))
-                .collect(),
+            uniform: film.spp(),
+            spp: Vec::new(),
+            done: Vec::new(),
+        };
+        if film.adaptive_started() {
+            d.spp = (0..tiles.count()).map(|t| film.tile_spp(t)).collect();
+            d.done = film.tiles_done().to_vec();
         }
-    }
-
-    /// The fewest and the most samples of a tile.
-    fn range(&self) -> (u64, u64) {
-        let lo = self.spp.iter().copied().min().unwrap_or(0);
-        (lo, self.spp.iter().copied().max().unwrap_or(0))
+        d
     }
 
     /// A film's tiles before any sample.
@@ -42,19 +43,41 @@ impl Density {
         Self {
             cols: tiles.cols,
             rows: tiles.rows,
-            spp: vec![0; tiles.count()],
-            done: vec![false; tiles.count()],
+            uniform: 0,
+            spp: Vec::new(),
+            done: Vec::new(),
+        }
+    }
+
+    /// Tile `t`'s samples per pixel.
+    fn spp(&self, t: usize) -> u64 {
+        self.spp.get(t).copied().unwrap_or(self.uniform)
+    }
+
+    /// Tiles at their share of the target error.
+    pub fn done_count(&self) -> usize {
+        self.done.iter().filter(|&&d| d).count()
+    }
+
+    /// The fewest and the most samples of a tile.
+    fn range(&self) -> (u64, u64) {
+        match self.spp.is_empty() {
+            true => (self.uniform, self.uniform),
+            false => (
+                self.spp.iter().copied().min().unwrap_or(0),
+                self.spp.iter().copied().max().unwrap_or(0),
+            ),
         }
     }
 
     /// Colour of a tile: samples on a log scale from the fewest (dark
     /// blue) to the most (yellow); done tiles in green.
     fn colour(&self, t: usize, (lo, hi): (u64, u64)) -> [u8; 4] {
-        if self.done[t] {
+        if self.done.get(t) == Some(&true) {
             return [40, 200, 90, 255];
         }
         let span = ((hi.max(1) as f64).ln() - (lo.max(1) as f64).ln()).max(1e-9);
-        let x = (((self.spp[t].max(1) as f64).ln() - (lo.max(1) as f64).ln()) / span) as f32;
+        let x = (((self.spp(t).max(1) as f64).ln() - (lo.max(1) as f64).ln()) / span) as f32;
         let stops = [
             [20.0, 20.0, 120.0],
             [200.0, 40.0, 120.0],
@@ -72,9 +95,8 @@ impl Density {
     /// The map as an RGBA PNG, one pixel per tile.
     pub fn png(&self) -> Result<Vec<u8>, image::ImageError> {
         let range = self.range();
-        let bytes: Vec<u8> = (0..self.spp.len())
-            .flat_map(|t| self.colour(t, range))
-            .collect();
+        let count = self.cols as usize * self.rows as usize;
+        let bytes: Vec<u8> = (0..count).flat_map(|t| self.colour(t, range)).collect();
         let mut out = Vec::new();
         PngEncoder::new(&mut out).write_image(
             &bytes,
@@ -95,6 +117,7 @@ mod tests {
         let d = Density {
             cols: 3,
             rows: 1,
+            uniform: 16,
             spp: vec![16, 64, 256],
             done: vec![false, false, true],
         };
@@ -105,6 +128,16 @@ mod tests {
         assert_eq!(d.colour(2, r), [40, 200, 90, 255]);
         let png = d.png().expect("png");
         let img = image::load_from_memory(&png).expect("decodes");
+        assert_eq!((img.width(), img.height()), (3, 1));
+        assert_eq!(d.done_count(), 1);
+        // A uniform film: every tile at its count, none done.
+        let u = Density {
+            spp: Vec::new(),
+            done: Vec::new(),
+            ..d
+        };
+        assert_eq!((u.range(), u.done_count()), ((16, 16), 0));
+        let img = image::load_from_memory(&u.png().expect("png")).expect("decodes");
         assert_eq!((img.width(), img.height()), (3, 1));
     }
 }

@@ -24,9 +24,11 @@ pub struct Status {
     pub spp: u64,
     /// The least, median and most samples of a pixel.
     pub spp_spread: SppSpread,
-    /// Adaptive tiles at their share of the target error, of `tiles`.
+    /// Adaptive tiles at their share of the target error, of `tiles`
+    /// (squares of `tile_size` pixels, cut short at the right and bottom).
     pub tiles_done: usize,
     pub tiles: usize,
+    pub tile_size: u32,
     pub error_estimate: Option<f64>,
     pub samples_per_sec: f64,
     pub elapsed_ms: f64,
@@ -80,10 +82,11 @@ impl Session {
                 SppSpread::default()
             },
             tiles_done: match (&frame.density, current) {
-                (Some(d), true) => d.done.iter().filter(|&&d| d).count(),
+                (Some(d), true) => d.done_count(),
                 _ => 0,
             },
             tiles: crate::render::adaptive::Tiles::new(st.width, st.height).count(),
+            tile_size: crate::render::adaptive::TILE_SIZE,
             error_estimate: if current { frame.error_estimate } else { None },
             samples_per_sec: if current { frame.samples_per_sec } else { 0.0 },
             elapsed_ms: st.restarted.elapsed().as_secs_f64() * 1e3,
