@@ -230,9 +230,7 @@ impl Film {
     /// Camera paths the film holds (all pixels' samples).
     pub fn total_samples(&self) -> u64 {
         let uniform = self.spp * self.pixels.len() as u64 + self.next as u64;
-        let extra: u64 = (self.adaptive.extra.iter().enumerate())
-            .map(|(t, n)| n * self.tiles.pixels(t))
-            .sum();
+        let extra: u64 = (self.adaptive.pixels_at.iter()).map(|(n, p)| n * p).sum();
         uniform + extra
     }
 
@@ -253,23 +251,20 @@ impl Film {
                 max: top,
             };
         }
-        let mut counts: Vec<(u64, u64)> = (0..self.tiles.count())
-            .map(|t| (self.tile_spp(t), self.tiles.pixels(t)))
-            .collect();
-        counts.sort_unstable();
+        let at = &self.adaptive.pixels_at;
         let half = self.pixels.len() as u64 / 2;
         let mut seen = 0;
-        let median = counts
+        let median = at
             .iter()
             .find(|(_, p)| {
-                seen += p;
+                seen += *p;
                 seen > half
             })
-            .map_or(0, |c| c.0);
+            .map_or(0, |(n, _)| self.spp + n);
         SppSpread {
-            min: counts.first().map_or(0, |c| c.0),
+            min: at.keys().next().map_or(0, |n| self.spp + n),
             median,
-            max: counts.last().map_or(0, |c| c.0),
+            max: at.keys().next_back().map_or(0, |n| self.spp + n),
         }
     }
 
@@ -308,8 +303,7 @@ impl Film {
     pub fn adaptive_round(&mut self, goal: Goal) -> bool {
         debug_assert_eq!(self.next, 0, "adaptive rounds start on whole samples");
         if !self.adaptive.started() {
-            self.adaptive.extra = vec![0; self.tiles.count()];
-            self.adaptive.done = vec![false; self.tiles.count()];
+            self.adaptive = TileState::start(&self.tiles);
         }
         if self.adaptive.round.is_empty() {
             let counts: Vec<u64> = (0..self.tiles.count()).map(|t| self.tile_spp(t)).collect();
@@ -328,7 +322,7 @@ impl Film {
     /// Records that `work` (what [`Film::adaptive_work`] returned) was
     /// added, `rejected` samples of it refused.
     pub fn commit_tiles(&mut self, work: &[TileWork], rejected: u64) {
-        self.adaptive.commit(work);
+        self.adaptive.commit(&self.tiles, work);
         self.rejected += rejected;
     }
 
