@@ -24,11 +24,11 @@
 //!
 //! With a target error e, tile t is done once its (smoothed) error
 //! v_t P_t / n_t <= e^2 S P_t / P (S: the image's sum of squared means, P:
-//! its pixels): the tiles' shares of the whole image's allowance. Judging a
-//! tile by its own estimate would stop the tiles whose few samples happen
-//! to agree, and leave the image's estimate too low; so that when every tile is done the whole image
-//! is at the target. A done tile gets no more samples; a live one gets at
-//! most what its estimate says it still needs.
+//! its pixels): the tiles' shares of the whole image's allowance, so that
+//! when every tile is done the whole image is at the target. (Judged by its
+//! own four pixels, a tile whose few samples happen to agree would stop,
+//! and the image's estimate would read low.) A done tile gets no more
+//! samples; a live one gets at most what its estimate says it still needs.
 
 use std::cmp::Reverse;
 use std::collections::BTreeMap;
@@ -311,8 +311,8 @@ pub fn plan_round(
     // The largest c whose round fits the budget, to 1e-12 of itself (about
     // 40 halvings; no allocation: a 1080p film has half a million tiles).
     let (mut lo, mut hi) = (0.0f64, 0.0f64);
-    for (i, &t) in live.iter().enumerate() {
-        hi = hi.max((counts[t] as f64 + caps[i]) / rates[i]);
+    for i in 0..live.len() {
+        hi = hi.max((had[i] + caps[i]) / rates[i]);
     }
     if paths(hi) > budget as f64 {
         for _ in 0..200 {
@@ -332,8 +332,8 @@ pub fn plan_round(
     let want: Vec<f64> = (0..live.len()).map(|i| want(i, lo)).collect();
     let mut counts_out: Vec<u64> = want.iter().map(|w| w.floor() as u64).collect();
     let mut left = budget as f64
-        - (live.iter().zip(&counts_out))
-            .map(|(&t, &n)| n as f64 * size[t])
+        - (px.iter().zip(&counts_out))
+            .map(|(p, &n)| n as f64 * p)
             .sum::<f64>();
     // What flooring left over: one sample more for the tiles that lost the
     // most, then (when the round would be empty) for the noisiest ones.

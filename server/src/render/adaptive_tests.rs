@@ -78,6 +78,35 @@ fn samples_go_to_noisy_tiles_in_proportion_to_their_deviation() {
 }
 
 #[test]
+fn no_tile_more_than_doubles_in_a_round() {
+    // A row of 12 tiles of 16 samples; tiles 0 and 1 have 100x the variance
+    // of the rest (10x the rate: 144 more each), but double at most (16),
+    // and the rest of the budget (8 spp a tile on average) goes elsewhere.
+    let tiles = Tiles::new(12 * T, T);
+    let (counts, errors) = flat(&tiles, 16, |t| if t < 2 { 100.0 } else { 1.0 });
+    let mut done = vec![false; 12];
+    let work = plan_round(
+        &tiles,
+        &counts,
+        &errors,
+        &mut done,
+        Goal::default(),
+        16 * 12 * P,
+    );
+    let got: Vec<u32> = (0..12)
+        .map(|t| work.iter().find(|w| w.tile == t).map_or(0, |w| w.count))
+        .collect();
+    assert_eq!(got[..2], [16, 16], "capped at doubling: {got:?}");
+    assert!(got.iter().all(|&n| n <= 16), "{got:?}");
+    assert!(
+        (1..16).contains(&got[11]),
+        "the rest share what is left: {got:?}"
+    );
+    let paths: u64 = work.iter().map(|w| u64::from(w.count) * P).sum();
+    assert_eq!(paths, 8 * 12 * P);
+}
+
+#[test]
 fn done_tiles_get_nothing_and_the_round_ends_when_all_are() {
     // Signal 3 per pixel: allowance 0.01^2 * 3 * P per tile.
     let allowance = 3e-4 * P as f64;
