@@ -11,8 +11,12 @@ use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene
 use serde_json::json;
 
 fn scene(extra: usize, quads: bool) -> Scene {
-    let mut j =
-        serde_json::to_value(Scene::load("cornell").expect("built-in").to_json()).expect("json");
+    let mut j = serde_json::to_value(
+        pathstream::resolve::load_scene("cornell")
+            .expect("built-in")
+            .to_json(),
+    )
+    .expect("json");
     let objects = j["objects"].as_array_mut().expect("objects");
     for i in 0..extra as u64 {
         let mut s = Sampler::new(42, i, 0);

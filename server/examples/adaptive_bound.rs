@@ -99,7 +99,7 @@ fn main() {
     let a: Vec<String> = std::env::args().collect();
     let arg = |i: usize, d: &str| a.get(i).cloned().unwrap_or_else(|| d.to_owned());
     let name = arg(1, "cornell-glass");
-    let scene = Scene::load(&name).expect("scene");
+    let scene = pathstream::resolve::load_scene(&name).expect("scene");
     let num = |i: usize, d: &str| -> u64 { arg(i, d).parse().expect("a number") };
     let (w, h) = (num(2, "64") as u32, num(3, "64") as u32);
     let (runs, spp, pilot_spp) = (num(4, "64"), num(5, "64"), num(6, "64"));

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 fn main() {
     let a: Vec<String> = std::env::args().collect();
     let arg = |i: usize, d: &str| a.get(i).cloned().unwrap_or_else(|| d.to_owned());
-    let scene = Scene::load(&arg(1, "cornell-glass")).expect("scene");
+    let scene = pathstream::resolve::load_scene(&arg(1, "cornell-glass")).expect("scene");
     let (w, h): (u32, u32) = (
         arg(2, "512").parse().expect("width"),
         arg(3, "512").parse().expect("height"),

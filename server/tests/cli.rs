@@ -51,7 +51,7 @@ fn scenes_lists_every_builtin_and_prints_json() {
         pathstream::render::Scene::from_json_str(&text(&out.stdout)).expect("valid scene JSON");
     assert_eq!(
         scene,
-        pathstream::render::Scene::load("smallpt").expect("smallpt")
+        pathstream::resolve::load_scene("smallpt").expect("smallpt")
     );
 }
 

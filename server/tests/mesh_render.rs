@@ -11,7 +11,7 @@ use common::{
 };
 use pathstream::model::generate::icosphere;
 use pathstream::model::MeshData;
-use pathstream::render::light::LightSampling;
+use pathstream::render::integrator::LightSampling;
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Quality, RenderJob, Scene};
 use serde_json::{json, Value};
 

@@ -1,5 +1,5 @@
 //! Model files end to end: the Stanford bunny and generated files through
-//! `pathstream render` and `Scene::load`; malformed files exit 2 naming the
+//! `pathstream render` and `resolve::load_scene`; malformed files exit 2 naming the
 //! problem.
 
 mod common;
@@ -33,7 +33,7 @@ fn the_stanford_bunny_loads_and_renders_framed_under_the_default_sky() {
     write_ply_binary(&mesh, &mut f).expect("write");
     drop(f);
 
-    let scene = Scene::load(path_str(&ply)).expect("loads");
+    let scene = pathstream::resolve::load_scene(path_str(&ply)).expect("loads");
     assert_eq!(scene.unique_triangles(), 3674);
 
     let out_file = dir.path().join("bunny.pfm");
@@ -123,7 +123,7 @@ fn a_scene_file_places_a_model_file_twice_and_stores_it_once() {
         .to_string(),
     )
     .expect("scene");
-    let scene = Scene::load(path_str(&scene_file)).expect("loads");
+    let scene = pathstream::resolve::load_scene(path_str(&scene_file)).expect("loads");
     assert_eq!(scene.imports.len(), 2);
     let (a, b) = (
         &scene.imports[0].instances[0].mesh,
@@ -207,7 +207,7 @@ fn a_gltf_model_brings_its_camera() {
     let dir = tempfile::tempdir().expect("tempdir");
     let file = dir.path().join("tri.gltf");
     std::fs::write(&file, gltf_with_camera()).expect("gltf");
-    let scene = Scene::load(path_str(&file)).expect("loads");
+    let scene = pathstream::resolve::load_scene(path_str(&file)).expect("loads");
     let c = scene.camera;
     assert!(
         (c.position - glam::DVec3::new(0.25, 0.25, 3.0)).length() < 1e-9,

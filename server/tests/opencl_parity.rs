@@ -23,7 +23,7 @@ use pathstream::render::{Filter, Quality, RenderJob, Scene};
 
 fn job(scene: &str) -> RenderJob {
     RenderJob::new(
-        &Scene::load(scene).expect("built-in"),
+        &pathstream::resolve::load_scene(scene).expect("built-in"),
         16,
         16,
         &Quality::default(),
@@ -233,7 +233,12 @@ fn sphere_and_quad_intersection_and_the_nearest_hit_agree_on_1e5_rays() {
 /// `cornell` (or `cornell-quads`) with `extra` small random spheres (or
 /// quads): enough to be searched through the BVH.
 fn crowded(base: &str, extra: u64, quads: bool) -> RenderJob {
-    let mut j = serde_json::to_value(Scene::load(base).expect("built-in").to_json()).expect("json");
+    let mut j = serde_json::to_value(
+        pathstream::resolve::load_scene(base)
+            .expect("built-in")
+            .to_json(),
+    )
+    .expect("json");
     let objects = j["objects"].as_array_mut().expect("objects");
     for i in 0..extra {
         let c = [

@@ -25,8 +25,12 @@ use pathstream::render::{Quality, RenderJob, Scene};
 #[test]
 fn the_device_picks_the_emitter_the_cpu_picks() {
     let Some(d) = device() else { return };
-    let mut j =
-        serde_json::to_value(Scene::load("cornell").expect("scene").to_json()).expect("json");
+    let mut j = serde_json::to_value(
+        pathstream::resolve::load_scene("cornell")
+            .expect("scene")
+            .to_json(),
+    )
+    .expect("json");
     for i in 0..40u64 {
         let c = [
             10.0 + 80.0 * uniform(i, 1),
@@ -108,8 +112,12 @@ fn ball(levels: u32, material: &str, at: [f64; 3], scale: f64, smooth: bool) -> 
 #[test]
 fn meshes_render_the_cpus_image_on_the_device() {
     let Some(_) = device() else { return };
-    let mut j =
-        serde_json::to_value(Scene::load("cornell").expect("scene").to_json()).expect("json");
+    let mut j = serde_json::to_value(
+        pathstream::resolve::load_scene("cornell")
+            .expect("scene")
+            .to_json(),
+    )
+    .expect("json");
     let objects = j["objects"].as_array_mut().expect("objects");
     let lamp = objects
         .iter()
@@ -241,8 +249,12 @@ fn mesh_args<'a>(input: &'a [[f32; 4]], p: &'a Packed) -> Vec<CheckArg<'a>> {
 #[test]
 fn the_nearest_hit_among_meshes_agrees_on_1e5_rays() {
     let Some(d) = device() else { return };
-    let mut j =
-        serde_json::to_value(Scene::load("cornell").expect("scene").to_json()).expect("json");
+    let mut j = serde_json::to_value(
+        pathstream::resolve::load_scene("cornell")
+            .expect("scene")
+            .to_json(),
+    )
+    .expect("json");
     let objects = j["objects"].as_array_mut().expect("objects");
     let mut fine = ball(6, "white", [30.0, 40.0, 60.0], 12.0, true);
     fine["transform"]["rotate"] = serde_json::json!({"axis": [1, 2, 3], "deg": 37});
@@ -302,8 +314,12 @@ fn the_nearest_hit_among_meshes_agrees_on_1e5_rays() {
 /// A scene with every kind of emitter: quads (cornell-quads' light), a
 /// sphere, the triangles of a glowing mesh, and the sky.
 fn every_emitter() -> Scene {
-    let mut j =
-        serde_json::to_value(Scene::load("cornell-quads").expect("scene").to_json()).expect("json");
+    let mut j = serde_json::to_value(
+        pathstream::resolve::load_scene("cornell-quads")
+            .expect("scene")
+            .to_json(),
+    )
+    .expect("json");
     j["materials"]["glow"] =
         serde_json::json!({"type": "diffuse", "albedo": [0.5, 0.5, 0.5], "emission": [3, 2, 1]});
     let objects = j["objects"].as_array_mut().expect("objects");
@@ -398,7 +414,7 @@ fn light_picks_and_light_samples_agree_bit_for_bit() {
         let e = &lights.emitters[which[i] as usize];
         let (u1, u2) = (input[3 * i + 2][0], input[3 * i + 2][1]);
         let dev = &out[4 * i..4 * i + 4];
-        match e.sample_direction(s, s.ng, s.ns, u1, u2) {
+        match e.sample_direction(&s.receiver(s.ng, s.ns), u1, u2) {
             None => assert_eq!(dev[3], -1.0, "sample {i}: the device sampled {dev:?}"),
             Some((dir, w)) => {
                 sampled += 1;

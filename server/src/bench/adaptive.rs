@@ -2,9 +2,10 @@
 //! setting on every scene, and how much sooner adaptive reaches 5%, 2% and
 //! 1% true error.
 
+use super::cells;
 use super::fit::{self, Reach};
 use super::settings::{self, Setting};
-use super::{report, Results, TradeCurve};
+use super::{Results, TradeCurve};
 use crate::model::generate::bumpy_sphere;
 use crate::render::{Quality, Scene, SceneError};
 use serde_json::json;
@@ -20,7 +21,7 @@ pub const LEVELS: [f64; 3] = [0.05, 0.02, 0.01];
 
 /// [`MESH_SCENE`], built.
 pub fn mesh_scene() -> Result<Scene, SceneError> {
-    let mut j = serde_json::to_value(Scene::load("cornell-glass")?.to_json())
+    let mut j = serde_json::to_value(crate::resolve::load_scene("cornell-glass")?.to_json())
         .map_err(|e| SceneError::new(".", e.to_string()))?;
     let mesh = bumpy_sphere(20_000);
     let ball = json!({
@@ -87,7 +88,7 @@ fn median_by<T: Copy>(mut values: Vec<T>, key: impl Fn(&T) -> f64) -> Option<T> 
 
 /// A time cell: the median over seeds.
 fn time_cell(reaches: Vec<Reach>) -> String {
-    median_by(reaches, |r| seconds(*r).unwrap_or(f64::INFINITY)).map_or("?".into(), report::reach)
+    median_by(reaches, |r| seconds(*r).unwrap_or(f64::INFINITY)).map_or("?".into(), cells::reach)
 }
 
 /// A speed-up cell: the median over seeds, and their range when there are

@@ -13,6 +13,7 @@
 
 pub mod adaptive;
 pub mod cache;
+pub mod cells;
 pub mod devices;
 pub mod fit;
 pub mod measure;

@@ -1,5 +1,6 @@
 //! The benchmark's results as Markdown tables (stdout, docs) and CSV files.
 
+use super::cells::{pct, reach, secs};
 use super::fit::{self, Reach};
 use super::{thesis, Results, TradeCurve};
 use serde::Serialize;
@@ -8,34 +9,6 @@ use std::path::{Path, PathBuf};
 
 /// The error levels the trade tables give times for.
 pub const LEVELS: [f64; 4] = [0.10, 0.05, 0.02, 0.01];
-
-/// A relative error as a percentage, with as many decimals as it needs.
-pub fn pct(e: f64) -> String {
-    match e {
-        e if !e.is_finite() => "n/a".into(),
-        e if e < 1e-4 => "< 0.01%".into(),
-        e if e < 0.1 => format!("{:.2}%", e * 100.0),
-        e => format!("{:.1}%", e * 100.0),
-    }
-}
-
-fn secs(s: f64) -> String {
-    match s {
-        s if s < 0.01 => format!("{:.1} ms", s * 1000.0),
-        s if s < 10.0 => format!("{s:.2} s"),
-        s if s < 1000.0 => format!("{s:.0} s"),
-        s => format!("{:.1} h", s / 3600.0),
-    }
-}
-
-pub(super) fn reach(r: Reach) -> String {
-    match r {
-        Reach::Measured(s) => secs(s),
-        Reach::Extrapolated(s) => format!("~{}", secs(s)),
-        Reach::Never => "never".into(),
-        Reach::Unknown => "?".into(),
-    }
-}
 
 fn reaches(curve: &TradeCurve) -> [Reach; 4] {
     LEVELS.map(|l| fit::time_to(&curve.points, curve.fit.as_ref(), l))

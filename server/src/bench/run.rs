@@ -5,7 +5,7 @@ use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
 use super::measure::TRACE_SEED;
 use super::settings::{self, Setting};
 use super::{
-    adaptive, fit, measure, report, BenchError, CalibrationRow, Config, Observer, Results,
+    adaptive, cells, fit, measure, BenchError, CalibrationRow, Config, Observer, Results,
     SpecialisationRow, ThroughputRow, TradeCurve,
 };
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
@@ -14,7 +14,7 @@ use crate::render::{Backend, BackendChoice, Quality, RenderJob, Scene};
 fn load_scene(name: &str) -> Result<Scene, BenchError> {
     let scene = match name {
         adaptive::MESH_SCENE => adaptive::mesh_scene(),
-        _ => Scene::load(name),
+        _ => crate::resolve::load_scene(name),
     };
     scene.map_err(|e| BenchError::Usage(format!("--scenes {name}: {e}")))
 }
@@ -396,7 +396,7 @@ fn reference(
         config.reference_error,
         config.reference_seconds,
         |p| {
-            let e = p.error_estimate.map_or_else(|| "n/a".into(), report::pct);
+            let e = p.error_estimate.map_or_else(|| "n/a".into(), cells::pct);
             observer.detail(&format!("{} spp, error {e}", p.spp));
         },
     )?;

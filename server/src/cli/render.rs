@@ -8,7 +8,7 @@ use pathstream::render::output::{write_image, ImageFormat};
 use pathstream::render::progressive::{self, DEFAULT_SPP};
 use pathstream::render::split::{render_split, DeviceShare};
 use pathstream::render::tonemap::Tonemap;
-use pathstream::render::{Backend, BackendChoice, Film, Filter, Preset, Quality, RenderJob, Scene};
+use pathstream::render::{Backend, BackendChoice, Film, Filter, Preset, Quality, RenderJob};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -145,8 +145,8 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     quality
         .validate()
         .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
-    let scene =
-        Scene::load(&args.scene).map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
+    let scene = pathstream::resolve::load_scene(&args.scene)
+        .map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

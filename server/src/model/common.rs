@@ -3,8 +3,8 @@
 //! [`finish`], which turns a loader's [`Parts`] into a [`Model`] that keeps
 //! the guarantees of the module doc.
 
+use super::Material;
 use super::{Instance, Limits, MeshData, Model, ModelCamera, ModelError};
-use crate::render::scene::{MaterialJson, SurfaceJson};
 use std::collections::HashSet;
 
 /// Albedo of the material given to faces that name none (OBJ, PLY).
@@ -107,7 +107,7 @@ impl Ctx {
 #[derive(Clone, Debug)]
 pub(super) struct Mat {
     pub name: String,
-    pub json: MaterialJson,
+    pub json: Material,
     /// What the file asks of this material that is not modelled, each a
     /// clause; [`finish`] prefixes the material's (final) name. Only the
     /// notes of materials that some triangle uses become warnings.
@@ -119,10 +119,10 @@ impl Mat {
     pub fn default_diffuse(name: &str) -> Self {
         Self {
             name: name.to_owned(),
-            json: MaterialJson::Diffuse(SurfaceJson {
+            json: Material::Diffuse {
                 albedo: [DEFAULT_ALBEDO; 3],
                 emission: None,
-            }),
+            },
             notes: Vec::new(),
         }
     }

@@ -25,8 +25,8 @@
 
 use super::common::{self, Ctx, Mat, Parts};
 use super::gltf_data::{self as data, Buffers};
+use super::Material;
 use super::{Instance, MeshData, ModelCamera, ModelError};
-use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
 use ::gltf::camera::Projection;
 use ::gltf::material::AlphaMode;
 use ::gltf::mesh::{Mode, Semantic};
@@ -314,10 +314,10 @@ impl Materials {
                 ctx.warn("primitives without a material use the glTF default material: white diffuse (albedo 1)");
                 self.list.push(Mat {
                     name: "default".to_owned(),
-                    json: MaterialJson::Diffuse(SurfaceJson {
+                    json: Material::Diffuse {
                         albedo: [1.0; 3],
                         emission: None,
-                    }),
+                    },
                     notes: Vec::new(),
                 });
                 next
@@ -387,27 +387,26 @@ fn material(m: &::gltf::Material, index: usize) -> Mat {
             None => common::DEFAULT_IOR,
             Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
         };
-        MaterialJson::Glass(GlassJson {
+        Material::Glass {
             ior,
             albedo: Some(common::albedo("base colour", rgb, &mut notes)),
-            fresnel: FresnelJson::Exact,
             emission,
-        })
+        }
     } else if metallic == 1.0 && roughness == 0.0 {
-        MaterialJson::Mirror(SurfaceJson {
+        Material::Mirror {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
-        })
+        }
     } else {
         if !(metallic == 0.0 && roughness == 1.0) {
             ignored.push(format!(
                 "metallic {metallic} / roughness {roughness} (roughness and metalness are not modelled: rendered diffuse)"
             ));
         }
-        MaterialJson::Diffuse(SurfaceJson {
+        Material::Diffuse {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
-        })
+        }
     };
     if !ignored.is_empty() {
         notes.push(format!("not modelled, ignored: {}", ignored.join(", ")));

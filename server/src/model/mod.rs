@@ -26,7 +26,6 @@
 //! says how many). Limits are checked against what a header or a scan says
 //! before the data is read.
 
-use crate::render::scene::MaterialJson;
 use std::path::Path;
 
 mod common;
@@ -48,7 +47,7 @@ pub struct Model {
     pub meshes: Vec<MeshData>,
     /// Materials the meshes' triangles refer to, by index, with the names the
     /// file gives them (unique within the model).
-    pub materials: Vec<(String, MaterialJson)>,
+    pub materials: Vec<(String, Material)>,
     /// Placements of meshes: one per mesh for OBJ and PLY (identity), one per
     /// glTF node that holds a mesh (its world transform, hierarchy applied).
     pub instances: Vec<Instance>,
@@ -57,6 +56,27 @@ pub struct Model {
     pub camera: Option<ModelCamera>,
     /// What the file holds that the renderer does not use, one line each.
     pub warnings: Vec<String>,
+}
+
+/// A material as a loader maps it (each format's rules are in its module's
+/// doc): one of the three kinds the renderer models. Glass is smooth, with
+/// the exact dielectric Fresnel equations.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    Diffuse {
+        albedo: [f64; 3],
+        emission: Option<[f64; 3]>,
+    },
+    Mirror {
+        albedo: [f64; 3],
+        emission: Option<[f64; 3]>,
+    },
+    Glass {
+        ior: f64,
+        /// Tint of light passing through (None: clear).
+        albedo: Option<[f64; 3]>,
+        emission: Option<[f64; 3]>,
+    },
 }
 
 /// An indexed triangle mesh.

@@ -14,7 +14,7 @@
 //!   one note per material.
 
 use super::common::{self, Mat};
-use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
+use super::Material;
 
 /// One `newmtl` block, as written.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -180,30 +180,29 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     let json = if glass {
         let ior = common::ior("Ni", m.ni, &mut notes);
         let albedo = m.tf.map(|tf| common::albedo("Tf", tf, &mut notes));
-        MaterialJson::Glass(GlassJson {
+        Material::Glass {
             ior,
             albedo,
-            fresnel: FresnelJson::Exact,
             emission,
-        })
+        }
     } else if mirror {
         let (what, c) = if nonzero(m.ks) {
             ("Ks", m.ks.unwrap_or_default())
         } else {
             ("Kd", kd())
         };
-        MaterialJson::Mirror(SurfaceJson {
+        Material::Mirror {
             albedo: common::albedo(what, c, &mut notes),
             emission,
-        })
+        }
     } else {
         if m.kd.is_none() {
             notes.push(format!("no Kd: albedo {}", common::DEFAULT_ALBEDO));
         }
-        MaterialJson::Diffuse(SurfaceJson {
+        Material::Diffuse {
             albedo: common::albedo("Kd", kd(), &mut notes),
             emission,
-        })
+        }
     };
     if !ignored.is_empty() {
         notes.push(format!("not modelled, ignored: {}", ignored.join(", ")));

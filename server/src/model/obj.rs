@@ -438,8 +438,8 @@ pub(super) fn locate(text: &str, e: &tobj::LoadError) -> Option<(usize, String)>
 
 #[cfg(test)]
 mod tests {
+    use crate::model::Material;
     use crate::model::{load_bytes, Limits};
-    use crate::render::scene::{MaterialJson, SurfaceJson};
 
     fn err(text: &str) -> String {
         match load_bytes(text.as_bytes(), "t.obj", &Limits::default()) {
@@ -535,10 +535,10 @@ mod tests {
             m.materials,
             vec![(
                 "default".to_owned(),
-                MaterialJson::Diffuse(SurfaceJson {
+                Material::Diffuse {
                     albedo: [0.8; 3],
                     emission: None
-                })
+                }
             )]
         );
         assert_eq!(

@@ -118,7 +118,7 @@ impl Quality {
             rr_depth: self.rr_depth,
             nee: self.nee,
             clamp: self.clamp,
-            light_sampling: crate::render::light::LightSampling::Power,
+            light_sampling: crate::render::integrator::LightSampling::Power,
         }
     }
 }

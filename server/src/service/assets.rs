@@ -159,7 +159,7 @@ impl AssetStore {
         };
         let read = model::load_bytes(bytes, name, &limits)
             .map_err(|e| AssetError::Invalid(e.to_string()))?;
-        let loaded = LoadedModel::new(name, read).map_err(AssetError::Invalid)?;
+        let loaded = crate::resolve::loaded_model(name, read).map_err(AssetError::Invalid)?;
         let memory = loaded.memory_bytes();
         let asset = Arc::new(Asset {
             id: id.clone(),

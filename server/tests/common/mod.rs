@@ -59,7 +59,7 @@ pub fn render(scene: &Scene, w: u32, h: u32, q: &Quality, spp: u64) -> Film {
 }
 
 pub fn scene(name: &str) -> Scene {
-    Scene::load(name).expect("built-in scene")
+    pathstream::resolve::load_scene(name).expect("built-in scene")
 }
 
 /// The furnace scene with the shell's albedo and emission replaced.

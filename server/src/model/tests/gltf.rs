@@ -3,8 +3,8 @@
 //! malformed variants of a one-triangle document.
 
 use super::{assert_guarantees, cube};
+use crate::model::Material;
 use crate::model::{load_bytes, load_file, Instance, Limits, MeshData, Model, ModelCamera};
-use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
 use base64::Engine;
 use serde_json::{json, Value};
 use std::f32::consts::FRAC_1_SQRT_2;
@@ -204,8 +204,8 @@ fn with_buffer(mut doc: Value, len: usize, uri: Option<String>) -> Value {
     doc
 }
 
-fn surface(albedo: [f64; 3], emission: Option<[f64; 3]>) -> SurfaceJson {
-    SurfaceJson { albedo, emission }
+fn diffuse(albedo: [f64; 3], emission: Option<[f64; 3]>) -> Material {
+    Material::Diffuse { albedo, emission }
 }
 
 /// What every encoding of [`scene`] must load as.
@@ -262,25 +262,22 @@ fn expected() -> Model {
         triangles: (0..4).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
         materials: vec![3, 4, 5, 6],
     };
-    let glass = |ior, albedo| {
-        MaterialJson::Glass(GlassJson {
-            ior,
-            albedo: Some(albedo),
-            fresnel: FresnelJson::Exact,
-            emission: None,
-        })
+    let glass = |ior, albedo| Material::Glass {
+        ior,
+        albedo: Some(albedo),
+        emission: None,
     };
     let r = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]];
     let rt = |t: [f64; 3]| [0, 1, 2].map(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
     Model {
         meshes: vec![cube_mesh, strips, tri],
         materials: vec![
-            ("paint".into(), MaterialJson::Diffuse(surface([0.8, 0.2, 0.1], None))),
+            ("paint".into(), diffuse([0.8, 0.2, 0.1], None)),
             ("glass".into(), glass(1.4, [1.0; 3])),
-            ("default".into(), MaterialJson::Diffuse(surface([1.0; 3], None))),
-            ("chrome".into(), MaterialJson::Mirror(surface([0.9; 3], None))),
-            ("lamp".into(), MaterialJson::Diffuse(surface([0.0; 3], Some([4.0, 2.0, 1.0])))),
-            ("paint-2".into(), MaterialJson::Diffuse(surface([0.5; 3], None))),
+            ("default".into(), diffuse([1.0; 3], None)),
+            ("chrome".into(), Material::Mirror { albedo: [0.9; 3], emission: None }),
+            ("lamp".into(), diffuse([0.0; 3], Some([4.0, 2.0, 1.0]))),
+            ("paint-2".into(), diffuse([0.5; 3], None)),
             ("partial".into(), glass(1.5, [1.0, 0.5, 0.5])),
         ],
         instances: vec![
@@ -583,10 +580,7 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
     assert_guarantees(&m);
     assert_eq!(
         m.materials,
-        vec![(
-            "material0".to_owned(),
-            MaterialJson::Diffuse(surface([1.0; 3], None))
-        )]
+        vec![("material0".to_owned(), diffuse([1.0; 3], None))]
     );
     assert_eq!(
         m.warnings,

@@ -1,8 +1,8 @@
 //! OBJ + MTL.
 
 use super::{assert_guarantees, cube, Gen};
+use crate::model::Material;
 use crate::model::{load_bytes, load_file, Instance, Limits, Model};
-use crate::render::scene::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
 use std::fmt::Write as _;
 
 /// The cube as OBJ: every vertex and normal written once per face corner,
@@ -33,24 +33,23 @@ fn cube_obj(g: &Gen, names: [&str; 2], mtllib: Option<&str>) -> String {
     s
 }
 
-fn diffuse(albedo: [f64; 3], emission: Option<[f64; 3]>) -> MaterialJson {
-    MaterialJson::Diffuse(SurfaceJson { albedo, emission })
+fn diffuse(albedo: [f64; 3], emission: Option<[f64; 3]>) -> Material {
+    Material::Diffuse { albedo, emission }
 }
 
-fn mirror(albedo: [f64; 3]) -> MaterialJson {
-    MaterialJson::Mirror(SurfaceJson {
+fn mirror(albedo: [f64; 3]) -> Material {
+    Material::Mirror {
         albedo,
         emission: None,
-    })
+    }
 }
 
-fn glass(ior: f64, albedo: Option<[f64; 3]>) -> MaterialJson {
-    MaterialJson::Glass(GlassJson {
+fn glass(ior: f64, albedo: Option<[f64; 3]>) -> Material {
+    Material::Glass {
         ior,
         albedo,
-        fresnel: FresnelJson::Exact,
         emission: None,
-    })
+    }
 }
 
 /// Per triangle: its corners' positions and normals, and its material's name.
@@ -233,7 +232,7 @@ fn mtl_rules_map_every_material() {
             "default"
         ]
     );
-    let json: Vec<&MaterialJson> = m.materials.iter().map(|(_, j)| j).collect();
+    let json: Vec<&Material> = m.materials.iter().map(|(_, j)| j).collect();
     assert_eq!(
         json,
         [

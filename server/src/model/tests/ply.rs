@@ -1,8 +1,8 @@
 //! PLY: ASCII, binary little and big endian.
 
 use super::{assert_guarantees, cube, Gen};
+use crate::model::Material;
 use crate::model::{load_bytes, load_file, Instance, Limits, Model};
-use crate::render::scene::{MaterialJson, SurfaceJson};
 use std::fmt::Write as _;
 
 const ASCII_HEADER_LINES: usize = 15;
@@ -124,10 +124,10 @@ fn expected(g: &Gen, warnings: &[&str]) -> Model {
         meshes: vec![g.mesh("cube", &[0, 0])],
         materials: vec![(
             "default".into(),
-            MaterialJson::Diffuse(SurfaceJson {
+            Material::Diffuse {
                 albedo: [0.8; 3],
                 emission: None,
-            }),
+            },
         )],
         instances: vec![Instance {
             mesh: 0,

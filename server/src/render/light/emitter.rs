@@ -12,10 +12,9 @@
 //! Every emitter is two-sided (emission leaves both sides of a surface).
 
 use super::alias::AliasTable;
-use crate::render::material::{cosine_hemisphere, SurfaceMaterial};
+use crate::render::material::cosine_hemisphere;
 use crate::render::math::{basis, sincos_turns, Vec3A};
 use crate::render::shape::{Quad, Sphere};
-use crate::render::world::{Geometry, Instance, Surface, WorldObject, NO_PRIM};
 use std::f32::consts::{PI, TAU};
 
 /// An emissive triangle in camera-relative space.
@@ -37,12 +36,25 @@ pub enum EmitterShape {
     Environment,
 }
 
+/// The point a shadow ray leaves from, as light sampling sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Receiver {
+    pub p: Vec3A,
+    /// The object and primitive the point is on (an emitter does not
+    /// sample itself, except a sphere seen from inside).
+    pub object: u32,
+    pub prim: u32,
+    /// Geometric and shading normals, on the side the path arrived from.
+    pub nl: Vec3A,
+    pub ns: Vec3A,
+}
+
 /// One thing next-event estimation can aim at.
 #[derive(Clone, Copy, Debug)]
 pub struct Emitter {
     /// The object a shadow ray must hit to see it (unused for the environment).
     pub object: u32,
-    /// The triangle of that object, or `NO_PRIM`.
+    /// The triangle of that object, or the world's `NO_PRIM`.
     pub prim: u32,
     pub emission: Vec3A,
     pub shape: EmitterShape,
@@ -61,91 +73,11 @@ fn brightness(e: Vec3A) -> f64 {
 }
 
 impl Lights {
-    /// The emitters of these objects; `environment` (if not black) as seen
-    /// from everywhere within `radius` of the origin.
-    pub fn new(
-        objects: &[WorldObject],
-        instances: &[Instance],
-        materials: &[SurfaceMaterial],
-        environment: Vec3A,
-        radius: f64,
-    ) -> Self {
-        let mut emitters = Vec::new();
-        let mut power = Vec::new();
-        for (id, o) in objects.iter().enumerate() {
-            let id = id as u32;
-            match o.geometry {
-                Geometry::Sphere(s) => {
-                    let m = &materials[o.material as usize];
-                    if m.emissive {
-                        let r = f64::from(s.radius);
-                        power.push(brightness(m.emission) * 4.0 * std::f64::consts::PI * r * r);
-                        emitters.push(Emitter {
-                            object: id,
-                            prim: NO_PRIM,
-                            emission: m.emission,
-                            shape: EmitterShape::Sphere(s),
-                        });
-                    }
-                }
-                Geometry::Quad(q) => {
-                    let m = &materials[o.material as usize];
-                    if m.emissive {
-                        power.push(brightness(m.emission) * 2.0 * f64::from(q.area));
-                        emitters.push(Emitter {
-                            object: id,
-                            prim: NO_PRIM,
-                            emission: m.emission,
-                            shape: EmitterShape::Quad(q),
-                        });
-                    }
-                }
-                Geometry::Instance(i) => {
-                    let inst = &instances[i as usize];
-                    let mesh = &*inst.mesh;
-                    for (t, &slot) in mesh.materials.iter().enumerate() {
-                        let m = &materials[inst.materials[slot as usize] as usize];
-                        if !m.emissive {
-                            continue;
-                        }
-                        let [a, b, c] = mesh
-                            .vertices(t as u32)
-                            .map(|v| inst.cam_from_obj.transform_point3a(v));
-                        let cross = (b - a).cross(c - a);
-                        let area = 0.5 * cross.length();
-                        if !(area > 0.0) {
-                            continue;
-                        }
-                        let tri = LightTri {
-                            p0: a,
-                            e1: b - a,
-                            e2: c - a,
-                            n: cross.normalize(),
-                            area,
-                        };
-                        power.push(brightness(m.emission) * 2.0 * f64::from(area));
-                        emitters.push(Emitter {
-                            object: id,
-                            prim: t as u32,
-                            emission: m.emission,
-                            shape: EmitterShape::Triangle(tri),
-                        });
-                    }
-                }
-            }
-        }
-        if environment.max_element() > 0.0 {
-            // As bright as a sphere of the scene's size lit from everywhere.
-            power.push(brightness(environment) * 4.0 * std::f64::consts::PI * radius * radius);
-            emitters.push(Emitter {
-                object: u32::MAX,
-                prim: NO_PRIM,
-                emission: environment,
-                shape: EmitterShape::Environment,
-            });
-        }
-        // Power is brightness x area x pi (x the solid angle factor folded
-        // into the constants above); only ratios matter.
+    /// These emitters, with a table that picks one in proportion to its
+    /// power; an environment among them counts as seen from everywhere
+    /// within `radius` of the origin.
+    pub fn new(emitters: Vec<Emitter>, radius: f64) -> Self {
+        let power: Vec<f64> = emitters.iter().map(|e| e.power(radius)).collect();
         Self {
             table: AliasTable::new(&power),
             emitters,
@@ -158,18 +90,27 @@ impl Lights {
 }
 
 impl Emitter {
-    /// A direction from surface `s` towards this emitter and 1/pdf (solid
-    /// angle) of choosing it; `nl` is the geometric normal and `ns` the
-    /// shading normal, both on the side the path arrived from.
+    /// Power up to a common factor (brightness x area, the solid-angle
+    /// factor folded into the constants; only ratios matter): an
+    /// environment as bright as a sphere of `radius` lit from everywhere.
+    fn power(&self, radius: f64) -> f64 {
+        let b = brightness(self.emission);
+        match &self.shape {
+            EmitterShape::Sphere(s) => {
+                let r = f64::from(s.radius);
+                b * 4.0 * std::f64::consts::PI * r * r
+            }
+            EmitterShape::Quad(q) => b * 2.0 * f64::from(q.area),
+            EmitterShape::Triangle(t) => b * 2.0 * f64::from(t.area),
+            EmitterShape::Environment => b * 4.0 * std::f64::consts::PI * radius * radius,
+        }
+    }
+
+    /// A direction from `r` towards this emitter and 1/pdf (solid angle)
+    /// of choosing it.
     #[inline(always)]
-    pub fn sample_direction(
-        &self,
-        s: &Surface,
-        nl: Vec3A,
-        ns: Vec3A,
-        u1: f32,
-        u2: f32,
-    ) -> Option<(Vec3A, f32)> {
+    pub fn sample_direction(&self, r: &Receiver, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
+        let (s, nl, ns) = (r, r.nl, r.ns);
         let on_self = self.object == s.object && self.prim == s.prim;
         match &self.shape {
             EmitterShape::Sphere(sphere) => sample_sphere(sphere, s.p, nl, on_self, u1, u2),

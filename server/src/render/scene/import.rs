@@ -13,10 +13,9 @@
 
 use super::json::{ImportJson, MeshDataJson};
 use super::resolve::{LoadedModel, ModelSource, Resolver};
-use super::{placement, validate, Material, SceneError};
-use crate::model::{Instance as ModelInstance, MeshData, Model};
+use super::{materials, placement, Material, SceneError};
 use crate::render::math::DAffine3;
-use crate::render::shape::Mesh;
+use crate::render::shape::{Mesh, MeshData};
 use std::collections::{BTreeMap, HashMap};
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex, OnceLock, Weak};
@@ -133,7 +132,7 @@ impl Importer<'_> {
         let map: Arc<[u32]> = match &json.material {
             Some(name) => {
                 let Some(&m) = self.index_of.get(name) else {
-                    return Err(validate::unknown_material(
+                    return Err(materials::unknown_material(
                         &format!("{path}.material"),
                         name,
                         self.index_of,
@@ -196,7 +195,7 @@ impl Importer<'_> {
                 full = format!("{}/{name} ({n})", model.name);
                 n += 1;
             }
-            let mut material = validate::material(&full, m)
+            let mut material = materials::material(&full, m)
                 .map_err(|e| SceneError::new(path, format!("{}: {e}", model.name)))?;
             material.imported = true;
             self.index_of.insert(full, self.materials.len());
@@ -270,29 +269,23 @@ fn inline(data: &MeshDataJson) -> std::result::Result<Arc<LoadedModel>, String> 
         }
         None => None,
     };
-    let model = Model {
-        meshes: vec![MeshData {
-            name: "data".into(),
-            positions,
-            normals,
-            triangles: data.triangles.clone(),
-            materials: Vec::new(),
-        }],
+    let mesh = MeshData {
+        name: "data".into(),
+        positions,
+        normals,
+        triangles: data.triangles.clone(),
         materials: Vec::new(),
-        instances: vec![ModelInstance {
-            mesh: 0,
-            transform: [
-                [1.0, 0.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0, 0.0],
-                [0.0, 0.0, 1.0, 0.0],
-            ],
-        }],
-        camera: None,
-        warnings: Vec::new(),
     };
     let loaded = Arc::new(
-        LoadedModel::new("data", model)
-            .map_err(|e| e.trim_start_matches("data: mesh 'data': ").to_owned())?,
+        LoadedModel::new(
+            "data",
+            vec![mesh],
+            Vec::new(),
+            vec![(0, DAffine3::IDENTITY)],
+            None,
+            Vec::new(),
+        )
+        .map_err(|e| e.trim_start_matches("data: mesh 'data': ").to_owned())?,
     );
     if let Ok(mut cache) = inline_cache().lock() {
         cache.retain(|_, w| w.strong_count() > 0);

@@ -10,10 +10,12 @@ mod edit;
 mod frame;
 mod import;
 mod json;
+mod materials;
 mod placement;
 mod resolve;
 mod transform;
 mod validate;
+mod values;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
@@ -22,7 +24,7 @@ pub use json::{
     CameraJson, FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson,
     QuadJson, RotateJson, ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
 };
-pub use resolve::{FileResolver, LoadedModel, ModelSource, NoFiles, Resolver};
+pub use resolve::{LoadedModel, ModelSource, NoFiles, Resolver};
 pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};
 
 use crate::render::math::DVec3;
@@ -155,6 +157,12 @@ impl Scene {
             .map_err(|e| SceneError::new(e.path().to_string(), e.into_inner().to_string()))
     }
 
+    /// Parses and validates scene JSON whose meshes and models `resolver`
+    /// reads.
+    pub fn from_json_str_with(text: &str, resolver: &dyn Resolver) -> Result<Scene, SceneError> {
+        Self::from_json_with(&SceneJson::from_value(Self::parse_value(text)?)?, resolver)
+    }
+
     /// Validates already parsed JSON (e.g. the `scene` field of a request).
     pub fn from_json_value(value: serde_json::Value) -> Result<Scene, SceneError> {
         Self::from_json(&SceneJson::from_value(value)?)
@@ -176,52 +184,6 @@ impl Scene {
     /// is read or rebuilt), else as `from_json` would.
     pub fn revalidate(&self, raw: &SceneJson) -> Result<Scene, SceneError> {
         Self::from_json_with(raw, &resolve::Reuse::new(self, &NoFiles))
-    }
-
-    /// A scene given by built-in name, as a scene JSON file, or as a model
-    /// file (`.obj`, `.gltf`, `.glb`, `.ply`) framed and lit by default.
-    /// Files that a scene refers to are read relative to its directory.
-    pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
-        if let Some(scene) = builtin(name_or_path) {
-            return Ok(scene);
-        }
-        let path = std::path::Path::new(name_or_path);
-        if !path.exists() {
-            return Err(SceneError::new(
-                ".",
-                format!(
-                    "'{name_or_path}' is neither a built-in scene ({}) nor a file",
-                    BUILTIN_NAMES.join(", ")
-                ),
-            ));
-        }
-        let resolver = FileResolver::new(path.parent().unwrap_or(std::path::Path::new(".")));
-        if crate::model::is_model_name(name_or_path) {
-            let file = path.file_name().map_or_else(
-                || name_or_path.to_owned(),
-                |f| f.to_string_lossy().into_owned(),
-            );
-            let raw = SceneJson {
-                camera: None,
-                materials: Default::default(),
-                objects: vec![ObjectJson::Model(ImportJson {
-                    file: Some(file),
-                    asset: None,
-                    data: None,
-                    transform: None,
-                    material: None,
-                })],
-                light: None,
-                environment: None,
-            };
-            return Self::from_json_with(&raw, &resolver);
-        }
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::new(".", format!("cannot read {name_or_path}: {e}")))?;
-        Self::from_json_with(
-            &SceneJson::from_value(Self::parse_value(&text)?)?,
-            &resolver,
-        )
     }
 
     /// The scene back in its JSON form (round-trips through `from_json`

@@ -1,23 +1,18 @@
 //! Where the meshes of `mesh` and `model` objects come from: a
 //! [`Resolver`] turns a file name or an asset id into a [`LoadedModel`]
-//! (meshes with their BVHs built, materials, placements, camera).
+//! (meshes with their BVHs built, materials, placements, camera). The
+//! renderer reads no files: resolvers that do live above it
+//! (`crate::resolve::FileResolver` for the command line, the server's asset
+//! store).
 //!
-//! - [`NoFiles`]: reads nothing (the library's default; what the server
-//!   uses for scenes, with its asset store in front);
-//! - [`FileResolver`]: reads files relative to a directory (the command
-//!   line), cached process-wide by path, size and modification time for as
-//!   long as any scene holds them, so that a scene edited and validated
-//!   again does not read or rebuild anything;
+//! - [`NoFiles`]: reads nothing (the library's default);
 //! - `Reuse`: the models of an existing scene (edits), else another resolver.
 
-use super::{ImportJson, MaterialJson, Scene};
-use crate::model::{self, Limits, Model, ModelCamera};
-use crate::render::math::{DAffine3, DMat3, DVec3};
-use crate::render::shape::Mesh;
+use super::{CameraJson, ImportJson, MaterialJson, Scene};
+use crate::render::math::DAffine3;
+use crate::render::shape::{Mesh, MeshData};
 use rayon::prelude::*;
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex, Weak};
+use std::sync::Arc;
 
 /// What a `mesh` or `model` object names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,15 +48,23 @@ pub struct LoadedModel {
     pub materials: Vec<(String, MaterialJson)>,
     /// (mesh, world_from_object) per placement.
     pub instances: Vec<(usize, DAffine3)>,
-    pub camera: Option<ModelCamera>,
+    /// The file's camera in its world space, if it has one.
+    pub camera: Option<CameraJson>,
     pub warnings: Vec<String>,
 }
 
 impl LoadedModel {
-    /// Builds the meshes (their BVHs in parallel) of a model read by a loader.
-    pub fn new(name: &str, model: Model) -> Result<Self, String> {
-        let meshes = model
-            .meshes
+    /// Checks the meshes and builds them (their BVHs in parallel). `camera`
+    /// is in the model's world space (its `near_clip` unused).
+    pub fn new(
+        name: &str,
+        meshes: Vec<MeshData>,
+        materials: Vec<(String, MaterialJson)>,
+        instances: Vec<(usize, DAffine3)>,
+        camera: Option<CameraJson>,
+        warnings: Vec<String>,
+    ) -> Result<Self, String> {
+        let meshes = meshes
             .into_par_iter()
             .map(|m| {
                 let mesh_name = m.name.clone();
@@ -70,32 +73,13 @@ impl LoadedModel {
                     .map_err(|e| format!("{name}: mesh '{mesh_name}': {e}"))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let instances = model
-            .instances
-            .iter()
-            .map(|i| {
-                let [r0, r1, r2] = i.transform;
-                let matrix3 = DMat3::from_cols(
-                    DVec3::new(r0[0], r1[0], r2[0]),
-                    DVec3::new(r0[1], r1[1], r2[1]),
-                    DVec3::new(r0[2], r1[2], r2[2]),
-                );
-                (
-                    i.mesh,
-                    DAffine3 {
-                        matrix3,
-                        translation: DVec3::new(r0[3], r1[3], r2[3]),
-                    },
-                )
-            })
-            .collect();
         Ok(Self {
             name: name.to_owned(),
             meshes,
-            materials: model.materials,
+            materials,
             instances,
-            camera: model.camera,
-            warnings: model.warnings,
+            camera,
+            warnings,
         })
     }
 
@@ -123,65 +107,6 @@ impl Resolver for NoFiles {
             ),
             ModelSource::Asset(a) => format!("asset '{a}': assets are only known to a server"),
         })
-    }
-}
-
-/// Reads model files relative to a directory.
-#[derive(Clone, Debug)]
-pub struct FileResolver {
-    base: PathBuf,
-    limits: Limits,
-}
-
-type FileKey = (PathBuf, u64, Option<std::time::SystemTime>);
-
-/// Models read from files, for as long as something holds them.
-fn file_cache() -> &'static Mutex<HashMap<FileKey, Weak<LoadedModel>>> {
-    static CACHE: std::sync::OnceLock<Mutex<HashMap<FileKey, Weak<LoadedModel>>>> =
-        std::sync::OnceLock::new();
-    CACHE.get_or_init(Default::default)
-}
-
-impl FileResolver {
-    pub fn new(base: &Path) -> Self {
-        Self {
-            base: base.to_path_buf(),
-            limits: Limits::default(),
-        }
-    }
-
-    pub fn with_limits(self, limits: Limits) -> Self {
-        Self { limits, ..self }
-    }
-}
-
-impl Resolver for FileResolver {
-    fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
-        let ModelSource::File(name) = source else {
-            return NoFiles.resolve(source);
-        };
-        let path = self.base.join(name);
-        let meta = std::fs::metadata(&path)
-            .map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
-        let canonical = path.canonicalize().unwrap_or_else(|_| path.clone());
-        let key = (canonical, meta.len(), meta.modified().ok());
-        if let Some(hit) = file_cache()
-            .lock()
-            .ok()
-            .and_then(|c| c.get(&key).and_then(Weak::upgrade))
-        {
-            return Ok(hit);
-        }
-        let model = model::load_file(&path, &self.limits).map_err(|e| e.to_string())?;
-        let display = path
-            .file_name()
-            .map_or_else(|| name.to_owned(), |f| f.to_string_lossy().into_owned());
-        let loaded = Arc::new(LoadedModel::new(&display, model)?);
-        if let Ok(mut cache) = file_cache().lock() {
-            cache.retain(|_, w| w.strong_count() > 0);
-            cache.insert(key, Arc::downgrade(&loaded));
-        }
-        Ok(loaded)
     }
 }
 

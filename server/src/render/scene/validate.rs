@@ -2,22 +2,17 @@
 //! of the field it rejects.
 
 use super::import::{ImportKind, Importer};
-use super::json::{
-    CameraJson, FresnelJson, GlassJson, MaterialJson, ObjectJson, QuadJson, SceneJson, SphereJson,
-    SurfaceJson,
-};
+use super::json::{CameraJson, ObjectJson, QuadJson, SceneJson, SphereJson};
+use super::materials::{self, unknown_material};
 use super::resolve::Resolver;
+use super::values::{finite, point, vec3};
 use super::{
-    frame, Camera, Fresnel, Material, MaterialKind, Object, Scene, SceneError, Shape,
-    MAX_COORDINATE, MAX_EMISSION, MAX_OBJECTS,
+    frame, Camera, Object, Scene, SceneError, Shape, MAX_COORDINATE, MAX_EMISSION, MAX_OBJECTS,
 };
 use crate::render::math::DVec3;
 use std::collections::{BTreeMap, HashMap};
 
 type Result<T> = std::result::Result<T, SceneError>;
-
-/// Highest index of refraction accepted.
-const MAX_IOR: f64 = 10.0;
 
 /// Most objects a scene may place, counting every placement of a mesh.
 pub const MAX_PLACED: usize = 1 << 22;
@@ -31,7 +26,7 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
     let mut index_of = BTreeMap::new();
     for (name, m) in &raw.materials {
         index_of.insert(name.clone(), materials.len());
-        materials.push(material(name, m)?);
+        materials.push(materials::material(name, m)?);
     }
 
     if raw.objects.is_empty() {
@@ -103,7 +98,7 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
                 .iter()
                 .filter(|i| i.kind == ImportKind::Model)
                 .find_map(|i| {
-                    let c = i.model.camera?;
+                    let c = i.model.camera.as_ref()?;
                     let t = i.world_from_json;
                     Some(CameraJson {
                         position: t.transform_point3(DVec3::from_array(c.position)).to_array(),
@@ -217,62 +212,6 @@ fn camera(c: &CameraJson) -> Result<Camera> {
     })
 }
 
-pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
-    let path = format!("materials.{name}");
-    let (kind, albedo, emission) = match m {
-        MaterialJson::Diffuse(SurfaceJson { albedo, emission }) => {
-            (MaterialKind::Diffuse, *albedo, *emission)
-        }
-        MaterialJson::Mirror(SurfaceJson { albedo, emission }) => {
-            (MaterialKind::Mirror, *albedo, *emission)
-        }
-        MaterialJson::Glass(GlassJson {
-            ior,
-            albedo,
-            fresnel,
-            emission,
-        }) => {
-            let ior = finite(&format!("{path}.ior"), *ior)?;
-            if !(1.0..=MAX_IOR).contains(&ior) {
-                return Err(SceneError::new(
-                    format!("{path}.ior"),
-                    format!("must be between 1 and {MAX_IOR} (got {ior})"),
-                ));
-            }
-            let fresnel = match fresnel {
-                FresnelJson::Exact => Fresnel::Exact,
-                FresnelJson::Schlick => Fresnel::Schlick,
-            };
-            (
-                MaterialKind::Glass { ior, fresnel },
-                albedo.unwrap_or([1.0; 3]),
-                *emission,
-            )
-        }
-    };
-    let albedo = vec3(&format!("{path}.albedo"), albedo)?;
-    if albedo.min_element() < 0.0 || albedo.max_element() > 1.0 {
-        return Err(SceneError::new(
-            format!("{path}.albedo"),
-            "components must be between 0 and 1",
-        ));
-    }
-    let emission = vec3(&format!("{path}.emission"), emission.unwrap_or([0.0; 3]))?;
-    if emission.min_element() < 0.0 || emission.max_element() > MAX_EMISSION {
-        return Err(SceneError::new(
-            format!("{path}.emission"),
-            format!("components must be between 0 and {MAX_EMISSION:e}"),
-        ));
-    }
-    Ok(Material {
-        name: name.to_owned(),
-        kind,
-        albedo,
-        emission,
-        imported: false,
-    })
-}
-
 fn object(path: &str, o: &ObjectJson, index_of: &BTreeMap<String, usize>) -> Result<Object> {
     let (shape, material) = match o {
         ObjectJson::Sphere(SphereJson {
@@ -335,78 +274,13 @@ fn object(path: &str, o: &ObjectJson, index_of: &BTreeMap<String, usize>) -> Res
     Ok(Object { shape, material })
 }
 
-/// The error for a material name that the scene does not define.
-pub(super) fn unknown_material(
-    path: &str,
-    name: &str,
-    index_of: &BTreeMap<String, usize>,
-) -> SceneError {
-    let known: Vec<&str> = index_of.keys().map(String::as_str).collect();
-    SceneError::new(
-        path,
-        format!("unknown material '{name}' (known: {})", known.join(", ")),
-    )
-}
-
-fn finite(path: &str, x: f64) -> Result<f64> {
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(SceneError::new(
-            path,
-            format!("must be a finite number (got {x})"),
-        ))
-    }
-}
-
-fn vec3(path: &str, v: [f64; 3]) -> Result<DVec3> {
-    for (i, x) in v.iter().enumerate() {
-        finite(&format!("{path}[{i}]"), *x)?;
-    }
-    Ok(DVec3::from_array(v))
-}
-
-/// A position or direction: finite and within [`MAX_COORDINATE`].
-fn point(path: &str, v: [f64; 3]) -> Result<DVec3> {
-    let p = vec3(path, v)?;
-    if p.abs().max_element() > MAX_COORDINATE {
-        return Err(SceneError::new(
-            path,
-            format!("coordinates must be within +-{MAX_COORDINATE:e}"),
-        ));
-    }
-    Ok(p)
-}
-
 pub(super) fn to_json(s: &Scene) -> SceneJson {
     let camera = s.camera.to_json();
-    let emission = |m: &Material| m.is_emissive().then(|| m.emission.to_array());
     let materials = s
         .materials
         .iter()
         .filter(|m| !m.imported)
-        .map(|m| {
-            let json = match m.kind {
-                MaterialKind::Diffuse => MaterialJson::Diffuse(SurfaceJson {
-                    albedo: m.albedo.to_array(),
-                    emission: emission(m),
-                }),
-                MaterialKind::Mirror => MaterialJson::Mirror(SurfaceJson {
-                    albedo: m.albedo.to_array(),
-                    emission: emission(m),
-                }),
-                MaterialKind::Glass { ior, fresnel } => MaterialJson::Glass(GlassJson {
-                    ior,
-                    albedo: Some(m.albedo.to_array()),
-                    fresnel: match fresnel {
-                        Fresnel::Exact => FresnelJson::Exact,
-                        Fresnel::Schlick => FresnelJson::Schlick,
-                    },
-                    emission: emission(m),
-                }),
-            };
-            (m.name.clone(), json)
-        })
+        .map(|m| (m.name.clone(), materials::to_json(m)))
         .collect();
     let objects = s
         .objects

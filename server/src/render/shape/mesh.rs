@@ -7,11 +7,23 @@
 //! OpenCL kernel reads too), so that a leaf reads its triangles in sequence;
 //! the indexed form stays for shading normals and materials.
 
-use crate::model::MeshData;
 use crate::render::bvh::{Aabb, Bvh, MAX_LEAF};
 use crate::render::math::Vec3A;
 use crate::render::shape::{TriPack, TriVerts};
 use rayon::prelude::*;
+
+/// A mesh's data as it arrives (from a model file or inline scene JSON),
+/// before [`Mesh::new`] checks it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshData {
+    pub name: String,
+    pub positions: Vec<[f32; 3]>,
+    /// Per-vertex unit shading normals (same length as `positions`), if any.
+    pub normals: Option<Vec<[f32; 3]>>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Per triangle: the mesh's material slot (empty: slot 0 everywhere).
+    pub materials: Vec<u32>,
+}
 
 #[derive(Debug)]
 pub struct Mesh {

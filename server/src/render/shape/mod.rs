@@ -11,7 +11,7 @@ mod sphere_batch_avx2;
 mod tri_pack;
 mod triangle;
 
-pub use mesh::{Mesh, MeshError};
+pub use mesh::{Mesh, MeshData, MeshError};
 pub use quad::Quad;
 pub use sphere::{Roots, Sphere};
 pub use sphere_batch::{Leaving, SphereBatch, LANES as SPHERE_BATCH_LANES};

@@ -10,7 +10,6 @@
 
 use super::{Accel, Geometry, Instance, World, WorldObject};
 use crate::render::bvh::{Aabb, Bvh};
-use crate::render::light::Lights;
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::{DAffine3, DVec3, Vec3A};
 use crate::render::scene::{Scene, Shape};
@@ -111,7 +110,7 @@ impl World {
             f64::from(scene_box.extent().length()) * 0.5
         };
         let environment: Vec3A = scene.environment.as_vec3().into();
-        let lights = Lights::new(&objects, &instances, &materials, environment, radius);
+        let lights = super::emitters::lights(&objects, &instances, &materials, environment, radius);
         let scan = instances.is_empty()
             && match choice {
                 AccelChoice::Auto => {

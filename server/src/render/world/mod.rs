@@ -15,6 +15,7 @@
 //! same hit: among equal distances, the lowest (object, triangle).
 
 mod build;
+mod emitters;
 mod instance;
 mod scan;
 
@@ -23,7 +24,7 @@ pub use instance::Instance;
 
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
 use crate::render::isa::Isa;
-use crate::render::light::Lights;
+use crate::render::light::{Lights, Receiver};
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
@@ -71,6 +72,21 @@ impl Origin {
         prim: NO_PRIM,
         entering: false,
     };
+}
+
+impl Surface {
+    /// The surface as light sampling sees it, with its geometric and
+    /// shading normals `nl` and `ns` on the side the path arrived from.
+    #[inline(always)]
+    pub fn receiver(&self, nl: Vec3A, ns: Vec3A) -> Receiver {
+        Receiver {
+            p: self.p,
+            object: self.object,
+            prim: self.prim,
+            nl,
+            ns,
+        }
+    }
 }
 
 /// The nearest intersection.

@@ -8,10 +8,13 @@
 //! is (NEE cannot sample a delta lobe). NEE on and off therefore estimate the
 //! same quantity at every depth cap.
 
+pub mod nee;
+
+pub use nee::LightSampling;
+
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
 use crate::render::isa::Isa;
-use crate::render::light::{self, LightSampling};
 use crate::render::material::{scatter, Bsdf};
 use crate::render::math::{max_component, Vec3A};
 use crate::render::ray::Ray;
@@ -106,7 +109,7 @@ impl Path {
             s.ns
         };
         if settings.nee && m.bsdf == Bsdf::Diffuse {
-            let direct = light::direct(
+            let direct = nee::direct(
                 isa,
                 world,
                 &s,

@@ -1,0 +1,99 @@
+//! Next-event estimation: at a diffuse point, one shadow ray to one
+//! emitter picked in proportion to its power (an alias table), weighted by
+//! 1 / the probability of the pick; or, for comparison, one shadow ray to
+//! every emitter. Both are unbiased and converge to the same image; the
+//! first costs one ray however many emitters there are.
+//!
+//! Random numbers: the pick takes one dimension (64 bits), each emitter
+//! sampled two, whatever branch it takes.
+
+use crate::render::isa::Isa;
+use crate::render::light::{Emitter, EmitterShape};
+use crate::render::math::Vec3A;
+use crate::render::sampler::Sampler;
+use crate::render::world::{Origin, Surface, World, NO_PRIM};
+
+/// How next-event estimation chooses its emitters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSampling {
+    /// One emitter per shading point, picked in proportion to its power.
+    #[default]
+    Power,
+    /// Every emitter at every shading point (the thesis's way).
+    All,
+}
+
+/// Sum over the sampled emitters of Le * V * cos(theta_s) / pdf(direction)
+/// for surface `s`, whose geometric normal `nl` and shading normal `ns` face
+/// the side the path came from. Multiply by the BRDF (albedo / pi for
+/// diffuse) to get reflected radiance. `isa` picks the intersection kernels.
+#[inline(always)]
+pub fn direct<I: Isa>(
+    isa: I,
+    world: &World,
+    s: &Surface,
+    nl: Vec3A,
+    ns: Vec3A,
+    sampling: LightSampling,
+    sampler: &mut Sampler,
+) -> Vec3A {
+    let lights = &world.lights;
+    match sampling {
+        LightSampling::Power => match lights.emitters.as_slice() {
+            [] => Vec3A::ZERO,
+            // One emitter (the thesis's scenes): picked with probability 1,
+            // no random number spent on the pick.
+            [only] => one(isa, world, only, s, nl, ns, sampler),
+            _ => {
+                let Some(table) = &lights.table else {
+                    return Vec3A::ZERO;
+                };
+                let (i, pmf) = table.pick(sampler.next_u64());
+                one(isa, world, &lights.emitters[i], s, nl, ns, sampler) / pmf
+            }
+        },
+        LightSampling::All => {
+            let mut sum = Vec3A::ZERO;
+            for e in &lights.emitters {
+                sum += one(isa, world, e, s, nl, ns, sampler);
+            }
+            sum
+        }
+    }
+}
+
+/// One shadow ray towards `e`.
+#[inline(always)]
+fn one<I: Isa>(
+    isa: I,
+    world: &World,
+    e: &Emitter,
+    s: &Surface,
+    nl: Vec3A,
+    ns: Vec3A,
+    sampler: &mut Sampler,
+) -> Vec3A {
+    let (u1, u2) = sampler.next_2d();
+    let Some((dir, weight)) = e.sample_direction(&s.receiver(nl, ns), u1, u2) else {
+        return Vec3A::ZERO;
+    };
+    let cos_s = ns.dot(dir);
+    if !(cos_s > 0.0 && nl.dot(dir) > 0.0) {
+        return Vec3A::ZERO;
+    }
+    let from = Origin {
+        object: s.object,
+        prim: s.prim,
+        entering: dir.dot(s.ng) < 0.0,
+    };
+    let hit = world.intersect(isa, &world.spawn(s, dir), from);
+    let visible = match e.shape {
+        EmitterShape::Environment => hit.is_none(),
+        _ => hit.is_some_and(|h| h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim)),
+    };
+    if visible {
+        e.emission * (cos_s * weight)
+    } else {
+        Vec3A::ZERO
+    }
+}

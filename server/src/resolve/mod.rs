@@ -1,0 +1,130 @@
+//! Scenes from names, files and model files: the layer between the model
+//! loaders (`crate::model`, which know nothing of rendering) and the
+//! renderer (`crate::render`, which reads no files). It resolves a scene's
+//! `file` references ([`FileResolver`]), turns a loader's [`Model`] into the
+//! renderer's [`LoadedModel`] ([`loaded_model`]: the server's asset store
+//! uses it for uploads), and loads a scene by built-in name, scene JSON file
+//! or model file ([`load_scene`]).
+
+mod files;
+
+pub use files::FileResolver;
+
+use crate::model::{self, Model};
+use crate::render::math::{DAffine3, DMat3, DVec3};
+use crate::render::scene::{
+    builtin, CameraJson, GlassJson, ImportJson, LoadedModel, MaterialJson, ObjectJson, SceneJson,
+    SurfaceJson, BUILTIN_NAMES,
+};
+use crate::render::scene::{FresnelJson, Scene, SceneError};
+use crate::render::shape::MeshData;
+use std::path::Path;
+
+/// A scene given by built-in name, as a scene JSON file, or as a model file
+/// (`.obj`, `.gltf`, `.glb`, `.ply`) framed and lit by default. Files that a
+/// scene refers to are read relative to its directory.
+pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
+    if let Some(scene) = builtin(name_or_path) {
+        return Ok(scene);
+    }
+    let path = Path::new(name_or_path);
+    if !path.exists() {
+        return Err(SceneError::new(
+            ".",
+            format!(
+                "'{name_or_path}' is neither a built-in scene ({}) nor a file",
+                BUILTIN_NAMES.join(", ")
+            ),
+        ));
+    }
+    let resolver = FileResolver::new(path.parent().unwrap_or(Path::new(".")));
+    if model::is_model_name(name_or_path) {
+        let file = path.file_name().map_or_else(
+            || name_or_path.to_owned(),
+            |f| f.to_string_lossy().into_owned(),
+        );
+        let raw = SceneJson {
+            camera: None,
+            materials: Default::default(),
+            objects: vec![ObjectJson::Model(ImportJson {
+                file: Some(file),
+                asset: None,
+                data: None,
+                transform: None,
+                material: None,
+            })],
+            light: None,
+            environment: None,
+        };
+        return Scene::from_json_with(&raw, &resolver);
+    }
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::new(".", format!("cannot read {name_or_path}: {e}")))?;
+    Scene::from_json_str_with(&text, &resolver)
+}
+
+/// A model as the renderer takes it: its meshes built (BVHs in parallel),
+/// its materials as scene materials, its placements and camera in the
+/// renderer's types. `name` is the file's (or the upload's) name, for
+/// material names and messages.
+pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
+    let meshes = (model.meshes.into_iter())
+        .map(|m| MeshData {
+            name: m.name,
+            positions: m.positions,
+            normals: m.normals,
+            triangles: m.triangles,
+            materials: m.materials,
+        })
+        .collect();
+    let materials = (model.materials.into_iter())
+        .map(|(name, m)| (name, material_json(m)))
+        .collect();
+    let instances = (model.instances.iter())
+        .map(|i| (i.mesh, world_from_object(i.transform)))
+        .collect();
+    let camera = model.camera.map(|c| CameraJson {
+        position: c.position,
+        look_at: c.look_at,
+        up: c.up,
+        vfov_deg: c.vfov_deg,
+        near_clip: 0.0,
+    });
+    LoadedModel::new(name, meshes, materials, instances, camera, model.warnings)
+}
+
+/// A loader's material as scene JSON (glass from files is always exact
+/// Fresnel).
+fn material_json(m: model::Material) -> MaterialJson {
+    match m {
+        model::Material::Diffuse { albedo, emission } => {
+            MaterialJson::Diffuse(SurfaceJson { albedo, emission })
+        }
+        model::Material::Mirror { albedo, emission } => {
+            MaterialJson::Mirror(SurfaceJson { albedo, emission })
+        }
+        model::Material::Glass {
+            ior,
+            albedo,
+            emission,
+        } => MaterialJson::Glass(GlassJson {
+            ior,
+            albedo,
+            fresnel: FresnelJson::Exact,
+            emission,
+        }),
+    }
+}
+
+/// A row-major 3x4 world_from_object matrix as an affine map.
+fn world_from_object(m: [[f64; 4]; 3]) -> DAffine3 {
+    let [r0, r1, r2] = m;
+    DAffine3 {
+        matrix3: DMat3::from_cols(
+            DVec3::new(r0[0], r1[0], r2[0]),
+            DVec3::new(r0[1], r1[1], r2[1]),
+            DVec3::new(r0[2], r1[2], r2[2]),
+        ),
+        translation: DVec3::new(r0[3], r1[3], r2[3]),
+    }
+}
