@@ -6,7 +6,8 @@
 //! - `camera`, `filter`, `sampler`: where camera samples go and their randomness
 //! - `material`, `fresnel`, `light`, `integrator`: the path tracer
 //! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
-//! - `quality`, `preset`, `job`, `progressive`, `backend`: what to render and where
+//! - `quality`, `preset`, `job`, `pass`, `progressive`, `backend`: what to
+//!   render, in which passes, and where
 //! - `split`: one render on several devices at once
 //! - `isa`: the instruction sets the CPU hot path is compiled for
 
@@ -24,6 +25,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod output;
+pub mod pass;
 pub mod preset;
 pub mod progressive;
 pub mod quality;

@@ -1,15 +1,12 @@
-//! Progressive rendering until a halt condition: passes sized to take about
-//! `PASS_TARGET`, progress reported after each.
+//! Progressive rendering until a halt condition: passes planned by
+//! [`Planner::OFFLINE`], progress reported after each.
 
-use crate::render::adaptive::{Goal, WARMUP_SPP};
 use crate::render::backend::{Backend, BackendError};
 use crate::render::film::{Film, SppSpread};
 use crate::render::job::RenderJob;
+use crate::render::pass::{Measured, Pass, Planner};
 use crate::render::quality::Quality;
 use std::time::{Duration, Instant};
-
-/// How long one pass should take (keeps progress and halts responsive).
-const PASS_TARGET: Duration = Duration::from_millis(100);
 /// The error estimate is too noisy to stop on below this many samples.
 pub const MIN_SPP_FOR_TARGET_ERROR: u64 = 8;
 /// Samples per pixel when no halt condition is given.
@@ -96,31 +93,25 @@ pub fn step(
     quality: &Quality,
     max_paths: u64,
 ) -> Result<u64, BackendError> {
-    let pixels = film.pixels().len() as u64;
-    let target = spp_target(quality);
-    if quality.adaptive && film.spp() >= WARMUP_SPP {
-        let goal = Goal {
-            spp: target,
-            ..quality.goal()
-        };
-        let work = film.adaptive_work(goal, max_paths);
-        let before = film.total_samples();
-        backend.render_tiles(job, film, &work, &|| false)?;
-        return Ok(film.total_samples() - before);
+    let quality = with_spp_target(quality);
+    let pass = Pass::for_paths(film, &quality, max_paths);
+    let before = film.total_samples();
+    pass.run(backend, job, film, &|| false)?;
+    Ok(film.total_samples() - before)
+}
+
+/// `quality` with its spp halt made explicit (the default when it sets no
+/// halt), so that passes stop there.
+fn with_spp_target(quality: &Quality) -> Quality {
+    Quality {
+        spp: spp_target(quality),
+        ..*quality
     }
-    let mut count = (max_paths / pixels.max(1)).max(1);
-    if let Some(n) = target {
-        count = count.min(n.saturating_sub(film.spp())).max(1);
-    }
-    if quality.adaptive {
-        count = count.min(WARMUP_SPP - film.spp());
-    }
-    backend.render(job, film, count)?;
-    Ok(count * pixels)
 }
 
 /// Renders into `film` until `quality` halts, calling `on_progress` after
-/// every pass.
+/// every pass. Passes are planned by [`Planner::OFFLINE`], never to run far
+/// past a time limit.
 pub fn render(
     job: &RenderJob,
     backend: &mut Backend,
@@ -129,30 +120,24 @@ pub fn render(
     mut on_progress: impl FnMut(&Progress),
 ) -> Result<Progress, BackendError> {
     let start = Instant::now();
-    let pixels = film.pixels().len() as u64;
-    let mut paths = pixels;
+    let planned = with_spp_target(quality);
+    let pixels = film.pixels().len();
+    let mut last = None;
     loop {
+        let mut planner = Planner::OFFLINE;
+        if let Some(t) = quality.time_ms {
+            let left = Duration::from_millis(t).saturating_sub(start.elapsed());
+            planner = planner.aiming_at(planner.target.min(left));
+        }
+        let pass = planner.plan(film, last, &planned);
+        let paths = pass.paths(film);
         let pass_start = Instant::now();
-        let traced = step(job, backend, film, quality, paths)?;
-        let pass = pass_start.elapsed();
+        pass.run(backend, job, film, &|| false)?;
+        last = Some(Measured::of(paths, pass_start.elapsed(), pixels));
         let progress = Progress::of(film, start.elapsed());
         on_progress(&progress);
-        if traced == 0 || halted(quality, &progress) {
+        if paths == 0 || halted(quality, &progress) {
             return Ok(progress);
         }
-        // Next pass: aim at PASS_TARGET, grow at most 4x, and do not run far
-        // past a time limit.
-        let per_path = pass.as_secs_f64() / traced as f64;
-        let mut budget = PASS_TARGET.as_secs_f64();
-        if let Some(t) = quality.time_ms {
-            let left = Duration::from_millis(t).saturating_sub(progress.elapsed);
-            budget = budget.min(left.as_secs_f64());
-        }
-        let wanted = if per_path > 0.0 {
-            (budget / per_path) as u64
-        } else {
-            traced * 4
-        };
-        paths = wanted.clamp(1, traced * 4);
     }
 }

@@ -21,6 +21,7 @@ use crate::render::adaptive::WARMUP_SPP;
 use crate::render::backend::{Backend, BackendError};
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
+use crate::render::pass::{Measured, Planner};
 use crate::render::progressive::{self, Progress};
 use crate::render::quality::Quality;
 use std::collections::BTreeMap;
@@ -207,11 +208,6 @@ impl DeviceShare {
     }
 }
 
-/// How long one device's block should take: each block costs a film of its
-/// own and a merge, O(pixels) each (at 100 ms, 10-16% of a 1080p render on
-/// one device, measured; at 250 ms, a few per cent).
-const BLOCK_TARGET: Duration = Duration::from_millis(250);
-
 struct Shared<'a, F> {
     ledger: Ledger,
     film: &'a mut Film,
@@ -355,10 +351,8 @@ fn device_loop<F: FnMut(&Progress) + Send>(
             s.stop = progressive::halted(quality, &p) && !quality.adaptive;
             s.progress = Some(p);
         }
-        // Next block: about BLOCK_TARGET, growing at most fourfold.
-        let per_sample = took.as_secs_f64() / count as f64;
-        let fits = BLOCK_TARGET.as_secs_f64() / per_sample.max(1e-9);
-        want = (fits as u64).clamp(1, count * 4);
+        let measured = Measured::of(count * pixels, took, pixels as usize);
+        want = Planner::BLOCK.whole_samples(pixels as usize, measured);
     }
 }
 

@@ -15,7 +15,6 @@ mod link;
 pub mod listen;
 pub mod load;
 mod metrics;
-mod pass;
 mod routes;
 pub mod session;
 mod static_files;

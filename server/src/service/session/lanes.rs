@@ -8,10 +8,10 @@
 
 use super::{lock, Image, Session, SessionState};
 use crate::render::adaptive::WARMUP_SPP;
+use crate::render::pass::{Pass, Planner};
 use crate::render::split::{DeviceShare, Ledger};
 use crate::render::{Backend, Film, Quality};
 use crate::service::metrics::Metrics;
-use crate::service::pass::{whole_samples, Pass};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::ops::Range;
 use std::sync::atomic::Ordering;
@@ -111,11 +111,9 @@ impl Session {
         };
         let start = Instant::now();
         let cancelled = || self.current_generation.load(Ordering::Relaxed) != generation;
-        let result = backend.prepare(&job).and_then(|()| match pass.clone() {
-            Pass::Samples(n) => backend.render_unless(&job, &mut block, n, &cancelled),
-            Pass::Slice(r) => backend.render_slice(&job, &mut block, r.end, &cancelled),
-            Pass::Tiles(_) => Ok(true), // not planned for a block
-        });
+        // Never tiles: blocks are planned without adaptive sampling.
+        let result =
+            (backend.prepare(&job)).and_then(|()| pass.run(backend, &job, &mut block, &cancelled));
         let took = self.count_pass(start);
         let mut st = lock(&self.state);
         if st.generation != generation || self.is_deleted() || matches!(result, Ok(false)) {
@@ -182,12 +180,12 @@ impl Session {
             Some(b) => b,
             None => {
                 let pixels = width as usize * height as usize;
-                let want = measured.map_or(1, |m| whole_samples(pixels, m));
+                let want = measured.map_or(1, |m| Planner::INTERACTIVE.whole_samples(pixels, m));
                 let range = split.ledger.claim(want)?;
                 (split.ledger.block_film(width, height, &range), range)
             }
         };
-        let pass = match Pass::plan(&mut film, measured, &quality) {
+        let pass = match Planner::INTERACTIVE.plan(&mut film, measured, &quality) {
             Pass::Samples(n) => Pass::Samples(n.min(range.end - range.start - film.spp())),
             pass => pass,
         };

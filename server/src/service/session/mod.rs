@@ -12,8 +12,8 @@ use super::change::{patch_quality, Change};
 use super::error::ApiError;
 pub use super::frame::Frame;
 use super::metrics::Metrics;
-use super::pass::{Measured, Pass};
 use super::worker::{BackendInfo, Waker};
+use crate::render::pass::{Measured, Pass, Planner};
 use crate::render::progressive::{self, Progress};
 use crate::render::split::DeviceShare;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
@@ -136,14 +136,8 @@ impl SessionState {
         took: Duration,
         pixels: usize,
     ) {
-        let full = pixels as f64 / paths.max(1) as f64;
-        self.measured.insert(
-            worker,
-            Measured {
-                per_sample: took.mul_f64(full),
-                paths,
-            },
-        );
+        self.measured
+            .insert(worker, Measured::of(paths, took, pixels));
         let share = self
             .devices
             .entry(worker)
@@ -363,7 +357,7 @@ impl Session {
     }
 
     /// One pass on `backend` (worker `worker`): about
-    /// [`super::pass::PASS_TARGET`] of samples, then a frame; or, when one
+    /// [`Planner::INTERACTIVE`]'s target of samples, then a frame; or, when one
     /// sample of the whole image takes longer, that long a slice of one
     /// sample (a frame when it completes the sample). A change made
     /// meanwhile wins: the pass's film is thrown away. A session on every
@@ -385,11 +379,11 @@ impl Session {
                 return 0;
             };
             let measured = st.measured.get(&worker).copied();
-            let pass = Pass::plan(&mut film, measured, &st.quality);
+            let pass = Planner::INTERACTIVE.plan(&mut film, measured, &st.quality);
             let watched = self.clients.load(Ordering::Relaxed) > 0;
             // Due if it will be by the time the pass ends.
             let partial_due = watched
-                && st.last_frame.elapsed() + super::pass::PASS_TARGET >= preview::PARTIAL_EVERY;
+                && st.last_frame.elapsed() + Planner::INTERACTIVE.target >= preview::PARTIAL_EVERY;
             let preview = st.preview.clone();
             (
                 st.job.clone(),
@@ -405,11 +399,8 @@ impl Session {
         let start = Instant::now();
         tracing::debug!(session = %self.id, generation, ?pass, "pass starts");
         let cancelled = || self.current_generation.load(Ordering::Relaxed) != generation;
-        let result = backend.prepare(&job).and_then(|()| match pass.clone() {
-            Pass::Samples(count) => backend.render_unless(&job, &mut film, count, &cancelled),
-            Pass::Slice(range) => backend.render_slice(&job, &mut film, range.end, &cancelled),
-            Pass::Tiles(work) => backend.render_tiles(&job, &mut film, &work, &cancelled),
-        });
+        let result =
+            (backend.prepare(&job)).and_then(|()| pass.run(backend, &job, &mut film, &cancelled));
         // An adaptive render plans its next round now, so that the frame
         // says whether it is done.
         let finished_rounds = matches!(pass, Pass::Tiles(_))

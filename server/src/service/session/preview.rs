@@ -14,10 +14,10 @@
 //!   done), the preview where a pixel has none yet.
 
 use super::super::metrics::Metrics;
-use super::super::pass::PASS_TARGET;
 use super::super::stream::downscale;
 use super::{lock, Frame, Session};
 use crate::render::camera::CameraRays;
+use crate::render::pass::Planner;
 use crate::render::{Backend, Film, RenderJob, Scene};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -45,7 +45,7 @@ pub struct Preview {
 /// the smallest power of two that brings a sample of the preview within a
 /// pass; None when a sample of the image is quick enough by itself.
 pub fn factor(per_sample: Duration) -> Option<u32> {
-    let passes = per_sample.as_secs_f64() / PASS_TARGET.as_secs_f64();
+    let passes = per_sample.as_secs_f64() / Planner::INTERACTIVE.target.as_secs_f64();
     if passes <= PREVIEW_ABOVE {
         return None;
     }
@@ -222,13 +222,16 @@ mod tests {
 
     #[test]
     fn the_factor_brings_a_preview_sample_within_a_pass() {
-        let pass = PASS_TARGET.as_secs_f64();
-        assert_eq!(factor(PASS_TARGET), None);
-        assert_eq!(factor(PASS_TARGET.mul_f64(PREVIEW_ABOVE)), None);
-        assert_eq!(factor(PASS_TARGET.mul_f64(1.5)), Some(2));
-        assert_eq!(factor(PASS_TARGET.mul_f64(3.0)), Some(2));
-        assert_eq!(factor(PASS_TARGET.mul_f64(4.0)), Some(2));
-        assert_eq!(factor(PASS_TARGET.mul_f64(4.5)), Some(4));
+        let pass = Planner::INTERACTIVE.target.as_secs_f64();
+        assert_eq!(factor(Planner::INTERACTIVE.target), None);
+        assert_eq!(
+            factor(Planner::INTERACTIVE.target.mul_f64(PREVIEW_ABOVE)),
+            None
+        );
+        assert_eq!(factor(Planner::INTERACTIVE.target.mul_f64(1.5)), Some(2));
+        assert_eq!(factor(Planner::INTERACTIVE.target.mul_f64(3.0)), Some(2));
+        assert_eq!(factor(Planner::INTERACTIVE.target.mul_f64(4.0)), Some(2));
+        assert_eq!(factor(Planner::INTERACTIVE.target.mul_f64(4.5)), Some(4));
         // 1920x1080 on two cores: about 0.42 s a sample, 14 passes.
         assert_eq!(factor(Duration::from_secs_f64(0.42)), Some(4));
         assert_eq!(factor(Duration::from_secs(1000)), Some(MOST_FACTOR));
