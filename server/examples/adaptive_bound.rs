@@ -20,7 +20,7 @@
 use pathstream::bench::settings;
 use pathstream::render::film::relative_rms_error;
 use pathstream::render::progressive::{self, halted, Progress};
-use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene};
+use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob};
 use std::time::Duration;
 
 /// Per-pixel variance of one sample, summed over channels, from `films`

@@ -8,7 +8,7 @@
 use pathstream::render::adaptive::WARMUP_SPP;
 use pathstream::render::backend::opencl::{OpenClBackend, TileDispatch};
 use pathstream::render::progressive::{self, halted, Progress};
-use pathstream::render::{Backend, Film, Quality, RenderJob, Scene};
+use pathstream::render::{Backend, Film, Quality, RenderJob};
 use std::time::{Duration, Instant};
 
 fn main() {

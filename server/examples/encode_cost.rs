@@ -3,7 +3,7 @@
 //! `cargo run --release --example encode_cost -- [scene] [width] [height] [spp]`.
 use pathstream::render::output::{encode_jpeg, encode_png, encode_webp};
 use pathstream::render::tonemap::Tonemap;
-use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene};
+use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob};
 use std::time::Instant;
 
 fn main() {

@@ -15,10 +15,11 @@
 //! `scripts/netem-bench.sh` runs it across a shaped link.
 
 use futures_util::{SinkExt, StreamExt};
+use pathstream::api::start;
 use pathstream::render::output::encode_png;
 use pathstream::render::tonemap::Tonemap;
 use pathstream::render::BackendChoice;
-use pathstream::service::{start, ServeConfig};
+use pathstream::service::ServeConfig;
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;

@@ -7,10 +7,13 @@
 //!   types; they know nothing of rendering;
 //! - `resolve`: scenes from names and files, model files into the
 //!   renderer's types;
-//! - `service`: the render service (sessions and their workers, then the
-//!   HTTP and WebSocket transport on top);
+//! - `service`: the render service's core: sessions, their workers and
+//!   passes, frames, changes, assets;
+//! - `api`: its transport: HTTP routes, the WebSocket stream and its
+//!   encodings, auth, limits, the static browser client; `api::start`;
 //! - `bench`, and the command line in the binary: tools on top of it all.
 
+pub mod api;
 pub mod bench;
 pub mod model;
 pub mod render;

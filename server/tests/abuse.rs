@@ -292,7 +292,7 @@ async fn a_delete_answers_every_waiter_and_closes_every_socket_at_once() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn slow_and_excess_connections_are_dropped_and_health_keeps_answering() {
-    use pathstream::service::listen::ConnectionLimits;
+    use pathstream::service::ConnectionLimits;
     let limits = ConnectionLimits {
         max_connections: 100_000,
         max_per_address: 64,

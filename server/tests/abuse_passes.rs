@@ -9,8 +9,8 @@
 mod http;
 
 use http::{client, config, create, served_url, server};
+use pathstream::api::Running;
 use pathstream::render::BackendChoice;
-use pathstream::service::Running;
 use serde_json::{json, Value};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};

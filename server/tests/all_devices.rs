@@ -8,9 +8,10 @@ mod http;
 
 use common::{opencl_device, render, scene};
 use http::{client, config, create, halted, patch, pfm, status};
+use pathstream::api::{start_with_device, start_with_devices, Running};
 use pathstream::render::film::relative_rms_error;
 use pathstream::render::{Backend, Quality, RenderJob};
-use pathstream::service::{start_with_device, start_with_devices, Placement, Running};
+use pathstream::service::Placement;
 use serde_json::{json, Value};
 use std::time::Duration;
 

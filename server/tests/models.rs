@@ -7,7 +7,7 @@ mod common;
 use common::bunny;
 use pathstream::model::write::write_ply_binary;
 use pathstream::render::output::decode_pfm;
-use pathstream::render::Scene;
+
 use std::path::Path;
 use std::process::{Command, Output};
 use std::sync::Arc;

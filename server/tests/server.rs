@@ -646,7 +646,7 @@ async fn every_file_under_static_is_served_built_in_and_from_a_folder() {
         files.iter().any(|f| f.starts_with("js/")),
         "the page's modules live in static/js: {files:?}"
     );
-    let mut embedded: Vec<String> = pathstream::service::embedded_static_files().collect();
+    let mut embedded: Vec<String> = pathstream::api::embedded_static_files().collect();
     embedded.sort();
     assert_eq!(
         embedded, files,
@@ -735,7 +735,7 @@ async fn after_the_opencl_device_fails_the_service_reports_rayon() {
         backend: Box::new(device),
         fallback: true,
     };
-    let running = pathstream::service::start_with_device(config(), Some(chosen_by_auto))
+    let running = pathstream::api::start_with_device(config(), Some(chosen_by_auto))
         .await
         .expect("starts");
     let base = format!("http://{}", running.addr);

@@ -6,7 +6,7 @@
 mod http;
 
 use http::*;
-use pathstream::service::Running;
+use pathstream::api::Running;
 use serde_json::json;
 use std::time::{Duration, Instant};
 

@@ -3,8 +3,9 @@
 //! exactly the same fields).
 
 use futures_util::StreamExt;
+use pathstream::api::{start, Running};
 use pathstream::render::BackendChoice;
-use pathstream::service::{start, Running, ServeConfig};
+use pathstream::service::ServeConfig;
 use pathstream_client::{
     CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SceneSpec,
     SessionStatus,

@@ -127,7 +127,7 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         static_dir: args.static_dir,
         assets,
         max_triangles,
-        connections: service::listen::ConnectionLimits {
+        connections: service::ConnectionLimits {
             max_connections: args
                 .max_connections
                 .unwrap_or(defaults.connections.max_connections),
@@ -145,7 +145,9 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
         .build()
         .map_err(|e| CliError::Failed(format!("cannot start the async runtime: {e}")))?;
     runtime.block_on(async move {
-        let running = service::start(config).await.map_err(CliError::Failed)?;
+        let running = pathstream::api::start(config)
+            .await
+            .map_err(CliError::Failed)?;
         let backends: Vec<String> = running
             .state
             .backends()

@@ -1,7 +1,7 @@
-//! What `pathstream serve` is started with.
+//! What `pathstream serve` is started with: the service's limits and the
+//! transport's (address, token, connections), in one place.
 
 use super::assets::AssetLimits;
-use super::listen::ConnectionLimits;
 use crate::render::BackendChoice;
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -36,6 +36,28 @@ pub struct ServeConfig {
     /// session ids start with `NAME-`, and every response carries
     /// `x-pathstream-node: NAME`. Checked by [`check_node_name`].
     pub node_name: Option<String>,
+}
+
+/// How many connections, and how long a request head may take.
+#[derive(Clone, Copy, Debug)]
+pub struct ConnectionLimits {
+    /// Open connections in total; more are closed at once.
+    pub max_connections: usize,
+    /// Open connections from one client address.
+    pub max_per_address: usize,
+    /// A request head not read completely in this time ends the connection
+    /// (also the time an idle keep-alive connection is kept).
+    pub header_timeout: Duration,
+}
+
+impl Default for ConnectionLimits {
+    fn default() -> Self {
+        Self {
+            max_connections: 4096,
+            max_per_address: 256,
+            header_timeout: Duration::from_secs(10),
+        }
+    }
 }
 
 /// Most characters of a node name.

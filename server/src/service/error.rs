@@ -1,10 +1,7 @@
-//! One error type for the whole API: a 4xx says what was wrong with the
-//! request, naming the field; a 5xx says little and the detail is logged.
-//! Every error body is `{"error": "..."}`.
-
-use axum::http::StatusCode;
-use axum::response::{IntoResponse, Response};
-use axum::Json;
+//! One error type for the whole service: each kind is what a request did
+//! wrong (or `Internal`), and its message names the field. The transport
+//! (`crate::api`) answers each kind with its status: a 4xx says what was
+//! wrong with the request; a 5xx says little and the detail is logged.
 
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
@@ -34,21 +31,6 @@ pub enum ApiError {
 }
 
 impl ApiError {
-    pub fn status(&self) -> StatusCode {
-        match self {
-            ApiError::BadRequest(_) => StatusCode::BAD_REQUEST,
-            ApiError::NotFound(_) => StatusCode::NOT_FOUND,
-            ApiError::Gone(_) => StatusCode::GONE,
-            ApiError::MethodNotAllowed(_) => StatusCode::METHOD_NOT_ALLOWED,
-            ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
-            ApiError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            ApiError::TooMany(_) => StatusCode::TOO_MANY_REQUESTS,
-            ApiError::Full(_) => StatusCode::INSUFFICIENT_STORAGE,
-            ApiError::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            ApiError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
-        }
-    }
-
     pub fn unknown_session(id: &str) -> Self {
         ApiError::NotFound(format!("no session '{id}'"))
     }
@@ -58,26 +40,6 @@ impl ApiError {
 impl From<crate::render::scene::EditError> for ApiError {
     fn from(e: crate::render::scene::EditError) -> Self {
         ApiError::BadRequest(e.to_string())
-    }
-}
-
-impl IntoResponse for ApiError {
-    fn into_response(self) -> Response {
-        if let ApiError::Internal(detail) = &self {
-            tracing::error!(%detail, "internal error");
-        }
-        let mut response = (
-            self.status(),
-            Json(serde_json::json!({"error": self.to_string()})),
-        )
-            .into_response();
-        if matches!(self, ApiError::Unauthorized) {
-            response.headers_mut().insert(
-                "www-authenticate",
-                axum::http::HeaderValue::from_static("Bearer"),
-            );
-        }
-        response
     }
 }
 

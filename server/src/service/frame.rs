@@ -1,15 +1,46 @@
 //! A published image and its statistics: what a session's `watch` channel
-//! carries to the WebSocket streams and the frame endpoints.
+//! carries to the WebSocket streams and the frame endpoints, and its
+//! encodings (PNG, JPEG, WebP, at a width), each made once however many
+//! clients want it.
 
 use super::density::Density;
 use super::error::ApiError;
-use super::session::Preview;
-use super::stream::{downscale, StreamFormat, StreamSettings};
+use super::scaled::{downscale, Preview};
 use crate::render::film::SppSpread;
 use crate::render::output::{encode_jpeg, encode_pfm, encode_png, encode_webp, WEBP_MAX_SIDE};
 use crate::render::tonemap::Tonemap;
 use std::borrow::Cow;
 use std::sync::{Arc, Mutex, OnceLock};
+
+/// An image format a frame is encoded in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StreamFormat {
+    /// Exact: the default.
+    #[default]
+    Png,
+    /// Several times smaller on a noisy image, and the cheapest to encode.
+    Jpeg { quality: u8 },
+    /// Lossy WebP: smaller again.
+    Webp { quality: u8 },
+}
+
+impl StreamFormat {
+    pub fn name(self) -> &'static str {
+        match self {
+            StreamFormat::Png => "png",
+            StreamFormat::Jpeg { .. } => "jpeg",
+            StreamFormat::Webp { .. } => "webp",
+        }
+    }
+}
+
+/// How to encode a frame: the format, and a width to scale it down to
+/// (None: the film's).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Encoding {
+    pub format: StreamFormat,
+    pub width: Option<u32>,
+}
 
 /// An encoded frame and its size.
 #[derive(Clone, Debug)]
@@ -48,16 +79,16 @@ pub struct Frame {
     pub preview: Option<u32>,
     /// The preview itself, for a frame that is nothing else: streams
     /// scale it, not its scaled-up copy in `pixels`.
-    pub(super) preview_image: Option<Arc<Preview>>,
+    pub preview_image: Option<Arc<Preview>>,
     /// Mean radiance, row-major, top row first (empty before the first pass).
     pub pixels: Vec<[f32; 3]>,
-    /// Stream encodings, by settings: each made once however many sockets
+    /// Encodings, by what was asked: each made once however many sockets
     /// want it (a second asker waits for the first's).
-    pub(super) encodings: Mutex<Vec<(StreamSettings, Arc<EncodedOnce>)>>,
+    encodings: Mutex<Vec<(Encoding, Arc<EncodedOnce>)>>,
 }
 
 impl Frame {
-    pub(super) fn empty(
+    pub fn empty(
         seq: u64,
         generation: u64,
         width: u32,
@@ -99,17 +130,16 @@ impl Frame {
     /// want it (the frame endpoints; a stream's default). Call off the
     /// async runtime (it takes milliseconds).
     pub fn png(&self) -> Result<Arc<[u8]>, ApiError> {
-        self.encoded(StreamSettings::default()).map(|e| e.bytes)
+        self.encoded(Encoding::default()).map(|e| e.bytes)
     }
 
-    /// The frame as a stream with `settings` wants it, each encoding made
-    /// once. Call off the async runtime (it takes milliseconds).
-    pub fn encoded(&self, settings: StreamSettings) -> Result<Encoded, ApiError> {
+    /// The frame encoded as `settings` say, each encoding made once. Call
+    /// off the async runtime (it takes milliseconds).
+    pub fn encoded(&self, settings: Encoding) -> Result<Encoded, ApiError> {
         // The same encoding however it is asked for: no width at or above
-        // the frame's (progressive resolution is the caller's business).
-        let settings = StreamSettings {
+        // the frame's.
+        let settings = Encoding {
             width: settings.width.filter(|&w| w < self.width),
-            progressive: false,
             ..settings
         };
         let cell = {
@@ -129,7 +159,7 @@ impl Frame {
     }
 
     /// Encodes the frame as `settings` asks (see [`Frame::encoded`]).
-    fn encode(&self, settings: StreamSettings) -> Result<Encoded, String> {
+    fn encode(&self, settings: Encoding) -> Result<Encoded, String> {
         let pixels = self.pixels_or_black();
         let mut width = settings.width.unwrap_or(self.width).min(self.width);
         if matches!(settings.format, StreamFormat::Webp { .. }) {

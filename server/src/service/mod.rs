@@ -1,54 +1,38 @@
-//! The render service: sessions on worker threads, the HTTP API, the
-//! WebSocket frame stream. `app(state)` builds the whole router; `start`
-//! binds and serves it until shut down.
+//! The render service's core: sessions on worker threads (one per device,
+//! passes shared fairly), their frames, the changes clients make, uploaded
+//! assets, load and metrics. It knows nothing of HTTP: the transport
+//! (`crate::api`) parses requests into the values taken here and turns
+//! [`ApiError`]s into responses. [`AppState`] holds it all.
 
 pub mod assets;
-mod assets_routes;
-mod auth;
 pub mod change;
 pub mod config;
-mod density;
+mod create;
+pub mod density;
 pub mod error;
-mod frame;
-mod guard;
-mod link;
-pub mod listen;
+pub mod frame;
 pub mod load;
-mod metrics;
-mod routes;
+pub mod metrics;
+pub mod placement;
+pub mod scaled;
 pub mod session;
-mod static_files;
-mod stream;
 mod worker;
-mod ws;
 
 use assets::AssetStore;
 use change::SceneRules;
-pub use config::ServeConfig;
+pub use config::{ConnectionLimits, ServeConfig};
+pub use create::NewSession;
 pub use error::ApiError;
 pub use metrics::Metrics;
-pub use routes::app;
-pub use static_files::embedded_names as embedded_static_files;
-pub use worker::BackendInfo;
+pub use placement::{BackendInfo, Placement};
 
 use crate::render::backend::CpuBackend;
 use crate::render::{Backend, BackendChoice};
 use session::Session;
 use std::collections::HashMap;
-use std::net::SocketAddr;
 use std::sync::{Arc, RwLock};
-use std::time::Duration;
-use tokio::sync::{oneshot, watch};
+use tokio::sync::watch;
 use worker::Worker;
-
-/// Where a session renders.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Placement {
-    /// On this worker.
-    One(usize),
-    /// On every worker at once (`backend: "all"`).
-    All,
-}
 
 /// Shared state of a running service.
 pub struct AppState {
@@ -275,11 +259,13 @@ impl AppState {
         Ok(())
     }
 
+    /// Becomes true when the service shuts down (streams close).
     pub fn shutdown_signal(&self) -> watch::Receiver<bool> {
         self.shutdown.subscribe()
     }
 
-    fn expire_idle(&self) {
+    /// Deletes the sessions nobody has used for the idle timeout.
+    pub fn expire_idle(&self) {
         let idle: Vec<String> = self
             .sessions()
             .into_iter()
@@ -292,127 +278,17 @@ impl AppState {
         }
     }
 
-    fn stop(&self) {
+    /// Says to every stream that the service shuts down (they close, and
+    /// their connections drain).
+    pub fn begin_shutdown(&self) {
         let _ = self.shutdown.send(true);
+    }
+
+    /// Closes the streams and stops the workers.
+    pub fn stop(&self) {
+        self.begin_shutdown();
         for w in &self.workers {
             w.stop();
         }
-    }
-}
-
-/// A service bound to its address and serving.
-pub struct Running {
-    pub addr: SocketAddr,
-    pub state: Arc<AppState>,
-    stop: Option<oneshot::Sender<()>>,
-    task: tokio::task::JoinHandle<std::io::Result<()>>,
-}
-
-impl Running {
-    /// Graceful shutdown: stop accepting, close WebSockets, stop workers.
-    pub async fn shutdown(mut self) -> std::io::Result<()> {
-        if let Some(tx) = self.stop.take() {
-            let _ = tx.send(());
-        }
-        self.task.await.map_err(std::io::Error::other)?
-    }
-
-    /// Runs until the process gets SIGINT or SIGTERM, then shuts down.
-    pub async fn until_signal(self) -> std::io::Result<()> {
-        shutdown_signal().await;
-        tracing::info!("shutting down");
-        self.shutdown().await
-    }
-}
-
-/// Binds `config.addr` (port 0 picks one) and serves in the background.
-pub async fn start(config: ServeConfig) -> Result<Running, String> {
-    let listener = bind(&config).await?;
-    serve(listener, AppState::new(config)?)
-}
-
-/// As [`start`], with the device backend given instead of chosen by
-/// `config.backend` (tests: a device that fails on purpose).
-pub async fn start_with_device(
-    config: ServeConfig,
-    device: Option<Backend>,
-) -> Result<Running, String> {
-    let listener = bind(&config).await?;
-    serve(listener, AppState::with_device(config, device))
-}
-
-/// As [`start`], with the device backends and where new sessions go given
-/// (tests: several devices, one that fails on purpose).
-pub async fn start_with_devices(
-    config: ServeConfig,
-    devices: Vec<Backend>,
-    default: Placement,
-) -> Result<Running, String> {
-    let listener = bind(&config).await?;
-    serve(listener, AppState::with_devices(config, devices, default))
-}
-
-async fn bind(config: &ServeConfig) -> Result<tokio::net::TcpListener, String> {
-    tokio::net::TcpListener::bind(config.addr)
-        .await
-        .map_err(|e| format!("cannot listen on {}: {e}", config.addr))
-}
-
-fn serve(listener: tokio::net::TcpListener, state: Arc<AppState>) -> Result<Running, String> {
-    let addr = listener.local_addr().map_err(|e| e.to_string())?;
-    let (stop, stopped) = oneshot::channel::<()>();
-    let janitor_state = state.clone();
-    let janitor = tokio::spawn(async move {
-        let period = (janitor_state.config.idle_timeout / 4)
-            .clamp(Duration::from_millis(50), Duration::from_secs(5));
-        loop {
-            tokio::time::sleep(period).await;
-            janitor_state.expire_idle();
-        }
-    });
-    let serve_state = state.clone();
-    let signal_state = state.clone();
-    let limits = state.config.connections;
-    if let Some(n) = listen::raise_file_limit() {
-        tracing::debug!(open_files = n, "open-file limit");
-    }
-    let task = tokio::spawn(async move {
-        let result = listen::serve(listener, app(serve_state.clone()), limits, async move {
-            let _ = stopped.await;
-            // Closing WebSockets first lets the connections drain.
-            let _ = signal_state.shutdown.send(true);
-        })
-        .await;
-        janitor.abort();
-        let s = serve_state.clone();
-        let _ = tokio::task::spawn_blocking(move || s.stop()).await;
-        result
-    });
-    Ok(Running {
-        addr,
-        state,
-        stop: Some(stop),
-        task,
-    })
-}
-
-async fn shutdown_signal() {
-    let ctrl_c = async {
-        let _ = tokio::signal::ctrl_c().await;
-    };
-    #[cfg(unix)]
-    let term = async {
-        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
-            Ok(mut s) => {
-                s.recv().await;
-            }
-            Err(_) => std::future::pending::<()>().await,
-        }
-    };
-    #[cfg(not(unix))]
-    let term = std::future::pending::<()>();
-    tokio::select! {
-        () = ctrl_c => {},
-        () = term => {},
     }
 }

@@ -4,30 +4,13 @@
 
 use super::load::BusyMeter;
 use super::metrics::Metrics;
+use super::placement::BackendInfo;
 use super::session::Session;
 use crate::render::Backend;
-use serde::Serialize;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard, Weak};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-
-/// What a worker renders with, as `/api/health` and `/api/devices` report it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
-pub struct BackendInfo {
-    /// `cpu` or `opencl`.
-    pub backend: String,
-    pub device: String,
-}
-
-impl BackendInfo {
-    pub fn of(backend: &Backend) -> Self {
-        Self {
-            backend: backend.name().to_owned(),
-            device: backend.device(),
-        }
-    }
-}
 
 struct WorkerShared {
     /// What the worker renders with now: an OpenCL backend chosen by `auto`
@@ -44,19 +27,6 @@ struct WorkerShared {
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// Tells a worker that one of its sessions has work again. Held by the
-/// session; it does not keep the worker alive.
-#[derive(Clone, Debug)]
-pub struct Waker(Weak<WorkerShared>);
-
-impl Waker {
-    pub fn wake(&self) {
-        if let Some(shared) = self.0.upgrade() {
-            shared.notify();
-        }
-    }
 }
 
 impl WorkerShared {
@@ -126,7 +96,12 @@ impl Worker {
 
     /// Places a session on this worker, which starts rendering it.
     pub fn add(&self, session: Arc<Session>) {
-        session.attach(Waker(Arc::downgrade(&self.shared)));
+        let worker = Arc::downgrade(&self.shared);
+        session.attach(Box::new(move || {
+            if let Some(shared) = worker.upgrade() {
+                shared.notify();
+            }
+        }));
         lock(&self.shared.sessions).push(session);
         self.shared.notify();
     }

@@ -2,8 +2,9 @@
 #![allow(dead_code)]
 
 use futures_util::StreamExt;
+use pathstream::api::{start, Running};
 use pathstream::render::BackendChoice;
-use pathstream::service::{start, Running, ServeConfig};
+use pathstream::service::ServeConfig;
 use serde_json::Value;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;

@@ -12,13 +12,13 @@ use super::change::{patch_quality, Change};
 use super::error::ApiError;
 pub use super::frame::Frame;
 use super::metrics::Metrics;
-use super::worker::{BackendInfo, Waker};
+use super::placement::BackendInfo;
+use super::scaled::Preview;
 use crate::render::pass::{Measured, Pass, Planner};
 use crate::render::progressive::{self, Progress};
 use crate::render::split::DeviceShare;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
 use lanes::Lanes;
-pub(in crate::service) use preview::Preview;
 pub use status::{Status, WorkerShare};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -76,6 +76,10 @@ pub struct Session {
     /// waiting requests and WebSockets are answered at once.
     deleted: watch::Sender<bool>,
 }
+
+/// Tells a worker that one of its sessions has work again. Held by the
+/// session; it does not keep the worker alive.
+pub type Waker = Box<dyn Fn() + Send + Sync>;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A panic while holding the lock cannot leave the state half-written in a
@@ -230,8 +234,8 @@ impl Session {
     }
 
     fn wake_workers(&self) {
-        for w in lock(&self.wakers).iter() {
-            w.wake();
+        for wake in lock(&self.wakers).iter() {
+            wake();
         }
     }
 
@@ -493,26 +497,25 @@ impl Session {
             && (finished_rounds
                 || (st.quality.halts() && progressive::halted(&st.quality, &progress)));
         st.last_frame = Instant::now();
-        Frame {
-            seq: self.seq.fetch_add(1, Ordering::Relaxed),
-            generation: st.generation,
-            width: film.width(),
-            height: film.height(),
-            spp: progress.spp,
-            spread: progress.spread,
-            density: Some(image.density),
-            error_estimate: progress.error_estimate,
-            samples_per_sec: progress.samples_per_sec,
-            elapsed_ms: progress.elapsed.as_secs_f64() * 1e3,
-            rejected: progress.rejected,
-            halted: st.halted,
-            backend: by.0,
-            device: by.1,
-            preview: image.preview,
-            preview_image: None,
-            pixels: image.pixels,
-            encodings: Mutex::new(Vec::new()),
-        }
+        let mut frame = Frame::empty(
+            self.seq.fetch_add(1, Ordering::Relaxed),
+            st.generation,
+            film.width(),
+            film.height(),
+            by.0,
+            by.1,
+        );
+        frame.spp = progress.spp;
+        frame.spread = progress.spread;
+        frame.density = Some(image.density);
+        frame.error_estimate = progress.error_estimate;
+        frame.samples_per_sec = progress.samples_per_sec;
+        frame.elapsed_ms = progress.elapsed.as_secs_f64() * 1e3;
+        frame.rejected = progress.rejected;
+        frame.halted = st.halted;
+        frame.preview = image.preview;
+        frame.pixels = image.pixels;
+        frame
     }
 
     fn publish_status_only(&self, backend: String, device: String) {

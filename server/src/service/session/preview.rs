@@ -13,12 +13,12 @@
 //!   stands: each pixel the mean of its own samples (one more for the rows
 //!   done), the preview where a pixel has none yet.
 
-use super::super::metrics::Metrics;
-use super::super::stream::downscale;
 use super::{lock, Frame, Session};
 use crate::render::camera::CameraRays;
 use crate::render::pass::Planner;
 use crate::render::{Backend, Film, RenderJob, Scene};
+use crate::service::metrics::Metrics;
+use crate::service::scaled::Preview;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -30,16 +30,6 @@ pub const PREVIEW_ABOVE: f64 = 1.0;
 const MOST_FACTOR: u32 = 16;
 /// Partial frames (of a sample in progress) are published at most this often.
 pub const PARTIAL_EVERY: Duration = Duration::from_millis(60);
-
-/// A view rendered at 1/`factor` of the film's resolution, one sample.
-#[derive(Debug)]
-pub struct Preview {
-    pub factor: u32,
-    pub width: u32,
-    pub height: u32,
-    /// Mean radiance, row-major.
-    pub pixels: Vec<[f32; 3]>,
-}
 
 /// The preview factor for an image one sample of which takes `per_sample`:
 /// the smallest power of two that brings a sample of the preview within a
@@ -63,65 +53,6 @@ pub fn job(job: &RenderJob, scene: &Scene, factor: u32) -> RenderJob {
     RenderJob {
         camera: CameraRays::new(&scene.camera, w, h),
         ..job.with_new_id()
-    }
-}
-
-impl Preview {
-    /// The preview a one-sample `film` of the preview job holds.
-    pub fn of(film: &Film, factor: u32) -> Arc<Self> {
-        Arc::new(Self {
-            factor,
-            width: film.width(),
-            height: film.height(),
-            pixels: film.mean(),
-        })
-    }
-
-    /// The pixel covering image pixel (x, y).
-    #[inline]
-    fn at(&self, x: u32, y: u32) -> [f32; 3] {
-        let (px, py) = (
-            (x / self.factor).min(self.width - 1),
-            (y / self.factor).min(self.height - 1),
-        );
-        self.pixels[(py * self.width + px) as usize]
-    }
-
-    /// The image (`width` x `height`) the preview shows, scaled up.
-    pub fn scaled_up(&self, width: u32, height: u32) -> Vec<[f32; 3]> {
-        let mut out = Vec::with_capacity(width as usize * height as usize);
-        for y in 0..height {
-            out.extend((0..width).map(|x| self.at(x, y)));
-        }
-        out
-    }
-
-    /// The preview as an image `width` pixels wide (the aspect kept):
-    /// averaged down, or each pixel repeated (nearest) up.
-    pub fn resized(&self, width: u32) -> (u32, u32, Vec<[f32; 3]>) {
-        if width <= self.width {
-            return downscale(&self.pixels, self.width, self.height, width);
-        }
-        let height =
-            (u64::from(self.height) * u64::from(width)).div_ceil(u64::from(self.width)) as u32;
-        let mut out = Vec::with_capacity(width as usize * height as usize);
-        for y in 0..height {
-            let py = (u64::from(y) * u64::from(self.height) / u64::from(height)) as u32;
-            out.extend((0..width).map(|x| {
-                let px = (u64::from(x) * u64::from(self.width) / u64::from(width)) as u32;
-                self.pixels[(py * self.width + px) as usize]
-            }));
-        }
-        (width, height, out)
-    }
-
-    /// Puts the preview into `mean` (the film's, row-major) wherever the
-    /// film has no sample yet: from pixel `from` on (the first sample's
-    /// slice in progress).
-    pub fn fill(&self, mean: &mut [[f32; 3]], width: u32, from: usize) {
-        for (i, p) in mean.iter_mut().enumerate().skip(from) {
-            *p = self.at(i as u32 % width, i as u32 / width);
-        }
     }
 }
 

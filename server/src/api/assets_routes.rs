@@ -15,9 +15,9 @@
 //! model, or a malformed one, is a 400 whose message names the file and
 //! the problem; a full store is a 507.
 
-use super::assets::{AssetError, AssetInfo};
-use super::error::ApiError;
-use super::AppState;
+use crate::service::assets::{AssetError, AssetInfo};
+use crate::service::ApiError;
+use crate::service::AppState;
 use axum::extract::rejection::QueryRejection;
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
 use axum::http::{header, StatusCode};

@@ -14,13 +14,13 @@
 //! arrive, even while a frame is going out. With `progressive` the first
 //! frame after a change goes at a quarter of the width, the next at half.
 
-use super::change::Change;
-use super::error::ApiError;
-use super::frame::Encoded;
 use super::link::{progressive_width, Link};
-use super::session::{Frame, Session, Status};
 use super::stream::{StreamRequest, StreamSettings};
-use super::AppState;
+use crate::service::change::Change;
+use crate::service::frame::Encoded;
+use crate::service::session::{Frame, Session, Status};
+use crate::service::ApiError;
+use crate::service::AppState;
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
 use axum::response::Response;
@@ -223,7 +223,7 @@ async fn write(
                     let busy = encoding_ahead.clone();
                     busy.store(true, Ordering::Release);
                     tokio::task::spawn_blocking(move || {
-                        let _ = frame.encoded(wanted);
+                        let _ = frame.encoded(wanted.encoding());
                         busy.store(false, Ordering::Release);
                     });
                 }
@@ -248,7 +248,7 @@ async fn write(
                 nth += 1;
                 let f = frame.clone();
                 let encode = Instant::now();
-                let image = match tokio::task::spawn_blocking(move || f.encoded(wanted)).await {
+                let image = match tokio::task::spawn_blocking(move || f.encoded(wanted.encoding())).await {
                     Ok(Ok(image)) => image,
                     _ => break,
                 };

@@ -10,8 +10,8 @@
 //! - panics: a handler that panics answers a 500 JSON error, is logged and
 //!   is counted in `/metrics`, and the connection lives on.
 
-use super::error::ApiError;
-use super::metrics::Metrics;
+use crate::service::ApiError;
+use crate::service::Metrics;
 use axum::body::{to_bytes, Body};
 use axum::extract::{OriginalUri, Request};
 use axum::http::{header, HeaderMap, HeaderValue, Method, StatusCode};

@@ -7,7 +7,7 @@
 //! `Cache-Control: no-cache`, so a browser revalidates (ETag or
 //! Last-Modified) and never runs a stale module beside a fresh one.
 
-use super::error::ApiError;
+use crate::service::ApiError;
 use axum::body::Body;
 use axum::handler::HandlerWithoutStateExt;
 use axum::http::{header, HeaderMap, HeaderValue, Method, StatusCode, Uri};

@@ -3,13 +3,13 @@
 //! and hand them to the session ([`Session::apply`] for changes).
 
 use super::auth::require_token;
-use super::change::{patch_quality, Change};
-use super::error::{parse_json, ApiError};
-use super::session::{Frame, Session, Status};
-use super::{assets_routes, static_files, ws, AppState, Placement};
-use crate::render::job::check_size;
+use super::{assets_routes, static_files, ws};
 use crate::render::scene::{CameraEdit, LightEdit, BUILTIN_NAMES};
 use crate::render::{Preset, Quality};
+use crate::service::change::Change;
+use crate::service::error::{parse_json, ApiError};
+use crate::service::session::{Frame, Status};
+use crate::service::AppState;
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
@@ -158,49 +158,8 @@ async fn presets() -> Json<Value> {
 
 async fn metrics(State(state): State<Arc<AppState>>) -> impl IntoResponse {
     let mut text = state.metrics.render(state.session_count());
-    text.push_str(&super::load::prometheus(&state.load()));
+    text.push_str(&crate::service::load::prometheus(&state.load()));
     ([(header::CONTENT_TYPE, "text/plain; version=0.0.4")], text)
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CreateSession {
-    #[serde(default = "default_scene")]
-    scene: Value,
-    #[serde(default = "default_side")]
-    width: u64,
-    #[serde(default = "default_side")]
-    height: u64,
-    #[serde(default)]
-    quality: Option<Value>,
-    #[serde(default)]
-    backend: Option<String>,
-}
-
-fn default_scene() -> Value {
-    Value::String("cornell-glass".into())
-}
-
-fn default_side() -> u64 {
-    512
-}
-
-/// A fresh session id: 16 hex digits, after `NODE-` when the box has a
-/// node name (what a proxy routes by).
-fn new_id(node: Option<&str>) -> String {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos() as u64);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let id = crate::render::sampler::mix64(
-        nanos ^ crate::render::sampler::mix64(n ^ u64::from(std::process::id())),
-    );
-    match node {
-        Some(node) => format!("{node}-{id:016x}"),
-        None => format!("{id:016x}"),
-    }
 }
 
 async fn create_session(
@@ -208,46 +167,7 @@ async fn create_session(
     body: Result<Bytes, BytesRejection>,
 ) -> AppResult<(StatusCode, Json<Status>)> {
     let body = body_bytes(body, state.config.max_body_bytes)?;
-    let req: CreateSession = parse_json(&body)?;
-    let (width, height) = (
-        u32::try_from(req.width)
-            .map_err(|_| ApiError::BadRequest(format!("width: {} is too large", req.width)))?,
-        u32::try_from(req.height)
-            .map_err(|_| ApiError::BadRequest(format!("height: {} is too large", req.height)))?,
-    );
-    check_size(width, height).map_err(ApiError::BadRequest)?;
-    let pixels = u64::from(width) * u64::from(height);
-    if pixels > state.config.max_pixels {
-        return Err(ApiError::BadRequest(format!(
-            "width x height: {pixels} pixels is more than this server's limit of {}",
-            state.config.max_pixels
-        )));
-    }
-    let quality = match &req.quality {
-        Some(q) => patch_quality(&Quality::default(), q)?,
-        None => Quality::default(),
-    };
-    let Change::Scene { name, scene } = Change::scene(req.scene, &state.scene_rules())? else {
-        return Err(ApiError::Internal(
-            "Change::scene made another change".into(),
-        ));
-    };
-    let placement = state.placement_for(req.backend.as_deref())?;
-    let mut session = Session::new(
-        new_id(state.config.node_name.as_deref()),
-        name,
-        *scene,
-        width,
-        height,
-        quality,
-        state.placement_info(placement),
-    );
-    if placement == Placement::All {
-        session = session.on_every_device(&state.backends());
-    }
-    let session = Arc::new(session);
-    state.add_session(session.clone(), placement)?;
-    tracing::info!(session = %session.id, width, height, "session created");
+    let session = state.create_session(parse_json(&body)?)?;
     Ok((StatusCode::CREATED, Json(session.status())))
 }
 
@@ -431,10 +351,12 @@ async fn samples_png(
 ) -> AppResult<Response> {
     let frame = wait_frame(&state, &id, query).await?;
     // Before the first pass: every tile at 0 samples.
-    let density = frame
-        .density
-        .clone()
-        .unwrap_or_else(|| Arc::new(super::density::Density::empty(frame.width, frame.height)));
+    let density = frame.density.clone().unwrap_or_else(|| {
+        Arc::new(crate::service::density::Density::empty(
+            frame.width,
+            frame.height,
+        ))
+    });
     let png = tokio::task::spawn_blocking(move || density.png())
         .await
         .map_err(|e| ApiError::Internal(e.to_string()))?
@@ -453,7 +375,7 @@ mod tests {
 
     #[tokio::test]
     async fn a_handler_panic_answers_500_json_is_counted_and_the_server_lives_on() {
-        let state = AppState::with_device(super::super::ServeConfig::default(), None);
+        let state = AppState::with_device(crate::service::ServeConfig::default(), None);
         let router = Router::new()
             .route(
                 "/api/boom",

@@ -5,8 +5,8 @@
 //! kept as they are, invalid UTF-8 replaced), so no input can make the check
 //! fail other than by refusing it. Tokens are compared in constant time.
 
-use super::error::ApiError;
-use super::AppState;
+use crate::service::ApiError;
+use crate::service::AppState;
 use axum::extract::{Request, State};
 use axum::http::{header, HeaderMap, Uri};
 use axum::middleware::Next;

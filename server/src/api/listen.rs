@@ -4,6 +4,7 @@
 //! byte at a time is dropped), TCP_NODELAY, served by hyper's HTTP/1 with
 //! upgrades (WebSockets), and shut down gracefully.
 
+use crate::service::ConnectionLimits;
 use axum::Router;
 use hyper_util::rt::{TokioIo, TokioTimer};
 use hyper_util::service::TowerToHyperService;
@@ -14,28 +15,6 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::net::TcpListener;
 use tokio::sync::{mpsc, watch, OwnedSemaphorePermit, Semaphore};
-
-/// How many connections, and how long a request head may take.
-#[derive(Clone, Copy, Debug)]
-pub struct ConnectionLimits {
-    /// Open connections in total; more are closed at once.
-    pub max_connections: usize,
-    /// Open connections from one client address.
-    pub max_per_address: usize,
-    /// A request head not read completely in this time ends the connection
-    /// (also the time an idle keep-alive connection is kept).
-    pub header_timeout: Duration,
-}
-
-impl Default for ConnectionLimits {
-    fn default() -> Self {
-        Self {
-            max_connections: 4096,
-            max_per_address: 256,
-            header_timeout: Duration::from_secs(10),
-        }
-    }
-}
 
 /// Raises the soft limit on open files to the hard one (a server holds a
 /// descriptor per connection); returns the limit now in force.
