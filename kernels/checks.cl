@@ -1,7 +1,9 @@
 /* Routine checks: each kernel runs one routine of the path tracer on inputs
  * from the host, which compares the outputs with the routine's Rust twin
  * (server/tests/opencl_parity.rs). Arguments: the output buffer, the item
- * count n, then the inputs; item i < n writes its own outputs only. */
+ * count n, then the inputs; item i < n writes its own outputs only. Scenes
+ * are built with designated initialisers: the fields a check leaves out are
+ * null, whatever order scene_arrays.h gives them. */
 
 /* The sampler: 8 draws from sampler_new(seed, pixel, sample), given as 3
  * ulongs per item. */
@@ -46,7 +48,7 @@ __kernel void check_pixel_offset(__global float *out, uint n, __global const flo
 __kernel void check_intersect(__global float *out, uint n, __global const float4 *rays,
                               __global const Object *objects, __global const Params *P,
                               __global const BvhNode *nodes, __global const uint *prims, __global const uint *big) {
-    Scene sc = {P, objects, 0, 0, nodes, prims, big, 0, 0, 0, 0, 0};
+    Scene sc = {.P = P, .objects = objects, .nodes = nodes, .prims = prims, .big = big};
     uint i = (uint)get_global_id(0);
     if (i >= n) {
         return;
@@ -98,7 +100,7 @@ __kernel void check_nearest(__global float *out, uint n, __global const float4 *
     if (i >= n) {
         return;
     }
-    Scene sc = {P, objects, 0, 0, nodes, prims, big, 0, 0, 0, 0, 0};
+    Scene sc = {.P = P, .objects = objects, .nodes = nodes, .prims = prims, .big = big};
     uint hit;
     out[2 * i] = intersect(&sc, rays[2 * i].xyz, rays[2 * i + 1].xyz, NO_OBJECT, 0, &hit);
     out[2 * i + 1] = as_float(hit);
@@ -116,7 +118,16 @@ __kernel void check_nearest_meshes(__global float *out, uint n, __global const f
     if (i >= n) {
         return;
     }
-    Scene sc = {P, objects, 0, 0, nodes, prims, big, instances, mesh_nodes, tris, normals, slots};
+    Scene sc = {.P = P,
+                .objects = objects,
+                .nodes = nodes,
+                .prims = prims,
+                .big = big,
+                .instances = instances,
+                .mesh_nodes = mesh_nodes,
+                .tris = tris,
+                .normals = normals,
+                .slots = slots};
     Hit h;
     nearest(&sc, rays[2 * i].xyz, rays[2 * i + 1].xyz, NO_OBJECT, NO_PRIM, 0, &h);
     out[3 * i] = h.t;
@@ -178,7 +189,7 @@ __kernel void check_light_sample(__global float *out, uint n, __global const flo
     if (i >= n) {
         return;
     }
-    Scene sc = {0, objects, 0, lights, 0, 0, 0, 0, 0, 0, 0, 0};
+    Scene sc = {.objects = objects, .lights = lights};
     __global const Light *L = &lights[which[i]];
     Surf sf;
     sf.p = in[3 * i].xyz;
@@ -216,6 +227,18 @@ __kernel void check_layout_sizes(__global uint *out, uint n) {
     out[5] = (uint)sizeof(Instance);
     out[6] = (uint)sizeof(TriVerts);
 }
+
+/* sizeof of each scene array's element type, in SCENE_ARRAYS order: the
+ * host compares them with its table's element sizes (buffers.rs). */
+#define SCENE_ARRAY_SIZE(T, name) out[i++] = (uint)sizeof(T);
+__kernel void check_scene_array_sizes(__global uint *out, uint n) {
+    if (get_global_id(0) != 0) {
+        return;
+    }
+    uint i = 0;
+    SCENE_ARRAYS(SCENE_ARRAY_SIZE)
+}
+#undef SCENE_ARRAY_SIZE
 
 /* Adds `value` to a compensated sum `count` times, as the film does: the
  * host checks that 1e8 additions keep the value to 1e-6. */

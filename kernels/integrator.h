@@ -1,6 +1,5 @@
-/* The path tracer, loop for loop as integrator.rs. */
-
-#define MAX_SURVIVAL 0.99f
+/* The path tracer, loop for loop as integrator.rs. Its Russian roulette
+ * cap is the host's MAX_SURVIVAL, passed as its bits (MAX_SURVIVAL_BITS). */
 
 #if HAS_DIFFUSE
 /* Le * V * cos / pdf of one shadow ray from surface sf towards emitter L,
@@ -111,7 +110,7 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         beta *= weight;
         bounces += 1u;
         if (bounces > RR_DEPTH || !(max3(beta) > 0.0f)) {
-            float q = fmin(max3(beta), MAX_SURVIVAL);
+            float q = fmin(max3(beta), as_float(MAX_SURVIVAL_BITS));
             if (!(next_f32(s) < q)) {
                 break;
             }

@@ -4,10 +4,10 @@
  * adds samples first .. first+count-1,
  * in index order, to the device film. The film keeps each sum as a pair of
  * floats (hi + lo, compensated with TwoSum) for the even and the odd
- * samples: 12 floats per pixel, [even hi rgb, even lo rgb, odd hi rgb,
- * odd lo rgb]. That keeps ~44 bits (the 1e8-sample check) and, since every
- * pixel's samples are added in order, an image that does not depend on how
- * samples were split into launches. Non-finite samples are counted in
+ * samples: FILM_FLOATS floats per pixel, [even hi rgb, even lo rgb, odd hi
+ * rgb, odd lo rgb]. That keeps ~44 bits (the 1e8-sample check) and, since
+ * every pixel's samples are added in order, an image that does not depend on
+ * how samples were split into launches. Non-finite samples are counted in
  * *rejected and add nothing.
  *
  * Adaptive sampling (mode != 0) gives each tile of ADAPTIVE_TILE^2 pixels
@@ -29,14 +29,13 @@ inline void add_compensated(__global float *hi, __global float *lo, float x) {
     *hi = nh;
 }
 
-__kernel void render(__global const Params *P, __global const Object *objects, __global const Material *materials,
-                     __global const Light *lights, __global float *film, __global uint *rejected, ulong first,
-                     uint count, uint pixel_base, uint pixel_end, __global const BvhNode *nodes,
-                     __global const uint *prims, __global const uint *big, __global const Instance *instances,
-                     __global const BvhNode *mesh_nodes, __global const TriVerts *tris,
-                     __global const float4 *normals, __global const uint *slots, __global const uint4 *work,
-                     uint mode) {
-    Scene sc = {P, objects, materials, lights, nodes, prims, big, instances, mesh_nodes, tris, normals, slots};
+/* The scene's arrays first, in SCENE_ARRAYS order, then the launch's own
+ * arguments (buffers.rs, SceneBuffers::set_args, binds them by position). */
+#define SCENE_PARAM(T, name) __global const T *name,
+#define SCENE_NAME(T, name) name,
+__kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global uint *rejected, ulong first,
+                     uint count, uint pixel_base, uint pixel_end, __global const uint4 *work, uint mode) {
+    Scene sc = {SCENE_ARRAYS(SCENE_NAME)};
     uint gid = pixel_base + (uint)get_global_id(0);
     if (gid >= pixel_end) {
         return;
@@ -66,7 +65,7 @@ __kernel void render(__global const Params *P, __global const Object *objects, _
     }
     uint x = gid % P->width;
     uint y = gid / P->width;
-    __global float *px = film + (size_t)gid * 12u;
+    __global float *px = film + (size_t)gid * FILM_FLOATS;
     for (uint k = 0; k < count; ++k) {
         ulong sample = first + (ulong)k;
         Sampler s = sampler_new(P->seed, (ulong)gid, sample);
@@ -83,9 +82,11 @@ __kernel void render(__global const Params *P, __global const Object *objects, _
             atomic_inc(rejected);
             continue;
         }
-        __global float *sums = px + ((sample & 1UL) ? 6 : 0);
+        __global float *sums = px + ((sample & 1UL) ? FILM_FLOATS / 2u : 0u);
         add_compensated(sums + 0, sums + 3, l.x);
         add_compensated(sums + 1, sums + 4, l.y);
         add_compensated(sums + 2, sums + 5, l.z);
     }
 }
+#undef SCENE_PARAM
+#undef SCENE_NAME

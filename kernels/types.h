@@ -1,8 +1,9 @@
 /* Types shared with the host. Their Rust twins, with the same names and
  * layout (sizes asserted on both sides), are in
  * server/src/render/backend/opencl/layout.rs, and so are the shared
- * constants (KIND_*, MAT_*, NO_OBJECT): the host passes them to every build
- * as -D options, so they are written once.
+ * constants (KIND_*, MAT_*, NO_OBJECT, MAX_BVH_STACK, ...): the host passes
+ * them to every build as -D options, so they are written once. The scene's
+ * buffers are listed once, in scene_arrays.h.
  *
  * Floating point: no contraction of a * b + c into fma, as in the Rust twins
  * (which never fuse), so that both round every operation the same way and the
@@ -119,21 +120,13 @@ typedef struct {
     float3 bary;
 } Hit;
 
-/* The scene's buffers, as one argument for the routines that read them. */
+/* The scene's buffers (scene_arrays.h), as one argument for the routines
+ * that read them. */
+#define SCENE_FIELD(T, name) __global const T *name;
 typedef struct {
-    __global const Params *P;
-    __global const Object *objects;
-    __global const Material *materials;
-    __global const Light *lights;
-    __global const BvhNode *nodes; /* the objects' BVH (use_bvh) */
-    __global const uint *prims;    /* object of each leaf slot */
-    __global const uint *big;      /* objects tested before the BVH */
-    __global const Instance *instances;
-    __global const BvhNode *mesh_nodes;
-    __global const TriVerts *tris;
-    __global const float4 *normals;  /* vertex normals per triangle slot */
-    __global const uint *slots;      /* world material of each instance slot */
+    SCENE_ARRAYS(SCENE_FIELD)
 } Scene;
+#undef SCENE_FIELD
 
 /* What the program was specialised for. Without SPECIALISED every feature is
  * compiled in and counts and switches are read from Params (the generic
@@ -149,9 +142,9 @@ typedef struct {
 #define HAS_SPHERE_LIGHTS 1
 #define HAS_QUAD_LIGHTS 1
 #define HAS_BVH 1
-#define BVH_STACK 196
+#define BVH_STACK MAX_BVH_STACK
 #define HAS_MESHES 1
-#define MESH_STACK 196
+#define MESH_STACK MAX_BVH_STACK
 #define HAS_TRI_LIGHTS 1
 #define HAS_ENV 1
 #define USE_BVH (P->use_bvh != 0u)

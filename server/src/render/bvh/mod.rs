@@ -20,6 +20,7 @@ mod traverse;
 
 pub use aabb::Aabb;
 pub use build::MAX_LEAF;
+pub(crate) use traverse::STACK;
 pub use traverse::{BoxRay, ROBUST};
 
 use bytemuck::{Pod, Zeroable};

@@ -19,7 +19,7 @@ pub const ROBUST: f32 = 1.0 + 2.0 * gamma(3);
 
 /// Deepest node stack a traversal needs: three more children than it pops
 /// at each level, and trees are at most 64 levels deep (see `build`).
-const STACK: usize = 3 * 64 + 4;
+pub(crate) const STACK: usize = 3 * 64 + 4;
 /// The stack of trees at most `SHALLOW_DEPTH` deep (nearly all): small
 /// enough that setting it up costs nothing.
 const SHALLOW_STACK: usize = 64;

@@ -24,7 +24,7 @@ use std::f32::consts::FRAC_1_PI;
 
 /// Largest Russian-roulette survival probability: even albedo-1 mirrors end
 /// eventually, so unbounded paths terminate with probability 1.
-const MAX_SURVIVAL: f32 = 0.99;
+pub(crate) const MAX_SURVIVAL: f32 = 0.99;
 
 /// The quality settings the path loop reads.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,6 +1,21 @@
 //! A job's scene on the device: one buffer per array of `layout::pack`,
-//! and the `render` kernel's arguments in the order kernels/render.cl
-//! declares them.
+//! listed once in [`SCENE_ARRAYS`], the host twin of
+//! `kernels/scene_arrays.h`; and the `render` kernel's arguments, which are
+//! those arrays in that order and then the launch's own ([`LAUNCH_PARAMS`]).
+//!
+//! Adding a scene array:
+//! 1. a line `X(ElementType, name)` in `kernels/scene_arrays.h` (the
+//!    kernel's `Scene` field and parameter follow; the routine checks in
+//!    `kernels/checks.cl` name the fields they set);
+//! 2. its data in [`Packed`] (`layout.rs`, or `meshes.rs` for meshes), and
+//!    if the element type is a struct, its `#[repr(C)]` twin in `layout.rs`
+//!    next to the C one in `kernels/types.h`;
+//! 3. the entry in [`SCENE_ARRAYS`] at the same position: it is uploaded,
+//!    counted by [`job_bytes`] and bound as an argument from there;
+//!    `contract_tests.rs` fails until the names, order and element types
+//!    agree (and, on a device, the element sizes).
+//!
+//! Adding a shared constant: see the checklist in `layout.rs`.
 
 use super::layout::{self, Packed};
 use super::meshes;
@@ -9,23 +24,85 @@ use crate::render::bvh::BvhNode;
 use crate::render::shape::TriVerts;
 use opencl3::kernel::Kernel;
 use opencl3::memory::{Buffer, ClMem};
-use opencl3::types::{cl_uint, cl_ulong};
+use opencl3::types::{cl_mem, cl_uint, cl_ulong};
 use std::mem::size_of;
 
-pub(super) struct SceneBuffers {
-    params: Buffer<layout::Params>,
-    objects: Buffer<layout::Object>,
-    materials: Buffer<layout::Material>,
-    lights: Buffer<layout::Light>,
-    nodes: Buffer<BvhNode>,
-    prims: Buffer<u32>,
-    big: Buffer<u32>,
-    instances: Buffer<meshes::Instance>,
-    mesh_nodes: Buffer<BvhNode>,
-    tris: Buffer<TriVerts>,
-    normals: Buffer<[f32; 4]>,
-    slots: Buffer<u32>,
+/// One array of the scene as the kernel reads it.
+pub(super) struct SceneArray {
+    /// Its name in `kernels/scene_arrays.h`: the `Scene` field and the
+    /// `render` kernel's parameter (read by the tests that hold the two
+    /// lists equal).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub name: &'static str,
+    /// Its element type there.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub c_type: &'static str,
+    /// What a message about device memory calls it.
+    pub label: &'static str,
+    /// Bytes of one element on the host.
+    pub elem_bytes: usize,
+    /// The job's elements, as bytes.
+    pub bytes: fn(&Packed) -> &[u8],
 }
+
+/// A [`SceneArray`] whose elements are `$t`, read from the packed job by
+/// `$data` (so that the size and the data cannot name different types).
+macro_rules! scene_array {
+    ($name:literal: $c_type:literal, $label:literal, [$t:ty], |$p:ident| $data:expr) => {
+        SceneArray {
+            name: $name,
+            c_type: $c_type,
+            label: $label,
+            elem_bytes: size_of::<$t>(),
+            bytes: |$p| {
+                let data: &[$t] = $data;
+                bytemuck::cast_slice(data)
+            },
+        }
+    };
+}
+
+/// The scene's arrays in the order of `kernels/scene_arrays.h`: the
+/// `render` kernel's first parameters.
+pub(super) const SCENE_ARRAYS: [SceneArray; 12] = [
+    scene_array!("P": "Params", "params", [layout::Params], |p| {
+        std::slice::from_ref(&p.params)
+    }),
+    scene_array!("objects": "Object", "objects", [layout::Object], |p| &p.objects),
+    scene_array!("materials": "Material", "materials", [layout::Material], |p| {
+        &p.materials
+    }),
+    scene_array!("lights": "Light", "lights", [layout::Light], |p| &p.lights),
+    scene_array!("nodes": "BvhNode", "object BVH", [BvhNode], |p| &p.nodes),
+    scene_array!("prims": "uint", "object BVH slots", [u32], |p| &p.prims),
+    scene_array!("big": "uint", "large objects", [u32], |p| &p.big),
+    scene_array!("instances": "Instance", "instances", [meshes::Instance], |p| {
+        &p.meshes.instances
+    }),
+    scene_array!("mesh_nodes": "BvhNode", "mesh BVH", [BvhNode], |p| &p.meshes.nodes),
+    scene_array!("tris": "TriVerts", "triangles", [TriVerts], |p| &p.meshes.tris),
+    scene_array!("normals": "float4", "vertex normals", [[f32; 4]], |p| {
+        &p.meshes.normals
+    }),
+    scene_array!("slots": "uint", "material slots", [u32], |p| &p.meshes.slots),
+];
+
+/// The `render` kernel's parameters after the scene's arrays, in order:
+/// (C type, name) as kernels/render.cl declares them.
+pub(super) const LAUNCH_PARAMS: [(&str, &str); 8] = [
+    ("__global float *", "film"),
+    ("__global uint *", "rejected"),
+    ("ulong", "first"),
+    ("uint", "count"),
+    ("uint", "pixel_base"),
+    ("uint", "pixel_end"),
+    ("__global const uint4 *", "work"),
+    ("uint", "mode"),
+];
+
+/// The job's scene on the device: one buffer per entry of [`SCENE_ARRAYS`],
+/// in its order.
+pub(super) struct SceneBuffers(Vec<Buffer<u8>>);
 
 /// Where one launch adds its samples.
 pub(super) struct LaunchArgs<'a> {
@@ -40,6 +117,29 @@ pub(super) struct LaunchArgs<'a> {
     pub mode: cl_uint,
 }
 
+/// A kernel argument's value.
+enum Arg {
+    Mem(cl_mem),
+    U32(cl_uint),
+    U64(cl_ulong),
+}
+
+impl LaunchArgs<'_> {
+    /// The values of [`LAUNCH_PARAMS`], in its order.
+    fn values(&self) -> [Arg; LAUNCH_PARAMS.len()] {
+        [
+            Arg::Mem(self.film.get()),
+            Arg::Mem(self.rejected.get()),
+            Arg::U64(self.first),
+            Arg::U32(self.count),
+            Arg::U32(self.pixel_base),
+            Arg::U32(self.pixel_end),
+            Arg::Mem(self.work.get()),
+            Arg::U32(self.mode),
+        ]
+    }
+}
+
 /// What a device can hold: the largest buffer, and all buffers together.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemoryLimits {
@@ -47,32 +147,16 @@ pub struct MemoryLimits {
     pub total_bytes: u64,
 }
 
-/// Bytes of each buffer a job needs on the device: its scene and a film
-/// of `film_bytes`.
-pub(super) fn job_bytes(p: &Packed, film_bytes: usize) -> [(&'static str, usize); 13] {
-    let b = |n: usize, size: usize| n.max(1) * size;
-    let m = &p.meshes;
-    [
-        ("film", film_bytes),
-        ("objects", b(p.objects.len(), size_of::<layout::Object>())),
-        (
-            "materials",
-            b(p.materials.len(), size_of::<layout::Material>()),
-        ),
-        ("lights", b(p.lights.len(), size_of::<layout::Light>())),
-        ("object BVH", b(p.nodes.len(), size_of::<BvhNode>())),
-        ("object BVH slots", b(p.prims.len(), 4)),
-        ("large objects", b(p.big.len(), 4)),
-        (
-            "instances",
-            b(m.instances.len(), size_of::<meshes::Instance>()),
-        ),
-        ("mesh BVH", b(m.nodes.len(), size_of::<BvhNode>())),
-        ("triangles", b(m.tris.len(), size_of::<TriVerts>())),
-        ("vertex normals", b(m.normals.len(), 16)),
-        ("material slots", b(m.slots.len(), 4)),
-        ("params", size_of::<layout::Params>()),
-    ]
+/// Bytes of each buffer a job needs on the device: a film of `film_bytes`
+/// and its scene's arrays (each at least one element: OpenCL refuses empty
+/// buffers).
+pub(super) fn job_bytes(p: &Packed, film_bytes: usize) -> Vec<(&'static str, usize)> {
+    let arrays = SCENE_ARRAYS
+        .iter()
+        .map(|a| (a.label, (a.bytes)(p).len().max(a.elem_bytes)));
+    std::iter::once(("film", film_bytes))
+        .chain(arrays)
+        .collect()
 }
 
 /// Whether buffers of `bytes` fit `limits`, with `resident` bytes of other
@@ -106,68 +190,44 @@ pub(super) fn check_fits(bytes: &[(&str, usize)], limits: MemoryLimits) -> Resul
 impl SceneBuffers {
     pub(super) fn upload(cl: &OpenClBackend, p: &Packed) -> Result<Self, OpenClError> {
         let read = Access::ReadOnly;
-        let m = &p.meshes;
-        Ok(Self {
-            params: cl.upload(read, std::slice::from_ref(&p.params))?,
-            objects: cl.upload(read, &p.objects)?,
-            materials: cl.upload(read, &p.materials)?,
-            lights: cl.upload(read, &p.lights)?,
-            nodes: cl.upload(read, &p.nodes)?,
-            prims: cl.upload(read, &p.prims)?,
-            big: cl.upload(read, &p.big)?,
-            instances: cl.upload(read, &m.instances)?,
-            mesh_nodes: cl.upload(read, &m.nodes)?,
-            tris: cl.upload(read, &m.tris)?,
-            normals: cl.upload(read, &m.normals)?,
-            slots: cl.upload(read, &m.slots)?,
-        })
+        let buffers = SCENE_ARRAYS.iter().map(|a| match (a.bytes)(p) {
+            // One element the kernel never reads (the counts say none).
+            [] => cl.buffer(read, a.elem_bytes),
+            bytes => cl.upload(read, bytes),
+        });
+        Ok(Self(buffers.collect::<Result<_, _>>()?))
     }
 
-    /// Sets every argument of `kernel`.
+    /// Sets every argument of `kernel`: the scene's arrays, then `a`.
     ///
     /// # Safety
     /// `kernel` must be the `render` kernel of kernels/render.cl, whose
-    /// parameters are, in order: the params, objects, materials and lights
-    /// (`__global` pointers), the film and the rejection counter, `ulong
-    /// first`, `uint count`, `uint pixel_base`, `uint pixel_end`, then the
-    /// BVH's nodes, prims and big objects and the meshes' instances, nodes,
-    /// triangles, normals and slots (`__global` pointers); each pointer
-    /// argument gets the `cl_mem` of a buffer of that element type.
+    /// parameters are the arrays of `kernels/scene_arrays.h` (`__global`
+    /// pointers, in [`SCENE_ARRAYS`] order: a test holds the two lists
+    /// equal) and then [`LAUNCH_PARAMS`]; each pointer argument gets the
+    /// `cl_mem` of a buffer of that element type.
     #[allow(unsafe_code)]
     pub(super) unsafe fn set_args(
         &self,
         kernel: &Kernel,
         a: &LaunchArgs,
     ) -> Result<(), OpenClError> {
-        let mems = [
-            (0, self.params.get()),
-            (1, self.objects.get()),
-            (2, self.materials.get()),
-            (3, self.lights.get()),
-            (4, a.film.get()),
-            (5, a.rejected.get()),
-            (10, self.nodes.get()),
-            (11, self.prims.get()),
-            (12, self.big.get()),
-            (13, self.instances.get()),
-            (14, self.mesh_nodes.get()),
-            (15, self.tris.get()),
-            (16, self.normals.get()),
-            (17, self.slots.get()),
-            (18, a.work.get()),
-        ];
-        // SAFETY: per the contract above, every index gets the type the
-        // kernel declares there.
-        #[allow(unsafe_code)]
-        unsafe {
-            for (i, mem) in mems {
-                kernel.set_arg(i, &mem).map_err(call("set_arg"))?;
+        let scene = self.0.iter().map(|b| Arg::Mem(b.get()));
+        for (i, arg) in scene.chain(a.values()).enumerate() {
+            let i = i as cl_uint;
+            // SAFETY: per the contract above, argument i has the type the
+            // kernel declares there: the buffers hold SCENE_ARRAYS' element
+            // types (uploaded from the same table), and `values` gives
+            // LAUNCH_PARAMS' types in its order.
+            #[allow(unsafe_code)]
+            unsafe {
+                match arg {
+                    Arg::Mem(m) => kernel.set_arg(i, &m),
+                    Arg::U32(v) => kernel.set_arg(i, &v),
+                    Arg::U64(v) => kernel.set_arg(i, &v),
+                }
             }
-            kernel.set_arg(6, &a.first).map_err(call("set_arg"))?;
-            kernel.set_arg(7, &a.count).map_err(call("set_arg"))?;
-            kernel.set_arg(8, &a.pixel_base).map_err(call("set_arg"))?;
-            kernel.set_arg(9, &a.pixel_end).map_err(call("set_arg"))?;
-            kernel.set_arg(19, &a.mode).map_err(call("set_arg"))?;
+            .map_err(call("set_arg"))?;
         }
         Ok(())
     }

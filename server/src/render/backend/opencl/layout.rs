@@ -1,6 +1,21 @@
 //! Host twins of the kernel's shared structs (`kernels/types.h`): same field
 //! names, `#[repr(C)]`, 16-byte aligned, sizes asserted here and checked
-//! against the device's own `sizeof` by the `check_layout_sizes` kernel.
+//! against the device's own `sizeof` by the `check_layout_sizes` kernel;
+//! and the constants host and kernel share ([`SHARED_CONSTANTS`]), which
+//! every program build receives as `-D NAME=VALUEu`.
+//!
+//! Adding a shared constant:
+//! 1. define it once on the host (here, or as a `pub(crate) const` where
+//!    the Rust code that uses it lives) and add it to [`SHARED_CONSTANTS`]:
+//!    an integer as itself, an `f32` as its bits under `NAME_BITS`;
+//! 2. in `kernels/`, use the name (a float as `as_float(NAME_BITS)`), never
+//!    a `#define` of it or of its value (`contract_tests.rs` scans
+//!    `kernels/` for both, and for upper-case names that nothing defines);
+//! 3. nothing else: `shared_defines` passes the table to every build,
+//!    the routine checks' included.
+//!
+//! Adding a scene array (a device buffer the kernel reads): see the
+//! checklist in `buffers.rs`.
 
 use crate::render::bvh::BvhNode;
 use crate::render::job::RenderJob;
@@ -26,8 +41,11 @@ pub const MAT_GLASS: u32 = 2;
 pub const NO_OBJECT: u32 = u32::MAX;
 
 /// The constants host and kernel share, written once: every program is
-/// built with them as `-D NAME=VALUEu` (kernels/types.h defines none).
-pub const SHARED_CONSTANTS: [(&str, u32); 17] = [
+/// built with them as `-D NAME=VALUEu` (kernels/ defines none). An `f32`
+/// goes as its bits, named `NAME_BITS`, and the kernel reads it with
+/// `as_float`, so both sides hold the same float bit for bit (a decimal
+/// literal in C would be a second definition, rounded by another compiler).
+pub const SHARED_CONSTANTS: [(&str, u32); 20] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -42,9 +60,17 @@ pub const SHARED_CONSTANTS: [(&str, u32); 17] = [
     ("NO_OBJECT", NO_OBJECT),
     ("BVH_ROBUST_BITS", crate::render::bvh::ROBUST.to_bits()),
     ("GAMMA7_BITS", crate::render::math::gamma(7).to_bits()),
+    (
+        "MAX_SURVIVAL_BITS",
+        crate::render::integrator::MAX_SURVIVAL.to_bits(),
+    ),
     ("ADAPTIVE_TILE", crate::render::adaptive::TILE_SIZE),
     ("WORK_LIST", WORK_LIST),
     ("WORK_DENSE", WORK_DENSE),
+    // The generic program's traversal stacks (specialised ones are sized
+    // to the scene's trees, `program::bvh_stack`).
+    ("MAX_BVH_STACK", crate::render::bvh::STACK as u32),
+    ("FILM_FLOATS", super::FILM_FLOATS as u32),
 ];
 
 /// How a launch finds its pixels and samples (the kernel's `mode`): every

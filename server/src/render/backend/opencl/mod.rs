@@ -17,6 +17,8 @@
 
 mod buffers;
 mod check;
+#[cfg(test)]
+mod contract_tests;
 mod devices;
 mod launch;
 mod layout;
@@ -60,7 +62,9 @@ pub const TILE: usize = 1 << 16;
 /// Work-items per work-group (a multiple of NVIDIA's warp and AMD's
 /// wavefront, and small enough for any device's limit).
 const LOCAL_SIZE: usize = 64;
-/// Floats per pixel in the device film: [even hi, even lo, odd hi, odd lo] x rgb.
+/// Floats per pixel in the device film: [even hi, even lo, odd hi, odd lo] x
+/// rgb, the odd samples' from `FILM_FLOATS / 2` (a shared constant: the
+/// kernel's stride and offset are this one).
 const FILM_FLOATS: usize = 12;
 
 #[derive(Debug, thiserror::Error)]
@@ -432,7 +436,7 @@ impl OpenClBackend {
                 .zip(device_film.chunks_exact_mut(FILM_FLOATS))
             {
                 for c in 0..3 {
-                    for (half, base) in [(px.even[c], 0), (px.odd[c], 6)] {
+                    for (half, base) in [(px.even[c], 0), (px.odd[c], FILM_FLOATS / 2)] {
                         let hi = half as f32;
                         out[base + c] = hi;
                         out[base + 3 + c] = (half - f64::from(hi)) as f32;

@@ -16,7 +16,8 @@ use opencl3::context::Context;
 use opencl3::program::Program;
 
 /// The kernel's sources in dependency order (`kernels/`, built into the binary).
-pub const SOURCES: [&str; 11] = [
+pub const SOURCES: [&str; 12] = [
+    include_str!("../../../../../kernels/scene_arrays.h"),
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
     include_str!("../../../../../kernels/camera.h"),

@@ -79,13 +79,14 @@ impl OpenClBackend {
                 .enqueue_read_buffer(&state.rejected, CL_BLOCKING, 0, &mut rejected, &[])
                 .map_err(call("film read"))?;
         }
+        let odd = FILM_FLOATS / 2;
         for (px, s) in film.pixels_mut()[range]
             .iter_mut()
             .zip(sums.chunks_exact(FILM_FLOATS))
         {
             for c in 0..3 {
                 px.even[c] = f64::from(s[c]) + f64::from(s[3 + c]);
-                px.odd[c] = f64::from(s[6 + c]) + f64::from(s[9 + c]);
+                px.odd[c] = f64::from(s[odd + c]) + f64::from(s[odd + 3 + c]);
             }
         }
         // The device counter holds the rejections since the film was uploaded.
