@@ -1,5 +1,5 @@
 //! The WebSocket frame stream. The server sends binary frames, PNG at the
-//! film's size unless the socket asks otherwise (`service/stream.rs`: JPEG,
+//! film's size unless the socket asks otherwise (`api/stream.rs`: JPEG,
 //! a smaller width), each followed by a text message with its stats
 //! (`format`, `frame_bytes`, `frame_width`, `frame_height` included); the
 //! client sends JSON changes: `{"camera": {...}}`, `{"light": {...}}`,

@@ -1,10 +1,12 @@
-//! The renderer. It knows nothing of HTTP: a scene, an image size and quality
-//! settings go in; a film that converges comes out.
+//! The renderer. It knows nothing of HTTP and reads no files: a scene, an
+//! image size and quality settings go in; a film that converges comes out.
 //!
 //! - `scene`: validated scene model, JSON, built-in scenes
 //! - `world`, `shape`, `bvh`, `ray`: the scene as the hot path sees it
 //! - `camera`, `filter`, `sampler`: where camera samples go and their randomness
-//! - `material`, `fresnel`, `light`, `integrator`: the path tracer
+//! - `material`, `fresnel`, `light`: how surfaces scatter, what emits
+//! - `integrator`: the path tracer, next-event estimation included
+//! - `adaptive`: where an adaptive render's samples go
 //! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
 //! - `quality`, `preset`, `job`, `pass`, `progressive`, `backend`: what to
 //!   render, in which passes, and where

@@ -1,3 +1,6 @@
+//! Tests of the BVH: its structure for random and degenerate boxes, and
+//! traversals that meet every leaf a ray meets.
+
 use super::*;
 use crate::render::math::Vec3A;
 use crate::render::sampler::Sampler;

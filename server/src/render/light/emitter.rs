@@ -10,6 +10,16 @@
 //! - the environment: cosine-weighted about the shading normal.
 //!
 //! Every emitter is two-sided (emission leaves both sides of a surface).
+//!
+//! ## Adding an emitter kind ([`EmitterShape`])
+//! 1. Here: its `EmitterShape` variant, its `power` and how
+//!    `sample_direction` samples it (a chi-square test of the pdf).
+//! 2. `render/world/emitters.rs`: which objects make it; the shadow ray's
+//!    visibility test in `render/integrator/nee.rs`.
+//! 3. OpenCL: a `LIGHT_` constant and its packing (`kernel_lights` in
+//!    `backend/opencl/layout.rs`), its `HAS_` feature (`program.rs`), its
+//!    case in `kernels/lights.h`, and a case in the light-sampling parity
+//!    test (`tests/opencl_parity_meshes.rs`).
 
 use super::alias::AliasTable;
 use crate::render::material::cosine_hemisphere;

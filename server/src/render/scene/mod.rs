@@ -4,6 +4,34 @@
 //! meshes whose files loaded (see `import`).
 //! World coordinates stay in f64 here; the hot path gets camera-relative f32
 //! (see `render::world`).
+//!
+//! ## Adding a material kind ([`MaterialKind`])
+//! 1. Scene JSON: its `MaterialJson` variant and tag (`json.rs`), its checks
+//!    and JSON form (`materials.rs`), its `MaterialKind` variant here.
+//! 2. The hot path: its `Bsdf` and how `scatter` samples it
+//!    (`render/material.rs`); whether next-event estimation applies to it
+//!    (`render/integrator`).
+//! 3. OpenCL: a `MAT_` constant in `SHARED_CONSTANTS` and its packing
+//!    (`backend/opencl/layout.rs`), its `HAS_` feature
+//!    (`backend/opencl/program.rs`), its case in `kernels/materials.h`.
+//! 4. Model files that have it: `model::Material` and
+//!    `resolve::material_json`.
+//! 5. Tests: a CPU/OpenCL parity case (`tests/opencl_parity.rs`) and a
+//!    closed-form check (furnace or analytic).
+//!
+//! ## Adding a shape kind ([`Shape`])
+//! 1. Scene JSON: its `ObjectJson` variant and tag (`json.rs`), its checks
+//!    and JSON form (`validate.rs`), its bounds and transform (`frame.rs`,
+//!    `transform.rs`), its `Shape` variant here.
+//! 2. The hot path: a file of its own in `render/shape/` (intersection,
+//!    normal), its `world::Geometry` variant, box and accelerator choice
+//!    (`world/build.rs`), hit and surface (`world/mod.rs`); if it can
+//!    emit, an emitter kind (`render/light/emitter.rs`).
+//! 3. OpenCL: a `KIND_` constant and its packing (`layout.rs`), its `HAS_`
+//!    feature (`program.rs`), its test in `kernels/shapes.h` and
+//!    `kernels/world.h`.
+//! 4. Tests: intersection against a brute-force or analytic answer, a
+//!    parity case, a furnace.
 
 mod builtin;
 mod edit;
