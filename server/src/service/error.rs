@@ -1,10 +1,11 @@
 //! One error type for the whole API: a 4xx says what was wrong with the
 //! request, naming the field; a 5xx says little and the detail is logged.
-//! Every error body is `{"error": "..."}`.
+//! Every error body is `{"error": "..."}` (the contract's `ErrorBody`).
 
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
+use pathstream_wire::{ErrorBody, StreamError};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
@@ -61,16 +62,19 @@ impl From<crate::render::scene::EditError> for ApiError {
     }
 }
 
+/// A stream request that cannot be honoured; its message names the field.
+impl From<StreamError> for ApiError {
+    fn from(e: StreamError) -> Self {
+        ApiError::BadRequest(e.to_string())
+    }
+}
+
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
         if let ApiError::Internal(detail) = &self {
             tracing::error!(%detail, "internal error");
         }
-        let mut response = (
-            self.status(),
-            Json(serde_json::json!({"error": self.to_string()})),
-        )
-            .into_response();
+        let mut response = (self.status(), Json(ErrorBody::new(self.to_string()))).into_response();
         if matches!(self, ApiError::Unauthorized) {
             response.headers_mut().insert(
                 "www-authenticate",

@@ -6,26 +6,19 @@ use super::load::BusyMeter;
 use super::metrics::Metrics;
 use super::session::Session;
 use crate::render::Backend;
-use serde::Serialize;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, Weak};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// What a worker renders with, as `/api/health` and `/api/devices` report it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
-pub struct BackendInfo {
-    /// `cpu` or `opencl`.
-    pub backend: String,
-    pub device: String,
-}
+pub use pathstream_wire::BackendInfo;
 
-impl BackendInfo {
-    pub fn of(backend: &Backend) -> Self {
-        Self {
-            backend: backend.name().to_owned(),
-            device: backend.device(),
-        }
+/// What `backend` renders with, as the API names it.
+fn backend_info(backend: &Backend) -> BackendInfo {
+    BackendInfo {
+        backend: backend.name().to_owned(),
+        device: backend.device(),
     }
 }
 
@@ -77,7 +70,7 @@ impl Worker {
     /// Starts worker number `index` (its place in the service's list).
     pub fn start(index: usize, mut backend: Backend, metrics: Arc<Metrics>) -> Worker {
         let shared = Arc::new(WorkerShared {
-            info: Mutex::new(BackendInfo::of(&backend)),
+            info: Mutex::new(backend_info(&backend)),
             sessions: Mutex::new(Vec::new()),
             wake: Condvar::new(),
             stop: AtomicBool::new(false),
@@ -177,7 +170,7 @@ fn run(index: usize, backend: &mut Backend, shared: &WorkerShared, metrics: &Met
             shared.busy.count(Instant::now(), paths);
             if backend.name() != rendering_with {
                 rendering_with = backend.name();
-                let info = BackendInfo::of(backend);
+                let info = backend_info(backend);
                 tracing::warn!(backend = %info.backend, device = %info.device, "the worker now renders elsewhere");
                 *lock(&shared.info) = info;
             }
