@@ -2,6 +2,7 @@
 
 use crate::error::{ClientError, Result};
 use crate::types::*;
+use pathstream_wire::{Asset, AssetList, Devices, Health, SessionStatus, Uploaded};
 use std::time::Duration;
 
 /// A blocking client (it owns a small single-threaded runtime).

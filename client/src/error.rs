@@ -31,3 +31,10 @@ impl ClientError {
 }
 
 pub type Result<T> = std::result::Result<T, ClientError>;
+
+/// The message of an error body (`{"error": "..."}`), if `body` is one.
+pub(crate) fn message_of(body: &[u8]) -> Option<String> {
+    serde_json::from_slice::<pathstream_wire::ErrorBody>(body)
+        .ok()
+        .map(|b| b.error)
+}

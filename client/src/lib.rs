@@ -23,7 +23,17 @@ mod stream;
 mod types;
 
 pub use error::{ClientError, Result};
-pub use linear::{srgb8, ImageError, LinearFrame, LinearImage};
+pub use linear::{ImageError, LinearFrame, LinearImage};
+/// The whole contract, for what the names above leave out (the stream's
+/// stats and settings, error bodies).
+pub use pathstream_wire as wire;
+/// Linear radiance to the 8-bit sRGB of the server's `frame.png`.
+pub use pathstream_wire::tonemap::srgb8;
+/// What the server answers: the contract's types, shared with the server.
+pub use pathstream_wire::{
+    Asset, AssetList, BackendInfo, Camera, DeviceShare, Devices, Health, Light, OpenClDevice,
+    Quality, Scenes, SessionList, SessionStatus, SppSpread, Uploaded, WorkerLoad,
+};
 pub use stream::FrameStream;
 pub use types::*;
 
@@ -91,10 +101,7 @@ impl Client {
         }
         let status = response.status().as_u16();
         let text = response.text().await.unwrap_or_default();
-        let message = serde_json::from_str::<serde_json::Value>(&text)
-            .ok()
-            .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
-            .unwrap_or(text);
+        let message = error::message_of(text.as_bytes()).unwrap_or(text);
         Err(ClientError::Server { status, message })
     }
 

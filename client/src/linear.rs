@@ -1,8 +1,12 @@
 //! Linear images as the server sends them (`GET /api/sessions/{id}/frame.pfm`):
 //! little-endian RGB PFM, header `PF\n<w> <h>\n-1.0\n`, rows bottom to top on
 //! the wire, top row first in memory. And the PNG the server would make of
-//! one: exposure 0, clipped to [0, 1], the sRGB transfer curve, 8 bits (the
-//! server's `render/tonemap.rs`, which this client does not depend on).
+//! one: exposure 0, clipped to [0, 1], the sRGB transfer curve, 8 bits. Both
+//! the format and the curve are the contract's (`pathstream_wire::pfm`,
+//! `pathstream_wire::tonemap`), the code the server runs too.
+
+use pathstream_wire::pfm;
+use pathstream_wire::tonemap::srgb8;
 
 /// What is wrong with an image or a set of images to merge.
 #[derive(Debug, thiserror::Error)]
@@ -47,49 +51,7 @@ pub struct LinearFrame {
 impl LinearImage {
     /// Reads a PFM as the server writes it (colour, little-endian).
     pub fn decode_pfm(data: &[u8]) -> Result<Self, ImageError> {
-        let bad = |why: &str| ImageError::Pfm(why.to_owned());
-        let mut fields = Vec::with_capacity(4);
-        let mut pos = 0;
-        while fields.len() < 4 {
-            while data.get(pos).is_some_and(u8::is_ascii_whitespace) {
-                pos += 1;
-            }
-            let start = pos;
-            while data.get(pos).is_some_and(|b| !b.is_ascii_whitespace()) {
-                pos += 1;
-            }
-            let field = data.get(start..pos).filter(|f| !f.is_empty());
-            let field = field.ok_or_else(|| bad("truncated header"))?;
-            fields.push(std::str::from_utf8(field).map_err(|_| bad("header is not text"))?);
-        }
-        pos += 1; // the one whitespace byte after the scale
-        if fields[0] != "PF" {
-            return Err(bad("only colour PFM (PF) is supported"));
-        }
-        let width: u32 = fields[1].parse().map_err(|_| bad("bad width"))?;
-        let height: u32 = fields[2].parse().map_err(|_| bad("bad height"))?;
-        let scale: f32 = fields[3].parse().map_err(|_| bad("bad scale"))?;
-        if !(scale < 0.0) {
-            return Err(bad("only little-endian PFM is supported"));
-        }
-        if width == 0 || height == 0 {
-            return Err(bad("empty image"));
-        }
-        let body = data.get(pos..).ok_or_else(|| bad("truncated data"))?;
-        let row_bytes = 12 * width as usize;
-        if body.len() as u64 != 12 * u64::from(width) * u64::from(height) {
-            return Err(bad("data size does not match the header"));
-        }
-        let pixel = |px: &[u8]| -> [f32; 3] {
-            std::array::from_fn(|c| {
-                f32::from_le_bytes([px[4 * c], px[4 * c + 1], px[4 * c + 2], px[4 * c + 3]])
-            })
-        };
-        let pixels = body
-            .chunks_exact(row_bytes)
-            .rev()
-            .flat_map(|row| row.chunks_exact(12).map(pixel))
-            .collect();
+        let (width, height, pixels) = pfm::decode(data).map_err(|e| ImageError::Pfm(e.0))?;
         Ok(Self {
             width,
             height,
@@ -99,14 +61,7 @@ impl LinearImage {
 
     /// The image as PFM, byte for byte as the server writes it.
     pub fn encode_pfm(&self) -> Vec<u8> {
-        let mut out = format!("PF\n{} {}\n-1.0\n", self.width, self.height).into_bytes();
-        out.reserve(self.pixels.len() * 12);
-        for row in self.pixels.chunks(self.width.max(1) as usize).rev() {
-            for v in row.iter().flatten() {
-                out.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-        out
+        pfm::encode(self.width, self.height, &self.pixels)
     }
 
     /// The image as 8-bit sRGB PNG, the pixels the server's `frame.png`
@@ -131,20 +86,6 @@ impl LinearImage {
             .map(|&v| f64::from(v) * f64::from(v))
             .sum()
     }
-}
-
-/// Linear radiance to 8-bit sRGB at exposure 0: clipped to [0, 1], the sRGB
-/// curve, rounded; NaN maps to 0. The same f32 arithmetic as the server's
-/// tone map, so the same bytes.
-pub fn srgb8(v: f32) -> u8 {
-    let v = v.clamp(0.0, 1.0);
-    let e = if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    // `as` saturates and maps NaN to 0.
-    (e * 255.0 + 0.5) as u8
 }
 
 #[cfg(test)]

@@ -22,6 +22,7 @@
 //! noise per sample it equals `1 / sqrt(sum_i 1 / e_i^2)`.
 
 use crate::linear::{ImageError, LinearFrame, LinearImage};
+use pathstream_wire::error_estimate::relative;
 
 /// The merged image.
 #[derive(Clone, Debug, PartialEq)]
@@ -106,16 +107,6 @@ pub fn combined_error(parts: &[(u64, Option<f64>)]) -> Option<f64> {
         err2 += w * w * e * e;
     }
     Some(err2.sqrt())
-}
-
-fn relative(err2: f64, sig2: f64) -> f64 {
-    if err2 == 0.0 {
-        0.0
-    } else if sig2 == 0.0 {
-        f64::INFINITY
-    } else {
-        (err2 / sig2).sqrt()
-    }
 }
 
 #[cfg(test)]

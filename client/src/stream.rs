@@ -1,9 +1,10 @@
 //! The frame stream: a `Stream` of frames with their stats, and a way to
 //! send changes on the same socket.
 
-use crate::error::{ClientError, Result};
-use crate::types::{SessionStatus, StreamFrame};
+use crate::error::{message_of, ClientError, Result};
+use crate::types::StreamFrame;
 use futures_util::{SinkExt, Stream, StreamExt};
+use pathstream_wire::StreamMessage;
 use serde_json::Value;
 use std::pin::Pin;
 use std::task::{Context, Poll};
@@ -29,11 +30,8 @@ impl FrameStream {
             .map_err(|e| match e {
                 tokio_tungstenite::tungstenite::Error::Http(r) => ClientError::Server {
                     status: r.status().as_u16(),
-                    message: r
-                        .body()
-                        .as_deref()
-                        .and_then(|b| serde_json::from_slice::<Value>(b).ok())
-                        .and_then(|v| v.get("error").and_then(|e| e.as_str()).map(str::to_owned))
+                    message: (r.body().as_deref())
+                        .and_then(message_of)
                         .unwrap_or_else(|| "WebSocket upgrade refused".into()),
                 },
                 other => ClientError::Unreachable(other.to_string()),
@@ -58,18 +56,6 @@ impl FrameStream {
     }
 }
 
-fn parse_stats(text: &str) -> Result<(SessionStatus, u64)> {
-    let mut v: Value =
-        serde_json::from_str(text).map_err(|e| ClientError::Protocol(e.to_string()))?;
-    let map = v
-        .as_object_mut()
-        .ok_or_else(|| ClientError::Protocol("stats: not an object".into()))?;
-    map.remove("type");
-    let seq = map.remove("frame").and_then(|f| f.as_u64()).unwrap_or(0);
-    let status = serde_json::from_value(v).map_err(|e| ClientError::Protocol(e.to_string()))?;
-    Ok((status, seq))
-}
-
 impl Stream for FrameStream {
     type Item = Result<StreamFrame>;
 
@@ -86,29 +72,23 @@ impl Stream for FrameStream {
             match message {
                 Message::Binary(png) => self.png = Some(png.to_vec()),
                 Message::Text(text) => {
-                    let kind = serde_json::from_str::<Value>(text.as_str())
-                        .ok()
-                        .and_then(|v| v.get("type").and_then(|t| t.as_str()).map(str::to_owned));
-                    if kind.as_deref() == Some("error") {
-                        let message = serde_json::from_str::<Value>(text.as_str())
-                            .ok()
-                            .and_then(|v| {
-                                v.get("error").and_then(|e| e.as_str()).map(str::to_owned)
-                            })
-                            .unwrap_or_default();
-                        return Poll::Ready(Some(Err(ClientError::Server {
-                            status: 400,
-                            message,
-                        })));
-                    }
+                    let stats = match serde_json::from_str::<StreamMessage>(text.as_str()) {
+                        Ok(StreamMessage::Error(e)) => {
+                            return Poll::Ready(Some(Err(ClientError::Server {
+                                status: 400,
+                                message: e.error,
+                            })))
+                        }
+                        Ok(StreamMessage::Stats(stats)) => Ok(*stats),
+                        Err(e) => Err(ClientError::Protocol(e.to_string())),
+                    };
+                    // Stats with no frame before them are not a frame.
                     let Some(png) = self.png.take() else { continue };
-                    return Poll::Ready(Some(
-                        parse_stats(text.as_str()).map(|(status, seq)| StreamFrame {
-                            png,
-                            status,
-                            seq,
-                        }),
-                    ));
+                    return Poll::Ready(Some(stats.map(|s| StreamFrame {
+                        png,
+                        status: s.status,
+                        seq: s.frame,
+                    })));
                 }
                 Message::Close(_) => return Poll::Ready(None),
                 _ => {}

@@ -1,11 +1,12 @@
 //! The client library against a real server: every call, the error paths,
-//! and contract drift (the server's JSON and the client's types must have
-//! exactly the same fields).
+//! and contract drift (what the server sends must read into the shared wire
+//! types and back unchanged: the same fields, the same values).
 
-use futures_util::StreamExt;
+use futures_util::{SinkExt, StreamExt};
 use pathstream::api::{start, Running};
 use pathstream::render::BackendChoice;
 use pathstream::service::ServeConfig;
+use pathstream_client::wire::{ErrorBody, StreamMessage};
 use pathstream_client::{
     CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SceneSpec,
     SessionStatus,
@@ -14,6 +15,7 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 use serde_json::{json, Value};
 use std::time::Duration;
+use tokio_tungstenite::tungstenite::Message as WsMessage;
 
 async fn server(token: Option<&str>) -> Running {
     start(ServeConfig {
@@ -220,41 +222,69 @@ async fn errors_carry_the_servers_message_and_status() {
     assert!(matches!(Client::new("ftp://x"), Err(ClientError::Input(_))));
 }
 
-/// Every key path in `v`, e.g. `camera.position`, `light.index`.
-fn key_paths(v: &Value, prefix: &str, out: &mut Vec<String>) {
-    if let Value::Object(map) = v {
-        for (k, child) in map {
-            let path = if prefix.is_empty() {
-                k.clone()
-            } else {
-                format!("{prefix}.{k}")
-            };
-            out.push(path.clone());
-            key_paths(child, &path, out);
+/// The fields that are f32 on both sides (written as f64 in some bodies,
+/// so compared at f32 precision); every other number must read back as it
+/// was sent.
+const F32_FIELDS: [&str; 1] = ["quality.clamp"];
+
+/// Where `back` (the server's JSON read into the wire type and written
+/// again) differs from `sent`, path by path, arrays' items included: keys
+/// the type does not know, keys it adds, values it changes (an integer
+/// read back as a float too).
+fn differences(sent: &Value, back: &Value, path: &str, out: &mut Vec<String>) {
+    let at = |key: &str| {
+        if path.is_empty() {
+            key.to_owned()
+        } else {
+            format!("{path}.{key}")
         }
+    };
+    match (sent, back) {
+        (Value::Object(a), Value::Object(b)) => {
+            for (key, v) in a {
+                match b.get(key) {
+                    Some(w) => differences(v, w, &at(key), out),
+                    None => out.push(format!("{}: unknown to the wire types", at(key))),
+                }
+            }
+            for key in b.keys().filter(|k| !a.contains_key(*k)) {
+                out.push(format!("{}: expected, but the server lacks it", at(key)));
+            }
+        }
+        (Value::Array(a), Value::Array(b)) if a.len() == b.len() => {
+            for (i, (v, w)) in a.iter().zip(b).enumerate() {
+                differences(v, w, &format!("{path}[{i}]"), out);
+            }
+        }
+        (Value::Number(a), Value::Number(b))
+            if a.is_f64() && b.is_f64() && F32_FIELDS.iter().any(|f| path.ends_with(f)) =>
+        {
+            let (x, y) = (a.as_f64().unwrap_or(0.0), b.as_f64().unwrap_or(0.0));
+            if x as f32 != y as f32 {
+                out.push(format!("{path}: sent {x}, read back as {y}"));
+            }
+        }
+        (a, b) if a == b => {}
+        (a, b) => out.push(format!("{path}: sent {a}, read back as {b}")),
     }
 }
 
-/// The server's JSON parses into the client's type, and the type has
-/// exactly the server's fields: none unknown to the client, none missing.
+/// The server's JSON parses into the wire type, and reads back the same:
+/// no field unknown to the type, none that the server leaves out, no value
+/// changed (in nested objects and arrays too). Where the server serializes
+/// the wire type itself this holds by construction; it is checked on what
+/// the server actually sends, so that a body assembled around the types (a
+/// list, the stream's stats, an error) or a value converted into them on
+/// the way out cannot drift either.
 fn assert_no_drift<T: DeserializeOwned + Serialize>(what: &str, server: &Value) -> T {
     let typed: T = serde_json::from_value(server.clone())
         .unwrap_or_else(|e| panic!("{what}: the client cannot read it: {e}\n{server}"));
     let back = serde_json::to_value(&typed).expect("serialize");
-    let (mut a, mut b) = (Vec::new(), Vec::new());
-    key_paths(server, "", &mut a);
-    key_paths(&back, "", &mut b);
-    a.sort();
-    b.sort();
-    let unknown: Vec<_> = a.iter().filter(|k| !b.contains(k)).collect();
-    let missing: Vec<_> = b.iter().filter(|k| !a.contains(k)).collect();
+    let mut out = Vec::new();
+    differences(server, &back, "", &mut out);
     assert!(
-        unknown.is_empty(),
-        "{what}: the server sends fields the client does not know: {unknown:?}"
-    );
-    assert!(
-        missing.is_empty(),
-        "{what}: the client expects fields the server lacks: {missing:?}"
+        out.is_empty(),
+        "{what}: drift from the wire types: {out:?}\n{server}"
     );
     typed
 }
@@ -306,6 +336,99 @@ async fn the_client_types_match_every_route_of_the_server() {
         "GET /api/sessions",
         &client.get_json("/api/sessions").await.expect("json"),
     );
+    running.shutdown().await.expect("shutdown");
+}
+
+/// The next text message on `socket` (frames in between are skipped).
+async fn next_text(socket: &mut Socket) -> Value {
+    loop {
+        let message = tokio::time::timeout(Duration::from_secs(30), socket.next())
+            .await
+            .expect("a message in time")
+            .expect("the socket stays open")
+            .expect("a message");
+        if let WsMessage::Text(text) = message {
+            return serde_json::from_str(text.as_str()).expect("JSON text");
+        }
+    }
+}
+
+type Socket =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_streams_messages_and_the_error_bodies_match_the_wire_types() {
+    let running = server(None).await;
+    let base = format!("http://{}", running.addr);
+    let client = Client::new(&base).expect("client");
+    let response = reqwest::get(format!("{base}/api/sessions/missing"))
+        .await
+        .expect("an answer");
+    assert_eq!(response.status().as_u16(), 404);
+    let body: ErrorBody = assert_no_drift("a 404's body", &response.json().await.expect("JSON"));
+    assert_eq!(body.error, "no session 'missing'");
+
+    // A quality whose clamp is not exact in binary: the stats write the
+    // f32 widened, the status does not; both read back.
+    let mut req = small("cornell");
+    req.quality = Some(QualityPatch {
+        clamp: Some(0.1),
+        ..req.quality.unwrap_or_default()
+    });
+    let s = client.create_session(&req).await.expect("create");
+    let ws = base.replacen("http", "ws", 1);
+    let refused =
+        tokio_tungstenite::connect_async(format!("{ws}/api/sessions/{}/ws?format=gif", s.id));
+    match refused.await {
+        Err(tokio_tungstenite::tungstenite::Error::Http(r)) => {
+            assert_eq!(r.status().as_u16(), 400);
+            let body = serde_json::from_slice(r.body().as_deref().unwrap_or_default());
+            let body: ErrorBody = assert_no_drift("a refused upgrade's body", &body.expect("JSON"));
+            assert_eq!(
+                body.error,
+                "stream.format: must be png, jpeg or webp (got 'gif')"
+            );
+        }
+        other => panic!("expected a 400, got {other:?}"),
+    }
+
+    let url = format!("{ws}/api/sessions/{}/ws?format=jpeg&quality=50", s.id);
+    let (mut socket, _) = tokio_tungstenite::connect_async(url)
+        .await
+        .expect("connects");
+    match assert_no_drift("the stream's stats", &next_text(&mut socket).await) {
+        StreamMessage::Stats(stats) => {
+            assert_eq!(
+                (stats.status.id, stats.format.as_str()),
+                (s.id.clone(), "jpeg")
+            );
+            assert!(stats.frame >= 1 && stats.frame_bytes > 0);
+        }
+        other => panic!("expected stats, got {other:?}"),
+    }
+    for (sent, said) in [
+        (
+            r#"{"nonsense": 1}"#,
+            "message: unknown key 'nonsense' (expected camera, light, quality or scene)",
+        ),
+        (
+            r#"{"stream": {"format": "gif"}}"#,
+            "stream.format: must be png, jpeg or webp (got 'gif')",
+        ),
+    ] {
+        socket.send(WsMessage::text(sent)).await.expect("sends");
+        let error = loop {
+            let text = next_text(&mut socket).await;
+            if text["type"] == "error" {
+                break text;
+            }
+        };
+        let error: StreamMessage = assert_no_drift("the stream's error", &error);
+        assert_eq!(error, StreamMessage::Error(ErrorBody::new(said)));
+    }
+    let status = client.get_json(&format!("/api/sessions/{}", s.id)).await;
+    let status: SessionStatus = assert_no_drift("a clamped status", &status.expect("json"));
+    assert_eq!(status.quality.clamp, 0.1);
     running.shutdown().await.expect("shutdown");
 }
 

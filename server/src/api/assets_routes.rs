@@ -23,8 +23,8 @@ use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
 use axum::http::{header, StatusCode};
 use axum::routing::get;
 use axum::{Json, Router};
-use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use pathstream_wire::{AssetList, Uploaded};
+use serde::Deserialize;
 use std::sync::Arc;
 
 type AppResult<T> = Result<T, ApiError>;
@@ -46,13 +46,6 @@ pub fn router(max_bytes: usize) -> Router<Arc<AppState>> {
 struct UploadQuery {
     /// The file's name (its extension tells the format when the bytes do not).
     name: Option<String>,
-}
-
-#[derive(Serialize)]
-struct Uploaded {
-    #[serde(flatten)]
-    info: AssetInfo,
-    deduplicated: bool,
 }
 
 async fn upload(
@@ -101,19 +94,18 @@ async fn upload(
     Ok((
         status,
         Json(Uploaded {
-            info: asset.info(),
+            asset: asset.info(),
             deduplicated: !new,
         }),
     ))
 }
 
-async fn list(State(state): State<Arc<AppState>>) -> Json<Value> {
-    let assets: Vec<AssetInfo> = state.assets.list().iter().map(|a| a.info()).collect();
-    Json(json!({
-        "assets": assets,
-        "memory_bytes": state.assets.memory(),
-        "memory_limit_bytes": state.assets.limits.max_total_bytes,
-    }))
+async fn list(State(state): State<Arc<AppState>>) -> Json<AssetList> {
+    Json(AssetList {
+        assets: state.assets.list().iter().map(|a| a.info()).collect(),
+        memory_bytes: state.assets.memory() as u64,
+        memory_limit_bytes: state.assets.limits.max_total_bytes as u64,
+    })
 }
 
 fn unknown(id: &str) -> ApiError {

@@ -1,10 +1,12 @@
 //! Service errors as HTTP responses: the status of each kind, and the body
-//! `{"error": "..."}` (a 5xx says "internal error" and logs the detail).
+//! `{"error": "..."}`, the contract's `ErrorBody` (a 5xx says "internal
+//! error" and logs the detail).
 
 use crate::service::ApiError;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
+use pathstream_wire::ErrorBody;
 
 /// The HTTP status of each kind of error.
 pub fn status(e: &ApiError) -> StatusCode {
@@ -27,11 +29,7 @@ impl IntoResponse for ApiError {
         if let ApiError::Internal(detail) = &self {
             tracing::error!(%detail, "internal error");
         }
-        let mut response = (
-            status(&self),
-            Json(serde_json::json!({"error": self.to_string()})),
-        )
-            .into_response();
+        let mut response = (status(&self), Json(ErrorBody::new(self.to_string()))).into_response();
         if matches!(self, ApiError::Unauthorized) {
             response.headers_mut().insert(
                 "www-authenticate",

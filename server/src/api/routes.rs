@@ -4,6 +4,7 @@
 
 use super::auth::require_token;
 use super::{assets_routes, static_files, ws};
+use crate::render::backend::opencl::DeviceInfo;
 use crate::render::scene::{CameraEdit, LightEdit, BUILTIN_NAMES};
 use crate::render::{Preset, Quality};
 use crate::service::change::Change;
@@ -18,6 +19,7 @@ use axum::middleware;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, patch, put};
 use axum::{Json, Router};
+use pathstream_wire::{Devices, Health, OpenClDevice, Scenes};
 use serde::Deserialize;
 use serde_json::{json, Value};
 use std::sync::Arc;
@@ -112,31 +114,65 @@ fn body_bytes(body: Result<Bytes, BytesRejection>, limit: usize) -> AppResult<By
 /// Liveness and load: this box's node name (null without `--node-name`),
 /// its sessions, and per worker its sessions and the fraction of the last
 /// 5 s it spent rendering (`"load"`, in the order of `"backends"`).
-async fn health(State(state): State<Arc<AppState>>) -> Json<Value> {
-    Json(json!({
-        "status": "ok",
-        "version": env!("CARGO_PKG_VERSION"),
-        "node": state.config.node_name,
-        "sessions": state.session_count(),
-        "backends": state.backends(),
-        "load": state.load(),
-    }))
+async fn health(State(state): State<Arc<AppState>>) -> Json<Health> {
+    Json(Health {
+        status: "ok".into(),
+        version: env!("CARGO_PKG_VERSION").into(),
+        node: state.config.node_name.clone(),
+        sessions: state.session_count(),
+        backends: state.backends(),
+        load: state.load(),
+    })
 }
 
 /// The workers as they render now (after an OpenCL device failed, rayon)
 /// and the OpenCL devices this machine lists.
-async fn devices(State(state): State<Arc<AppState>>) -> Json<Value> {
+async fn devices(State(state): State<Arc<AppState>>) -> Json<Devices> {
     let listed = crate::render::backend::opencl::list_devices();
-    Json(json!({
-        "backends": state.backends(),
-        "default": state.default_backend().backend,
-        "opencl_devices": listed.as_ref().ok(),
-        "opencl_error": listed.as_ref().err(),
-    }))
+    Json(Devices {
+        backends: state.backends(),
+        default: state.default_backend().backend,
+        opencl_devices: (listed.as_ref().ok()).map(|l| l.iter().map(opencl_device).collect()),
+        opencl_error: listed.err(),
+    })
 }
 
-async fn scenes() -> Json<Value> {
-    Json(json!({"scenes": BUILTIN_NAMES}))
+/// An OpenCL device as the API lists it (without the handle the renderer
+/// keeps). Taken apart field by field: a field added to the renderer's
+/// listing fails to compile here until the contract has it too.
+fn opencl_device(d: &DeviceInfo) -> OpenClDevice {
+    let DeviceInfo {
+        index,
+        platform,
+        name,
+        vendor,
+        kind,
+        compute_units,
+        global_mem_bytes,
+        max_alloc_bytes,
+        fp64,
+        opencl_c_version,
+        correctly_rounded_divide_sqrt: _,
+        device: _,
+    } = d.clone();
+    OpenClDevice {
+        index,
+        platform,
+        name,
+        vendor,
+        kind: kind.to_owned(),
+        compute_units,
+        global_mem_bytes,
+        max_alloc_bytes,
+        fp64,
+        opencl_c_version,
+    }
+}
+
+async fn scenes() -> Json<Scenes> {
+    Json(Scenes {
+        scenes: BUILTIN_NAMES.iter().map(|&n| n.to_owned()).collect(),
+    })
 }
 
 /// The quality presets: name, what it is for, and the settings it applies.

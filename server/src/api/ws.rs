@@ -15,7 +15,7 @@
 //! frame after a change goes at a quarter of the width, the next at half.
 
 use super::link::{progressive_width, Link};
-use super::stream::{StreamRequest, StreamSettings};
+use super::stream::{encoding, StreamRequest, StreamSettings};
 use crate::service::change::Change;
 use crate::service::frame::Encoded;
 use crate::service::session::{Frame, Session, Status};
@@ -25,6 +25,7 @@ use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
 use axum::response::Response;
 use futures_util::{SinkExt, StreamExt};
+use pathstream_wire::{ErrorBody, Stats, StreamMessage};
 use serde_json::{json, Value};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -52,47 +53,50 @@ pub async fn upgrade(
         .on_upgrade(move |socket| serve(socket, state, session, settings)))
 }
 
+/// The stats of `frame`, just sent as `image`: the session's status with
+/// the frame's own figures where it is of the current generation (not
+/// those of whatever came after it), and how it went out.
 fn stats(
-    status: &Status,
+    mut status: Status,
     frame: &Frame,
     settings: StreamSettings,
     image: &Encoded,
     link: &Link,
     now: Instant,
-) -> Value {
-    let mut v = serde_json::to_value(status).unwrap_or_else(|_| json!({}));
-    if let Value::Object(m) = &mut v {
-        m.insert("type".into(), json!("stats"));
-        m.insert("format".into(), json!(settings.format.name()));
-        m.insert("frame_bytes".into(), json!(image.bytes.len()));
-        m.insert("frame_width".into(), json!(image.width));
-        m.insert("frame_height".into(), json!(image.height));
-        m.insert("progressive".into(), json!(settings.progressive));
-        m.insert("preview".into(), json!(frame.preview));
-        m.insert("delivered_fps".into(), json!(link.fps(now)));
-        m.insert("link_mbps".into(), json!(link.mbps()));
-        m.insert(
-            "delivery_ms".into(),
-            json!(link.last_delivery().map(|d| d.as_secs_f64() * 1e3)),
-        );
-        // The stats of the frame just sent, not of whatever came after it.
-        if frame.generation == status.generation {
-            m.insert("spp".into(), json!(frame.spp));
-            m.insert("spp_spread".into(), json!(frame.spread));
-            m.insert("error_estimate".into(), json!(frame.error_estimate));
-            m.insert("samples_per_sec".into(), json!(frame.samples_per_sec));
-        }
-        m.insert("frame".into(), json!(frame.seq));
-        // The frame's own restart, which may be older than the session's.
-        m.insert("generation".into(), json!(frame.generation));
+) -> StreamMessage {
+    if frame.generation == status.generation {
+        status.spp = frame.spp;
+        status.spp_spread = frame.spread;
+        status.error_estimate = frame.error_estimate;
+        status.samples_per_sec = frame.samples_per_sec;
     }
-    v
+    // The frame's own restart, which may be older than the session's.
+    status.generation = frame.generation;
+    StreamMessage::Stats(Box::new(Stats {
+        status,
+        frame: frame.seq,
+        format: settings.format.name().to_owned(),
+        frame_bytes: image.bytes.len() as u64,
+        frame_width: image.width,
+        frame_height: image.height,
+        progressive: settings.progressive,
+        preview: frame.preview,
+        delivered_fps: link.fps(now) as u64,
+        link_mbps: link.mbps(),
+        delivery_ms: link.last_delivery().map(|d| d.as_secs_f64() * 1e3),
+    }))
+}
+
+/// A text message. Written through a `Value`, as these messages always
+/// were: its keys in sorted order and f32 fields (`quality.clamp`) widened
+/// to f64, so the bytes on the socket are unchanged.
+fn text(message: &StreamMessage) -> Message {
+    let json = serde_json::to_value(message).unwrap_or_else(|_| json!({}));
+    Message::Text(Utf8Bytes::from(json.to_string()))
 }
 
 fn error_message(e: &str) -> Message {
-    Message::Text(Utf8Bytes::from(
-        json!({"type": "error", "error": e}).to_string(),
-    ))
+    text(&StreamMessage::Error(ErrorBody::new(e)))
 }
 
 /// Takes a `stream` setting out of a client message, if it has one; the
@@ -223,7 +227,7 @@ async fn write(
                     let busy = encoding_ahead.clone();
                     busy.store(true, Ordering::Release);
                     tokio::task::spawn_blocking(move || {
-                        let _ = frame.encoded(wanted.encoding());
+                        let _ = frame.encoded(encoding(wanted));
                         busy.store(false, Ordering::Release);
                     });
                 }
@@ -248,7 +252,7 @@ async fn write(
                 nth += 1;
                 let f = frame.clone();
                 let encode = Instant::now();
-                let image = match tokio::task::spawn_blocking(move || f.encoded(wanted.encoding())).await {
+                let image = match tokio::task::spawn_blocking(move || f.encoded(encoding(wanted))).await {
                     Ok(Ok(image)) => image,
                     _ => break,
                 };
@@ -261,10 +265,10 @@ async fn write(
                     "frame out"
                 );
                 link.sending(frame.seq, image.bytes.len(), start);
-                let text = stats(&session.status(), &frame, settings, &image, &link, start).to_string();
+                let stats = text(&stats(session.status(), &frame, settings, &image, &link, start));
                 let send = async {
                     sink.send(Message::Binary(image.bytes.to_vec().into())).await?;
-                    sink.send(Message::Text(Utf8Bytes::from(text))).await
+                    sink.send(stats).await
                 };
                 match tokio::time::timeout(SEND_TIMEOUT, send).await {
                     Ok(Ok(())) => {

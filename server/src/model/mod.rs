@@ -146,13 +146,8 @@ pub enum Format {
 }
 
 /// Whether a file name has a model file's extension (`.obj`, `.gltf`,
-/// `.glb`, `.ply`, any case).
-pub fn is_model_name(name: &str) -> bool {
-    let lower = name.to_ascii_lowercase();
-    [".obj", ".gltf", ".glb", ".ply"]
-        .iter()
-        .any(|e| lower.ends_with(e))
-}
+/// `.glb`, `.ply`, any case): the contract's, which clients use too.
+pub use pathstream_wire::asset::is_model_name;
 
 /// Reads a model file; references to other files (OBJ's `mtllib`, a
 /// `.gltf`'s external buffers) resolve relative to its directory (absolute

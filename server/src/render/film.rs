@@ -22,7 +22,12 @@
 
 use crate::render::adaptive::{self, Goal, TileError, TileState, TileWork, Tiles};
 use crate::render::math::{is_finite3, Vec3A};
+use pathstream_wire::error_estimate::relative;
 use rayon::prelude::*;
+
+/// The spread of samples per pixel over a film's pixels, as the status
+/// reports it (a plain triple: the film fills the contract's own type).
+pub use pathstream_wire::SppSpread;
 
 /// Sums of one pixel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
@@ -77,14 +82,6 @@ pub struct Film {
     /// The index of the film's first sample: 0, except for a block of
     /// samples rendered on one of several devices ([`Film::block`]).
     first: u64,
-}
-
-/// The spread of samples per pixel over a film's pixels.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct SppSpread {
-    pub min: u64,
-    pub median: u64,
-    pub max: u64,
 }
 
 impl Film {
@@ -501,16 +498,6 @@ impl Factors {
             sig2 += m * m;
         }
         (err2, sig2)
-    }
-}
-
-fn relative(err2: f64, sig2: f64) -> f64 {
-    if err2 == 0.0 {
-        0.0
-    } else if sig2 == 0.0 {
-        f64::INFINITY
-    } else {
-        (err2 / sig2).sqrt()
     }
 }
 

@@ -1,5 +1,6 @@
 //! Image files: PNG (tone-mapped sRGB, fast compression) and PFM (linear
-//! little-endian f32 RGB, header `PF\n<w> <h>\n-1.0\n`, rows bottom to top).
+//! little-endian f32 RGB, header `PF\n<w> <h>\n-1.0\n`, rows bottom to top; the
+//! format is the contract's, `pathstream_wire::pfm`).
 
 use crate::render::tonemap::Tonemap;
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
@@ -116,66 +117,15 @@ pub fn encode_webp(
     Ok(encoded.to_vec())
 }
 
-/// Linear PFM of an image (row-major, top row first; PFM stores bottom first).
+/// Linear PFM of an image (row-major, top row first; PFM stores bottom
+/// first), byte for byte what `frame.pfm` carries.
 pub fn encode_pfm(width: u32, height: u32, rgb: &[[f32; 3]]) -> Vec<u8> {
-    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
-    out.reserve(rgb.len() * 12);
-    for row in rgb.chunks(width as usize).rev() {
-        for v in row.iter().flatten() {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-    }
-    out
+    pathstream_wire::pfm::encode(width, height, rgb)
 }
 
 /// Reads a PFM written by [`encode_pfm`] (little-endian RGB only).
 pub fn decode_pfm(data: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), OutputError> {
-    let bad = |why: &str| OutputError::Pfm(why.to_owned());
-    let mut fields = Vec::new();
-    let mut pos = 0;
-    while fields.len() < 4 {
-        while pos < data.len() && data[pos].is_ascii_whitespace() {
-            pos += 1;
-        }
-        let start = pos;
-        while pos < data.len() && !data[pos].is_ascii_whitespace() {
-            pos += 1;
-        }
-        if start == pos {
-            return Err(bad("truncated header"));
-        }
-        fields.push(std::str::from_utf8(&data[start..pos]).map_err(|_| bad("header is not text"))?);
-    }
-    pos += 1; // the single whitespace byte after the scale
-    if fields[0] != "PF" {
-        return Err(bad("only colour PFM (PF) is supported"));
-    }
-    let width: u32 = fields[1].parse().map_err(|_| bad("bad width"))?;
-    let height: u32 = fields[2].parse().map_err(|_| bad("bad height"))?;
-    let scale: f32 = fields[3].parse().map_err(|_| bad("bad scale"))?;
-    if scale >= 0.0 {
-        return Err(bad("only little-endian PFM is supported"));
-    }
-    if width == 0 || height == 0 {
-        return Err(bad("empty image"));
-    }
-    let count = width as usize * height as usize;
-    let body = data.get(pos..).ok_or_else(|| bad("truncated data"))?;
-    if body.len() != count * 12 {
-        return Err(bad("data size does not match the header"));
-    }
-    let pixel = |px: &[u8]| -> [f32; 3] {
-        std::array::from_fn(|c| {
-            f32::from_le_bytes([px[4 * c], px[4 * c + 1], px[4 * c + 2], px[4 * c + 3]])
-        })
-    };
-    // Bottom row first on disk: reverse the rows to get the top row first.
-    let rgb = body
-        .chunks_exact(12 * width as usize)
-        .rev()
-        .flat_map(|row| row.chunks_exact(12).map(pixel))
-        .collect();
-    Ok((width, height, rgb))
+    pathstream_wire::pfm::decode(data).map_err(|e| OutputError::Pfm(e.0))
 }
 
 /// Writes PNG or PFM by the path's extension.

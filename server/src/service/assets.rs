@@ -10,7 +10,6 @@
 
 use crate::model::{self, Limits};
 use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
-use serde::Serialize;
 use sha2::{Digest, Sha256};
 use std::collections::HashMap;
 use std::sync::{Arc, RwLock};
@@ -53,20 +52,7 @@ pub struct Asset {
 }
 
 /// An asset as the API reports it.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct AssetInfo {
-    pub id: String,
-    pub name: String,
-    pub format: &'static str,
-    pub bytes: usize,
-    pub memory_bytes: usize,
-    pub triangles: u64,
-    pub meshes: usize,
-    pub instances: usize,
-    pub materials: Vec<String>,
-    pub has_camera: bool,
-    pub warnings: Vec<String>,
-}
+pub use pathstream_wire::Asset as AssetInfo;
 
 impl Asset {
     pub fn info(&self) -> AssetInfo {
@@ -74,12 +60,12 @@ impl Asset {
         AssetInfo {
             id: self.id.clone(),
             name: self.name.clone(),
-            format: self.format,
-            bytes: self.bytes,
-            memory_bytes: self.memory,
+            format: self.format.to_owned(),
+            bytes: self.bytes as u64,
+            memory_bytes: self.memory as u64,
             triangles: m.triangles(),
-            meshes: m.meshes.len(),
-            instances: m.instances.len(),
+            meshes: m.meshes.len() as u64,
+            instances: m.instances.len() as u64,
             materials: m.materials.iter().map(|(n, _)| n.clone()).collect(),
             has_camera: m.camera.is_some(),
             warnings: m.warnings.clone(),

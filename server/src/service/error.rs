@@ -3,6 +3,8 @@
 //! (`crate::api`) answers each kind with its status: a 4xx says what was
 //! wrong with the request; a 5xx says little and the detail is logged.
 
+use pathstream_wire::StreamError;
+
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
     #[error("{0}")]
@@ -39,6 +41,13 @@ impl ApiError {
 /// A refused scene edit is the client's mistake; its message names the field.
 impl From<crate::render::scene::EditError> for ApiError {
     fn from(e: crate::render::scene::EditError) -> Self {
+        ApiError::BadRequest(e.to_string())
+    }
+}
+
+/// A stream request that cannot be honoured; its message names the field.
+impl From<StreamError> for ApiError {
+    fn from(e: StreamError) -> Self {
         ApiError::BadRequest(e.to_string())
     }
 }

@@ -9,30 +9,9 @@ use super::scaled::{downscale, Preview};
 use crate::render::film::SppSpread;
 use crate::render::output::{encode_jpeg, encode_pfm, encode_png, encode_webp, WEBP_MAX_SIDE};
 use crate::render::tonemap::Tonemap;
+pub use pathstream_wire::stream::StreamFormat;
 use std::borrow::Cow;
 use std::sync::{Arc, Mutex, OnceLock};
-
-/// An image format a frame is encoded in.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum StreamFormat {
-    /// Exact: the default.
-    #[default]
-    Png,
-    /// Several times smaller on a noisy image, and the cheapest to encode.
-    Jpeg { quality: u8 },
-    /// Lossy WebP: smaller again.
-    Webp { quality: u8 },
-}
-
-impl StreamFormat {
-    pub fn name(self) -> &'static str {
-        match self {
-            StreamFormat::Png => "png",
-            StreamFormat::Jpeg { .. } => "jpeg",
-            StreamFormat::Webp { .. } => "webp",
-        }
-    }
-}
 
 /// How to encode a frame: the format, and a width to scale it down to
 /// (None: the film's).

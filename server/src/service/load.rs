@@ -7,7 +7,6 @@
 //! the figure follows a box that starts or stops rendering within about one
 //! window, and never depends on how often it is asked for.
 
-use serde::Serialize;
 use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
@@ -18,21 +17,9 @@ pub const SLOTS: usize = 10;
 /// The span `busy` is measured over.
 pub const WINDOW: Duration = Duration::from_millis(500 * SLOTS as u64);
 
-/// One worker's load, as `/api/health` reports it under `"load"`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct WorkerLoad {
-    /// `cpu` or `opencl`, as the worker renders now.
-    pub backend: String,
-    pub device: String,
-    /// Sessions placed on the worker (rendering or halted).
-    pub sessions: usize,
-    /// Fraction of the last [`WINDOW`] spent rendering, 0..1 to 3 decimals.
-    pub busy: f64,
-    /// Camera paths per second over the last [`WINDOW`] (all its sessions).
-    pub samples_per_sec: f64,
-    /// Camera paths rendered since the service started.
-    pub samples: u64,
-}
+/// One worker's load, as `/api/health` reports it under `"load"` (`busy`
+/// and `samples_per_sec` over the last [`WINDOW`]).
+pub use pathstream_wire::WorkerLoad;
 
 /// A per-worker series: name, type, help, and the value of one worker.
 type Series = (

@@ -2,7 +2,6 @@
 //! once, and what a worker renders with.
 
 use crate::render::Backend;
-use serde::Serialize;
 
 /// Where a session renders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -14,18 +13,12 @@ pub enum Placement {
 }
 
 /// What a worker renders with, as `/api/health` and `/api/devices` report it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
-pub struct BackendInfo {
-    /// `cpu` or `opencl`.
-    pub backend: String,
-    pub device: String,
-}
+pub use pathstream_wire::BackendInfo;
 
-impl BackendInfo {
-    pub fn of(backend: &Backend) -> Self {
-        Self {
-            backend: backend.name().to_owned(),
-            device: backend.device(),
-        }
+/// What `backend` renders with, as the API names it.
+pub fn backend_info(backend: &Backend) -> BackendInfo {
+    BackendInfo {
+        backend: backend.name().to_owned(),
+        device: backend.device(),
     }
 }

@@ -4,7 +4,7 @@
 
 use super::load::BusyMeter;
 use super::metrics::Metrics;
-use super::placement::BackendInfo;
+use super::placement::{backend_info, BackendInfo};
 use super::session::Session;
 use crate::render::Backend;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -47,7 +47,7 @@ impl Worker {
     /// Starts worker number `index` (its place in the service's list).
     pub fn start(index: usize, mut backend: Backend, metrics: Arc<Metrics>) -> Worker {
         let shared = Arc::new(WorkerShared {
-            info: Mutex::new(BackendInfo::of(&backend)),
+            info: Mutex::new(backend_info(&backend)),
             sessions: Mutex::new(Vec::new()),
             wake: Condvar::new(),
             stop: AtomicBool::new(false),
@@ -152,7 +152,7 @@ fn run(index: usize, backend: &mut Backend, shared: &WorkerShared, metrics: &Met
             shared.busy.count(Instant::now(), paths);
             if backend.name() != rendering_with {
                 rendering_with = backend.name();
-                let info = BackendInfo::of(backend);
+                let info = backend_info(backend);
                 tracing::warn!(backend = %info.backend, device = %info.device, "the worker now renders elsewhere");
                 *lock(&shared.info) = info;
             }

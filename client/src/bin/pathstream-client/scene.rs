@@ -2,16 +2,9 @@
 //! files uploaded first), or a model file uploaded and placed whole.
 
 use super::{usage, Failure};
+use pathstream_client::wire::asset::is_model_name;
 use pathstream_client::{Client, ClientError, SceneSpec};
 use std::path::Path;
-
-/// Model files the server reads (by extension).
-pub fn is_model_file(name: &str) -> bool {
-    let lower = name.to_ascii_lowercase();
-    [".obj", ".gltf", ".glb", ".ply"]
-        .iter()
-        .any(|e| lower.ends_with(e))
-}
 
 /// Uploads a model file; prints what the server says it does not render.
 pub async fn upload(client: &Client, path: &Path, what: &str) -> Result<String, Failure> {
@@ -42,7 +35,7 @@ pub async fn upload(client: &Client, path: &Path, what: &str) -> Result<String, 
 /// lit by the server's defaults).
 pub async fn scene_spec(client: &Client, scene: &str) -> Result<SceneSpec, Failure> {
     let path = Path::new(scene);
-    if is_model_file(scene) && path.is_file() {
+    if is_model_name(scene) && path.is_file() {
         let id = upload(client, path, &format!("--scene {scene}")).await?;
         return Ok(SceneSpec::Json(
             serde_json::json!({"objects": [{"type": "model", "asset": id}]}),

@@ -19,7 +19,7 @@ use crate::render::progressive::{self, Progress};
 use crate::render::split::DeviceShare;
 use crate::render::{Backend, Film, Quality, RenderJob, Scene};
 use lanes::Lanes;
-pub use status::{Status, WorkerShare};
+pub use status::Status;
 use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};

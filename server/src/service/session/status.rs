@@ -1,63 +1,17 @@
-//! What `GET /api/sessions/{id}` reports of a session.
+//! What `GET /api/sessions/{id}` reports of a session: the contract's
+//! `SessionStatus`, filled from the session's state. The renderer's own
+//! types (the quality with its typed filter, a device's share without its
+//! worker number) become the contract's here, at the edge.
 
 use super::{lock, Session};
-use crate::render::film::SppSpread;
-use crate::render::scene::LightInfo;
+use crate::render::scene::{CameraJson, LightInfo};
 use crate::render::split::DeviceShare;
 use crate::render::Quality;
-use serde::Serialize;
+use pathstream_wire as wire;
 use std::sync::atomic::Ordering;
 
 /// Status as `GET /api/sessions/{id}` reports it.
-#[derive(Debug, Serialize)]
-pub struct Status {
-    pub id: String,
-    pub scene: String,
-    pub width: u32,
-    pub height: u32,
-    pub camera: crate::render::scene::CameraJson,
-    pub light: Option<LightInfo>,
-    pub quality: Quality,
-    /// `rendering` or `halted` (also after a device failure, see `failure`).
-    pub state: &'static str,
-    /// Samples per pixel (adaptive: the mean, rounded down).
-    pub spp: u64,
-    /// The least, median and most samples of a pixel.
-    pub spp_spread: SppSpread,
-    /// Adaptive tiles at their share of the target error, of `tiles`
-    /// (squares of `tile_size` pixels, cut short at the right and bottom).
-    pub tiles_done: usize,
-    pub tiles: usize,
-    pub tile_size: u32,
-    pub error_estimate: Option<f64>,
-    pub samples_per_sec: f64,
-    pub elapsed_ms: f64,
-    pub rejected: u64,
-    pub backend: String,
-    pub device: String,
-    /// Time the device has spent rendering this session, all generations
-    /// (how a worker shares its device among its sessions).
-    pub render_ms: f64,
-    /// What each device rendered of this generation (several for a session
-    /// on every device).
-    pub devices: Vec<WorkerShare>,
-    pub generation: u64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub failure: Option<String>,
-    /// What the scene holds that is not rendered as given (unsupported
-    /// material features, a default sky, automatic framing).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
-}
-
-/// One worker's share of a session's samples.
-#[derive(Debug, Serialize)]
-pub struct WorkerShare {
-    /// The worker's number (the order of `/api/health`'s `backends`).
-    pub worker: usize,
-    #[serde(flatten)]
-    pub share: DeviceShare,
-}
+pub use pathstream_wire::SessionStatus as Status;
 
 impl Session {
     pub fn status(&self) -> Status {
@@ -71,21 +25,21 @@ impl Session {
             scene: st.scene_name.clone(),
             width: st.width,
             height: st.height,
-            camera: c,
-            light: st.scene.light_info(),
-            quality: st.quality,
-            state: if st.halted { "halted" } else { "rendering" },
+            camera: camera(c),
+            light: st.scene.light_info().map(light),
+            quality: quality(&st.quality),
+            state: if st.halted { "halted" } else { "rendering" }.to_owned(),
             spp: if current { frame.spp } else { 0 },
             spp_spread: if current {
                 frame.spread
             } else {
-                SppSpread::default()
+                wire::SppSpread::default()
             },
             tiles_done: match (&frame.density, current) {
-                (Some(d), true) => d.done_count(),
+                (Some(d), true) => d.done_count() as u64,
                 _ => 0,
             },
-            tiles: crate::render::adaptive::Tiles::new(st.width, st.height).count(),
+            tiles: crate::render::adaptive::Tiles::new(st.width, st.height).count() as u64,
             tile_size: crate::render::adaptive::TILE_SIZE,
             error_estimate: if current { frame.error_estimate } else { None },
             samples_per_sec: if current { frame.samples_per_sec } else { 0.0 },
@@ -95,14 +49,108 @@ impl Session {
             device: frame.device.clone(),
             render_ms: self.render_ns.load(Ordering::Relaxed) as f64 / 1e6,
             devices: (st.devices.iter())
-                .map(|(&worker, share)| WorkerShare {
-                    worker,
-                    share: share.clone(),
-                })
+                .map(|(&worker, share)| device_share(worker, share))
                 .collect(),
             generation: st.generation,
             failure: st.failure.clone(),
             warnings: st.scene.warnings.clone(),
         }
+    }
+}
+
+// Each conversion moves every field, as `conversions_lose_nothing` checks.
+
+fn camera(c: CameraJson) -> wire::Camera {
+    wire::Camera {
+        position: c.position,
+        look_at: c.look_at,
+        up: c.up,
+        vfov_deg: c.vfov_deg,
+        near_clip: c.near_clip,
+    }
+}
+
+fn light(l: LightInfo) -> wire::Light {
+    wire::Light {
+        index: l.index,
+        position: l.position,
+        color: l.color,
+        intensity: l.intensity,
+    }
+}
+
+/// The filter by its name; every other field as it is.
+fn quality(q: &Quality) -> wire::Quality {
+    wire::Quality {
+        max_depth: q.max_depth,
+        rr_depth: q.rr_depth,
+        nee: q.nee,
+        filter: q.filter.name().to_owned(),
+        clamp: q.clamp,
+        seed: q.seed,
+        adaptive: q.adaptive,
+        spp: q.spp,
+        time_ms: q.time_ms,
+        target_error: q.target_error,
+    }
+}
+
+/// A device's share, numbered by the worker that renders on it.
+fn device_share(worker: usize, share: &DeviceShare) -> wire::DeviceShare {
+    wire::DeviceShare {
+        worker,
+        backend: share.backend.clone(),
+        device: share.device.clone(),
+        samples: share.samples,
+        busy_s: share.busy_s,
+        samples_per_sec: share.samples_per_sec,
+        failure: share.failure.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde::Serialize;
+    use serde_json::{json, Value};
+
+    fn json_of(v: &impl Serialize) -> Value {
+        serde_json::to_value(v).expect("serializes")
+    }
+
+    /// The renderer's types still serialize themselves (scenes, the CLI):
+    /// what the API sends of them must be all of it, so that a field added
+    /// there cannot go missing from the contract unnoticed.
+    #[test]
+    fn conversions_lose_nothing() {
+        let c = CameraJson {
+            position: [1.0, 2.0, 3.0],
+            look_at: [0.0, 0.5, 0.0],
+            up: [0.0, 0.0, 1.0],
+            vfov_deg: 33.0,
+            near_clip: 0.25,
+        };
+        assert_eq!(json_of(&camera(c.clone())), json_of(&c));
+        let l = LightInfo {
+            index: 3,
+            position: [0.0, 9.0, 0.0],
+            color: [1.0, 0.5, 0.25],
+            intensity: 12.0,
+        };
+        assert_eq!(json_of(&light(l.clone())), json_of(&l));
+        let q = Quality {
+            spp: Some(64),
+            target_error: Some(0.01),
+            clamp: 0.1,
+            adaptive: true,
+            ..Quality::default()
+        };
+        assert_eq!(json_of(&quality(&q)), json_of(&q));
+        let mut share = DeviceShare::named("opencl", "gpu");
+        share.samples = 1 << 40;
+        share.failure = Some("lost".into());
+        let mut expected = json_of(&share);
+        expected["worker"] = json!(2);
+        assert_eq!(json_of(&device_share(2, &share)), expected);
     }
 }
