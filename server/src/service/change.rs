@@ -99,13 +99,22 @@ impl Change {
     /// One WebSocket message: a JSON object with any of the keys `scene`,
     /// `camera`, `light` and `quality`; the changes in that order.
     pub fn parse_message(text: &str, rules: &SceneRules<'_>) -> Result<Vec<Change>, ApiError> {
-        const ORDER: [&str; 4] = ["scene", "camera", "light", "quality"];
         let value: Value = parse_json(text.as_bytes())?;
-        let Value::Object(mut map) = value else {
+        let Value::Object(map) = value else {
             return Err(ApiError::BadRequest(
                 "message: must be a JSON object".into(),
             ));
         };
+        Self::from_fields(map, rules)
+    }
+
+    /// The changes of a message's fields (any of `scene`, `camera`, `light`
+    /// and `quality`), in that order.
+    pub fn from_fields(
+        mut map: serde_json::Map<String, Value>,
+        rules: &SceneRules<'_>,
+    ) -> Result<Vec<Change>, ApiError> {
+        const ORDER: [&str; 4] = ["scene", "camera", "light", "quality"];
         if let Some(other) = map.keys().find(|k| !ORDER.contains(&k.as_str())) {
             return Err(ApiError::BadRequest(format!(
                 "message: unknown key '{other}' (expected camera, light, quality or scene)"
