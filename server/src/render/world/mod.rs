@@ -74,21 +74,6 @@ impl Origin {
     };
 }
 
-impl Surface {
-    /// The surface as light sampling sees it, with its geometric and
-    /// shading normals `nl` and `ns` on the side the path arrived from.
-    #[inline(always)]
-    pub fn receiver(&self, nl: Vec3A, ns: Vec3A) -> Receiver {
-        Receiver {
-            p: self.p,
-            object: self.object,
-            prim: self.prim,
-            nl,
-            ns,
-        }
-    }
-}
-
 /// The nearest intersection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -139,6 +124,21 @@ pub struct Surface {
     pub prim: u32,
     /// For triangles: where to start rays that leave the surface.
     pub offset: Option<instance::Offset>,
+}
+
+impl Surface {
+    /// The surface as light sampling sees it, with its geometric and
+    /// shading normals `nl` and `ns` on the side the path arrived from.
+    #[inline(always)]
+    pub fn receiver(&self, nl: Vec3A, ns: Vec3A) -> Receiver {
+        Receiver {
+            p: self.p,
+            object: self.object,
+            prim: self.prim,
+            nl,
+            ns,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
