@@ -5,15 +5,25 @@ inline float tent(float u) {
     return r < 1.0f ? sqrt(r) - 1.0f : 1.0f - sqrt(2.0f - r);
 }
 
-/* Offset inside the pixel for sample `sample` (samples 2k, 2k+1 share a
- * sub-pixel). */
-inline float2 pixel_offset(__global const Params *P, ulong sample, float2 u) {
+/* Offset inside the pixel for sample `sample`: random numbers take the
+ * sub-pixel from the sample index (samples 2k, 2k+1 share one), Sobol
+ * points from each coordinate's top bit (filter.rs,
+ * pixel_offset_stratified). */
+inline float2 pixel_offset(__global const Params *P, ulong sample, float2 u, int stratified) {
     if (USE_BOX_FILTER) {
         return u;
     }
-    uint sub = (uint)((sample >> 1) & 3UL);
-    float sx = (float)(sub & 1u);
-    float sy = (float)(sub >> 1);
+    float sx, sy;
+    if (stratified) {
+        float2 t = 2.0f * u;
+        sx = t.x >= 1.0f ? 1.0f : 0.0f;
+        sy = t.y >= 1.0f ? 1.0f : 0.0f;
+        u = t - (float2)(sx, sy);
+    } else {
+        uint sub = (uint)((sample >> 1) & 3UL);
+        sx = (float)(sub & 1u);
+        sy = (float)(sub >> 1);
+    }
     return (float2)((sx + 0.5f + tent(u.x)) * 0.5f, (sy + 0.5f + tent(u.y)) * 0.5f);
 }
 

@@ -18,6 +18,35 @@ __kernel void check_rng(__global ulong *out, uint n, __global const ulong *in) {
     }
 }
 
+/* A path's numbers by use from sampler_of_kind(sobol, seed, pixel, sample)
+ * (4 ulongs per item: sobol, seed, pixel, sample): at vertices 0 and 3,
+ * the camera's 2-D, a light pick among 7, light 2-D for emitters 0 and 2,
+ * the BSDF's choice and 2-D, the roulette: 12 floats per vertex as bits
+ * (the pick as its two halves), 24 per item. */
+__kernel void check_sampler_uses(__global uint *out, uint n, __global const ulong *in) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Sampler s = sampler_of_kind((int)in[4 * i], in[4 * i + 1], in[4 * i + 2], in[4 * i + 3]);
+    __global uint *o = out + 24 * i;
+    for (uint k = 0; k < 2u; ++k) {
+        at_vertex(&s, 3u * k);
+        float2 c = camera_2d(&s);
+        ulong pick = light_pick(&s, 7u);
+        float2 l0 = light_2d(&s, 0u);
+        float2 l2 = light_2d(&s, 2u);
+        float b = bsdf_choice(&s);
+        float2 d = bsdf_2d(&s);
+        float r = roulette(&s);
+        uint v[12] = {as_uint(c.x), as_uint(c.y), (uint)(pick >> 32), (uint)pick, as_uint(l0.x), as_uint(l0.y),
+                      as_uint(l2.x), as_uint(l2.y), as_uint(b), as_uint(d.x), as_uint(d.y), as_uint(r)};
+        for (uint j = 0; j < 12u; ++j) {
+            o[12 * k + j] = v[j];
+        }
+    }
+}
+
 /* sincos_turns(u): (sin, cos). */
 __kernel void check_sincos(__global float *out, uint n, __global const float *u) {
     uint i = (uint)get_global_id(0);
@@ -29,13 +58,14 @@ __kernel void check_sincos(__global float *out, uint n, __global const float *u)
     out[2 * i + 1] = r.y;
 }
 
-/* pixel_offset(P, sample = i, (u[2i], u[2i+1])) with P's filter. */
+/* pixel_offset(P, sample = i, (u[2i], u[2i+1])) with P's filter, stratified
+ * as P's sampler is. */
 __kernel void check_pixel_offset(__global float *out, uint n, __global const float *u, __global const Params *P) {
     uint i = (uint)get_global_id(0);
     if (i >= n) {
         return;
     }
-    float2 r = pixel_offset(P, (ulong)i, (float2)(u[2 * i], u[2 * i + 1]));
+    float2 r = pixel_offset(P, (ulong)i, (float2)(u[2 * i], u[2 * i + 1]), P->sampler != 0u);
     out[2 * i] = r.x;
     out[2 * i + 1] = r.y;
 }

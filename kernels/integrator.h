@@ -62,6 +62,7 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
 #endif
             break;
         }
+        at_vertex(s, bounces);
         Surf sf = surface_at(sc, &hit, o, d);
         __global const Material *m = &materials[sf.material];
         if (m->emissive && (specular || !nee)) {
@@ -82,13 +83,13 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
                  * (light/mod.rs): no random number when there is one. */
                 uint j = 0u;
                 if (LIGHT_COUNT > 1u) {
-                    ulong bits = next_bits(s);
+                    ulong bits = light_pick(s, LIGHT_COUNT);
                     uint column = (uint)(((bits >> 32) * (ulong)LIGHT_COUNT) >> 32);
                     uint threshold = lights[column].threshold;
                     int keep = (uint)bits < threshold || threshold == 0xFFFFFFFFu;
                     j = keep ? column : lights[column].alias;
                 }
-                direct = direct_from(sc, &lights[j], &sf, nl, ns, next_2d(s));
+                direct = direct_from(sc, &lights[j], &sf, nl, ns, light_2d(s, 0u));
                 if (LIGHT_COUNT > 1u) {
                     direct = direct / lights[j].pmf;
                 }
@@ -111,7 +112,7 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         bounces += 1u;
         if (bounces > RR_DEPTH || !(max3(beta) > 0.0f)) {
             float q = fmin(max3(beta), as_float(MAX_SURVIVAL_BITS));
-            if (!(next_f32(s) < q)) {
+            if (!(roulette(s) < q)) {
                 break;
             }
             beta /= q;

@@ -50,7 +50,7 @@ inline float3 scatter(__global const Material *m, float3 d, int entering, float3
 #if HAS_DIFFUSE
     if (m->kind == MAT_DIFFUSE) {
         *specular = 0;
-        return cosine_hemisphere(nl, next_2d(s));
+        return cosine_hemisphere(nl, bsdf_2d(s));
     }
 #endif
     *specular = 1;
@@ -71,7 +71,7 @@ inline float3 scatter(__global const Material *m, float3 d, int entering, float3
             r = fresnel_exact(cos_i, cos_t, n1, n2);
 #endif
         }
-        if (next_f32(s) < r) {
+        if (bsdf_choice(s) < r) {
             return reflect_dir(d, nl);
         }
         *transmitted = 1;

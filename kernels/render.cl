@@ -68,8 +68,8 @@ __kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global ui
     __global float *px = film + (size_t)gid * FILM_FLOATS;
     for (uint k = 0; k < count; ++k) {
         ulong sample = first + (ulong)k;
-        Sampler s = sampler_new(P->seed, (ulong)gid, sample);
-        float2 off = pixel_offset(P, sample, next_2d(&s));
+        Sampler s = sampler_of_kind(USE_SOBOL, P->seed, (ulong)gid, sample);
+        float2 off = pixel_offset(P, sample, camera_2d(&s), s.sobol);
         float3 o, d;
         camera_ray(P, (float)x + off.x, (float)y + off.y, &o, &d);
         float3 l = radiance(&sc, o, d, &s);

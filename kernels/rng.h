@@ -1,5 +1,7 @@
-/* Counter-based random numbers: the CPU twin is server/src/render/sampler.rs
- * (same constants, same bits, so both make the same decisions). */
+/* Random numbers for paths: the CPU twin is server/src/render/sampler/
+ * (same constants, same bits, so both make the same decisions). A sampler
+ * is `random` (independent numbers drawn in order) or `sobol` (padded,
+ * Owen-scrambled Sobol points, one dimension per use of a vertex). */
 
 inline ulong mix64(ulong z) {
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9UL;
@@ -9,13 +11,42 @@ inline ulong mix64(ulong z) {
 
 typedef struct {
     ulong key;
-    ulong dim;
+    ulong dim;     /* random: dimensions drawn */
+    uint rindex;   /* sobol: the sample's index in its half, bit-reversed */
+    uint vertex;   /* sobol: the vertex whose numbers are drawn */
+    int sobol;
 } Sampler;
 
+inline uint reverse32(uint x) {
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+/* The `random` numbers of a sample (sampler/mod.rs, Sampler::new). */
 inline Sampler sampler_new(ulong seed, ulong pixel, ulong sample) {
     Sampler s;
     s.key = mix64(mix64(mix64(seed ^ 0x5851F42D4C957F2DUL) ^ pixel) ^ sample);
     s.dim = 0;
+    s.rindex = 0u;
+    s.vertex = 0u;
+    s.sobol = 0;
+    return s;
+}
+
+/* A sample's numbers of either kind (Sampler::of_kind). */
+inline Sampler sampler_of_kind(int sobol, ulong seed, ulong pixel, ulong sample) {
+    if (!sobol) {
+        return sampler_new(seed, pixel, sample);
+    }
+    Sampler s;
+    s.key = mix64(mix64(mix64(seed ^ 0x5851F42D4C957F2DUL) ^ pixel) ^ (sample & 1UL) ^ 0xA0761D6478BD642FUL);
+    s.dim = 0;
+    s.rindex = reverse32((uint)(sample >> 1));
+    s.vertex = 0u;
+    s.sobol = 1;
     return s;
 }
 
@@ -31,6 +62,106 @@ inline float next_f32(Sampler *s) {
 inline float2 next_2d(Sampler *s) {
     ulong bits = next_bits(s);
     return (float2)((float)(bits >> 40), (float)((bits >> 16) & 0xFFFFFFUL)) * (1.0f / 16777216.0f);
+}
+
+/* Sobol points, as sampler/sobol.rs. */
+inline uint lk_hash(uint x, uint seed) {
+    x ^= x * 0x3d20adeau;
+    x += seed;
+    x *= (seed >> 16) | 1u;
+    x ^= x * 0x05526c56u;
+    x ^= x * 0x53a22864u;
+    return x;
+}
+
+inline uint hash32(uint x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    return x ^ (x >> 16);
+}
+
+inline uint superset_sum(uint y) {
+    y ^= (y >> 1) & 0x55555555u;
+    y ^= (y >> 2) & 0x33333333u;
+    y ^= (y >> 4) & 0x0F0F0F0Fu;
+    y ^= (y >> 8) & 0x00FF00FFu;
+    y ^= (y >> 16) & 0x0000FFFFu;
+    return y;
+}
+
+inline float unit_f32(uint v) {
+    return (float)(v >> 8) * (1.0f / 16777216.0f);
+}
+
+/* Seeds of dimension d (index shuffle, x, y) and the shuffled index. */
+inline uint sobol_index(const Sampler *s, ulong d, uint *sx, uint *sy) {
+    ulong h = mix64(s->key + d * 0x9E3779B97F4A7C15UL);
+    *sx = (uint)(h >> 32);
+    *sy = hash32(*sx ^ 0x2545F491u);
+    return reverse32(lk_hash(s->rindex, (uint)h));
+}
+
+inline uint sobol_1d(const Sampler *s, ulong d) {
+    uint sx, sy;
+    uint i = sobol_index(s, d, &sx, &sy);
+    return reverse32(lk_hash(i, sx));
+}
+
+inline float2 sobol_2d(const Sampler *s, ulong d) {
+    uint sx, sy;
+    uint i = sobol_index(s, d, &sx, &sy);
+    return (float2)(unit_f32(reverse32(lk_hash(i, sx))), unit_f32(reverse32(lk_hash(superset_sum(i), sy))));
+}
+
+/* A path's numbers by use (Sampler::camera_2d, light_pick, ...): random
+ * draws in order, Sobol takes the use's own dimension at the vertex. */
+#define USE_LIGHT_PICK 0UL
+#define USE_LIGHT_POSITION 1UL
+#define USE_BSDF_CHOICE 2UL
+#define USE_BSDF_DIRECTION 3UL
+#define USE_ROULETTE 4UL
+#define VERTEX_USES 5UL
+
+inline ulong vertex_dim(const Sampler *s, ulong use) {
+    return 1UL + (ulong)s->vertex * VERTEX_USES + use;
+}
+
+inline void at_vertex(Sampler *s, uint v) {
+    s->vertex = v;
+}
+
+inline float2 camera_2d(Sampler *s) {
+    return s->sobol ? sobol_2d(s, 0UL) : next_2d(s);
+}
+
+inline ulong light_pick(Sampler *s, uint n) {
+    if (!s->sobol) {
+        return next_bits(s);
+    }
+    ulong hi = (ulong)sobol_1d(s, vertex_dim(s, USE_LIGHT_PICK));
+    return (hi << 32) | (ulong)(uint)(hi * (ulong)n);
+}
+
+inline float2 light_2d(Sampler *s, uint k) {
+    if (!s->sobol) {
+        return next_2d(s);
+    }
+    ulong d = k == 0u ? vertex_dim(s, USE_LIGHT_POSITION) : (0x8000000000000000UL | ((ulong)s->vertex << 32) | (ulong)k);
+    return sobol_2d(s, d);
+}
+
+inline float bsdf_choice(Sampler *s) {
+    return s->sobol ? unit_f32(sobol_1d(s, vertex_dim(s, USE_BSDF_CHOICE))) : next_f32(s);
+}
+
+inline float2 bsdf_2d(Sampler *s) {
+    return s->sobol ? sobol_2d(s, vertex_dim(s, USE_BSDF_DIRECTION)) : next_2d(s);
+}
+
+inline float roulette(Sampler *s) {
+    return s->sobol ? unit_f32(sobol_1d(s, vertex_dim(s, USE_ROULETTE))) : next_f32(s);
 }
 
 /* sin and cos of 2 pi u, as math.rs's sincos_turns. */

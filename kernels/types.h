@@ -48,7 +48,7 @@ typedef struct {
     float clamp;
     uint num_objects;
     uint num_lights;
-    uint pad0;
+    uint sampler;    /* 0 = random, 1 = sobol */
     uint use_bvh;    /* nearest hits through the BVH (nodes, prims, big) */
     uint num_big;    /* objects tested one by one before the BVH */
     uint pad1;
@@ -154,6 +154,7 @@ typedef struct {
 #define RR_DEPTH (P->rr_depth)
 #define USE_NEE (P->nee != 0u)
 #define USE_BOX_FILTER (P->filter != 0u)
+#define USE_SOBOL (P->sampler != 0u)
 #else
 #define USE_BVH HAS_BVH
 #define OBJECT_COUNT NUM_OBJECTS
@@ -162,4 +163,5 @@ typedef struct {
 #define RR_DEPTH (P->rr_depth)
 #define USE_NEE NEE
 #define USE_BOX_FILTER BOX_FILTER
+#define USE_SOBOL SOBOL
 #endif

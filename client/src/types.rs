@@ -21,6 +21,9 @@ pub struct QualityPatch {
     pub nee: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub filter: Option<String>,
+    /// `sobol` or `random`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampler: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clamp: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -210,7 +210,13 @@ fn nested_and_touching_spheres() {
             let expected = 0.5 * (1.0 - 0.5f64.powi(depth as i32 + 1)) / 0.5;
             // Next-event estimation picks one of the two shells per
             // shading point (by power), so a sample is no longer the closed
-            // form itself; its mean is.
+            // form itself; its mean is. The shells' powers differ by 4e-5:
+            // with Sobol points each half of a pixel's samples picks them
+            // in exactly equal numbers, except on rare draws, so the two
+            // halves agree (a standard error of 1e-9) while the mean is
+            // off by ~2e-5 until the rare draws come (measured: 2e-4 at 16
+            // spp, 4e-5 at 128, 5e-6 at 1024, always converging): hence a
+            // floor of 1e-4.
             let film = render_on(
                 &mut b,
                 &nested,
@@ -229,7 +235,7 @@ fn nested_and_touching_spheres() {
                 4,
                 expected,
                 4.5,
-                1e-6,
+                1e-4,
                 &format!("{}: nested shells depth {depth}", b.name()),
             );
             assert_eq!(acne_pixels(&film), 0, "{}: nested shells: acne", b.name());

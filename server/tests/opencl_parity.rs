@@ -16,7 +16,7 @@ use pathstream::render::backend::opencl::{
 use pathstream::render::material::{scatter, Bsdf};
 use pathstream::render::math::{sincos_turns, Vec3A};
 use pathstream::render::ray::Ray;
-use pathstream::render::sampler::{mix64, Sampler};
+use pathstream::render::sampler::{mix64, Sampler, SamplerKind};
 use pathstream::render::shape::Roots;
 use pathstream::render::world::{Geometry, Origin};
 use pathstream::render::{Filter, Quality, RenderJob, Scene};
@@ -53,6 +53,52 @@ fn the_sampler_is_bit_exact() {
 }
 
 #[test]
+fn every_use_of_either_sampler_gives_the_same_bits() {
+    let Some(d) = device() else { return };
+    let n = 1u64 << 12;
+    let input: Vec<u64> = (0..n)
+        .flat_map(|i| {
+            [
+                i % 2,
+                mix64(i) % 5,
+                mix64(i + n) % 1_000_000,
+                (i / 2) * 5 + mix64(i) % 3,
+            ]
+        })
+        .collect();
+    let out: Vec<u32> = checks(&d)
+        .run(
+            "check_sampler_uses",
+            n as usize,
+            24,
+            &[CheckArg::Buffer(bytemuck::cast_slice(&input))],
+        )
+        .expect("run");
+    for i in 0..n as usize {
+        let kind = [SamplerKind::Random, SamplerKind::Sobol][input[4 * i] as usize];
+        let mut s = Sampler::of_kind(kind, input[4 * i + 1], input[4 * i + 2], input[4 * i + 3]);
+        let mut cpu = Vec::new();
+        for k in 0..2 {
+            s.at_vertex(3 * k);
+            let c = s.camera_2d();
+            let pick = s.light_pick(7);
+            let (l0, l2) = (s.light_2d(0), s.light_2d(2));
+            let b = s.bsdf_choice();
+            let d = s.bsdf_2d();
+            let r = s.roulette();
+            cpu.extend([
+                c.0.to_bits(),
+                c.1.to_bits(),
+                (pick >> 32) as u32,
+                pick as u32,
+            ]);
+            cpu.extend([l0.0, l0.1, l2.0, l2.1, b, d.0, d.1, r].map(f32::to_bits));
+        }
+        assert_eq!(&out[24 * i..24 * i + 24], &cpu[..], "item {i} ({kind:?})");
+    }
+}
+
+#[test]
 fn sincos_and_the_pixel_filters_agree_to_an_ulp() {
     let Some(d) = device() else { return };
     let c = checks(&d);
@@ -83,9 +129,15 @@ fn sincos_and_the_pixel_filters_agree_to_an_ulp() {
         .unwrap_or(0);
     assert!(worst <= 1, "sincos differs by {worst} ulps");
 
-    for filter in [Filter::Tent2x2, Filter::Box] {
+    for (filter, stratified) in [
+        (Filter::Tent2x2, false),
+        (Filter::Box, false),
+        (Filter::Tent2x2, true),
+        (Filter::Box, true),
+    ] {
         let mut params = pack(&job("cornell")).params;
         params.filter = u32::from(filter == Filter::Box);
+        params.sampler = u32::from(stratified);
         let items = 1 << 14;
         let out: Vec<f32> = c
             .run(
@@ -99,7 +151,11 @@ fn sincos_and_the_pixel_filters_agree_to_an_ulp() {
             )
             .expect("run");
         for i in 0..items {
-            let (x, y) = filter.pixel_offset(i as u64, u[2 * i], u[2 * i + 1]);
+            let (x, y) = if stratified {
+                filter.pixel_offset_stratified(u[2 * i], u[2 * i + 1])
+            } else {
+                filter.pixel_offset(i as u64, u[2 * i], u[2 * i + 1])
+            };
             assert!(
                 ulps(out[2 * i], x) <= 1 && ulps(out[2 * i + 1], y) <= 1,
                 "{filter:?} sample {i}: ({}, {}) vs ({x}, {y})",

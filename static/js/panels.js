@@ -17,7 +17,7 @@ import { same } from "./vec.js";
 // may be needed first).
 let presets = null;
 let presetsLoading = false;
-const PRESET_KNOBS = ["max_depth", "rr_depth", "nee", "filter", "clamp", "adaptive"];
+const PRESET_KNOBS = ["max_depth", "rr_depth", "nee", "filter", "sampler", "clamp", "adaptive"];
 
 export async function loadPresets() {
   if (presets || presetsLoading) return;
@@ -74,6 +74,8 @@ function fillQuality(q) {
   set("q-adaptive", q.adaptive);
   $("q-adaptive").disabled = !("adaptive" in q); // a server without adaptive sampling
   set("q-filter", q.filter);
+  set("q-sampler", q.sampler || "random");
+  $("q-sampler").disabled = !("sampler" in q); // a server before Sobol sampling
   set("q-clamp", q.clamp);
   set("q-spp", q.spp);
   set("q-time", q.time_ms == null ? null : +(q.time_ms / 1000).toPrecision(6));

@@ -231,6 +231,11 @@ describe("browser client", { timeout: 600000 }, () => {
 
     await page.selectOption("#q-filter", "box");
     await waitFor("filter box on the server", async () => (await status()).quality.filter === "box");
+    assert.equal(await page.inputValue("#q-sampler"), "sobol", "the default sampler shows");
+    await page.selectOption("#q-sampler", "random");
+    await waitFor("sampler random on the server", async () => (await status()).quality.sampler === "random");
+    await page.selectOption("#q-sampler", "sobol");
+    await waitFor("sampler sobol again", async () => (await status()).quality.sampler === "sobol");
     await page.uncheck("#q-nee");
     await waitFor("nee off on the server", async () => (await status()).quality.nee === false);
     await page.check("#q-nee");

@@ -148,6 +148,10 @@ pub struct Quality {
     pub nee: bool,
     /// Pixel filter: `tent2x2` or `box`.
     pub filter: String,
+    /// Which numbers paths draw: `sobol` (low-discrepancy) or `random`.
+    /// `random` from servers before `sobol` existed.
+    #[serde(default = "random")]
+    pub sampler: String,
     /// Largest sample radiance (max component); 0 = off. Biased.
     pub clamp: f32,
     /// Seed of the samples' random numbers.
@@ -163,6 +167,10 @@ pub struct Quality {
     pub time_ms: Option<u64>,
     /// Halt when the estimated relative RMS error falls below this.
     pub target_error: Option<f64>,
+}
+
+fn random() -> String {
+    "random".to_owned()
 }
 
 /// How the samples spread over the pixels: uniform sampling gives every

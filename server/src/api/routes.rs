@@ -185,7 +185,8 @@ async fn presets() -> Json<Value> {
                 "name": p.name(),
                 "description": p.description(),
                 "quality": {"max_depth": q.max_depth, "rr_depth": q.rr_depth, "nee": q.nee,
-                            "filter": q.filter, "clamp": q.clamp, "adaptive": q.adaptive},
+                            "filter": q.filter, "sampler": q.sampler, "clamp": q.clamp,
+                            "adaptive": q.adaptive},
             })
         })
         .collect();

@@ -14,6 +14,7 @@
 pub mod adaptive;
 pub mod cache;
 pub mod cells;
+pub mod compare;
 pub mod devices;
 pub mod fit;
 pub mod measure;
@@ -21,6 +22,8 @@ pub mod meshes;
 pub mod plot;
 pub mod report;
 mod run;
+pub mod samplers;
+pub mod scenes;
 pub mod settings;
 pub mod thesis;
 
@@ -44,6 +47,8 @@ pub struct Sections {
     pub meshes: bool,
     /// Uniform vs adaptive sampling: time to 5%, 2%, 1% on every scene.
     pub adaptive: bool,
+    /// Random numbers vs Sobol points: time to 5%, 2%, 1% on every scene.
+    pub samplers: bool,
     /// Every backend alone, then all at once on one render.
     pub devices: bool,
 }
@@ -56,6 +61,7 @@ impl Sections {
         specialisation: true,
         meshes: true,
         adaptive: true,
+        samplers: true,
         devices: true,
     };
 }
@@ -77,9 +83,12 @@ pub struct Config {
     pub trade_seconds: f64,
     /// Scenes of the adaptive section (at the trade size and time).
     pub adaptive_scenes: Vec<String>,
-    /// Seeds of the adaptive section: each pair of curves is rendered with
-    /// every one (a single curve's time to 1% varies by 10-15%).
-    pub adaptive_seeds: u64,
+    /// Scenes of the samplers section (at the trade size and time).
+    pub sampler_scenes: Vec<String>,
+    /// Seeds of the paired sections (adaptive, samplers): each pair of
+    /// curves is rendered with every one (a single curve's time to 1%
+    /// varies by 10-15%).
+    pub seeds: u64,
     /// References are rendered until their error estimate is this low...
     pub reference_error: f64,
     /// ...or for this long.
@@ -119,11 +128,22 @@ impl Config {
                 "cornell-quads",
                 "smallpt",
                 "furnace",
-                adaptive::MESH_SCENE,
+                scenes::GLASS_MESH,
             ]
             .map(String::from)
             .to_vec(),
-            adaptive_seeds: 3,
+            sampler_scenes: [
+                "cornell",
+                "cornell-glass",
+                "cornell-quads",
+                "smallpt",
+                "furnace",
+                scenes::GLASS_MESH,
+                scenes::CORNELL_MESH,
+            ]
+            .map(String::from)
+            .to_vec(),
+            seeds: 3,
             trade_size: (64, 64),
             trade_seconds: 10.0,
             reference_error: 0.0025,
@@ -143,7 +163,8 @@ impl Config {
             throughput_seconds: 0.1,
             trade_scenes: vec!["cornell".into()],
             adaptive_scenes: vec!["cornell".into()],
-            adaptive_seeds: 1,
+            sampler_scenes: vec!["cornell".into()],
+            seeds: 1,
             trade_size: (16, 16),
             trade_seconds: 0.15,
             reference_error: 0.03,
@@ -236,6 +257,9 @@ pub struct Results {
     /// The adaptive section: per scene, backend and seed, the uniform curve
     /// then the adaptive one.
     pub adaptive: Vec<TradeCurve>,
+    /// The samplers section: per scene, backend and seed, the random curve
+    /// then the Sobol one.
+    pub samplers: Vec<TradeCurve>,
     pub specialisation: Vec<SpecialisationRow>,
     pub meshes: Vec<meshes::MeshRow>,
     pub devices: Vec<devices::DevicesRow>,

@@ -27,6 +27,7 @@ pub fn markdown(r: &Results) -> String {
     throughput(w, r);
     trade(w, r);
     super::adaptive::markdown(w, r);
+    super::samplers::markdown(w, r);
     calibration(w, r);
     specialisation(w, r);
     meshes(w, r);

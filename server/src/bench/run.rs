@@ -5,18 +5,14 @@ use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
 use super::measure::TRACE_SEED;
 use super::settings::{self, Setting};
 use super::{
-    adaptive, cells, fit, measure, BenchError, CalibrationRow, Config, Observer, Results,
-    SpecialisationRow, ThroughputRow, TradeCurve,
+    adaptive, cells, fit, measure, samplers, scenes, BenchError, CalibrationRow, Config, Observer,
+    Results, SpecialisationRow, ThroughputRow, TradeCurve,
 };
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use crate::render::{Backend, BackendChoice, Quality, RenderJob, Scene};
 
 fn load_scene(name: &str) -> Result<Scene, BenchError> {
-    let scene = match name {
-        adaptive::MESH_SCENE => adaptive::mesh_scene(),
-        _ => crate::resolve::load_scene(name),
-    };
-    scene.map_err(|e| BenchError::Usage(format!("--scenes {name}: {e}")))
+    scenes::load(name).map_err(|e| BenchError::Usage(format!("--scenes {name}: {e}")))
 }
 
 /// Opens the configured backends; an OpenCL one that cannot start is left
@@ -50,8 +46,12 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     };
     let throughput_scenes = load(&config.throughput_scenes)?;
     let trade_scenes = load(&config.trade_scenes)?;
-    let adaptive_scenes = match s_adaptive(config) {
+    let adaptive_scenes = match config.sections.adaptive {
         true => load(&config.adaptive_scenes)?,
+        false => Vec::new(),
+    };
+    let sampler_scenes = match config.sections.samplers {
+        true => load(&config.sampler_scenes)?,
         false => Vec::new(),
     };
     let backends = open_backends(config, observer)?;
@@ -68,7 +68,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         .iter()
         .filter(|b| matches!(b, Backend::OpenCl { .. }))
         .count() as u64;
-    let na = adaptive_scenes.len() as u64;
+    let na = (adaptive_scenes.len() + sampler_scenes.len()) as u64;
     let (nb, nt, nr) = (
         backends.len() as u64,
         throughput_scenes.len() as u64,
@@ -81,7 +81,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
             + u64::from(s.specialisation) * opencl_count * nt * 2
             + u64::from(s.meshes) * config.mesh_sizes.len() as u64
             + u64::from(s.devices) * nt * config.throughput_sizes.len() as u64
-            + na * (1 + nb * 2 * config.adaptive_seeds),
+            + na * (1 + nb * 2 * config.seeds),
     );
 
     let results = Results {
@@ -114,7 +114,10 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         }
     }
     if s.adaptive {
-        work.adaptive(&adaptive_scenes)?;
+        work.results.adaptive = work.pairs(&adaptive_scenes, adaptive::pair())?;
+    }
+    if s.samplers {
+        work.results.samplers = work.pairs(&sampler_scenes, samplers::pair())?;
     }
     if s.specialisation {
         work.specialisation(&throughput_scenes)?;
@@ -126,10 +129,6 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         work.devices(&throughput_scenes)?;
     }
     Ok(work.results)
-}
-
-fn s_adaptive(config: &Config) -> bool {
-    config.sections.adaptive
 }
 
 /// Scenes by name.
@@ -230,22 +229,26 @@ impl Work<'_> {
         Ok(())
     }
 
-    /// The unbiased setting, uniform then adaptive, on every scene and
-    /// backend; the adaptive traces also go to the calibration (as
-    /// "scene (adaptive)").
-    fn adaptive(&mut self, scenes: &Scenes) -> Result<(), BenchError> {
+    /// A paired section: the two settings of `pair` on every scene,
+    /// backend and seed, in that order; unbiased settings' traces also go
+    /// to the calibration (see [`Work::curve`]).
+    fn pairs(
+        &mut self,
+        scenes: &Scenes,
+        pair: [Setting; 2],
+    ) -> Result<Vec<TradeCurve>, BenchError> {
+        let mut curves = Vec::new();
         for (name, scene) in scenes {
             let reference = self.reference(name, scene)?;
             for b in 0..self.backends.len() {
-                for seed in (0..self.config.adaptive_seeds).map(|k| TRACE_SEED + k) {
-                    for setting in adaptive::pair() {
-                        let curve = self.curve(b, name, scene, &setting, &reference, seed)?;
-                        self.results.adaptive.push(curve);
+                for seed in (0..self.config.seeds).map(|k| TRACE_SEED + k) {
+                    for setting in &pair {
+                        curves.push(self.curve(b, name, scene, setting, &reference, seed)?);
                     }
                 }
             }
         }
-        Ok(())
+        Ok(curves)
     }
 
     /// `name`'s reference (cached or rendered), recorded once in the results.
@@ -260,7 +263,8 @@ impl Work<'_> {
     }
 
     /// `setting`'s error against time on backend `b`; the unbiased
-    /// setting's (uniform or adaptive) also goes to the calibration.
+    /// setting's (uniform or adaptive, Sobol or random) also goes to the
+    /// calibration, as "scene", "scene (adaptive)", "scene (random)".
     fn curve(
         &mut self,
         b: usize,
@@ -288,15 +292,19 @@ impl Work<'_> {
             seed,
         )?;
         let q = setting.quality;
-        if (Quality {
+        let plain = Quality {
             adaptive: false,
+            sampler: settings::unbiased().sampler,
             ..q
-        }) == settings::unbiased()
-        {
-            let calibrated = match q.adaptive {
-                true => format!("{name} (adaptive)"),
-                false => name.to_owned(),
-            };
+        };
+        if plain == settings::unbiased() {
+            let mut calibrated = name.to_owned();
+            if q.adaptive {
+                calibrated.push_str(" (adaptive)");
+            }
+            if q.sampler != plain.sampler {
+                calibrated.push_str(&format!(" ({})", q.sampler.name()));
+            }
             let row = CalibrationRow {
                 backend: backend.name().into(),
                 scene: calibrated,

@@ -24,6 +24,8 @@ pub enum SectionArg {
     Meshes,
     /// Uniform vs adaptive sampling: time to 5/2/1% error on every built-in scene and a mesh scene.
     Adaptive,
+    /// Random numbers vs Sobol points: time to 5/2/1% error on every built-in scene and two mesh scenes.
+    Samplers,
     /// Every backend alone, then all at once on one render (--backend all): paths/s of each and combined.
     Devices,
 }
@@ -45,9 +47,11 @@ pub struct BenchArgs {
     /// Sections to run, comma-separated [default: all].
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     sections: Vec<SectionArg>,
-    /// Scenes for every section, comma-separated (built-in names or JSON
-    /// files) [default: throughput on cornell, cornell-glass, cornell-quads,
-    /// smallpt, furnace; trade on cornell, cornell-glass, smallpt].
+    /// Scenes for every section, comma-separated (built-in names, the mesh
+    /// scenes cornell-glass-mesh and cornell-mesh, or JSON files) [default:
+    /// throughput on cornell, cornell-glass, cornell-quads, smallpt,
+    /// furnace; trade on cornell, cornell-glass, smallpt; adaptive and
+    /// samplers on those five and the mesh scenes].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     scenes: Vec<String>,
     /// A small version that runs in seconds (small images, short runs,
@@ -70,9 +74,9 @@ pub struct BenchArgs {
     /// Seconds per throughput measurement [default: 3; 0.1 with --quick].
     #[arg(long, value_name = "S")]
     throughput_seconds: Option<f64>,
-    /// Seeds of the adaptive section: uniform and adaptive are rendered
-    /// with each, and its table gives the median speed-up and the range
-    /// [default: 3; 1 with --quick].
+    /// Seeds of the paired sections (adaptive, samplers): both settings are
+    /// rendered with each, and the tables give the median speed-up and the
+    /// range [default: 3; 1 with --quick].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100))]
     seeds: Option<u64>,
     /// Triangle counts of the mesh section, comma-separated [default:
@@ -156,6 +160,7 @@ impl BenchArgs {
                 specialisation: has(SectionArg::Specialisation),
                 meshes: has(SectionArg::Meshes),
                 adaptive: has(SectionArg::Adaptive),
+                samplers: has(SectionArg::Samplers),
                 devices: has(SectionArg::Devices),
             };
         }
@@ -163,6 +168,7 @@ impl BenchArgs {
             c.throughput_scenes = self.scenes.clone();
             c.trade_scenes = self.scenes.clone();
             c.adaptive_scenes = self.scenes.clone();
+            c.sampler_scenes = self.scenes.clone();
         }
         if let Some(dir) = &self.cache {
             c.cache_dir = dir.clone();
@@ -171,7 +177,7 @@ impl BenchArgs {
             c.trade_size = size;
         }
         if let Some(n) = self.seeds {
-            c.adaptive_seeds = n;
+            c.seeds = n;
         }
         if !self.mesh_sizes.is_empty() {
             if let Some(bad) = self

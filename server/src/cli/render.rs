@@ -6,6 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pathstream::render::job::check_size;
 use pathstream::render::output::{write_image, ImageFormat};
 use pathstream::render::progressive::{self, DEFAULT_SPP};
+use pathstream::render::sampler::SamplerKind;
 use pathstream::render::split::{render_split, DeviceShare};
 use pathstream::render::tonemap::Tonemap;
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Preset, Quality, RenderJob};
@@ -15,6 +16,15 @@ use std::path::PathBuf;
 pub enum FilterArg {
     Tent2x2,
     Box,
+}
+
+/// `--sampler`: which numbers paths draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SamplerArg {
+    /// Owen-scrambled Sobol points: less error per sample.
+    Sobol,
+    /// Independent random numbers (the renderer's first sampler).
+    Random,
 }
 
 /// `--backend`: where to render.
@@ -80,6 +90,10 @@ pub struct RenderArgs {
     /// Pixel filter [default: tent2x2].
     #[arg(long, value_enum)]
     filter: Option<FilterArg>,
+    /// Random numbers: low-discrepancy Sobol points or independent ones
+    /// [default: sobol].
+    #[arg(long, value_enum)]
+    sampler: Option<SamplerArg>,
     /// Largest radiance of one sample; 0 = off (biased; removes fireflies) [default: 0].
     #[arg(long, value_name = "C")]
     clamp: Option<f32>,
@@ -126,6 +140,10 @@ impl RenderArgs {
             filter: self.filter.map_or(q.filter, |f| match f {
                 FilterArg::Tent2x2 => Filter::Tent2x2,
                 FilterArg::Box => Filter::Box,
+            }),
+            sampler: self.sampler.map_or(q.sampler, |s| match s {
+                SamplerArg::Sobol => SamplerKind::Sobol,
+                SamplerArg::Random => SamplerKind::Random,
             }),
             clamp: self.clamp.unwrap_or(q.clamp),
             adaptive: self.adaptive.map_or(q.adaptive, |a| a == Switch::On),

@@ -49,6 +49,36 @@ impl Filter {
     }
 }
 
+impl Filter {
+    /// As [`Filter::pixel_offset`], for a low-discrepancy point: the
+    /// sub-pixel from each coordinate's top bit and the tent from the rest
+    /// (exact in f32), so that the point set's stratification carries over
+    /// to the pixel. The same distribution as `pixel_offset`'s.
+    #[inline(always)]
+    pub fn pixel_offset_stratified(self, u1: f32, u2: f32) -> (f32, f32) {
+        match self {
+            Filter::Box => (u1, u2),
+            Filter::Tent2x2 => {
+                let (sx, r1) = halves(u1);
+                let (sy, r2) = halves(u2);
+                ((sx + 0.5 + tent(r1)) * 0.5, (sy + 0.5 + tent(r2)) * 0.5)
+            }
+        }
+    }
+}
+
+/// Which half of [0, 1) `u` is in (0 or 1), and where in it, rescaled to
+/// [0, 1).
+#[inline(always)]
+fn halves(u: f32) -> (f32, f32) {
+    let t = 2.0 * u;
+    if t >= 1.0 {
+        (1.0, t - 1.0)
+    } else {
+        (0.0, t)
+    }
+}
+
 /// smallpt's tent: maps uniform [0, 1) to [-1, 1) with a triangular density.
 #[inline(always)]
 fn tent(u: f32) -> f32 {

@@ -7,6 +7,7 @@ use crate::render::integrator::{self, Path, PathSettings};
 use crate::render::isa::Isa;
 use crate::render::math::Vec3A;
 use crate::render::quality::Quality;
+use crate::render::sampler::SamplerKind;
 use crate::render::scene::Scene;
 use crate::render::world::World;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -48,6 +49,7 @@ pub struct RenderJob {
     pub camera: CameraRays,
     pub settings: PathSettings,
     pub filter: Filter,
+    pub sampler: SamplerKind,
     pub seed: u64,
 }
 
@@ -60,6 +62,7 @@ impl RenderJob {
             camera: CameraRays::new(&scene.camera, width, height),
             settings: quality.path_settings(),
             filter: quality.filter,
+            sampler: quality.sampler,
             seed: quality.seed,
         }
     }
@@ -84,7 +87,13 @@ impl RenderJob {
     /// Sample `sample` of pixel (x, y) as a path about to start.
     #[inline(always)]
     pub fn camera_path(&self, x: u32, y: u32, sample: u64) -> Path {
-        integrator::camera_path(&self.camera, self.filter, self.seed, (x, y), sample)
+        integrator::camera_path(
+            &self.camera,
+            self.filter,
+            (self.sampler, self.seed),
+            (x, y),
+            sample,
+        )
     }
 
     /// Radiance of sample `sample` of pixel (x, y), computed with `isa`'s

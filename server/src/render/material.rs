@@ -85,7 +85,7 @@ pub fn scatter(
 ) -> Scattered {
     match m.bsdf {
         Bsdf::Diffuse => {
-            let (u1, u2) = sampler.next_2d();
+            let (u1, u2) = sampler.bsdf_2d();
             Scattered {
                 dir: cosine_hemisphere(nl, u1, u2),
                 weight: m.albedo,
@@ -107,7 +107,7 @@ pub fn scatter(
             } else {
                 fresnel::exact(cos_i, n1, n2)
             };
-            let reflected = sampler.next_f32() < split.reflectance;
+            let reflected = sampler.bsdf_choice() < split.reflectance;
             let dir = if reflected {
                 reflect(d, nl)
             } else {

@@ -11,6 +11,7 @@
 
 use crate::render::filter::Filter;
 use crate::render::quality::Quality;
+use crate::render::sampler::SamplerKind;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
@@ -75,6 +76,7 @@ impl Preset {
             rr_depth,
             nee: true,
             filter: Filter::Tent2x2,
+            sampler: SamplerKind::Sobol,
             clamp: 0.0,
             adaptive,
             ..quality

@@ -2,13 +2,14 @@
 //!
 //! ```json
 //! {"max_depth": 6, "rr_depth": 5, "nee": true, "filter": "tent2x2",
-//!  "clamp": 0, "seed": 0, "adaptive": false, "spp": 256, "time_ms": null,
-//!  "target_error": 0.02}
+//!  "sampler": "sobol", "clamp": 0, "seed": 0, "adaptive": false,
+//!  "spp": 256, "time_ms": null, "target_error": 0.02}
 //! ```
 //! Every field is optional (defaults below); unknown fields are refused.
 
 use crate::render::filter::Filter;
 use crate::render::integrator::PathSettings;
+use crate::render::sampler::SamplerKind;
 use serde::{Deserialize, Serialize};
 
 /// Highest explicit `max_depth` / `rr_depth`.
@@ -24,6 +25,8 @@ pub struct Quality {
     /// Next-event estimation (shadow rays to emitters).
     pub nee: bool,
     pub filter: Filter,
+    /// Which numbers paths draw: `sobol` (low-discrepancy) or `random`.
+    pub sampler: SamplerKind,
     /// Largest sample radiance (max component); 0 = off. Biased.
     pub clamp: f32,
     pub seed: u64,
@@ -45,6 +48,7 @@ impl Default for Quality {
             rr_depth: 5,
             nee: true,
             filter: Filter::Tent2x2,
+            sampler: SamplerKind::Sobol,
             clamp: 0.0,
             seed: 0,
             adaptive: false,

@@ -41,6 +41,9 @@ pub struct QualityArgs {
     /// Pixel filter: tent2x2 or box.
     #[arg(long)]
     filter: Option<String>,
+    /// Random numbers: sobol (low-discrepancy, the default) or random.
+    #[arg(long)]
+    sampler: Option<String>,
     /// Largest sample radiance; 0 = off.
     #[arg(long)]
     clamp: Option<f32>,
@@ -56,6 +59,7 @@ impl QualityArgs {
             rr_depth: self.rr_depth,
             nee: self.nee.map(|n| matches!(n, Switch::On)),
             filter: self.filter.clone(),
+            sampler: self.sampler.clone(),
             clamp: self.clamp,
             seed: self.seed,
             adaptive: self.adaptive.map(|a| matches!(a, Switch::On)),

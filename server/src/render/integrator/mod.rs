@@ -18,7 +18,7 @@ use crate::render::isa::Isa;
 use crate::render::material::{scatter, Bsdf};
 use crate::render::math::{max_component, Vec3A};
 use crate::render::ray::Ray;
-use crate::render::sampler::Sampler;
+use crate::render::sampler::{Sampler, SamplerKind};
 use crate::render::world::{Hit, Origin, World};
 use std::f32::consts::FRAC_1_PI;
 
@@ -90,6 +90,7 @@ impl Path {
             return false;
         };
         let ray = &self.ray;
+        self.sampler.at_vertex(self.bounces);
         let s = world.surface(&hit, ray);
         let m = world.material(s.material);
         if m.emissive && (self.specular || !settings.nee) {
@@ -134,7 +135,7 @@ impl Path {
         self.bounces += 1;
         if self.bounces > settings.rr_depth || !(max_component(self.beta) > 0.0) {
             let q = max_component(self.beta).min(MAX_SURVIVAL);
-            if !(self.sampler.next_f32() < q) {
+            if !(self.sampler.roulette() < q) {
                 return false;
             }
             self.beta /= q;
@@ -181,13 +182,17 @@ impl Path {
 pub fn camera_path(
     camera: &CameraRays,
     filter: Filter,
-    seed: u64,
+    (kind, seed): (SamplerKind, u64),
     (x, y): (u32, u32),
     sample: u64,
 ) -> Path {
     let pixel = u64::from(y) * u64::from(camera.width) + u64::from(x);
-    let mut sampler = Sampler::new(seed, pixel, sample);
-    let (u1, u2) = sampler.next_2d();
-    let (dx, dy) = filter.pixel_offset(sample, u1, u2);
+    let mut sampler = Sampler::of_kind(kind, seed, pixel, sample);
+    let (u1, u2) = sampler.camera_2d();
+    let (dx, dy) = if sampler.is_sobol() {
+        filter.pixel_offset_stratified(u1, u2)
+    } else {
+        filter.pixel_offset(sample, u1, u2)
+    };
     Path::new(camera.ray(x as f32 + dx, y as f32 + dy), sampler)
 }

@@ -4,8 +4,9 @@
 //! every emitter. Both are unbiased and converge to the same image; the
 //! first costs one ray however many emitters there are.
 //!
-//! Random numbers: the pick takes one dimension (64 bits), each emitter
-//! sampled two, whatever branch it takes.
+//! Random numbers: the pick and each emitter's point are the sampler's
+//! light uses of this vertex (`Sampler::light_pick`, `light_2d`); with one
+//! emitter there is no pick.
 
 use crate::render::isa::Isa;
 use crate::render::light::{Emitter, EmitterShape};
@@ -43,19 +44,27 @@ pub fn direct<I: Isa>(
             [] => Vec3A::ZERO,
             // One emitter (the thesis's scenes): picked with probability 1,
             // no random number spent on the pick.
-            [only] => one(isa, world, only, s, nl, ns, sampler),
+            [only] => one(isa, world, only, s, nl, ns, sampler.light_2d(0)),
             _ => {
                 let Some(table) = &lights.table else {
                     return Vec3A::ZERO;
                 };
-                let (i, pmf) = table.pick(sampler.next_u64());
-                one(isa, world, &lights.emitters[i], s, nl, ns, sampler) / pmf
+                let (i, pmf) = table.pick(sampler.light_pick(lights.emitters.len()));
+                one(
+                    isa,
+                    world,
+                    &lights.emitters[i],
+                    s,
+                    nl,
+                    ns,
+                    sampler.light_2d(0),
+                ) / pmf
             }
         },
         LightSampling::All => {
             let mut sum = Vec3A::ZERO;
-            for e in &lights.emitters {
-                sum += one(isa, world, e, s, nl, ns, sampler);
+            for (k, e) in lights.emitters.iter().enumerate() {
+                sum += one(isa, world, e, s, nl, ns, sampler.light_2d(k as u32));
             }
             sum
         }
@@ -71,9 +80,8 @@ fn one<I: Isa>(
     s: &Surface,
     nl: Vec3A,
     ns: Vec3A,
-    sampler: &mut Sampler,
+    (u1, u2): (f32, f32),
 ) -> Vec3A {
-    let (u1, u2) = sampler.next_2d();
     let Some((dir, weight)) = e.sample_direction(&s.receiver(nl, ns), u1, u2) else {
         return Vec3A::ZERO;
     };

@@ -86,6 +86,7 @@ fn quality(q: &Quality) -> wire::Quality {
         rr_depth: q.rr_depth,
         nee: q.nee,
         filter: q.filter.name().to_owned(),
+        sampler: q.sampler.name().to_owned(),
         clamp: q.clamp,
         seed: q.seed,
         adaptive: q.adaptive,

@@ -284,6 +284,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         quad_lights: true,
         nee: true,
         box_filter: true,
+        sobol: true,
         num_objects: 1,
         num_lights: 1,
         max_depth: 1,

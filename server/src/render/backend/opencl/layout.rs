@@ -22,6 +22,7 @@ use crate::render::job::RenderJob;
 use crate::render::light::EmitterShape;
 use crate::render::material::Bsdf;
 use crate::render::math::Vec3A;
+use crate::render::sampler::SamplerKind;
 use crate::render::world::{AccelChoice, Geometry, World};
 use crate::render::Filter;
 use bytemuck::{Pod, Zeroable};
@@ -135,7 +136,8 @@ pub struct Params {
     pub clamp: f32,
     pub num_objects: u32,
     pub num_lights: u32,
-    pub pad0: u32,
+    /// 0 = random, 1 = sobol.
+    pub sampler: u32,
     /// 1 when nearest hits are found through the BVH (nodes, prims, big).
     pub use_bvh: u32,
     /// Objects tested one by one before the BVH (`big`).
@@ -343,7 +345,7 @@ pub fn pack(job: &RenderJob) -> Packed {
         clamp: s.clamp,
         num_objects: w.objects.len() as u32,
         num_lights: kernel_light_count(w) as u32,
-        pad0: 0,
+        sampler: u32::from(job.sampler == SamplerKind::Sobol),
         use_bvh: 0,
         num_big: 0,
         pad1: 0,

@@ -10,6 +10,7 @@ use super::layout::{
 use crate::render::job::RenderJob;
 use crate::render::light::EmitterShape;
 use crate::render::material::Bsdf;
+use crate::render::sampler::SamplerKind;
 use crate::render::world::Geometry;
 use crate::render::Filter;
 use opencl3::context::Context;
@@ -45,6 +46,8 @@ pub struct Features {
     pub quad_lights: bool,
     pub nee: bool,
     pub box_filter: bool,
+    /// Sobol points (else independent random numbers).
+    pub sobol: bool,
     pub num_objects: u32,
     pub num_lights: u32,
     pub max_depth: u32,
@@ -118,6 +121,7 @@ impl Features {
             quad_lights: job.settings.nee && light_kind(KIND_QUAD),
             nee: job.settings.nee && light_count > 0,
             box_filter: job.filter == Filter::Box,
+            sobol: job.sampler == SamplerKind::Sobol,
             num_objects: w.objects.len() as u32,
             num_lights: if job.settings.nee {
                 light_count as u32
@@ -151,7 +155,7 @@ impl Features {
         let mut o = format!(
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
              -D HAS_GLASS={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
-             -D NEE={} -D BOX_FILTER={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
+             -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={}",
             b(self.spheres),
             b(self.quads),
@@ -164,6 +168,7 @@ impl Features {
             b(self.quad_lights),
             b(self.nee),
             b(self.box_filter),
+            b(self.sobol),
             self.num_objects,
             self.num_lights,
             self.max_depth,

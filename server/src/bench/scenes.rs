@@ -1,0 +1,154 @@
+//! The benchmark's mesh scenes, beside the built-in ones (by name, as
+//! `--scenes` takes them):
+//!
+//! - `cornell-glass-mesh`: `cornell-glass` with its glass ball replaced by
+//!   a glass bumpy sphere of 20,000 triangles (caustics through a mesh);
+//! - `cornell-mesh`: a diffuse Cornell box made only of triangles, lit by
+//!   an area light: the walls as two triangles each, two smooth diffuse
+//!   icospheres of 20,480 triangles, and an emissive square of two
+//!   triangles filling a hole in the ceiling (the scene renderers are
+//!   compared on; emitters are two-sided, so a lamp under a closed ceiling
+//!   would light the ceiling above it from a hair's breadth).
+
+use crate::model::generate::{bumpy_sphere, icosphere};
+use crate::model::MeshData;
+use crate::render::{Scene, SceneError};
+use serde_json::{json, Value};
+
+/// `cornell-glass-mesh`.
+pub const GLASS_MESH: &str = "cornell-glass-mesh";
+/// `cornell-mesh`.
+pub const CORNELL_MESH: &str = "cornell-mesh";
+
+/// The scene by name: a mesh scene of this module's, else a built-in one
+/// or a file.
+pub fn load(name: &str) -> Result<Scene, SceneError> {
+    match name {
+        GLASS_MESH => glass_mesh(),
+        CORNELL_MESH => cornell_mesh(),
+        _ => crate::resolve::load_scene(name),
+    }
+}
+
+fn json_of(scene: &Scene) -> Result<Value, SceneError> {
+    serde_json::to_value(scene.to_json()).map_err(|e| SceneError::new(".", e.to_string()))
+}
+
+/// `cornell-glass-mesh`.
+pub fn glass_mesh() -> Result<Scene, SceneError> {
+    let mut j = json_of(&crate::resolve::load_scene("cornell-glass")?)?;
+    let mesh = bumpy_sphere(20_000);
+    let ball = json!({
+        "type": "mesh",
+        "data": {"positions": mesh.positions, "triangles": mesh.triangles},
+        "material": "glass",
+        "transform": {"translate": [73.0, 16.5, 78.0], "scale": 14.0},
+    });
+    if let Some(objects) = j["objects"].as_array_mut() {
+        match objects
+            .iter()
+            .position(|o| o["center"] == json!([73.0, 16.5, 78.0]))
+        {
+            Some(i) => objects[i] = ball,
+            None => objects.push(ball),
+        }
+    }
+    Scene::from_json_value(j)
+}
+
+/// Two triangles spanning the parallelogram corner + s u + t v.
+fn square(corner: [f64; 3], u: [f64; 3], v: [f64; 3], material: &str) -> Value {
+    let at = |s: f64, t: f64| [0, 1, 2].map(|k| corner[k] + s * u[k] + t * v[k]);
+    json!({
+        "type": "mesh",
+        "data": {
+            "positions": [at(0.0, 0.0), at(1.0, 0.0), at(1.0, 1.0), at(0.0, 1.0)],
+            "triangles": [[0, 1, 2], [0, 2, 3]],
+        },
+        "material": material,
+    })
+}
+
+/// A smooth icosphere of radius `r` at `center`.
+fn ball(mesh: &MeshData, center: [f64; 3], r: f64, material: &str) -> Value {
+    json!({
+        "type": "mesh",
+        "data": {"positions": mesh.positions, "triangles": mesh.triangles, "normals": mesh.normals},
+        "material": material,
+        "transform": {"translate": center, "scale": r},
+    })
+}
+
+/// `cornell-mesh`: smallpt's box and camera, every surface triangles.
+pub fn cornell_mesh() -> Result<Scene, SceneError> {
+    let sphere = icosphere(5);
+    let (x0, x1, y1, z1) = (1.0, 99.0, 81.6, 170.0);
+    let (lx0, lx1, lz0, lz1) = (34.0, 66.0, 66.0, 98.0);
+    let objects = vec![
+        square([x0, 0.0, 0.0], [0.0, 0.0, z1], [0.0, y1, 0.0], "red"),
+        square([x1, 0.0, 0.0], [0.0, y1, 0.0], [0.0, 0.0, z1], "blue"),
+        square([x0, 0.0, 0.0], [x1 - x0, 0.0, 0.0], [0.0, y1, 0.0], "white"),
+        square([x0, 0.0, 0.0], [0.0, 0.0, z1], [x1 - x0, 0.0, 0.0], "white"),
+        // The ceiling around the lamp's hole, [lx0, lx1] x [lz0, lz1].
+        square([x0, y1, 0.0], [lx0 - x0, 0.0, 0.0], [0.0, 0.0, z1], "white"),
+        square(
+            [lx1, y1, 0.0],
+            [x1 - lx1, 0.0, 0.0],
+            [0.0, 0.0, z1],
+            "white",
+        ),
+        square(
+            [lx0, y1, 0.0],
+            [lx1 - lx0, 0.0, 0.0],
+            [0.0, 0.0, lz0],
+            "white",
+        ),
+        square(
+            [lx0, y1, lz1],
+            [lx1 - lx0, 0.0, 0.0],
+            [0.0, 0.0, z1 - lz1],
+            "white",
+        ),
+        square(
+            [lx0, y1, lz0],
+            [lx1 - lx0, 0.0, 0.0],
+            [0.0, 0.0, lz1 - lz0],
+            "lamp",
+        ),
+        ball(&sphere, [27.0, 16.5, 47.0], 16.5, "white"),
+        ball(&sphere, [73.0, 16.5, 78.0], 16.5, "white"),
+    ];
+    let diffuse = |c: [f64; 3]| json!({"type": "diffuse", "albedo": c});
+    Scene::from_json_value(json!({
+        "camera": {"position": [50.0, 52.0, 295.6], "look_at": [50.0, 51.957388, 294.6],
+                   "vfov_deg": 28.799316231093748, "near_clip": 140.0},
+        "materials": {
+            "red": diffuse([0.75, 0.25, 0.25]),
+            "blue": diffuse([0.25, 0.25, 0.75]),
+            "white": diffuse([0.75, 0.75, 0.75]),
+            "lamp": {"type": "diffuse", "albedo": [0.0, 0.0, 0.0], "emission": [8.0, 8.0, 8.0]},
+        },
+        "objects": objects,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_mesh_scenes_are_what_they_say() {
+        let s = glass_mesh().expect("valid");
+        assert_eq!(s.imports.len(), 1, "one mesh");
+        assert!(s.unique_triangles() >= 19_000);
+        let c = cornell_mesh().expect("valid");
+        assert_eq!(c.imports.len(), 11, "every object is a mesh");
+        assert_eq!(
+            c.unique_triangles(),
+            20_480 + 9 * 2,
+            "the balls share theirs"
+        );
+        assert_eq!(c.emitters().count(), 1, "one area light");
+        assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+    }
+}

@@ -1,0 +1,327 @@
+//! Random numbers for paths: every number a path uses is a pure function
+//! of (seed, pixel, sample index, dimension), so that any sample of any
+//! pixel can be computed alone, in any order, on any thread or device: an
+//! image depends only on scene, settings, seed and sample count.
+//!
+//! Two kinds ([`SamplerKind`], `quality.sampler`):
+//! - `sobol` (the default): low-discrepancy points, Owen-scrambled Sobol
+//!   padded in 2-D ([`sobol`]). Each use a path makes of random numbers has
+//!   its own dimension, chosen deliberately rather than by the order of
+//!   draws: the camera's pixel position (2-D); at every vertex v, the light
+//!   pick (1-D), the light position (2-D), the BSDF's choice of lobe (1-D)
+//!   and direction (2-D), and Russian roulette (1-D). A vertex that does
+//!   not use one (a mirror draws no direction) leaves it unused, so the
+//!   dimensions of the next vertex stay where they are. The film's even
+//!   and odd samples are two independently scrambled sequences (sample s
+//!   is point s / 2 of half s mod 2): the halves stay independent, as the
+//!   error estimate and adaptive sampling assume, and each is a
+//!   low-discrepancy set of its own.
+//! - `random`: independent numbers, drawn in order: dimension k of a
+//!   sample is SplitMix64's finaliser (Steele et al. 2014, passes BigCrush
+//!   fed a counter) of a key hashed from (seed, pixel, sample) plus k
+//!   times the golden ratio. Images under `random` are the renderer's
+//!   before `sobol` existed, bit for bit.
+//!
+//! Both need only 64-bit multiplies and 32-bit integer operations, which
+//! OpenCL C has everywhere: the kernel (`kernels/rng.h`) makes the very
+//! same decisions as the CPU.
+
+pub mod sobol;
+
+use serde::{Deserialize, Serialize};
+use sobol::Seeds;
+
+const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// Which numbers paths draw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol points: less error per sample.
+    #[default]
+    Sobol,
+    /// Independent random numbers (the renderer's first sampler).
+    Random,
+}
+
+impl SamplerKind {
+    pub const NAMES: [&'static str; 2] = ["sobol", "random"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Sobol => "sobol",
+            SamplerKind::Random => "random",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<SamplerKind> {
+        match s {
+            "sobol" => Some(SamplerKind::Sobol),
+            "random" => Some(SamplerKind::Random),
+            _ => None,
+        }
+    }
+}
+
+/// SplitMix64's output function: a bijection on u64 with full avalanche.
+#[inline(always)]
+pub fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// What a path uses a vertex's numbers for: each its own Sobol dimension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u64)]
+enum Use {
+    LightPick = 0,
+    LightPosition = 1,
+    BsdfChoice = 2,
+    BsdfDirection = 3,
+    Roulette = 4,
+}
+
+/// Dimensions per vertex (one per [`Use`]).
+const USES: u64 = 5;
+/// Dimensions of the light positions of every emitter but the first
+/// (`LightSampling::All`, for tests) start here.
+const EXTRA_LIGHTS: u64 = 1 << 63;
+
+/// The random numbers of one camera path.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampler {
+    key: u64,
+    /// Random: dimensions drawn so far.
+    dim: u64,
+    /// Sobol: the sample's index in its half's sequence, bit-reversed.
+    rindex: u32,
+    /// Sobol: the vertex whose numbers are drawn (see [`Sampler::at_vertex`]).
+    vertex: u32,
+    sobol: bool,
+}
+
+impl Sampler {
+    /// The `random` numbers of sample `sample` of pixel `pixel` under `seed`.
+    #[inline(always)]
+    pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
+        let key = mix64(mix64(mix64(seed ^ 0x5851_F42D_4C95_7F2D) ^ pixel) ^ sample);
+        Self {
+            key,
+            dim: 0,
+            rindex: 0,
+            vertex: 0,
+            sobol: false,
+        }
+    }
+
+    /// The numbers of sample `sample` of pixel `pixel` under `seed`.
+    #[inline(always)]
+    pub fn of_kind(kind: SamplerKind, seed: u64, pixel: u64, sample: u64) -> Self {
+        match kind {
+            SamplerKind::Random => Self::new(seed, pixel, sample),
+            SamplerKind::Sobol => {
+                let half = sample & 1;
+                let key = mix64(
+                    mix64(mix64(seed ^ 0x5851_F42D_4C95_7F2D) ^ pixel)
+                        ^ half
+                        ^ 0xA076_1D64_78BD_642F,
+                );
+                Self {
+                    key,
+                    dim: 0,
+                    rindex: ((sample >> 1) as u32).reverse_bits(),
+                    vertex: 0,
+                    sobol: true,
+                }
+            }
+        }
+    }
+
+    /// The next dimension's number, uniform in [0, 1) with 24 bits (random).
+    #[inline(always)]
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_bits() >> 40) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    /// Two numbers from one dimension's 64 bits (a 2-D sample): the top
+    /// and the next 24 bits (random).
+    #[inline(always)]
+    pub fn next_2d(&mut self) -> (f32, f32) {
+        let bits = self.next_bits();
+        const SCALE: f32 = 1.0 / 16_777_216.0;
+        (
+            (bits >> 40) as f32 * SCALE,
+            ((bits >> 16) & 0xFF_FFFF) as f32 * SCALE,
+        )
+    }
+
+    /// The next dimension's full 64 bits (random).
+    #[inline(always)]
+    pub fn next_u64(&mut self) -> u64 {
+        self.next_bits()
+    }
+
+    #[inline(always)]
+    fn next_bits(&mut self) -> u64 {
+        self.dim += 1;
+        mix64(self.key.wrapping_add(self.dim.wrapping_mul(GOLDEN)))
+    }
+
+    /// Whether the numbers are Sobol points.
+    #[inline(always)]
+    pub fn is_sobol(&self) -> bool {
+        self.sobol
+    }
+
+    /// The seeds of Sobol dimension `d`.
+    #[inline(always)]
+    fn seeds(&self, d: u64) -> Seeds {
+        Seeds::from_bits(mix64(self.key.wrapping_add(d.wrapping_mul(GOLDEN))))
+    }
+
+    #[inline(always)]
+    fn sobol_2d(&self, d: u64) -> (f32, f32) {
+        let (x, y) = sobol::sample_2d(self.rindex, self.seeds(d));
+        (sobol::unit_f32(x), sobol::unit_f32(y))
+    }
+
+    #[inline(always)]
+    fn vertex_dim(&self, u: Use) -> u64 {
+        1 + u64::from(self.vertex) * USES + u as u64
+    }
+
+    /// The camera sample's position in its pixel.
+    #[inline(always)]
+    pub fn camera_2d(&mut self) -> (f32, f32) {
+        if self.sobol {
+            self.sobol_2d(0)
+        } else {
+            self.next_2d()
+        }
+    }
+
+    /// Numbers drawn from now on are vertex `v`'s (the path's (v+1)-th
+    /// surface hit; Sobol only: random numbers go on in order).
+    #[inline(always)]
+    pub fn at_vertex(&mut self, v: u32) {
+        self.vertex = v;
+    }
+
+    /// 64 bits to pick one of `n` emitters with (`AliasTable::pick`): the
+    /// top 32 choose the column, the low 32 the coin (for Sobol, the
+    /// fraction the column leaves, so both stay stratified).
+    #[inline(always)]
+    pub fn light_pick(&mut self, n: usize) -> u64 {
+        if !self.sobol {
+            return self.next_u64();
+        }
+        let hi = sobol::sample_1d(self.rindex, self.seeds(self.vertex_dim(Use::LightPick)));
+        (u64::from(hi) << 32) | u64::from((u64::from(hi) * n as u64) as u32)
+    }
+
+    /// A point on emitter `k` of those sampled at this vertex (0 unless
+    /// every emitter is sampled).
+    #[inline(always)]
+    pub fn light_2d(&mut self, k: u32) -> (f32, f32) {
+        if !self.sobol {
+            return self.next_2d();
+        }
+        let d = match k {
+            0 => self.vertex_dim(Use::LightPosition),
+            _ => EXTRA_LIGHTS | (u64::from(self.vertex) << 32) | u64::from(k),
+        };
+        self.sobol_2d(d)
+    }
+
+    /// The BSDF's choice among its lobes (reflect or refract).
+    #[inline(always)]
+    pub fn bsdf_choice(&mut self) -> f32 {
+        if !self.sobol {
+            return self.next_f32();
+        }
+        let d = self.vertex_dim(Use::BsdfChoice);
+        sobol::unit_f32(sobol::sample_1d(self.rindex, self.seeds(d)))
+    }
+
+    /// The BSDF's sampled direction.
+    #[inline(always)]
+    pub fn bsdf_2d(&mut self) -> (f32, f32) {
+        if !self.sobol {
+            return self.next_2d();
+        }
+        self.sobol_2d(self.vertex_dim(Use::BsdfDirection))
+    }
+
+    /// Russian roulette's number.
+    #[inline(always)]
+    pub fn roulette(&mut self) -> f32 {
+        if !self.sobol {
+            return self.next_f32();
+        }
+        let d = self.vertex_dim(Use::Roulette);
+        sobol::unit_f32(sobol::sample_1d(self.rindex, self.seeds(d)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn same_key_same_stream_and_different_keys_differ() {
+        let mut a = Sampler::new(7, 123, 9);
+        let mut b = Sampler::new(7, 123, 9);
+        let mut c = Sampler::new(7, 124, 9);
+        let mut d = Sampler::new(8, 123, 9);
+        let (va, vb, vc, vd): (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>) = (
+            (0..16).map(|_| a.next_f32()).collect(),
+            (0..16).map(|_| b.next_f32()).collect(),
+            (0..16).map(|_| c.next_f32()).collect(),
+            (0..16).map(|_| d.next_f32()).collect(),
+        );
+        assert_eq!(va, vb);
+        assert_ne!(va, vc);
+        assert_ne!(va, vd);
+    }
+
+    #[test]
+    fn uniform_moments_and_range_over_many_keys() {
+        // Mean 1/2 and variance 1/12 over dimensions and neighbouring pixels,
+        // the case where a weak hash would show correlation first.
+        let (mut sum, mut sum2, mut n) = (0.0f64, 0.0f64, 0u32);
+        for pixel in 0..4096u64 {
+            let mut s = Sampler::new(0, pixel, 0);
+            for _ in 0..8 {
+                let u = s.next_f32();
+                assert!((0.0..1.0).contains(&u));
+                sum += f64::from(u);
+                sum2 += f64::from(u) * f64::from(u);
+                n += 1;
+            }
+        }
+        let n = f64::from(n);
+        let mean = sum / n;
+        let var = sum2 / n - mean * mean;
+        // Standard error of the mean is sqrt(1/12/n) ~ 1.1e-3.
+        assert!((mean - 0.5).abs() < 5e-3, "mean {mean}");
+        assert!((var - 1.0 / 12.0).abs() < 3e-3, "variance {var}");
+    }
+
+    #[test]
+    fn neighbouring_pixels_are_uncorrelated() {
+        let n = 20_000u64;
+        let (mut sxy, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0f64);
+        for p in 0..n {
+            let x = f64::from(Sampler::new(1, p, 3).next_f32());
+            let y = f64::from(Sampler::new(1, p + 1, 3).next_f32());
+            sxy += x * y;
+            sx += x;
+            sy += y;
+        }
+        let nf = n as f64;
+        let cov = sxy / nf - (sx / nf) * (sy / nf);
+        // Standard error of the covariance is about 1/12/sqrt(n) ~ 6e-4.
+        assert!(cov.abs() < 4e-3, "covariance {cov}");
+    }
+}
