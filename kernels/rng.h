@@ -11,6 +11,7 @@ inline ulong mix64(ulong z) {
 
 typedef struct {
     ulong key;
+    ulong rkey;    /* sobol: the key of the sample's independent numbers */
     ulong dim;     /* random: dimensions drawn */
     uint rindex;   /* sobol: the sample's index in its half, bit-reversed */
     uint vertex;   /* sobol: the vertex whose numbers are drawn */
@@ -29,6 +30,7 @@ inline uint reverse32(uint x) {
 inline Sampler sampler_new(ulong seed, ulong pixel, ulong sample) {
     Sampler s;
     s.key = mix64(mix64(mix64(seed ^ 0x5851F42D4C957F2DUL) ^ pixel) ^ sample);
+    s.rkey = 0UL;
     s.dim = 0;
     s.rindex = 0u;
     s.vertex = 0u;
@@ -45,6 +47,7 @@ inline Sampler sampler_of_kind(int sobol, ulong seed, ulong pixel, ulong sample)
     s.key = mix64(mix64(mix64(seed ^ 0x5851F42D4C957F2DUL) ^ pixel) ^ (sample & 1UL) ^ 0xA0761D6478BD642FUL);
     s.dim = 0;
     s.rindex = reverse32((uint)(sample >> 1));
+    s.rkey = mix64(s.key ^ (ulong)s.rindex);
     s.vertex = 0u;
     s.sobol = 1;
     return s;
@@ -116,7 +119,9 @@ inline float2 sobol_2d(const Sampler *s, ulong d) {
 }
 
 /* A path's numbers by use (Sampler::camera_2d, light_pick, ...): random
- * draws in order, Sobol takes the use's own dimension at the vertex. */
+ * draws in order, Sobol takes the use's own dimension at the vertex: Sobol
+ * points for the camera, the first SOBOL_VERTICES vertices and every
+ * roulette, independent numbers (pad_bits) for the rest. */
 #define USE_LIGHT_PICK 0UL
 #define USE_LIGHT_POSITION 1UL
 #define USE_BSDF_CHOICE 2UL
@@ -126,6 +131,23 @@ inline float2 sobol_2d(const Sampler *s, ulong d) {
 
 inline ulong vertex_dim(const Sampler *s, ulong use) {
     return 1UL + (ulong)s->vertex * VERTEX_USES + use;
+}
+
+inline int stratified(const Sampler *s) {
+    return s->vertex < SOBOL_VERTICES;
+}
+
+inline ulong pad_bits(const Sampler *s, ulong d) {
+    return mix64(s->rkey + d * 0x9E3779B97F4A7C15UL);
+}
+
+inline float2 pad_2d(const Sampler *s, ulong d) {
+    ulong bits = pad_bits(s, d);
+    return (float2)((float)(bits >> 40), (float)((bits >> 16) & 0xFFFFFFUL)) * (1.0f / 16777216.0f);
+}
+
+inline float number_1d(const Sampler *s, ulong d, int strat) {
+    return strat ? unit_f32(sobol_1d(s, d)) : (float)(pad_bits(s, d) >> 40) * (1.0f / 16777216.0f);
 }
 
 inline void at_vertex(Sampler *s, uint v) {
@@ -140,7 +162,11 @@ inline ulong light_pick(Sampler *s, uint n) {
     if (!s->sobol) {
         return next_bits(s);
     }
-    ulong hi = (ulong)sobol_1d(s, vertex_dim(s, USE_LIGHT_PICK));
+    ulong d = vertex_dim(s, USE_LIGHT_PICK);
+    if (!stratified(s)) {
+        return pad_bits(s, d);
+    }
+    ulong hi = (ulong)sobol_1d(s, d);
     return (hi << 32) | (ulong)(uint)(hi * (ulong)n);
 }
 
@@ -149,19 +175,23 @@ inline float2 light_2d(Sampler *s, uint k) {
         return next_2d(s);
     }
     ulong d = k == 0u ? vertex_dim(s, USE_LIGHT_POSITION) : (0x8000000000000000UL | ((ulong)s->vertex << 32) | (ulong)k);
-    return sobol_2d(s, d);
+    return stratified(s) ? sobol_2d(s, d) : pad_2d(s, d);
 }
 
 inline float bsdf_choice(Sampler *s) {
-    return s->sobol ? unit_f32(sobol_1d(s, vertex_dim(s, USE_BSDF_CHOICE))) : next_f32(s);
+    return s->sobol ? number_1d(s, vertex_dim(s, USE_BSDF_CHOICE), stratified(s)) : next_f32(s);
 }
 
 inline float2 bsdf_2d(Sampler *s) {
-    return s->sobol ? sobol_2d(s, vertex_dim(s, USE_BSDF_DIRECTION)) : next_2d(s);
+    if (!s->sobol) {
+        return next_2d(s);
+    }
+    ulong d = vertex_dim(s, USE_BSDF_DIRECTION);
+    return stratified(s) ? sobol_2d(s, d) : pad_2d(s, d);
 }
 
 inline float roulette(Sampler *s) {
-    return s->sobol ? unit_f32(sobol_1d(s, vertex_dim(s, USE_ROULETTE))) : next_f32(s);
+    return s->sobol ? number_1d(s, vertex_dim(s, USE_ROULETTE), 1) : next_f32(s);
 }
 
 /* sin and cos of 2 pi u, as math.rs's sincos_turns. */

@@ -104,8 +104,8 @@ fn spread(
 }
 
 /// Stated gain: random's squared error over Sobol's at equal samples, at
-/// least this (measured, 32x32, 8 seeds, clamp 4: cornell 2.44 at 64 spp
-/// and 3.85 at 256, cornell-glass 1.72 and 2.21).
+/// least this (measured, 32x32, 8 seeds, clamp 4: cornell 2.42 at 64 spp
+/// and 3.91 at 256, cornell-glass 1.77 and 2.19).
 const GAINS: [(&str, u64, f64); 4] = [
     ("cornell", 64, 2.0),
     ("cornell", 256, 3.0),

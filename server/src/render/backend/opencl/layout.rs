@@ -46,7 +46,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 20] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 21] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -66,6 +66,7 @@ pub const SHARED_CONSTANTS: [(&str, u32); 20] = [
         crate::render::integrator::MAX_SURVIVAL.to_bits(),
     ),
     ("ADAPTIVE_TILE", crate::render::adaptive::TILE_SIZE),
+    ("SOBOL_VERTICES", crate::render::sampler::SOBOL_VERTICES),
     ("WORK_LIST", WORK_LIST),
     ("WORK_DENSE", WORK_DENSE),
     // The generic program's traversal stacks (specialised ones are sized
