@@ -9,7 +9,7 @@
 import assert from "node:assert/strict";
 import { after, before, describe, it } from "node:test";
 import { chooseFormat, neededMbps } from "../../static/js/streamfmt.js";
-import { canvasStats, openPage, session, waitFor, waitFrame } from "./harness.mjs";
+import { api, canvasStats, openPage, session, waitFor, waitFrame } from "./harness.mjs";
 
 const W = 128;
 const H = 96;
@@ -134,6 +134,17 @@ describe("the frame stream in the browser", { timeout: 300000 }, () => {
   });
 
   it("a frame smaller than the session is stretched over the whole canvas", T, async () => {
+    // The live stream must be quiet first: a frame arriving while the test's
+    // own frame is drawn (or a draw already in flight) would cover it. A
+    // halted session publishes no more frames.
+    const sid = await id();
+    const r0 = await api(server.base, "PATCH", `/sessions/${sid}/quality`, { spp: 2 });
+    assert.equal(r0.status, 200, `PATCH quality: ${JSON.stringify(r0.body)}`);
+    await waitFor("the session halted", async () => (await status()).state === "halted");
+    await waitFor("the page idle (no frame being drawn or waiting)", () => page.evaluate(async () => {
+      const { state } = await import("/js/state.js");
+      return !state.decoding && !state.pendingFrame;
+    }));
     // A quarter-width frame, as progressive streaming sends first, handed to
     // the page's own drawing (the same module instances as the page's).
     const r = await page.evaluate(async ([w, h]) => {
