@@ -101,7 +101,7 @@ __kernel void check_intersect(__global float *out, uint n, __global const float4
  * normal in[2i+1].xyz, with the sampler of (seed 0, pixel i, sample 0):
  * (dir.xyz, weight.xyz, specular, 0) per item. */
 __kernel void check_scatter(__global float *out, uint n, __global const float4 *in,
-                            __global const Material *materials, uint material) {
+                            __global const Material *materials, uint material, __global const float *ggx) {
     uint i = (uint)get_global_id(0);
     if (i >= n) {
         return;
@@ -109,7 +109,7 @@ __kernel void check_scatter(__global float *out, uint n, __global const float4 *
     Sampler s = sampler_new(0UL, (ulong)i, 0UL);
     float3 weight;
     int specular;
-    float3 dir = scatter_outward(&materials[material], in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
+    float3 dir = scatter_outward(&materials[material], ggx, in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
     __global float *r = out + (size_t)i * 8u;
     r[0] = dir.x;
     r[1] = dir.y;

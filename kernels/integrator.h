@@ -102,7 +102,7 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
 #endif
         float3 weight;
         int transmitted;
-        float3 next = scatter(m, d, arriving, ns, s, &weight, &specular, &transmitted);
+        float3 next = scatter(m, sc->ggx, d, arriving, ns, s, &weight, &specular, &transmitted);
         /* A shading normal can send a direction to the wrong side of the
          * actual surface: such a sample has no contribution. */
         if (sf.smooth && (dot(next, nl) > 0.0f) == transmitted) {

@@ -40,11 +40,12 @@ inline float3 reflect_dir(float3 d, float3 n) {
 
 /* Samples the continuation of a ray along unit d that arrived at a
  * surface from outside (entering) or inside, nl the shading normal on the
- * side it came from (material.rs, scatter). Returns the new direction;
- * *weight is BSDF cos / pdf, *specular whether it was a delta lobe,
+ * side it came from (material.rs, scatter); ggx is the scene's table for
+ * MAT_PBR. Returns the new direction; *weight is BSDF cos / pdf,
+ * *specular whether the vertex did without next-event estimation,
  * *transmitted whether it went through. */
-inline float3 scatter(__global const Material *m, float3 d, int entering, float3 nl, Sampler *s, float3 *weight,
-                      int *specular, int *transmitted) {
+inline float3 scatter(__global const Material *m, __global const float *ggx, float3 d, int entering, float3 nl,
+                      Sampler *s, float3 *weight, int *specular, int *transmitted) {
     *weight = m->albedo.xyz;
     *transmitted = 0;
 #if HAS_DIFFUSE
@@ -54,6 +55,23 @@ inline float3 scatter(__global const Material *m, float3 d, int entering, float3
     }
 #endif
     *specular = 1;
+#if HAS_GGX
+    if (m->kind == MAT_PBR) {
+        float choice = bsdf_choice(s);
+        float2 u = bsdf_2d(s);
+        float3 t, b;
+        basis(nl, &t, &b);
+        float3 wo = (float3)(-dot(d, t), -dot(d, b), -dot(d, nl));
+        float3 wi;
+        if (ggx_sample(ggx, m->pbr, m->albedo.xyz, wo, choice, u, &wi, weight)) {
+            return t * wi.x + b * wi.y + nl * wi.z;
+        }
+        /* Below the surface: no contribution (the path ends on its zero
+         * weight). */
+        *weight = (float3)(0.0f);
+        return nl;
+    }
+#endif
 #if HAS_GLASS
     if (m->kind == MAT_GLASS) {
         float ior = m->albedo.w;
@@ -83,9 +101,9 @@ inline float3 scatter(__global const Material *m, float3 d, int entering, float3
 }
 
 /* scatter() off a surface of outward normal n (the routine checks). */
-inline float3 scatter_outward(__global const Material *m, float3 d, float3 n, Sampler *s, float3 *weight,
-                              int *specular) {
+inline float3 scatter_outward(__global const Material *m, __global const float *ggx, float3 d, float3 n, Sampler *s,
+                              float3 *weight, int *specular) {
     int entering = dot(d, n) < 0.0f;
     int transmitted;
-    return scatter(m, d, entering, entering ? n : -n, s, weight, specular, &transmitted);
+    return scatter(m, ggx, d, entering, entering ? n : -n, s, weight, specular, &transmitted);
 }

@@ -24,4 +24,5 @@
     X(BvhNode, mesh_nodes)                                                       \
     X(TriVerts, tris)                                                            \
     X(float4, normals)     /* vertex normals per triangle slot */                \
-    X(uint, slots)         /* world material of each instance slot */
+    X(uint, slots)         /* world material of each instance slot */        \
+    X(float, ggx)          /* metallic-roughness albedo tables (ggx.h) */

@@ -32,6 +32,7 @@ typedef struct {
     uint schlick;
     uint emissive;
     uint pad0;
+    float4 pbr;      /* MAT_PBR: metallic, alpha, roughness, f0 (ggx.h) */
 } Material;
 
 typedef struct {
@@ -137,6 +138,7 @@ typedef struct {
 #define HAS_DIFFUSE 1
 #define HAS_MIRROR 1
 #define HAS_GLASS 1
+#define HAS_GGX 1
 #define HAS_SCHLICK 1
 #define HAS_EXACT 1
 #define HAS_SPHERE_LIGHTS 1

@@ -381,25 +381,53 @@ fn the_bvh_nearest_hit_agrees_on_1e5_rays() {
     );
 }
 
+/// A scene of spheres, one per metallic-roughness corner the kernel must
+/// match: metal, dielectric over a coloured base, a mix, a near-mirror.
+const PBR_SCENE: &str = r#"{
+  "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40},
+  "materials": {
+    "metal": {"type": "pbr", "base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.3},
+    "plastic": {"type": "pbr", "base_color": [0.2, 0.5, 0.8], "metallic": 0, "roughness": 0.6},
+    "mixed": {"type": "pbr", "base_color": [0.7, 0.7, 0.2], "metallic": 0.5, "roughness": 1.0, "ior": 1.33},
+    "polished": {"type": "pbr", "metallic": 1, "roughness": 0.02},
+    "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 4, 4]}
+  },
+  "objects": [
+    {"type": "sphere", "center": [-1.5, 0, 0], "radius": 0.5, "material": "metal"},
+    {"type": "sphere", "center": [-0.5, 0, 0], "radius": 0.5, "material": "plastic"},
+    {"type": "sphere", "center": [0.5, 0, 0], "radius": 0.5, "material": "mixed"},
+    {"type": "sphere", "center": [1.5, 0, 0], "radius": 0.5, "material": "polished"},
+    {"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "material": "light"}
+  ]
+}"#;
+
 #[test]
 fn scattering_agrees_for_every_material() {
     let Some(d) = device() else { return };
     let c = checks(&d);
     let mut seen = Vec::new();
-    for scene in ["cornell-glass", "smallpt"] {
-        let job = job(scene);
-        let packed = pack(&job);
+    let pbr_scene = Scene::from_json_str(PBR_SCENE).expect("pbr scene");
+    let jobs = [
+        job("cornell-glass"),
+        job("smallpt"),
+        RenderJob::new(&pbr_scene, 16, 16, &Quality::default()),
+    ];
+    let tables: &[f32] = &pathstream::render::ggx::tables().data;
+    for job in &jobs {
+        let packed = pack(job);
         for (index, m) in job.world.materials.iter().enumerate() {
             let kind = match m.bsdf {
-                Bsdf::Diffuse => "diffuse",
-                Bsdf::Mirror => "mirror",
-                Bsdf::Glass { schlick: false, .. } => "glass (exact Fresnel)",
-                Bsdf::Glass { schlick: true, .. } => "glass (Schlick)",
+                Bsdf::Diffuse => "diffuse".to_owned(),
+                Bsdf::Mirror => "mirror".to_owned(),
+                Bsdf::Glass { schlick: false, .. } => "glass (exact Fresnel)".to_owned(),
+                Bsdf::Glass { schlick: true, .. } => "glass (Schlick)".to_owned(),
+                Bsdf::Pbr(p) => format!("pbr {p:?}"),
             };
             if seen.contains(&kind) {
                 continue;
             }
-            seen.push(kind);
+            seen.push(kind.clone());
+            let pbr = matches!(m.bsdf, Bsdf::Pbr(_));
             let n = 10_000u64;
             let dirs: Vec<(Vec3A, Vec3A)> = (0..n).map(|i| (unit(i, 30), unit(i, 40))).collect();
             let input: Vec<[f32; 4]> = dirs
@@ -415,10 +443,12 @@ fn scattering_agrees_for_every_material() {
                         CheckArg::Buffer(bytemuck::cast_slice(&input)),
                         CheckArg::Buffer(bytemuck::cast_slice(&packed.materials)),
                         CheckArg::U32(index as u32),
+                        CheckArg::Buffer(bytemuck::cast_slice(tables)),
                     ],
                 )
                 .expect("run");
             let mut decisions = 0;
+            let mut loose = 0;
             for (i, (dir, normal)) in dirs.iter().enumerate() {
                 let entering = dir.dot(*normal) < 0.0;
                 let nl = if entering { *normal } else { -*normal };
@@ -426,14 +456,32 @@ fn scattering_agrees_for_every_material() {
                 let cpu = scatter(m, *dir, entering, nl, &mut s);
                 let r = &out[8 * i..8 * i + 8];
                 let device_dir = Vec3A::new(r[0], r[1], r[2]);
-                assert_eq!(
-                    [r[3], r[4], r[5]],
-                    cpu.weight.to_array(),
-                    "{kind}: item {i}: weight"
-                );
+                let device_weight = Vec3A::new(r[3], r[4], r[5]);
+                if pbr {
+                    // Table lookups, normalisations and dot products in
+                    // another order: a few ulps, amplified where a
+                    // direction grazes the surface (its cosine) or a narrow
+                    // lobe's D is steep.
+                    let gap = (device_weight - cpu.weight).abs().max_element()
+                        / cpu.weight.max_element().max(1e-2);
+                    assert!(
+                        gap <= 1e-2,
+                        "{kind}: item {i}: weight {device_weight} vs {}",
+                        cpu.weight
+                    );
+                    // (Measured on PoCL: 5 of 40,000 above 1e-4, all
+                    // leaving within 0.01 of the horizon.)
+                    loose += usize::from(gap > 1e-4);
+                } else {
+                    assert_eq!(
+                        device_weight.to_array(),
+                        cpu.weight.to_array(),
+                        "{kind}: item {i}: weight"
+                    );
+                }
                 assert_eq!(r[6] != 0.0, cpu.specular, "{kind}: item {i}: specular");
                 let gap = (device_dir - cpu.dir).abs().max_element();
-                if gap > 1e-6 {
+                if gap > if pbr { 1e-5 } else { 1e-6 } {
                     // A reflect/refract choice on a Fresnel value within an
                     // ulp of the random number may go the other way.
                     decisions += 1;
@@ -448,9 +496,13 @@ fn scattering_agrees_for_every_material() {
                 decisions <= 1,
                 "{kind}: {decisions} of {n} directions differ"
             );
+            assert!(
+                loose <= 20,
+                "{kind}: {loose} of {n} weights differ by more than 1e-4"
+            );
         }
     }
-    assert_eq!(seen.len(), 4, "every material kind was checked: {seen:?}");
+    assert_eq!(seen.len(), 8, "every material kind was checked: {seen:?}");
 }
 
 #[test]

@@ -88,7 +88,7 @@ fn unknown_fields_and_kinds() {
     rejects(
         |v| v["materials"]["white"]["type"] = json!("metal"),
         "materials.white.type",
-        "unknown type 'metal' (expected one of: diffuse, mirror, glass)",
+        "unknown type 'metal' (expected one of: diffuse, mirror, glass, pbr)",
     );
     rejects(
         |v| v["objects"][0]["type"] = json!("cube"),

@@ -114,6 +114,8 @@ impl Config {
                 "cornell-quads",
                 "smallpt",
                 "furnace",
+                scenes::CORNELL_MESH,
+                scenes::CORNELL_MESH_PBR,
             ]
             .map(String::from)
             .to_vec(),

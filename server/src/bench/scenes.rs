@@ -8,7 +8,10 @@
 //!   icospheres of 20,480 triangles, and an emissive square of two
 //!   triangles filling a hole in the ceiling (the scene renderers are
 //!   compared on; emitters are two-sided, so a lamp under a closed ceiling
-//!   would light the ceiling above it from a hair's breadth).
+//!   would light the ceiling above it from a hair's breadth);
+//! - `cornell-mesh-pbr`: `cornell-mesh` with glTF metallic-roughness balls,
+//!   a rough gold metal and a coated blue plastic (what the GGX lobes
+//!   cost against the diffuse ones).
 
 use crate::model::generate::{bumpy_sphere, icosphere};
 use crate::model::MeshData;
@@ -19,6 +22,8 @@ use serde_json::{json, Value};
 pub const GLASS_MESH: &str = "cornell-glass-mesh";
 /// `cornell-mesh`.
 pub const CORNELL_MESH: &str = "cornell-mesh";
+/// `cornell-mesh-pbr`.
+pub const CORNELL_MESH_PBR: &str = "cornell-mesh-pbr";
 
 /// The scene by name: a mesh scene of this module's, else a built-in one
 /// or a file.
@@ -26,6 +31,7 @@ pub fn load(name: &str) -> Result<Scene, SceneError> {
     match name {
         GLASS_MESH => glass_mesh(),
         CORNELL_MESH => cornell_mesh(),
+        CORNELL_MESH_PBR => cornell_mesh_pbr(),
         _ => crate::resolve::load_scene(name),
     }
 }
@@ -81,6 +87,20 @@ fn ball(mesh: &MeshData, center: [f64; 3], r: f64, material: &str) -> Value {
 
 /// `cornell-mesh`: smallpt's box and camera, every surface triangles.
 pub fn cornell_mesh() -> Result<Scene, SceneError> {
+    let diffuse = json!({"type": "diffuse", "albedo": [0.75, 0.75, 0.75]});
+    box_with_balls(diffuse.clone(), diffuse)
+}
+
+/// `cornell-mesh-pbr`: the same box, metallic-roughness balls.
+pub fn cornell_mesh_pbr() -> Result<Scene, SceneError> {
+    box_with_balls(
+        json!({"type": "pbr", "base_color": [1.0, 0.78, 0.34], "metallic": 1.0, "roughness": 0.35}),
+        json!({"type": "pbr", "base_color": [0.2, 0.35, 0.8], "metallic": 0.0, "roughness": 0.5}),
+    )
+}
+
+/// The triangle Cornell box with two balls of materials `left` and `right`.
+fn box_with_balls(left: Value, right: Value) -> Result<Scene, SceneError> {
     let sphere = icosphere(5);
     let (x0, x1, y1, z1) = (1.0, 99.0, 81.6, 170.0);
     let (lx0, lx1, lz0, lz1) = (34.0, 66.0, 66.0, 98.0);
@@ -115,8 +135,8 @@ pub fn cornell_mesh() -> Result<Scene, SceneError> {
             [0.0, 0.0, lz1 - lz0],
             "lamp",
         ),
-        ball(&sphere, [27.0, 16.5, 47.0], 16.5, "white"),
-        ball(&sphere, [73.0, 16.5, 78.0], 16.5, "white"),
+        ball(&sphere, [27.0, 16.5, 47.0], 16.5, "left"),
+        ball(&sphere, [73.0, 16.5, 78.0], 16.5, "right"),
     ];
     let diffuse = |c: [f64; 3]| json!({"type": "diffuse", "albedo": c});
     Scene::from_json_value(json!({
@@ -126,6 +146,8 @@ pub fn cornell_mesh() -> Result<Scene, SceneError> {
             "red": diffuse([0.75, 0.25, 0.25]),
             "blue": diffuse([0.25, 0.25, 0.75]),
             "white": diffuse([0.75, 0.75, 0.75]),
+            "left": left,
+            "right": right,
             "lamp": {"type": "diffuse", "albedo": [0.0, 0.0, 0.0], "emission": [8.0, 8.0, 8.0]},
         },
         "objects": objects,
@@ -150,5 +172,11 @@ mod tests {
         );
         assert_eq!(c.emitters().count(), 1, "one area light");
         assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+        let p = cornell_mesh_pbr().expect("valid");
+        assert_eq!(p.unique_triangles(), c.unique_triangles());
+        assert!(p
+            .materials
+            .iter()
+            .any(|m| matches!(m.kind, crate::render::scene::MaterialKind::Pbr { .. })));
     }
 }

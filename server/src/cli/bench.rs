@@ -48,10 +48,11 @@ pub struct BenchArgs {
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     sections: Vec<SectionArg>,
     /// Scenes for every section, comma-separated (built-in names, the mesh
-    /// scenes cornell-glass-mesh and cornell-mesh, or JSON files) [default:
-    /// throughput on cornell, cornell-glass, cornell-quads, smallpt,
-    /// furnace; trade on cornell, cornell-glass, smallpt; adaptive and
-    /// samplers on those five and the mesh scenes].
+    /// scenes cornell-glass-mesh, cornell-mesh and cornell-mesh-pbr, or JSON
+    /// files) [default: throughput on cornell, cornell-glass,
+    /// cornell-quads, smallpt, furnace, cornell-mesh, cornell-mesh-pbr;
+    /// trade on cornell, cornell-glass, smallpt; adaptive and samplers on
+    /// the five built-in scenes and the first two mesh scenes].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     scenes: Vec<String>,
     /// A small version that runs in seconds (small images, short runs,

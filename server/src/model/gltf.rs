@@ -12,8 +12,9 @@
 //!   them.
 //! - Materials: transmission > 0 (KHR_materials_transmission) -> glass, ior
 //!   from KHR_materials_ior (1.5 when absent); else metallic 1 and roughness
-//!   0 -> mirror; else diffuse (metallic/roughness other than 0/1 noted). The
-//!   albedo is the base colour factor's rgb; emission is the emissive factor
+//!   0 -> mirror, metallic 0 and roughness 1 -> diffuse (the renderer's
+//!   exact corners); else the metallic-roughness model (`pbr`) with the
+//!   file's factors and ior. The albedo is the base colour factor's rgb; emission is the emissive factor
 //!   times KHR_materials_emissive_strength. Textures, normal and occlusion
 //!   maps, alpha modes other than OPAQUE: noted.
 //! - The first perspective camera met in the walk (preorder) becomes the
@@ -397,14 +398,20 @@ fn material(m: &::gltf::Material, index: usize) -> Mat {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
         }
-    } else {
-        if !(metallic == 0.0 && roughness == 1.0) {
-            ignored.push(format!(
-                "metallic {metallic} / roughness {roughness} (roughness and metalness are not modelled: rendered diffuse)"
-            ));
-        }
+    } else if metallic == 0.0 && roughness == 1.0 {
         Material::Diffuse {
             albedo: common::albedo("base colour", rgb, &mut notes),
+            emission,
+        }
+    } else {
+        Material::Pbr {
+            base_color: common::albedo("base colour", rgb, &mut notes),
+            metallic: metallic.clamp(0.0, 1.0),
+            roughness: roughness.clamp(0.0, 1.0),
+            ior: match m.ior() {
+                None => common::DEFAULT_IOR,
+                Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
+            },
             emission,
         }
     };

@@ -59,8 +59,9 @@ pub struct Model {
 }
 
 /// A material as a loader maps it (each format's rules are in its module's
-/// doc): one of the three kinds the renderer models. Glass is smooth, with
-/// the exact dielectric Fresnel equations.
+/// doc): one of the kinds the renderer models. Glass is smooth, with the
+/// exact dielectric Fresnel equations; `Pbr` is glTF's metallic-roughness
+/// model.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Material {
     Diffuse {
@@ -75,6 +76,13 @@ pub enum Material {
         ior: f64,
         /// Tint of light passing through (None: clear).
         albedo: Option<[f64; 3]>,
+        emission: Option<[f64; 3]>,
+    },
+    Pbr {
+        base_color: [f64; 3],
+        metallic: f64,
+        roughness: f64,
+        ior: f64,
         emission: Option<[f64; 3]>,
     },
 }

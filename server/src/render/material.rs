@@ -1,6 +1,8 @@
-//! Surface scattering: diffuse (cosine-weighted), mirror, and smooth glass.
+//! Surface scattering: diffuse (cosine-weighted), mirror, smooth glass, and
+//! glTF's metallic-roughness model (`render::ggx`).
 
 use crate::render::fresnel;
+use crate::render::ggx::{self, Pbr};
 use crate::render::math::{basis, sincos_turns, DVec3, Vec3A};
 use crate::render::sampler::Sampler;
 use crate::render::scene::{Fresnel, Material, MaterialKind};
@@ -11,6 +13,16 @@ pub enum Bsdf {
     Diffuse,
     Mirror,
     Glass { ior: f32, schlick: bool },
+    Pbr(Pbr),
+}
+
+impl Bsdf {
+    /// Whether next-event estimation gathers the light this surface
+    /// reflects (else the path counts emission at its next hit).
+    #[inline(always)]
+    pub fn gathers_light(&self) -> bool {
+        matches!(self, Bsdf::Diffuse)
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -34,6 +46,11 @@ impl SurfaceMaterial {
                 ior: ior as f32,
                 schlick: fresnel == Fresnel::Schlick,
             },
+            MaterialKind::Pbr {
+                metallic,
+                roughness,
+                ior,
+            } => Bsdf::Pbr(Pbr::new(metallic as f32, roughness as f32, ior as f32)),
         };
         Self {
             bsdf,
@@ -50,7 +67,9 @@ pub struct Scattered {
     pub dir: Vec3A,
     /// BSDF * cos / pdf.
     pub weight: Vec3A,
-    /// A delta lobe: next-event estimation cannot reach it.
+    /// No next-event estimation at this vertex (a delta lobe, which it
+    /// cannot reach, or a glossy one, which it does not try): the next hit
+    /// counts the emission it finds.
     pub specular: bool,
     /// Through the surface (refraction), not back off it.
     pub transmitted: bool,
@@ -119,6 +138,24 @@ pub fn scatter(
                 weight: m.albedo,
                 specular: true,
                 transmitted: !reflected,
+            }
+        }
+        Bsdf::Pbr(p) => {
+            let choice = sampler.bsdf_choice();
+            let u = sampler.bsdf_2d();
+            let (t, b) = basis(nl);
+            let wo = Vec3A::new(-d.dot(t), -d.dot(b), -d.dot(nl));
+            let (dir, weight) = match ggx::sample(ggx::tables(), &p, m.albedo, wo, choice, u) {
+                Some((wi, w)) => (t * wi.x + b * wi.y + nl * wi.z, w),
+                // Below the surface: no contribution (the path ends on its
+                // zero weight).
+                None => (nl, Vec3A::ZERO),
+            };
+            Scattered {
+                dir,
+                weight,
+                specular: true,
+                transmitted: false,
             }
         }
     }

@@ -4,7 +4,7 @@
 //! - `scene`: validated scene model, JSON, built-in scenes
 //! - `world`, `shape`, `bvh`, `ray`: the scene as the hot path sees it
 //! - `camera`, `filter`, `sampler`: where camera samples go and their randomness
-//! - `material`, `fresnel`, `light`: how surfaces scatter, what emits
+//! - `material`, `fresnel`, `ggx`, `light`: how surfaces scatter, what emits
 //! - `integrator`: the path tracer, next-event estimation included
 //! - `adaptive`: where an adaptive render's samples go
 //! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
@@ -20,6 +20,7 @@ pub mod camera;
 pub mod film;
 pub mod filter;
 pub mod fresnel;
+pub mod ggx;
 pub mod integrator;
 pub mod isa;
 pub mod job;

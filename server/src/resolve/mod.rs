@@ -13,8 +13,8 @@ pub use files::FileResolver;
 use crate::model::{self, Model};
 use crate::render::math::{DAffine3, DMat3, DVec3};
 use crate::render::scene::{
-    builtin, CameraJson, GlassJson, ImportJson, LoadedModel, MaterialJson, ObjectJson, SceneJson,
-    SurfaceJson, BUILTIN_NAMES,
+    builtin, CameraJson, GlassJson, ImportJson, LoadedModel, MaterialJson, ObjectJson, PbrJson,
+    SceneJson, SurfaceJson, BUILTIN_NAMES,
 };
 use crate::render::scene::{FresnelJson, Scene, SceneError};
 use crate::render::shape::MeshData;
@@ -111,6 +111,19 @@ fn material_json(m: model::Material) -> MaterialJson {
             ior,
             albedo,
             fresnel: FresnelJson::Exact,
+            emission,
+        }),
+        model::Material::Pbr {
+            base_color,
+            metallic,
+            roughness,
+            ior,
+            emission,
+        } => MaterialJson::Pbr(PbrJson {
+            base_color,
+            metallic,
+            roughness,
+            ior,
             emission,
         }),
     }

@@ -208,6 +208,17 @@ fn diffuse(albedo: [f64; 3], emission: Option<[f64; 3]>) -> Material {
     Material::Diffuse { albedo, emission }
 }
 
+/// glTF's metallic-roughness model with the default ior and no emission.
+fn pbr(base_color: [f64; 3], metallic: f64, roughness: f64) -> Material {
+    Material::Pbr {
+        base_color,
+        metallic,
+        roughness,
+        ior: 1.5,
+        emission: None,
+    }
+}
+
 /// What every encoding of [`scene`] must load as.
 fn expected() -> Model {
     let g = cube();
@@ -277,7 +288,7 @@ fn expected() -> Model {
             ("default".into(), diffuse([1.0; 3], None)),
             ("chrome".into(), Material::Mirror { albedo: [0.9; 3], emission: None }),
             ("lamp".into(), diffuse([0.0; 3], Some([4.0, 2.0, 1.0]))),
-            ("paint-2".into(), diffuse([0.5; 3], None)),
+            ("paint-2".into(), pbr([0.5; 3], 0.5, 0.5)),
             ("partial".into(), glass(1.5, [1.0, 0.5, 0.5])),
         ],
         instances: vec![
@@ -313,7 +324,7 @@ fn expected() -> Model {
             "primitives without a material use the glTF default material: white diffuse (albedo 1)",
             "meshes[1].primitives[2] (mesh \"strips\"): POINTS primitive skipped (only triangles are rendered)",
             "meshes[1].primitives[3] (mesh \"strips\"): LINES primitive skipped (only triangles are rendered)",
-            "material \"paint-2\": not modelled, ignored: base colour texture, normal map, alpha mode BLEND, metallic 0.5 / roughness 0.5 (roughness and metalness are not modelled: rendered diffuse)",
+            "material \"paint-2\": not modelled, ignored: base colour texture, normal map, alpha mode BLEND",
             "material \"partial\": transmission 0.5 is rendered as fully transmissive glass",
             "material \"partial\": base colour [2, 0.5, 0.5] is outside [0, 1]: clamped to [1, 0.5, 0.5]",
         ]
@@ -580,7 +591,7 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
     assert_guarantees(&m);
     assert_eq!(
         m.materials,
-        vec![("material0".to_owned(), diffuse([1.0; 3], None))]
+        vec![("material0".to_owned(), pbr([1.0; 3], 1.0, 1.0))]
     );
     assert_eq!(
         m.warnings,
@@ -589,7 +600,7 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
             "skins ignored (skinned meshes are placed by their node's transform)",
             "mesh \"mesh0\": morph targets ignored (the base shape is used)",
             "vertex colours ignored",
-            "material \"material0\": not modelled, ignored: metallic-roughness texture, occlusion map, emissive texture, alpha mode MASK (cutoff 0.25), metallic 1 / roughness 1 (roughness and metalness are not modelled: rendered diffuse)",
+            "material \"material0\": not modelled, ignored: metallic-roughness texture, occlusion map, emissive texture, alpha mode MASK (cutoff 0.25)",
         ]
     );
 }

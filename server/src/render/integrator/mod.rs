@@ -15,7 +15,7 @@ pub use nee::LightSampling;
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
 use crate::render::isa::Isa;
-use crate::render::material::{scatter, Bsdf};
+use crate::render::material::scatter;
 use crate::render::math::{max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
@@ -109,7 +109,7 @@ impl Path {
         } else {
             s.ns
         };
-        if settings.nee && m.bsdf == Bsdf::Diffuse {
+        if settings.nee && m.bsdf.gathers_light() {
             let direct = nee::direct(
                 isa,
                 world,

@@ -93,6 +93,36 @@ pub enum MaterialJson {
     Diffuse(SurfaceJson),
     Mirror(SurfaceJson),
     Glass(GlassJson),
+    Pbr(PbrJson),
+}
+
+/// Fields of `pbr` materials: glTF 2.0's metallic-roughness model, with
+/// glTF's defaults (white, metallic 1, roughness 1, ior 1.5).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PbrJson {
+    #[serde(default = "white")]
+    pub base_color: [f64; 3],
+    #[serde(default = "one")]
+    pub metallic: f64,
+    #[serde(default = "one")]
+    pub roughness: f64,
+    #[serde(default = "default_ior")]
+    pub ior: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission: Option<[f64; 3]>,
+}
+
+fn white() -> [f64; 3] {
+    [1.0; 3]
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn default_ior() -> f64 {
+    1.5
 }
 
 /// Fields of `diffuse` and `mirror` materials.
@@ -232,10 +262,11 @@ impl SceneJson {
             .into_iter()
             .map(|(name, v)| {
                 let path = format!("materials.{name}");
-                let m = match tagged(&path, v, &["diffuse", "mirror", "glass"])? {
+                let m = match tagged(&path, v, &["diffuse", "mirror", "glass", "pbr"])? {
                     ("diffuse", rest) => MaterialJson::Diffuse(at(&path, rest)?),
                     ("mirror", rest) => MaterialJson::Mirror(at(&path, rest)?),
-                    (_, rest) => MaterialJson::Glass(at(&path, rest)?),
+                    ("glass", rest) => MaterialJson::Glass(at(&path, rest)?),
+                    (_, rest) => MaterialJson::Pbr(at(&path, rest)?),
                 };
                 Ok((name, m))
             })

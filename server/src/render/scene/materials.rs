@@ -1,7 +1,7 @@
 //! Material JSON -> validated [`Material`], and back; the error for a
 //! material name a scene does not define.
 
-use super::json::{FresnelJson, GlassJson, MaterialJson, SurfaceJson};
+use super::json::{FresnelJson, GlassJson, MaterialJson, PbrJson, SurfaceJson};
 use super::values::{finite, vec3};
 use super::{Fresnel, Material, MaterialKind, SceneError, MAX_EMISSION};
 use std::collections::BTreeMap;
@@ -28,13 +28,7 @@ pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
             fresnel,
             emission,
         }) => {
-            let ior = finite(&format!("{path}.ior"), *ior)?;
-            if !(1.0..=MAX_IOR).contains(&ior) {
-                return Err(SceneError::new(
-                    format!("{path}.ior"),
-                    format!("must be between 1 and {MAX_IOR} (got {ior})"),
-                ));
-            }
+            let ior = checked_ior(&path, *ior)?;
             let fresnel = match fresnel {
                 FresnelJson::Exact => Fresnel::Exact,
                 FresnelJson::Schlick => Fresnel::Schlick,
@@ -45,11 +39,40 @@ pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
                 *emission,
             )
         }
+        MaterialJson::Pbr(PbrJson {
+            base_color,
+            metallic,
+            roughness,
+            ior,
+            emission,
+        }) => {
+            let unit = |field: &str, v: f64| {
+                let v = finite(&format!("{path}.{field}"), v)?;
+                if (0.0..=1.0).contains(&v) {
+                    Ok(v)
+                } else {
+                    Err(SceneError::new(
+                        format!("{path}.{field}"),
+                        format!("must be between 0 and 1 (got {v})"),
+                    ))
+                }
+            };
+            let kind = MaterialKind::Pbr {
+                metallic: unit("metallic", *metallic)?,
+                roughness: unit("roughness", *roughness)?,
+                ior: checked_ior(&path, *ior)?,
+            };
+            (kind, *base_color, *emission)
+        }
     };
-    let albedo = vec3(&format!("{path}.albedo"), albedo)?;
+    let field = match m {
+        MaterialJson::Pbr(_) => "base_color",
+        _ => "albedo",
+    };
+    let albedo = vec3(&format!("{path}.{field}"), albedo)?;
     if albedo.min_element() < 0.0 || albedo.max_element() > 1.0 {
         return Err(SceneError::new(
-            format!("{path}.albedo"),
+            format!("{path}.{field}"),
             "components must be between 0 and 1",
         ));
     }
@@ -67,6 +90,18 @@ pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
         emission,
         imported: false,
     })
+}
+
+/// An index of refraction in [1, [`MAX_IOR`]].
+fn checked_ior(path: &str, ior: f64) -> Result<f64> {
+    let ior = finite(&format!("{path}.ior"), ior)?;
+    if !(1.0..=MAX_IOR).contains(&ior) {
+        return Err(SceneError::new(
+            format!("{path}.ior"),
+            format!("must be between 1 and {MAX_IOR} (got {ior})"),
+        ));
+    }
+    Ok(ior)
 }
 
 /// The material's JSON form.
@@ -88,6 +123,17 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
                 Fresnel::Exact => FresnelJson::Exact,
                 Fresnel::Schlick => FresnelJson::Schlick,
             },
+            emission,
+        }),
+        MaterialKind::Pbr {
+            metallic,
+            roughness,
+            ior,
+        } => MaterialJson::Pbr(PbrJson {
+            base_color: m.albedo.to_array(),
+            metallic,
+            roughness,
+            ior,
             emission,
         }),
     }

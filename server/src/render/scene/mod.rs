@@ -50,7 +50,7 @@ pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
 pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
     CameraJson, FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson,
-    QuadJson, RotateJson, ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
+    PbrJson, QuadJson, RotateJson, ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
 };
 pub use resolve::{LoadedModel, ModelSource, NoFiles, Resolver};
 pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};
@@ -107,7 +107,17 @@ pub enum Fresnel {
 pub enum MaterialKind {
     Diffuse,
     Mirror,
-    Glass { ior: f64, fresnel: Fresnel },
+    Glass {
+        ior: f64,
+        fresnel: Fresnel,
+    },
+    /// glTF 2.0's metallic-roughness model (`render::ggx`); the albedo is
+    /// its base colour.
+    Pbr {
+        metallic: f64,
+        roughness: f64,
+        ior: f64,
+    },
 }
 
 /// A named material.
@@ -115,7 +125,7 @@ pub enum MaterialKind {
 pub struct Material {
     pub name: String,
     pub kind: MaterialKind,
-    /// Diffuse reflectance, mirror reflectance, or glass tint.
+    /// Diffuse reflectance, mirror reflectance, glass tint, or base colour.
     pub albedo: DVec3,
     /// Emitted radiance, from both sides of the surface.
     pub emission: DVec3,

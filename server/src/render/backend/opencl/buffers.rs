@@ -64,7 +64,7 @@ macro_rules! scene_array {
 
 /// The scene's arrays in the order of `kernels/scene_arrays.h`: the
 /// `render` kernel's first parameters.
-pub(super) const SCENE_ARRAYS: [SceneArray; 12] = [
+pub(super) const SCENE_ARRAYS: [SceneArray; 13] = [
     scene_array!("P": "Params", "params", [layout::Params], |p| {
         std::slice::from_ref(&p.params)
     }),
@@ -85,6 +85,7 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 12] = [
         &p.meshes.normals
     }),
     scene_array!("slots": "uint", "material slots", [u32], |p| &p.meshes.slots),
+    scene_array!("ggx": "float", "GGX albedo tables", [f32], |p| &p.ggx),
 ];
 
 /// The `render` kernel's parameters after the scene's arrays, in order:

@@ -278,6 +278,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         diffuse: true,
         mirror: true,
         glass: true,
+        ggx: true,
         schlick: true,
         exact: true,
         sphere_lights: true,

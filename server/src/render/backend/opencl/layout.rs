@@ -38,6 +38,7 @@ pub const LIGHT_ENVIRONMENT: u32 = 2;
 pub const MAT_DIFFUSE: u32 = 0;
 pub const MAT_MIRROR: u32 = 1;
 pub const MAT_GLASS: u32 = 2;
+pub const MAT_PBR: u32 = 3;
 /// No object hit (an object index).
 pub const NO_OBJECT: u32 = u32::MAX;
 
@@ -46,7 +47,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 21] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 23] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -58,6 +59,8 @@ pub const SHARED_CONSTANTS: [(&str, u32); 21] = [
     ("MAT_DIFFUSE", MAT_DIFFUSE),
     ("MAT_MIRROR", MAT_MIRROR),
     ("MAT_GLASS", MAT_GLASS),
+    ("MAT_PBR", MAT_PBR),
+    ("GGX_TABLE_N", crate::render::ggx::TABLE_N as u32),
     ("NO_OBJECT", NO_OBJECT),
     ("BVH_ROBUST_BITS", crate::render::bvh::ROBUST.to_bits()),
     ("GAMMA7_BITS", crate::render::math::gamma(7).to_bits()),
@@ -118,6 +121,8 @@ pub struct Material {
     pub schlick: u32,
     pub emissive: u32,
     pub pad0: u32,
+    /// pbr: metallic, alpha, roughness, f0 (`ggx::Pbr`).
+    pub pbr: [f32; 4],
 }
 
 #[repr(C, align(16))]
@@ -176,7 +181,7 @@ pub struct Light {
 
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
-const _: () = assert!(std::mem::size_of::<Material>() == 48);
+const _: () = assert!(std::mem::size_of::<Material>() == 64);
 const _: () = assert!(std::mem::size_of::<Params>() == 128);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
@@ -278,6 +283,9 @@ pub struct Packed {
     pub prims: Vec<u32>,
     pub big: Vec<u32>,
     pub meshes: super::meshes::PackedMeshes,
+    /// The metallic-roughness BSDF's albedo tables (`ggx::Tables`), where
+    /// a material uses it.
+    pub ggx: Vec<f32>,
 }
 
 pub fn pack(job: &RenderJob) -> Packed {
@@ -319,6 +327,11 @@ pub fn pack(job: &RenderJob) -> Packed {
                 Bsdf::Diffuse => (MAT_DIFFUSE, 1.0, false),
                 Bsdf::Mirror => (MAT_MIRROR, 1.0, false),
                 Bsdf::Glass { ior, schlick } => (MAT_GLASS, ior, schlick),
+                Bsdf::Pbr(_) => (MAT_PBR, 1.0, false),
+            };
+            let pbr = match m.bsdf {
+                Bsdf::Pbr(p) => [p.metallic, p.alpha, p.roughness, p.f0],
+                _ => [0.0; 4],
             };
             Material {
                 albedo: v4(m.albedo, ior),
@@ -327,6 +340,7 @@ pub fn pack(job: &RenderJob) -> Packed {
                 schlick: u32::from(schlick),
                 emissive: u32::from(m.emissive),
                 pad0: 0,
+                pbr,
             }
         })
         .collect();
@@ -362,6 +376,11 @@ pub fn pack(job: &RenderJob) -> Packed {
         prims: Vec::new(),
         big: Vec::new(),
         meshes: super::meshes::pack(w),
+        ggx: if w.materials.iter().any(|m| matches!(m.bsdf, Bsdf::Pbr(_))) {
+            crate::render::ggx::tables().data.to_vec()
+        } else {
+            Vec::new()
+        },
     };
     if device_uses_bvh(w) {
         let (bvh, big) = w.device_bvh();

@@ -5,7 +5,7 @@
 
 use super::layout::{
     device_uses_bvh, kernel_light_count, shared_defines, KIND_QUAD, KIND_SPHERE, MAT_DIFFUSE,
-    MAT_GLASS, MAT_MIRROR,
+    MAT_GLASS, MAT_MIRROR, MAT_PBR,
 };
 use crate::render::job::RenderJob;
 use crate::render::light::EmitterShape;
@@ -17,7 +17,7 @@ use opencl3::context::Context;
 use opencl3::program::Program;
 
 /// The kernel's sources in dependency order (`kernels/`, built into the binary).
-pub const SOURCES: [&str; 12] = [
+pub const SOURCES: [&str; 13] = [
     include_str!("../../../../../kernels/scene_arrays.h"),
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
@@ -26,6 +26,7 @@ pub const SOURCES: [&str; 12] = [
     include_str!("../../../../../kernels/bvh.h"),
     include_str!("../../../../../kernels/triangles.h"),
     include_str!("../../../../../kernels/world.h"),
+    include_str!("../../../../../kernels/ggx.h"),
     include_str!("../../../../../kernels/materials.h"),
     include_str!("../../../../../kernels/lights.h"),
     include_str!("../../../../../kernels/integrator.h"),
@@ -40,6 +41,8 @@ pub struct Features {
     pub diffuse: bool,
     pub mirror: bool,
     pub glass: bool,
+    /// glTF's metallic-roughness model (`MAT_PBR`, kernels/ggx.h).
+    pub ggx: bool,
     pub schlick: bool,
     pub exact: bool,
     pub sphere_lights: bool,
@@ -96,6 +99,7 @@ impl Features {
                 Bsdf::Diffuse => k == MAT_DIFFUSE,
                 Bsdf::Mirror => k == MAT_MIRROR,
                 Bsdf::Glass { .. } => k == MAT_GLASS,
+                Bsdf::Pbr(_) => k == MAT_PBR,
             })
         };
         let glass_with = |want: bool| {
@@ -115,6 +119,7 @@ impl Features {
             diffuse: mat(MAT_DIFFUSE),
             mirror: mat(MAT_MIRROR),
             glass: mat(MAT_GLASS),
+            ggx: mat(MAT_PBR),
             schlick: glass_with(true),
             exact: glass_with(false),
             sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
@@ -154,7 +159,7 @@ impl Features {
         let b = |v: bool| u8::from(v);
         let mut o = format!(
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
-             -D HAS_GLASS={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
+             -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={}",
             b(self.spheres),
@@ -162,6 +167,7 @@ impl Features {
             b(self.diffuse),
             b(self.mirror),
             b(self.glass),
+            b(self.ggx),
             b(self.schlick),
             b(self.exact),
             b(self.sphere_lights),

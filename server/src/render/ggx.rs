@@ -1,0 +1,349 @@
+//! The glTF 2.0 metallic-roughness BSDF (the specification's appendix B) in
+//! the shading frame (z the normal): GGX (Trowbridge-Reitz) microfacets
+//! with height-correlated Smith masking-shadowing, sampled by their visible
+//! normals (Dupuy and Benyoub 2023, spherical caps); Schlick's Fresnel, the
+//! metal tinted by the base colour, the dielectric over a diffuse base.
+//!
+//! Energy: a single-scattering microfacet lobe loses the light that
+//! scatters more than once among the microfacets (a white rough metal goes
+//! grey). Each lobe gets it back as Kulla and Conty's (2017) multiple-
+//! scattering lobe `(1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg))`, with
+//! the Fresnel average's factor; the diffuse base sees only what the
+//! specular layer lets through, `(1 - Es(mu_o)) (1 - Es(mu_i)) / (1 -
+//! Es_avg)`, so a white base under the coating also keeps every bit of
+//! energy. E, and its split into Schlick's F0 and (1 - cos)^5 parts, come
+//! from [`Tables`], integrated at start-up (not guessed) and read by
+//! bilinear lookup; the kernel (`kernels/ggx.h`) gets the same floats and
+//! mirrors every routine here operation for operation.
+//!
+//! Sampling: one lobe by the lobes' albedos seen from `wo` (visible
+//! normals, or cosine for the multiple-scattering and diffuse lobes), and
+//! the sample weighted by the mixture's pdf (one-sample MIS, balance
+//! heuristic), so every lobe is covered whichever was drawn.
+
+use crate::render::math::{sincos_turns, Vec3A};
+use crate::render::sampler::sobol::sobol_2d;
+use std::f32::consts::FRAC_1_PI;
+use std::sync::OnceLock;
+
+/// Smallest alpha (= roughness^2): a lobe this narrow is a mirror to f32
+/// image noise, and its D stays finite.
+pub const ALPHA_MIN: f32 = 1e-3;
+/// The tables' resolution in cos(theta) and in roughness (both 0..=1).
+pub const TABLE_N: usize = 32;
+/// Floats in [`Tables::data`]: A and B per (cos, roughness), then their
+/// cosine-weighted averages per roughness.
+pub const TABLE_LEN: usize = 2 * TABLE_N * TABLE_N + 2 * TABLE_N;
+/// Points per table entry (a Sobol (0,2)-sequence; the integrand is smooth).
+const TABLE_POINTS: u32 = 4096;
+
+/// The metallic-roughness parameters of one material (its base colour is
+/// the material's albedo).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pbr {
+    pub metallic: f32,
+    /// roughness^2, at least [`ALPHA_MIN`].
+    pub alpha: f32,
+    /// Perceptual roughness, the tables' coordinate.
+    pub roughness: f32,
+    /// Normal-incidence reflectance of the dielectric, ((ior-1)/(ior+1))^2.
+    pub f0: f32,
+}
+
+impl Pbr {
+    pub fn new(metallic: f32, roughness: f32, ior: f32) -> Pbr {
+        let r = (ior - 1.0) / (ior + 1.0);
+        Pbr {
+            metallic,
+            alpha: (roughness * roughness).max(ALPHA_MIN),
+            roughness,
+            f0: r * r,
+        }
+    }
+}
+
+/// Directional albedos of the single-scattering GGX lobe with Schlick's
+/// Fresnel, F = F0 + (1 - F0)(1 - cos)^5: its albedo is F0 A + B (white:
+/// E = A + B). Rows by roughness, columns by cos(theta_o).
+pub struct Tables {
+    pub data: Box<[f32]>,
+}
+
+/// The tables, integrated once per process.
+pub fn tables() -> &'static Tables {
+    static T: OnceLock<Tables> = OnceLock::new();
+    T.get_or_init(Tables::integrate)
+}
+
+const AVG_A: usize = 2 * TABLE_N * TABLE_N;
+const AVG_B: usize = AVG_A + TABLE_N;
+
+impl Tables {
+    fn integrate() -> Tables {
+        let n = TABLE_N;
+        let mut data = vec![0.0f32; TABLE_LEN];
+        for j in 0..n {
+            let r = j as f32 / (n - 1) as f32;
+            let alpha = (r * r).max(ALPHA_MIN);
+            for i in 0..n {
+                let mu = (i as f32 / (n - 1) as f32).max(1e-4);
+                let wo = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+                let (mut a, mut b) = (0.0f64, 0.0f64);
+                for k in 0..TABLE_POINTS {
+                    let (x, y) = sobol_2d(k);
+                    let u1 = ((f64::from(x) + 0.5) / 4_294_967_296.0) as f32;
+                    let u2 = ((f64::from(y) + 0.5) / 4_294_967_296.0) as f32;
+                    let h = visible_normal(wo, alpha, u1, u2);
+                    let wi = reflect_about(wo, h);
+                    if wi.z <= 0.0 {
+                        continue;
+                    }
+                    // f cos / pdf of a visible-normal sample: G2 / G1(wo).
+                    let (ro, ri) = (smith_r(wo, alpha), smith_r(wi, alpha));
+                    let w = f64::from((wo.z + ro) * wi.z / (ro * wi.z + ri * wo.z));
+                    let c5 = f64::from(pow5(1.0 - wo.dot(h).clamp(0.0, 1.0)));
+                    a += w * (1.0 - c5);
+                    b += w * c5;
+                }
+                data[j * n + i] = (a / f64::from(TABLE_POINTS)) as f32;
+                data[n * n + j * n + i] = (b / f64::from(TABLE_POINTS)) as f32;
+            }
+            // 2 * integral of E(mu) mu over the table's piecewise-linear E,
+            // exactly, so that the multiple-scattering lobes integrate to
+            // what their formula says.
+            for (part, avg) in [(0, AVG_A), (n * n, AVG_B)] {
+                let mut sum = 0.0f64;
+                let h = 1.0 / (n - 1) as f64;
+                for i in 0..n - 1 {
+                    let (ea, eb) = (
+                        f64::from(data[part + j * n + i]),
+                        f64::from(data[part + j * n + i + 1]),
+                    );
+                    let mu_a = i as f64 * h;
+                    sum += h * (ea * (mu_a / 2.0 + h / 6.0) + eb * (mu_a / 2.0 + h / 3.0));
+                }
+                data[avg + j] = (2.0 * sum) as f32;
+            }
+        }
+        Tables {
+            data: data.into_boxed_slice(),
+        }
+    }
+
+    /// The single-scattering lobe's white directional albedo E(mu) at
+    /// `roughness` (what a microfacet BSDF without the added lobes keeps).
+    pub fn single_scattering(&self, mu: f32, roughness: f32) -> f32 {
+        self.at(0, mu, roughness) + self.at(1, mu, roughness)
+    }
+
+    /// Bilinear lookup of table `part` (0: A, 1: B) at (mu, roughness).
+    #[inline(always)]
+    fn at(&self, part: usize, mu: f32, roughness: f32) -> f32 {
+        let n = TABLE_N;
+        let (i, tx) = cell(mu);
+        let (j, ty) = cell(roughness);
+        let t = &self.data[part * n * n..];
+        let row0 = t[j * n + i] * (1.0 - tx) + t[j * n + i + 1] * tx;
+        let row1 = t[(j + 1) * n + i] * (1.0 - tx) + t[(j + 1) * n + i + 1] * tx;
+        row0 * (1.0 - ty) + row1 * ty
+    }
+
+    /// Linear lookup of an average (0: A, 1: B) at `roughness`.
+    #[inline(always)]
+    fn avg(&self, part: usize, roughness: f32) -> f32 {
+        let (j, t) = cell(roughness);
+        let a = &self.data[AVG_A + part * TABLE_N..];
+        a[j] * (1.0 - t) + a[j + 1] * t
+    }
+}
+
+/// The cell of coordinate `x` in [0, 1] and the position within it.
+#[inline(always)]
+fn cell(x: f32) -> (usize, f32) {
+    let s = x.clamp(0.0, 1.0) * (TABLE_N - 1) as f32;
+    let i = (s as usize).min(TABLE_N - 2);
+    (i, s - i as f32)
+}
+
+#[inline(always)]
+fn pow5(x: f32) -> f32 {
+    let x2 = x * x;
+    x2 * x2 * x
+}
+
+/// sqrt(cos^2 + alpha^2 sin^2) of unit `w`: Smith's Lambda(w) is
+/// (R / cos - 1) / 2, so G1 = 2 cos / (cos + R) and the height-correlated
+/// G2 = 2 cos_o cos_i / (R_o cos_i + R_i cos_o).
+#[inline(always)]
+fn smith_r(w: Vec3A, alpha: f32) -> f32 {
+    let s2 = w.x * w.x + w.y * w.y;
+    (w.z * w.z + alpha * alpha * s2).sqrt()
+}
+
+/// GGX's D of unit half vector `h` (sin^2 from x and y, not 1 - cos^2:
+/// exact near the peak of a narrow lobe).
+#[inline(always)]
+fn distribution(h: Vec3A, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let t = h.x * h.x + h.y * h.y + a2 * (h.z * h.z);
+    a2 / (std::f32::consts::PI * (t * t))
+}
+
+#[inline(always)]
+fn reflect_about(wo: Vec3A, h: Vec3A) -> Vec3A {
+    h * (2.0 * wo.dot(h)) - wo
+}
+
+/// A visible normal of the GGX surface seen from `wo` (wo.z > 0), from
+/// (u1, u2) in [0, 1)^2: Dupuy and Benyoub's spherical cap in the
+/// stretched (alpha = 1) configuration.
+#[inline(always)]
+pub fn visible_normal(wo: Vec3A, alpha: f32, u1: f32, u2: f32) -> Vec3A {
+    let v = Vec3A::new(wo.x * alpha, wo.y * alpha, wo.z).normalize();
+    let (sin_phi, cos_phi) = sincos_turns(u1);
+    let z = (1.0 - u2) * (1.0 + v.z) - v.z;
+    let sin_t = (1.0 - z * z).max(0.0).sqrt();
+    let c = Vec3A::new(sin_t * cos_phi, sin_t * sin_phi, z) + v;
+    Vec3A::new(c.x * alpha, c.y * alpha, c.z).normalize()
+}
+
+/// What the lobes reflect towards `wo`, read from the tables once per
+/// shading point.
+#[derive(Clone, Copy, Debug)]
+pub struct Lobes {
+    /// White single-scattering albedo E(mu_o).
+    e_o: f32,
+    /// Cosine-weighted averages (E_avg = a_avg + b_avg).
+    a_avg: f32,
+    b_avg: f32,
+    /// Kulla-Conty Fresnel factors of the metal (per channel) and of the
+    /// dielectric.
+    fms_metal: Vec3A,
+    fms_diel: f32,
+    /// The dielectric layer's whole albedo at mu_o and its average.
+    es_o: f32,
+    es_avg: f32,
+    /// Probability of drawing the visible-normal lobe.
+    p_spec: f32,
+}
+
+#[inline(always)]
+fn fresnel_factor(f_avg: f32, e_avg: f32) -> f32 {
+    f_avg * f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg))
+}
+
+#[inline(always)]
+fn mean3(v: Vec3A) -> f32 {
+    (v.x + v.y + v.z) * (1.0 / 3.0)
+}
+
+impl Lobes {
+    #[inline(always)]
+    pub fn new(t: &Tables, p: &Pbr, base: Vec3A, wo: Vec3A) -> Lobes {
+        let a_o = t.at(0, wo.z, p.roughness);
+        let b_o = t.at(1, wo.z, p.roughness);
+        let a_avg = t.avg(0, p.roughness);
+        let b_avg = t.avg(1, p.roughness);
+        let e_o = a_o + b_o;
+        let e_avg = a_avg + b_avg;
+        let f_avg_metal = base + (Vec3A::ONE - base) * (1.0 / 21.0);
+        let fms_metal = Vec3A::new(
+            fresnel_factor(f_avg_metal.x, e_avg),
+            fresnel_factor(f_avg_metal.y, e_avg),
+            fresnel_factor(f_avg_metal.z, e_avg),
+        );
+        let fms_diel = fresnel_factor(p.f0 + (1.0 - p.f0) * (1.0 / 21.0), e_avg);
+        let es_o = p.f0 * a_o + b_o + (1.0 - e_o) * fms_diel;
+        let es_avg = p.f0 * a_avg + b_avg + (1.0 - e_avg) * fms_diel;
+        // The visible-normal lobe's share of what wo sees: the single-
+        // scattering albedos against the cosine-shaped lobes'.
+        let spec = p.metallic * mean3(base * a_o + Vec3A::splat(b_o))
+            + (1.0 - p.metallic) * (p.f0 * a_o + b_o);
+        let rest = p.metallic * (1.0 - e_o) * mean3(fms_metal)
+            + (1.0 - p.metallic) * ((1.0 - e_o) * fms_diel + (1.0 - es_o) * mean3(base));
+        let p_spec = (spec / (spec + rest)).clamp(0.05, 0.95);
+        Lobes {
+            e_o,
+            a_avg,
+            b_avg,
+            fms_metal,
+            fms_diel,
+            es_o,
+            es_avg,
+            p_spec,
+        }
+    }
+}
+
+/// BSDF times cos(theta_i) for `wo` and `wi` in the shading frame.
+#[inline(always)]
+pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> Vec3A {
+    if !(wi.z > 0.0 && wo.z > 0.0) {
+        return Vec3A::ZERO;
+    }
+    let h = (wo + wi).normalize();
+    let (ro, ri) = (smith_r(wo, p.alpha), smith_r(wi, p.alpha));
+    // D G2 / (4 cos_o cos_i), with G2 = 2 cos_o cos_i / (R_o cos_i + R_i cos_o).
+    let spec = distribution(h, p.alpha) / (2.0 * (ro * wi.z + ri * wo.z));
+    let c5 = pow5(1.0 - wo.dot(h).clamp(0.0, 1.0));
+    let e_i = t.at(0, wi.z, p.roughness) + t.at(1, wi.z, p.roughness);
+    let b_i = t.at(1, wi.z, p.roughness);
+    let a_i = e_i - b_i;
+    let e_avg = lobes.a_avg + lobes.b_avg;
+    let ms = (1.0 - lobes.e_o) * (1.0 - e_i) * FRAC_1_PI / (1.0 - e_avg).max(1e-6);
+    let metal = (base + (Vec3A::ONE - base) * c5) * spec + lobes.fms_metal * ms;
+    let es_i = p.f0 * a_i + b_i + (1.0 - e_i) * lobes.fms_diel;
+    let diffuse = (1.0 - lobes.es_o) * (1.0 - es_i) * FRAC_1_PI / (1.0 - lobes.es_avg).max(1e-6);
+    let diel = (p.f0 + (1.0 - p.f0) * c5) * spec + lobes.fms_diel * ms;
+    let f = metal * p.metallic + (base * diffuse + Vec3A::splat(diel)) * (1.0 - p.metallic);
+    f * wi.z
+}
+
+/// The sampling density of direction `wi` (solid angle) from `wo`.
+#[inline(always)]
+pub fn pdf(p: &Pbr, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> f32 {
+    if !(wi.z > 0.0 && wo.z > 0.0) {
+        return 0.0;
+    }
+    let h = (wo + wi).normalize();
+    // G1(wo) D(h) / (4 cos_o) = D / (2 (cos_o + R_o)).
+    let vndf = distribution(h, p.alpha) / (2.0 * (wo.z + smith_r(wo, p.alpha)));
+    lobes.p_spec * vndf + (1.0 - lobes.p_spec) * wi.z * FRAC_1_PI
+}
+
+/// A direction from `wo` (shading frame), drawn with `choice` and (u1, u2)
+/// in [0, 1), and its weight BSDF cos / pdf; None where it leaves below the
+/// surface (no contribution).
+#[inline(always)]
+pub fn sample(
+    t: &Tables,
+    p: &Pbr,
+    base: Vec3A,
+    wo: Vec3A,
+    choice: f32,
+    (u1, u2): (f32, f32),
+) -> Option<(Vec3A, Vec3A)> {
+    if !(wo.z > 0.0) {
+        return None;
+    }
+    let lobes = Lobes::new(t, p, base, wo);
+    let wi = if choice < lobes.p_spec {
+        reflect_about(wo, visible_normal(wo, p.alpha, u1, u2))
+    } else {
+        let (sin, cos) = sincos_turns(u1);
+        let r = u2.sqrt();
+        Vec3A::new(r * cos, r * sin, (1.0 - u2).max(0.0).sqrt())
+    };
+    if !(wi.z > 0.0) {
+        return None;
+    }
+    let pdf = pdf(p, &lobes, wo, wi);
+    if !(pdf > 0.0) {
+        return None;
+    }
+    Some((wi, eval_cos(t, p, base, &lobes, wo, wi) / pdf))
+}
+
+#[cfg(test)]
+#[path = "ggx_tests.rs"]
+mod tests;

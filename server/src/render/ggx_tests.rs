@@ -1,0 +1,262 @@
+//! The metallic-roughness BSDF against its own definition: energy in a
+//! white furnace, sampling against the pdf (chi-square), the pdf's
+//! integral, reciprocity.
+
+use super::*;
+use crate::render::sampler::Sampler;
+
+const ROUGHNESS: [f32; 5] = [0.05, 0.25, 0.5, 0.75, 1.0];
+
+fn dir(cos: f32, phi: f32) -> Vec3A {
+    let s = (1.0 - cos * cos).max(0.0).sqrt();
+    Vec3A::new(s * phi.cos(), s * phi.sin(), cos)
+}
+
+/// The directional albedo seen from `wo`: the mean of sample weights.
+fn albedo(p: &Pbr, base: Vec3A, wo: Vec3A, n: u64) -> Vec3A {
+    let t = tables();
+    let mut sum = Vec3A::ZERO;
+    for i in 0..n {
+        let mut s = Sampler::new(7, i, 0);
+        let choice = s.next_f32();
+        let u = s.next_2d();
+        if let Some((_, w)) = sample(t, p, base, wo, choice, u) {
+            sum += w;
+        }
+    }
+    sum / n as f32
+}
+
+#[test]
+fn white_lobes_keep_the_furnace_energy_at_every_roughness() {
+    // A white metal and a white base under the dielectric coating reflect
+    // everything, at every roughness and angle (within 1%: the tables'
+    // quadrature and interpolation, and 1/sqrt(n) noise).
+    for r in ROUGHNESS {
+        for metallic in [1.0, 0.0] {
+            let p = Pbr::new(metallic, r, 1.5);
+            for mu in [0.05, 0.2, 0.5, 0.8, 1.0] {
+                let a = albedo(&p, Vec3A::ONE, dir(mu, 0.3), 200_000);
+                for c in a.to_array() {
+                    assert!(
+                        (c - 1.0).abs() < 0.01,
+                        "metallic {metallic} roughness {r} mu {mu}: albedo {a}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn darker_materials_never_gain_energy() {
+    for r in ROUGHNESS {
+        for metallic in [1.0, 0.5, 0.0] {
+            let p = Pbr::new(metallic, r, 1.5);
+            let base = Vec3A::new(0.9, 0.5, 0.1);
+            for mu in [0.05, 0.5, 1.0] {
+                let a = albedo(&p, base, dir(mu, 1.0), 100_000);
+                assert!(
+                    a.max_element() < 1.0 && a.min_element() > 0.0,
+                    "metallic {metallic} roughness {r} mu {mu}: albedo {a}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_tables_are_what_a_plain_integration_gives() {
+    // E(mu) by midpoint quadrature over the hemisphere of the single-
+    // scattering lobe (no importance sampling), against the table.
+    let t = tables();
+    for r in [0.3f32, 0.7, 1.0] {
+        let alpha = (r * r).max(ALPHA_MIN);
+        for mu in [0.2f32, 0.6, 0.95] {
+            let wo = dir(mu, 0.0);
+            let (nt, np) = (800, 400);
+            let mut sum = 0.0f64;
+            for i in 0..nt {
+                let cos = (i as f32 + 0.5) / nt as f32;
+                for j in 0..np {
+                    let phi = (j as f32 + 0.5) / np as f32 * std::f32::consts::TAU;
+                    let wi = dir(cos, phi);
+                    let h = (wo + wi).normalize();
+                    let f = distribution(h, alpha)
+                        / (2.0 * (smith_r(wo, alpha) * wi.z + smith_r(wi, alpha) * wo.z));
+                    sum += f64::from(f * wi.z);
+                }
+            }
+            let e = sum * std::f64::consts::TAU / (nt * np) as f64;
+            let table = f64::from(t.at(0, mu, r) + t.at(1, mu, r));
+            assert!(
+                (e - table).abs() < 4e-3,
+                "roughness {r} mu {mu}: {e} vs table {table}"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_pdf_integrates_to_one() {
+    let t = tables();
+    for r in [0.3f32, 0.6, 1.0] {
+        for metallic in [0.0, 1.0] {
+            let p = Pbr::new(metallic, r, 1.5);
+            let wo = dir(0.7, 0.4);
+            let lobes = Lobes::new(t, &p, Vec3A::new(0.8, 0.6, 0.4), wo);
+            let (nt, np) = (2000, 1000);
+            let mut sum = 0.0f64;
+            for i in 0..nt {
+                // Denser near the normal, where narrow lobes are: cos = 1 - x^2.
+                let x = (i as f64 + 0.5) / nt as f64;
+                let cos = (1.0 - x * x) as f32;
+                let jac = 2.0 * x; // d cos / d x
+                for j in 0..np {
+                    let phi = (j as f32 + 0.5) / np as f32 * std::f32::consts::TAU;
+                    sum += f64::from(pdf(&p, &lobes, wo, dir(cos, phi))) * jac;
+                }
+            }
+            let total = sum * std::f64::consts::TAU / (nt * np) as f64;
+            // Reflections of visible normals that point below the surface
+            // are samples the pdf does not count (they end the path).
+            let n = 200_000u64;
+            let below = (0..n)
+                .filter(|&k| {
+                    let mut s = Sampler::new(3, k, 0);
+                    let (u1, u2) = s.next_2d();
+                    reflect_about(wo, visible_normal(wo, p.alpha, u1, u2)).z <= 0.0
+                })
+                .count() as f64
+                / n as f64;
+            let expected = 1.0 - f64::from(lobes.p_spec) * below;
+            assert!(
+                (total - expected).abs() < 3e-3,
+                "roughness {r} metallic {metallic}: {total} vs {expected} ({below} below)"
+            );
+        }
+    }
+}
+
+#[test]
+fn eval_is_reciprocal() {
+    let t = tables();
+    let base = Vec3A::new(0.7, 0.3, 0.9);
+    for r in ROUGHNESS {
+        for metallic in [0.0, 0.4, 1.0] {
+            let p = Pbr::new(metallic, r, 1.45);
+            for (a, b) in [((0.3, 0.1), (0.8, 2.0)), ((0.9, 1.0), (0.15, 4.0))] {
+                let (wo, wi) = (dir(a.0, a.1), dir(b.0, b.1));
+                let fo = eval_cos(t, &p, base, &Lobes::new(t, &p, base, wo), wo, wi) / wi.z;
+                let fi = eval_cos(t, &p, base, &Lobes::new(t, &p, base, wi), wi, wo) / wo.z;
+                assert!(
+                    (fo - fi).abs().max_element() <= 1e-4 * fo.max_element().max(1e-3),
+                    "roughness {r} metallic {metallic}: {fo} vs {fi}"
+                );
+            }
+        }
+    }
+}
+
+/// Upper tail of chi-square with `dof` degrees of freedom at `x`
+/// (Wilson-Hilferty normal approximation).
+fn chi2_tail(x: f64, dof: f64) -> f64 {
+    let z = ((x / dof).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * dof))) / (2.0 / (9.0 * dof)).sqrt();
+    0.5 * erfc(z / std::f64::consts::SQRT_2)
+}
+
+fn erfc(x: f64) -> f64 {
+    // Numerical Recipes' erfc (fractional error below 1.2e-7).
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+#[test]
+fn sampling_follows_the_pdf_chi_square() {
+    // Bins in (cos theta, phi) over the hemisphere; expected counts from
+    // the pdf integrated over each bin; bins expecting fewer than 5 pooled.
+    let t = tables();
+    let (bt, bp) = (16usize, 16usize);
+    let n = 400_000u64;
+    for (r, metallic, mu) in [
+        (0.2f32, 1.0f32, 0.6f32),
+        (0.6, 0.0, 0.3),
+        (1.0, 0.5, 0.9),
+        (0.35, 0.0, 0.8),
+    ] {
+        let p = Pbr::new(metallic, r, 1.5);
+        let base = Vec3A::new(0.6, 0.5, 0.4);
+        let wo = dir(mu, 0.2);
+        let lobes = Lobes::new(t, &p, base, wo);
+        let bin = |w: Vec3A| {
+            let i = ((w.z * bt as f32) as usize).min(bt - 1);
+            let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
+            let j = ((phi / std::f32::consts::TAU * bp as f32) as usize).min(bp - 1);
+            i * bp + j
+        };
+        let mut observed = vec![0f64; bt * bp];
+        for k in 0..n {
+            let mut s = Sampler::new(11, k, 0);
+            let choice = s.next_f32();
+            let u = s.next_2d();
+            // Directions below the surface are part of the density too:
+            // the test counts where samples land, weights aside.
+            let wi = if choice < lobes.p_spec {
+                reflect_about(wo, visible_normal(wo, p.alpha, u.0, u.1))
+            } else {
+                let (sin, cos) = sincos_turns(u.0);
+                let rr = u.1.sqrt();
+                Vec3A::new(rr * cos, rr * sin, (1.0 - u.1).max(0.0).sqrt())
+            };
+            if wi.z > 0.0 {
+                observed[bin(wi)] += 1.0;
+            }
+        }
+        let sub = 24;
+        let mut expected = vec![0f64; bt * bp];
+        for i in 0..bt * sub {
+            let cos = (i as f32 + 0.5) / (bt * sub) as f32;
+            for j in 0..bp * sub {
+                let phi = (j as f32 + 0.5) / (bp * sub) as f32 * std::f32::consts::TAU;
+                let w = dir(cos, phi);
+                let area = std::f64::consts::TAU / ((bt * sub) * (bp * sub)) as f64;
+                expected[bin(w)] += f64::from(pdf(&p, &lobes, wo, w)) * area * n as f64;
+            }
+        }
+        let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0.0, 0.0, 0.0);
+        for (o, e) in observed.iter().zip(&expected) {
+            if *e < 5.0 {
+                pool_o += o;
+                pool_e += e;
+            } else {
+                chi2 += (o - e) * (o - e) / e;
+                dof += 1.0;
+            }
+        }
+        if pool_e >= 5.0 {
+            chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+            dof += 1.0;
+        }
+        let tail = chi2_tail(chi2, dof - 1.0);
+        assert!(
+            tail > 1e-4,
+            "roughness {r} metallic {metallic} mu {mu}: chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
+        );
+    }
+}
