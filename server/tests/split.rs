@@ -106,7 +106,11 @@ fn pocl_and_rayon_together_render_the_one_device_image() {
     let single = render(&scene("cornell-glass"), SIDE, SIDE, &q, 256);
     // The same sample indices with the same random numbers: only the
     // devices' rounding differs.
-    assert_same_samples(&merged.mean(), &single.mean(), "PoCL + rayon vs rayon, same seed");
+    assert_same_samples(
+        &merged.mean(),
+        &single.mean(),
+        "PoCL + rayon vs rayon, same seed",
+    );
     // And statistically the image of another seed.
     let other = render(&scene("cornell-glass"), SIDE, SIDE, &quality(256, 10), 256);
     assert_agree(

@@ -50,7 +50,10 @@ fn assert_blocks_agree(a: &[u8], b: &[u8], grid: u32, levels: f64, what: &str) {
         .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
         .fold(0.0, f64::max);
     eprintln!("{what}: blocks differ by at most {worst:.2} levels");
-    assert!(worst < levels, "{what}: a block differs by {worst:.2} levels");
+    assert!(
+        worst < levels,
+        "{what}: a block differs by {worst:.2} levels"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -280,10 +283,16 @@ async fn frames_scale_to_the_width_a_socket_asks_for_and_keep_the_image() {
         })
         .collect();
     let expected = pathstream::render::tonemap::Tonemap::default().bytes(&expected);
-    let got = image::load_from_memory(&png).expect("png").to_rgb8().into_raw();
+    let got = image::load_from_memory(&png)
+        .expect("png")
+        .to_rgb8()
+        .into_raw();
     let off = (expected.iter().zip(&got))
         .filter(|(e, g)| e.abs_diff(**g) > 1)
         .count();
-    assert_eq!(off, 0, "of the 64x48 PNG's bytes, {off} are not the film's 2x2 means");
+    assert_eq!(
+        off, 0,
+        "of the 64x48 PNG's bytes, {off} are not the film's 2x2 means"
+    );
     running.shutdown().await.expect("shutdown");
 }

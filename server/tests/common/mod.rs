@@ -380,7 +380,10 @@ pub fn assert_same_samples(a: &[[f32; 3]], b: &[[f32; 3]], what: &str) {
         })
         .count();
     let share = differing as f64 / a.len() as f64;
-    eprintln!("{what}: {rms:.2e} relative RMS, {differing} of {} pixels differ", a.len());
+    eprintln!(
+        "{what}: {rms:.2e} relative RMS, {differing} of {} pixels differ",
+        a.len()
+    );
     assert!(
         rms < ROUNDING_RMS && share <= ROUNDING_PIXELS,
         "{what}: {rms:e} relative RMS (rounding: < {ROUNDING_RMS:e}), {differing} of {} pixels differ",
