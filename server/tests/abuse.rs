@@ -304,15 +304,18 @@ async fn slow_and_excess_connections_are_dropped_and_health_keeps_answering() {
     })
     .await;
     let addr = running.addr;
-    // A canary session renders through all of it.
+    // A canary session renders through all of it (with no halt in reach:
+    // the default 64 spp would be done before the attack began).
     let s = create(
         &base,
-        json!({"scene": "furnace", "width": 16, "height": 16}),
+        json!({"scene": "furnace", "width": 16, "height": 16,
+               "quality": {"spp": 1_000_000_000u64}}),
     )
     .await;
     let id = s["id"].as_str().expect("id").to_owned();
     // 150 clients sending a request head a byte at a time: 64 are taken,
     // the rest are closed at once; the taken ones are closed after 2 s.
+    let canary_before = status(&base, &id).await["spp"].as_u64().expect("spp");
     let mut slow = Vec::new();
     for _ in 0..150 {
         slow.push(tokio::net::TcpStream::connect(addr).await.expect("connect"));
@@ -381,8 +384,13 @@ async fn slow_and_excess_connections_are_dropped_and_health_keeps_answering() {
         dropped_at_once + timed_out == 150,
         "every slow client was dropped: {ended:?}"
     );
-    // The canary kept rendering.
-    let spp = status(&base, &id).await["spp"].as_u64().unwrap_or(0);
-    assert!(spp > 0, "the canary session rendered");
+    // The canary kept rendering: it went on from where the attack found it.
+    let canary = status(&base, &id).await;
+    let spp = canary["spp"].as_u64().expect("spp");
+    assert_eq!(canary["state"], "rendering", "{canary}");
+    assert!(
+        spp > canary_before,
+        "the canary rendered under the attack: {canary_before} spp before, {spp} after"
+    );
     running.shutdown().await.expect("shutdown");
 }

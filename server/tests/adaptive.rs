@@ -119,9 +119,14 @@ fn done_tiles_get_no_more_samples_and_the_target_error_holds_against_the_truth()
     );
     assert!(done > 0 && done < frozen.len(), "{done} tiles done");
     assert!(p.error_estimate.is_some_and(|e| e <= target));
-    // Within the estimate's calibration (the bench's 0.7-1.4 bound).
+    // Freezing the tiles that are done leaves the image unbiased: it is the
+    // reference's (the same clamp), region by region and as a whole.
+    assert_agree(&reference, &film, 16, 4.5, 0.0, "target error vs reference");
+    // Within 20% of the target (1.09x measured; the seeds are fixed, so
+    // this is one number, not a draw): the bench's 0.7-1.4 band of
+    // calibration passed a 40% overshoot.
     assert!(
-        (0.7 * target..=1.4 * target).contains(&truth),
+        (0.8 * target..=1.2 * target).contains(&truth),
         "true error {truth} for a target of {target}"
     );
 }

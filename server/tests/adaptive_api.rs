@@ -81,11 +81,31 @@ async fn a_target_error_halts_when_the_tiles_are_done_and_the_stream_says_so() {
     assert_eq!(done["state"], "halted", "{done}");
     let estimate = done["error_estimate"].as_f64().expect("estimate");
     assert!(estimate <= 0.05, "{done}");
+    // The target is its only halt (so the target halted it), and done
+    // tiles stopped taking samples while others went on.
+    assert_eq!(
+        (&done["quality"]["spp"], &done["quality"]["time_ms"]),
+        (&Value::Null, &Value::Null),
+        "{done}"
+    );
+    let (min, max) = (
+        done["spp_spread"]["min"].as_u64().expect("min"),
+        done["spp_spread"]["max"].as_u64().expect("max"),
+    );
+    let (tiles_done, tiles) = (
+        done["tiles_done"].as_u64().expect("tiles_done"),
+        done["tiles"].as_u64().expect("tiles"),
+    );
+    assert!(
+        min < max && tiles_done > 0 && tiles_done <= tiles,
+        "done tiles froze while others went on: {done}"
+    );
     let (frames, stats) = read_frames(&mut ws, Instant::now() + Duration::from_secs(2)).await;
     assert!(frames >= 1);
     assert_eq!(stats["type"], "stats", "{stats}");
-    assert!(stats["spp_spread"]["max"].as_u64() >= stats["spp_spread"]["min"].as_u64());
     assert_eq!(stats["spp_spread"], done["spp_spread"]);
+    assert_eq!(stats["tiles_done"], done["tiles_done"]);
+    assert_eq!(stats["state"], "halted", "the stream says so: {stats}");
     // A preset without adaptive sampling turns it off.
     let r = patch(&base, &id, "quality", json!({"preset": "interactive"})).await;
     let v: Value = r.json().await.expect("json");

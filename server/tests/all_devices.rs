@@ -6,10 +6,9 @@
 mod common;
 mod http;
 
-use common::{opencl_device, render, scene};
+use common::{assert_same_samples, opencl_device, render, scene};
 use http::{client, config, create, halted, patch, pfm, status};
 use pathstream::api::{start_with_device, start_with_devices, Running};
-use pathstream::render::film::relative_rms_error;
 use pathstream::render::{Backend, Quality, RenderJob};
 use pathstream::service::Placement;
 use serde_json::{json, Value};
@@ -52,8 +51,8 @@ async fn session(base: &str, spp: u64, seed: u64) -> String {
 
 /// The session's image against rayon's alone with the same seed: the same
 /// samples, so the same image up to the devices' rounding, which turns a few
-/// paths another way (1e-7 to 1.2e-4 relative RMS measured): far below the
-/// noise, where samples of another seed, or a block missing, would be.
+/// paths another way ([`common::assert_same_samples`]), where samples of
+/// another seed, or a block missing, would move every pixel.
 async fn assert_one_device_image(base: &str, id: &str, spp: u64, seed: u64) {
     let image = pfm(base, id, spp).await;
     let q = Quality {
@@ -61,12 +60,7 @@ async fn assert_one_device_image(base: &str, id: &str, spp: u64, seed: u64) {
         ..Quality::default()
     };
     let alone = render(&scene("cornell-glass"), SIDE, SIDE, &q, spp);
-    let diff = relative_rms_error(&image, &alone.mean());
-    let noise = alone.error_estimate().expect("estimate");
-    assert!(
-        diff < noise / 20.0,
-        "relative RMS difference {diff:e} from the one-device image (noise {noise:e})"
-    );
+    assert_same_samples(&image, &alone.mean(), "every device vs rayon alone");
 }
 
 fn devices(s: &Value) -> Vec<Value> {

@@ -5,10 +5,9 @@
 
 mod common;
 
-use common::{assert_agree, opencl_device, render, scene};
+use common::{assert_agree, assert_same_samples, opencl_device, render, scene};
 use pathstream::render::backend::CpuBackend;
-use pathstream::render::film::relative_rms_error;
-use pathstream::render::split::render_split;
+use pathstream::render::split::{render_split, render_split_taking_turns};
 use pathstream::render::{Backend, Film, Quality, RenderJob};
 
 const SIDE: u32 = 32;
@@ -32,7 +31,12 @@ fn split(
         b.prepare(&job).expect("prepare");
     }
     let mut film = Film::new(SIDE, SIDE);
-    let (progress, shares) = render_split(&job, backends, &mut film, q, |_| {}).expect("render");
+    // The lanes take turns, so that each render here merges blocks of every
+    // device, interleaved (left to the race, one lane can take a render this
+    // small whole, and the test would compare a one-device render with
+    // itself).
+    let (progress, shares) =
+        render_split_taking_turns(&job, backends, &mut film, q, |_| {}).expect("render");
     assert_eq!(progress.spp, q.spp.expect("spp"));
     (film, shares)
 }
@@ -66,6 +70,10 @@ fn blocks_on_two_rayon_devices_merge_into_the_one_device_image() {
     for name in ["cornell", "cornell-glass"] {
         let q = quality(48, 5);
         let (merged, shares) = split(&mut [cpu(), cpu()], name, &q);
+        assert!(
+            shares.iter().all(|s| s.samples > 0),
+            "{name}: every lane took blocks: {shares:?}"
+        );
         let single = render(&scene(name), SIDE, SIDE, &q, 48);
         assert_eq!(merged.spp(), 48);
         assert_eq!(merged.total_samples(), single.total_samples());
@@ -97,12 +105,12 @@ fn pocl_and_rayon_together_render_the_one_device_image() {
     );
     let single = render(&scene("cornell-glass"), SIDE, SIDE, &q, 256);
     // The same sample indices with the same random numbers: only the
-    // devices' rounding differs, which turns a few paths another way (1e-7
-    // to 1e-4 measured, against noise of 1e-2 to 1e-1).
-    let diff = relative_rms_error(&merged.mean(), &single.mean());
-    let noise = single.error_estimate().expect("estimate");
-    eprintln!("PoCL + rayon vs rayon, same seed: {diff:.2e} relative RMS; noise {noise:.2e}");
-    assert!(diff < noise / 20.0, "{diff} vs noise {noise}");
+    // devices' rounding differs.
+    assert_same_samples(
+        &merged.mean(),
+        &single.mean(),
+        "PoCL + rayon vs rayon, same seed",
+    );
     // And statistically the image of another seed.
     let other = render(&scene("cornell-glass"), SIDE, SIDE, &quality(256, 10), 256);
     assert_agree(
@@ -143,10 +151,8 @@ fn a_device_that_fails_mid_render_loses_no_samples() {
     assert_eq!(merged.spp(), 400);
     let single = render(&scene("cornell"), SIDE, SIDE, &q, 400);
     // Samples 0..400, each exactly once: a lost or doubled block would move
-    // the image by about the noise.
-    let diff = relative_rms_error(&merged.mean(), &single.mean());
-    let noise = single.error_estimate().expect("estimate");
-    assert!(diff < noise / 20.0, "{diff} vs noise {noise}");
+    // every pixel by about the noise.
+    assert_same_samples(&merged.mean(), &single.mean(), "a device failed mid-render");
 }
 
 #[test]

@@ -14,6 +14,10 @@ export const STATIC_DIR = path.join(REPO, "static");
 export const BIN = process.env.PATHSTREAM_BIN || path.join(REPO, "target/release/pathstream");
 export const CHROMIUM = process.env.CHROMIUM || "/usr/bin/chromium";
 export const ARTIFACTS = path.join(REPO, "target/browser");
+// Under CI (the variable set at all, any value: the Rust tests'
+// `var_os("CI").is_some()`, and what .ci/run exports) a missing device
+// fails a test instead of being passed over.
+export const UNDER_CI = process.env.CI !== undefined;
 
 export const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 

@@ -215,6 +215,18 @@ struct Shared<'a, F> {
     progress: Option<Progress>,
     stop: bool,
     on_progress: F,
+    /// The lane whose turn it is to claim, where lanes take turns (see
+    /// [`render_split_taking_turns`]); None: whoever comes first.
+    turn: Option<usize>,
+}
+
+/// The lane after `i`, round the list, that has not failed (`i` if none).
+fn next_live(shares: &[DeviceShare], i: usize) -> usize {
+    let n = shares.len();
+    (1..=n)
+        .map(|k| (i + k) % n)
+        .find(|&j| shares[j].failure.is_none())
+        .unwrap_or(i)
 }
 
 /// Renders `job` into `film` on every backend at once until `quality`
@@ -230,6 +242,32 @@ pub fn render_split(
     quality: &Quality,
     on_progress: impl FnMut(&Progress) + Send,
 ) -> Result<(Progress, Vec<DeviceShare>), BackendError> {
+    split(job, backends, film, quality, on_progress, false)
+}
+
+/// [`render_split`] where the lanes that have not failed claim blocks in
+/// turn, round the list: a test hook, so that a test of the merge certainly
+/// merges blocks of every device, interleaved (left to the race, one lane
+/// may take a small render whole).
+#[doc(hidden)]
+pub fn render_split_taking_turns(
+    job: &RenderJob,
+    backends: &mut [Backend],
+    film: &mut Film,
+    quality: &Quality,
+    on_progress: impl FnMut(&Progress) + Send,
+) -> Result<(Progress, Vec<DeviceShare>), BackendError> {
+    split(job, backends, film, quality, on_progress, true)
+}
+
+fn split(
+    job: &RenderJob,
+    backends: &mut [Backend],
+    film: &mut Film,
+    quality: &Quality,
+    on_progress: impl FnMut(&Progress) + Send,
+    taking_turns: bool,
+) -> Result<(Progress, Vec<DeviceShare>), BackendError> {
     let start = Instant::now();
     let target = progressive::spp_target(quality);
     let limit = match quality.adaptive {
@@ -243,6 +281,7 @@ pub fn render_split(
         progress: None,
         stop: false,
         on_progress,
+        turn: taking_turns.then_some(0),
     });
     let errors: Vec<Option<BackendError>> = std::thread::scope(|scope| {
         let handles: Vec<_> = (backends.iter_mut().enumerate())
@@ -304,8 +343,14 @@ fn device_loop<F: FnMut(&Progress) + Send>(
     let (width, height) = (job.width(), job.height());
     let pixels = u64::from(width) * u64::from(height);
     let mut want = 1u64;
+    let drop_out = |s: &mut Shared<'_, F>, e: &BackendError| {
+        s.shares[i].failure = Some(e.to_string());
+        if s.turn == Some(i) {
+            s.turn = Some(next_live(&s.shares, i));
+        }
+    };
     if let Err(e) = backend.prepare(job) {
-        lock().shares[i].failure = Some(e.to_string());
+        drop_out(&mut lock(), &e);
         return Some(e);
     }
     loop {
@@ -314,8 +359,16 @@ fn device_loop<F: FnMut(&Progress) + Send>(
             if s.stop {
                 return None;
             }
+            if s.turn.is_some_and(|t| t != i) && s.ledger.can_claim() {
+                drop(s);
+                std::thread::sleep(Duration::from_millis(2));
+                continue;
+            }
             match s.ledger.claim(want) {
                 Some(b) => {
+                    if s.turn.is_some() {
+                        s.turn = Some(next_live(&s.shares, i));
+                    }
                     let film = s.ledger.block_film(width, height, &b);
                     (b, film)
                 }
@@ -335,7 +388,7 @@ fn device_loop<F: FnMut(&Progress) + Send>(
             let mut s = lock();
             tracing::warn!(device = %s.shares[i].device, error = %e, "a device dropped out of the render; the others take its samples");
             s.ledger.give_back(block);
-            s.shares[i].failure = Some(e.to_string());
+            drop_out(&mut s, &e);
             return Some(e);
         }
         let took = t.elapsed();
