@@ -47,12 +47,18 @@ fn main() {
             .collect();
         println!("| {r} | {} |", row.join(" | "));
     }
-    for (what, metallic) in [("White metal", 1.0), ("White base under the coat (ior 1.5)", 0.0)] {
+    for (what, metallic) in [
+        ("White metal", 1.0),
+        ("White base under the coat (ior 1.5)", 0.0),
+    ] {
         println!("\n{what}, whole BSDF ({n} samples each):\n");
         header();
         for r in ROUGHNESS {
             let p = Pbr::new(metallic, r, 1.5);
-            let row: Vec<String> = MU.iter().map(|&m| format!("{:.4}", albedo(&p, m, n))).collect();
+            let row: Vec<String> = MU
+                .iter()
+                .map(|&m| format!("{:.4}", albedo(&p, m, n)))
+                .collect();
             println!("| {r} | {} |", row.join(" | "));
         }
     }

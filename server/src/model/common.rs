@@ -182,6 +182,20 @@ pub(super) fn ior(what: &str, value: Option<f64>, notes: &mut Vec<String>) -> f6
     }
 }
 
+/// A factor in [0, 1] (roughness, metallic): clamped with a note when
+/// outside, 0 with a note when not finite.
+pub(super) fn unit(what: &str, v: f64, notes: &mut Vec<String>) -> f64 {
+    if !v.is_finite() {
+        notes.push(format!("{what} {v} is not finite: 0"));
+        return 0.0;
+    }
+    let c = v.clamp(0.0, 1.0);
+    if c != v {
+        notes.push(format!("{what} {v} is outside [0, 1]: clamped to {c}"));
+    }
+    c
+}
+
 pub(super) fn fmt3(c: [f64; 3]) -> String {
     format!("[{}, {}, {}]", c[0], c[1], c[2])
 }

@@ -6,12 +6,16 @@
 //! - `illum 3` -> mirror, albedo `Ks` if nonzero, else `Kd`;
 //! - `illum 4` to `7` -> glass, ior `Ni` (1.5 with a note when missing or
 //!   outside [1, 10]), albedo `Tf` when given (else clear);
+//! - otherwise, with the PBR extension's `Pr` (roughness) or `Pm`
+//!   (metallic): glTF's metallic-roughness model (`pbr`), base colour `Kd`,
+//!   roughness `Pr` (default 1), metallic `Pm` (default 0), ior `Ni` (1.5
+//!   when missing), each clamped to its range with a note;
 //! - `illum 0` to `2` (or none) -> diffuse; other `illum` values -> diffuse
 //!   with a note;
 //! - whatever else changes the look (textures `map_*`, `bump`, `disp`,
 //!   `decal`, `refl`, `norm`; `Ks`/`Ns` of non-mirrors; `Ka`; `d`/`Tr`
-//!   transparency; `Tf` of non-glass; PBR and unknown statements) is listed in
-//!   one note per material.
+//!   transparency; `Tf` of non-glass; the PBR keys other than `Pr` and `Pm`
+//!   and unknown statements) is listed in one note per material.
 
 use super::common::{self, Mat};
 use super::Material;
@@ -29,6 +33,9 @@ pub(super) struct MtlMaterial {
     pub ni: Option<f64>,
     pub d: Option<f64>,
     pub tr: Option<f64>,
+    /// The PBR extension's roughness and metallic.
+    pub pr: Option<f64>,
+    pub pm: Option<f64>,
     pub illum: Option<i64>,
     /// Statements not modelled, as keywords (`map_Kd`, `Kd spectral`, ...).
     pub ignored: Vec<String>,
@@ -83,12 +90,14 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                 };
                 *slot = Some(c);
             }
-            "ns" | "ni" | "d" | "tr" => {
+            "ns" | "ni" | "d" | "tr" | "pr" | "pm" => {
                 let v = number(key, args.last().copied()).map_err(err)?;
                 let slot = match lower.as_str() {
                     "ns" => &mut m.ns,
                     "ni" => &mut m.ni,
                     "d" => &mut m.d,
+                    "pr" => &mut m.pr,
+                    "pm" => &mut m.pm,
                     _ => &mut m.tr,
                 };
                 *slot = Some(v);
@@ -146,6 +155,7 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     let illum = m.illum.unwrap_or(if nonzero(m.ks) { 2 } else { 1 });
     let mirror = illum == 3;
     let glass = (4..=7).contains(&illum);
+    let pbr = !mirror && !glass && (m.pr.is_some() || m.pm.is_some());
     let emission = common::emission("Ke", m.ke.unwrap_or_default(), &mut notes);
 
     if nonzero(m.ka) {
@@ -157,11 +167,17 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     if let Some(tr) = m.tr.filter(|&tr| tr != 0.0) {
         ignored.push(format!("Tr {tr} (transparency)"));
     }
-    if !(0..=7).contains(&illum) {
+    if !pbr && !(0..=7).contains(&illum) {
         ignored.push(format!("illum {illum} (rendered diffuse)"));
     }
     if !mirror && !glass && nonzero(m.ks) {
-        ignored.push("Ks/Ns (specular highlight)".to_owned());
+        ignored.push(match pbr {
+            true => "Ks/Ns (Pr and Pm describe the highlight)".to_owned(),
+            false => "Ks/Ns (specular highlight)".to_owned(),
+        });
+    }
+    if (mirror || glass) && (m.pr.is_some() || m.pm.is_some()) {
+        ignored.push("Pr/Pm (illum says mirror or glass)".to_owned());
     }
     if mirror && m.ns.is_some() {
         ignored.push("Ns (the mirror is perfect)".to_owned());
@@ -193,6 +209,20 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
         };
         Material::Mirror {
             albedo: common::albedo(what, c, &mut notes),
+            emission,
+        }
+    } else if pbr {
+        if m.kd.is_none() {
+            notes.push(format!("no Kd: base colour {}", common::DEFAULT_ALBEDO));
+        }
+        Material::Pbr {
+            base_color: common::albedo("Kd", kd(), &mut notes),
+            metallic: common::unit("Pm", m.pm.unwrap_or(0.0), &mut notes),
+            roughness: common::unit("Pr", m.pr.unwrap_or(1.0), &mut notes),
+            ior: match m.ni {
+                Some(ni) => common::ior("Ni", Some(ni), &mut notes),
+                None => common::DEFAULT_IOR,
+            },
             emission,
         }
     } else {

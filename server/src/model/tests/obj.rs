@@ -244,7 +244,13 @@ fn mtl_rules_map_every_material() {
             &glass(1.5, None),
             &glass(1.5, None),
             &diffuse([1.0, 0.5, 0.0], Some([0.0, 2.0, 2.0])),
-            &diffuse([0.5; 3], None),
+            &Material::Pbr {
+                base_color: [0.5; 3],
+                metallic: 0.0,
+                roughness: 0.5,
+                ior: 1.5,
+                emission: None,
+            },
             &diffuse([0.8; 3], None),
         ]
     );
@@ -271,7 +277,44 @@ fn mtl_rules_map_every_material() {
             "material \"glass_bad_ni\": Ni 0.5 is not an index of refraction in [1, 10]: ior 1.5",
             "material \"hot\": Ke [-1, 2, 2] is negative or not finite: those components are 0",
             "material \"hot\": Kd [1.5, 0.5, -0.25] is outside [0, 1]: clamped to [1, 0.5, 0]",
-            "material \"textured\": not modelled, ignored: map_Kd, bump, Pr, Ka (ambient), d 0.5 (transparency), Ks/Ns (specular highlight)",
+            "material \"textured\": not modelled, ignored: map_Kd, bump, Ka (ambient), d 0.5 (transparency), Ks/Ns (Pr and Pm describe the highlight)",
+        ]
+    );
+}
+
+#[test]
+fn mtl_pbr_keys_make_the_metallic_roughness_model() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mtl = "newmtl brushed\nKd 0.9 0.6 0.3\nPm 1\nPr 1.5\nNi 1.45\nPc 0.2\n\
+               newmtl mirror_wins\nillum 3\nKd 0.5 0.5 0.5\nPr 0.1\n";
+    std::fs::write(dir.path().join("pbr.mtl"), mtl).expect("write");
+    let obj = "mtllib pbr.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl brushed\nf 1 2 3\nusemtl mirror_wins\nf 1 2 3\n";
+    let path = dir.path().join("pbr.obj");
+    std::fs::write(&path, obj).expect("write");
+    let m = load_file(&path, &Limits::default()).expect("loads");
+    assert_guarantees(&m);
+    assert_eq!(
+        m.materials,
+        vec![
+            (
+                "brushed".to_owned(),
+                Material::Pbr {
+                    base_color: [0.9, 0.6, 0.3],
+                    metallic: 1.0,
+                    roughness: 1.0,
+                    ior: 1.45,
+                    emission: None,
+                }
+            ),
+            ("mirror_wins".to_owned(), mirror([0.5; 3])),
+        ]
+    );
+    assert_eq!(
+        m.warnings,
+        [
+            "material \"brushed\": Pr 1.5 is outside [0, 1]: clamped to 1",
+            "material \"brushed\": not modelled, ignored: Pc",
+            "material \"mirror_wins\": not modelled, ignored: Pr/Pm (illum says mirror or glass)",
         ]
     );
 }
