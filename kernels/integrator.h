@@ -1,11 +1,25 @@
 /* The path tracer, loop for loop as integrator.rs. Its Russian roulette
  * cap is the host's MAX_SURVIVAL, passed as its bits (MAX_SURVIVAL_BITS). */
 
-#if HAS_DIFFUSE
-/* Le * V * cos / pdf of one shadow ray from surface sf towards emitter L,
- * as light/mod.rs's `one`. What a scene cannot have is decided when the
+#if HAS_DIFFUSE || HAS_GGX
+/* What a surface makes of light from a direction, for next-event
+ * estimation (integrator/mod.rs, the closures given to nee::direct):
+ * cos(theta_s) for diffuse (the caller multiplies by albedo / pi), the
+ * broad lobes' BSDF cos for MAT_PBR. */
+typedef struct {
+    int pbr;
+#if HAS_GGX
+    __global const Material *m;
+    float3 t, b, n, wo;
+    GgxLobes lobes;
+#endif
+} NeeSurface;
+
+/* Le * V * f(dir) / pdf of one shadow ray from surface sf towards emitter
+ * L, as nee.rs's `one`. What a scene cannot have is decided when the
  * program is built (on PoCL the cheapest scenes feel every test here). */
-inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u) {
+inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u,
+                          const NeeSurface *ne) {
     float3 dir;
     float weight;
     if (!sample_emitter(sc, L, sf->p, sf->object, sf->prim, nl, ns, u, &dir, &weight)) {
@@ -33,7 +47,14 @@ inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *
     if (!visible) {
         return (float3)(0.0f);
     }
-    return L->emission.xyz * (cos_s * weight);
+    float3 f = (float3)(cos_s);
+#if HAS_GGX
+    if (ne->pbr) {
+        float3 wi = (float3)(dot(dir, ne->t), dot(dir, ne->b), dot(dir, ne->n));
+        ggx_eval_cos_parts(sc->ggx, ne->m->pbr, ne->m->albedo.xyz, &ne->lobes, ne->wo, wi, &f);
+    }
+#endif
+    return L->emission.xyz * (f * weight);
 }
 #endif
 
@@ -45,7 +66,9 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     int nee = USE_NEE; /* a variable: `x || !CONSTANT` draws a warning */
     float3 l = (float3)(0.0f);
     float3 beta = (float3)(1.0f);
-    int specular = 1;
+    /* The throughput with which the next hit counts emission (Path::emit). */
+    float3 emit = (float3)(1.0f);
+    int specular;
     uint from = NO_OBJECT;
     uint from_prim = NO_PRIM;
     int entering = 0;
@@ -56,17 +79,15 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         if (hit.object == NO_OBJECT) {
 #if HAS_ENV
             /* Left the scene: the environment, counted as an emitter's hit. */
-            if (specular || !nee) {
-                l += beta * P->environment.xyz;
-            }
+            l += emit * P->environment.xyz;
 #endif
             break;
         }
         at_vertex(s, bounces);
         Surf sf = surface_at(sc, &hit, o, d);
         __global const Material *m = &materials[sf.material];
-        if (m->emissive && (specular || !nee)) {
-            l += beta * m->emission.xyz;
+        if (m->emissive) {
+            l += emit * m->emission.xyz;
         }
         if (MAX_DEPTH != 0u && bounces >= MAX_DEPTH) {
             break;
@@ -75,8 +96,25 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         int arriving = dot(d, sf.ng) < 0.0f;
         float3 nl = arriving ? sf.ng : -sf.ng;
         float3 ns = !sf.smooth ? nl : (dot(sf.ns, nl) < 0.0f ? -sf.ns : sf.ns);
+        int gathered = 0;
+#if HAS_DIFFUSE || HAS_GGX
+        NeeSurface ne;
+        ne.pbr = 0;
 #if HAS_DIFFUSE
-        if (nee && m->kind == MAT_DIFFUSE) {
+        gathered = nee && m->kind == MAT_DIFFUSE;
+#endif
+#if HAS_GGX
+        if (nee && m->kind == MAT_PBR) {
+            gathered = 1;
+            ne.pbr = 1;
+            ne.m = m;
+            basis(ns, &ne.t, &ne.b);
+            ne.n = ns;
+            ne.wo = -(float3)(dot(d, ne.t), dot(d, ne.b), dot(d, ns));
+            ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->albedo.xyz, ne.wo);
+        }
+#endif
+        if (gathered) {
             float3 direct = (float3)(0.0f);
             if (LIGHT_COUNT > 0u) {
                 /* One emitter, picked in proportion to its power
@@ -89,34 +127,43 @@ inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
                     int keep = (uint)bits < threshold || threshold == 0xFFFFFFFFu;
                     j = keep ? column : lights[column].alias;
                 }
-                direct = direct_from(sc, &lights[j], &sf, nl, ns, light_2d(s, 0u));
+                direct = direct_from(sc, &lights[j], &sf, nl, ns, light_2d(s, 0u), &ne);
                 if (LIGHT_COUNT > 1u) {
                     direct = direct / lights[j].pmf;
                 }
             }
-            l += beta * m->albedo.xyz * direct * M_1_PI_F;
-            if (MAX_DEPTH != 0u && bounces + 1u >= MAX_DEPTH) {
-                break;
+            if (ne.pbr) {
+                l += beta * direct;
+            } else {
+                l += beta * m->albedo.xyz * direct * M_1_PI_F;
+                /* The bounce's own hit would not count its emission. */
+                if (MAX_DEPTH != 0u && bounces + 1u >= MAX_DEPTH) {
+                    break;
+                }
             }
         }
 #endif
         float3 weight;
+        float3 glossy;
         int transmitted;
-        float3 next = scatter(m, sc->ggx, d, arriving, ns, s, &weight, &specular, &transmitted);
+        float3 next = scatter(m, sc->ggx, d, arriving, ns, s, &weight, &specular, &transmitted, &glossy);
         /* A shading normal can send a direction to the wrong side of the
          * actual surface: such a sample has no contribution. */
         if (sf.smooth && (dot(next, nl) > 0.0f) == transmitted) {
             break;
         }
+        glossy = beta * glossy;
         beta *= weight;
         bounces += 1u;
+        float q = 1.0f;
         if (bounces > RR_DEPTH || !(max3(beta) > 0.0f)) {
-            float q = fmin(max3(beta), as_float(MAX_SURVIVAL_BITS));
+            q = fmin(max3(beta), as_float(MAX_SURVIVAL_BITS));
             if (!(roulette(s) < q)) {
                 break;
             }
             beta /= q;
         }
+        emit = !gathered ? beta : (m->kind == MAT_PBR ? glossy / q : (float3)(0.0f));
         from = hit.object;
         from_prim = hit.prim;
         entering = dot(next, sf.ng) < 0.0f;

@@ -42,36 +42,41 @@ inline float3 reflect_dir(float3 d, float3 n) {
  * surface from outside (entering) or inside, nl the shading normal on the
  * side it came from (material.rs, scatter); ggx is the scene's table for
  * MAT_PBR. Returns the new direction; *weight is BSDF cos / pdf,
- * *specular whether the vertex did without next-event estimation,
- * *transmitted whether it went through. */
+ * *specular whether it was a delta lobe, *transmitted whether it went
+ * through, *glossy the part of the weight next-event estimation leaves to
+ * the next hit (Scattered::glossy). */
 inline float3 scatter(__global const Material *m, __global const float *ggx, float3 d, int entering, float3 nl,
-                      Sampler *s, float3 *weight, int *specular, int *transmitted) {
+                      Sampler *s, float3 *weight, int *specular, int *transmitted, float3 *glossy) {
     *weight = m->albedo.xyz;
+    *glossy = m->albedo.xyz;
     *transmitted = 0;
 #if HAS_DIFFUSE
     if (m->kind == MAT_DIFFUSE) {
         *specular = 0;
+        *glossy = (float3)(0.0f);
         return cosine_hemisphere(nl, bsdf_2d(s));
     }
 #endif
-    *specular = 1;
 #if HAS_GGX
     if (m->kind == MAT_PBR) {
+        *specular = 0;
         float choice = bsdf_choice(s);
         float2 u = bsdf_2d(s);
         float3 t, b;
         basis(nl, &t, &b);
         float3 wo = (float3)(-dot(d, t), -dot(d, b), -dot(d, nl));
         float3 wi;
-        if (ggx_sample(ggx, m->pbr, m->albedo.xyz, wo, choice, u, &wi, weight)) {
+        if (ggx_sample(ggx, m->pbr, m->albedo.xyz, wo, choice, u, &wi, weight, glossy)) {
             return t * wi.x + b * wi.y + nl * wi.z;
         }
         /* Below the surface: no contribution (the path ends on its zero
          * weight). */
         *weight = (float3)(0.0f);
+        *glossy = (float3)(0.0f);
         return nl;
     }
 #endif
+    *specular = 1;
 #if HAS_GLASS
     if (m->kind == MAT_GLASS) {
         float ior = m->albedo.w;
@@ -105,5 +110,6 @@ inline float3 scatter_outward(__global const Material *m, __global const float *
                               float3 *weight, int *specular) {
     int entering = dot(d, n) < 0.0f;
     int transmitted;
-    return scatter(m, ggx, d, entering, entering ? n : -n, s, weight, specular, &transmitted);
+    float3 glossy;
+    return scatter(m, ggx, d, entering, entering ? n : -n, s, weight, specular, &transmitted, &glossy);
 }

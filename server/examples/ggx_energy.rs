@@ -21,8 +21,8 @@ fn albedo(p: &Pbr, mu: f32, n: u64) -> f32 {
         let mut s = Sampler::new(1, i, 0);
         let choice = s.next_f32();
         let u = s.next_2d();
-        if let Some((_, w)) = sample(tables(), p, Vec3A::ONE, wo, choice, u) {
-            sum += f64::from(w.x);
+        if let Some(s) = sample(tables(), p, Vec3A::ONE, wo, choice, u) {
+            sum += f64::from(s.weight.x);
         }
     }
     (sum / n as f64) as f32

@@ -140,6 +140,24 @@ fn a_metal_roughness_grid_agrees_on_every_backend() {
 }
 
 #[test]
+fn nee_on_and_off_agree_on_the_grid() {
+    // Next-event estimation gathers the broad lobes' light, the next hit
+    // the narrow lobes': together the same image as BSDF sampling alone.
+    let s = sphere_grid();
+    for (name, mut backend) in backends() {
+        let on = render_on(&mut backend, &s, 32, 24, &quality(), 128);
+        let off_q = Quality {
+            nee: false,
+            ..quality()
+        };
+        let off = render_on(&mut backend, &s, 32, 24, &off_q, 256);
+        assert_clean(&on, name);
+        assert_clean(&off, name);
+        assert_agree(&on, &off, 4, 4.5, 0.005, &format!("{name}: NEE on vs off"));
+    }
+}
+
+#[test]
 fn bad_pbr_fields_are_named() {
     let cases = [
         (

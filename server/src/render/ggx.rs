@@ -278,8 +278,24 @@ impl Lobes {
 /// BSDF times cos(theta_i) for `wo` and `wi` in the shading frame.
 #[inline(always)]
 pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> Vec3A {
+    let (glossy, rest) = eval_cos_parts(t, p, base, lobes, wo, wi);
+    glossy + rest
+}
+
+/// [`eval_cos`] in two parts: the single-scattering microfacet lobes
+/// (narrow: found by sampling them) and the rest, the multiple-scattering
+/// and diffuse lobes (broad: found by next-event estimation).
+#[inline(always)]
+pub fn eval_cos_parts(
+    t: &Tables,
+    p: &Pbr,
+    base: Vec3A,
+    lobes: &Lobes,
+    wo: Vec3A,
+    wi: Vec3A,
+) -> (Vec3A, Vec3A) {
     if !(wi.z > 0.0 && wo.z > 0.0) {
-        return Vec3A::ZERO;
+        return (Vec3A::ZERO, Vec3A::ZERO);
     }
     let h = (wo + wi).normalize();
     let (ro, ri) = (smith_r(wo, p.alpha), smith_r(wi, p.alpha));
@@ -291,12 +307,13 @@ pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: 
     let a_i = e_i - b_i;
     let e_avg = lobes.a_avg + lobes.b_avg;
     let ms = (1.0 - lobes.e_o) * (1.0 - e_i) * FRAC_1_PI / (1.0 - e_avg).max(1e-6);
-    let metal = (base + (Vec3A::ONE - base) * c5) * spec + lobes.fms_metal * ms;
     let es_i = p.f0 * a_i + b_i + (1.0 - e_i) * lobes.fms_diel;
     let diffuse = (1.0 - lobes.es_o) * (1.0 - es_i) * FRAC_1_PI / (1.0 - lobes.es_avg).max(1e-6);
-    let diel = (p.f0 + (1.0 - p.f0) * c5) * spec + lobes.fms_diel * ms;
-    let f = metal * p.metallic + (base * diffuse + Vec3A::splat(diel)) * (1.0 - p.metallic);
-    f * wi.z
+    let glossy = (base + (Vec3A::ONE - base) * c5) * (spec * p.metallic)
+        + Vec3A::splat((p.f0 + (1.0 - p.f0) * c5) * spec * (1.0 - p.metallic));
+    let rest = lobes.fms_metal * (ms * p.metallic)
+        + (base * diffuse + Vec3A::splat(lobes.fms_diel * ms)) * (1.0 - p.metallic);
+    (glossy * wi.z, rest * wi.z)
 }
 
 /// The sampling density of direction `wi` (solid angle) from `wo`.
@@ -311,9 +328,20 @@ pub fn pdf(p: &Pbr, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> f32 {
     lobes.p_spec * vndf + (1.0 - lobes.p_spec) * wi.z * FRAC_1_PI
 }
 
+/// A sampled direction and its weights.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    pub wi: Vec3A,
+    /// BSDF cos / pdf.
+    pub weight: Vec3A,
+    /// The single-scattering lobes' share of it (what next-event
+    /// estimation leaves to this sample: see [`eval_cos_parts`]).
+    pub glossy: Vec3A,
+}
+
 /// A direction from `wo` (shading frame), drawn with `choice` and (u1, u2)
-/// in [0, 1), and its weight BSDF cos / pdf; None where it leaves below the
-/// surface (no contribution).
+/// in [0, 1), and its weights; None where it leaves below the surface (no
+/// contribution).
 #[inline(always)]
 pub fn sample(
     t: &Tables,
@@ -322,7 +350,7 @@ pub fn sample(
     wo: Vec3A,
     choice: f32,
     (u1, u2): (f32, f32),
-) -> Option<(Vec3A, Vec3A)> {
+) -> Option<Sample> {
     if !(wo.z > 0.0) {
         return None;
     }
@@ -341,7 +369,12 @@ pub fn sample(
     if !(pdf > 0.0) {
         return None;
     }
-    Some((wi, eval_cos(t, p, base, &lobes, wo, wi) / pdf))
+    let (glossy, rest) = eval_cos_parts(t, p, base, &lobes, wo, wi);
+    Some(Sample {
+        wi,
+        weight: (glossy + rest) / pdf,
+        glossy: glossy / pdf,
+    })
 }
 
 #[cfg(test)]

@@ -20,8 +20,8 @@ fn albedo(p: &Pbr, base: Vec3A, wo: Vec3A, n: u64) -> Vec3A {
         let mut s = Sampler::new(7, i, 0);
         let choice = s.next_f32();
         let u = s.next_2d();
-        if let Some((_, w)) = sample(t, p, base, wo, choice, u) {
-            sum += w;
+        if let Some(s) = sample(t, p, base, wo, choice, u) {
+            sum += s.weight;
         }
     }
     sum / n as f32

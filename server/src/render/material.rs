@@ -17,11 +17,11 @@ pub enum Bsdf {
 }
 
 impl Bsdf {
-    /// Whether next-event estimation gathers the light this surface
-    /// reflects (else the path counts emission at its next hit).
+    /// Whether next-event estimation gathers (some of) the light this
+    /// surface reflects (else the path counts emission at its next hit).
     #[inline(always)]
     pub fn gathers_light(&self) -> bool {
-        matches!(self, Bsdf::Diffuse)
+        matches!(self, Bsdf::Diffuse | Bsdf::Pbr(_))
     }
 }
 
@@ -67,12 +67,15 @@ pub struct Scattered {
     pub dir: Vec3A,
     /// BSDF * cos / pdf.
     pub weight: Vec3A,
-    /// No next-event estimation at this vertex (a delta lobe, which it
-    /// cannot reach, or a glossy one, which it does not try): the next hit
-    /// counts the emission it finds.
+    /// A delta lobe: next-event estimation cannot reach it.
     pub specular: bool,
     /// Through the surface (refraction), not back off it.
     pub transmitted: bool,
+    /// The part of `weight` whose light next-event estimation at this
+    /// vertex does not gather (where it runs): the next hit counts its
+    /// emission with this weight (diffuse: none; `pbr`: its narrow
+    /// single-scattering lobes', `ggx::eval_cos_parts`).
+    pub glossy: Vec3A,
 }
 
 /// Mirror reflection of `d` about unit `n`.
@@ -110,6 +113,7 @@ pub fn scatter(
                 weight: m.albedo,
                 specular: false,
                 transmitted: false,
+                glossy: Vec3A::ZERO,
             }
         }
         Bsdf::Mirror => Scattered {
@@ -117,6 +121,7 @@ pub fn scatter(
             weight: m.albedo,
             specular: true,
             transmitted: false,
+            glossy: m.albedo,
         },
         Bsdf::Glass { ior, schlick } => {
             let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
@@ -138,6 +143,7 @@ pub fn scatter(
                 weight: m.albedo,
                 specular: true,
                 transmitted: !reflected,
+                glossy: m.albedo,
             }
         }
         Bsdf::Pbr(p) => {
@@ -145,17 +151,23 @@ pub fn scatter(
             let u = sampler.bsdf_2d();
             let (t, b) = basis(nl);
             let wo = Vec3A::new(-d.dot(t), -d.dot(b), -d.dot(nl));
-            let (dir, weight) = match ggx::sample(ggx::tables(), &p, m.albedo, wo, choice, u) {
-                Some((wi, w)) => (t * wi.x + b * wi.y + nl * wi.z, w),
+            match ggx::sample(ggx::tables(), &p, m.albedo, wo, choice, u) {
+                Some(s) => Scattered {
+                    dir: t * s.wi.x + b * s.wi.y + nl * s.wi.z,
+                    weight: s.weight,
+                    specular: false,
+                    transmitted: false,
+                    glossy: s.glossy,
+                },
                 // Below the surface: no contribution (the path ends on its
                 // zero weight).
-                None => (nl, Vec3A::ZERO),
-            };
-            Scattered {
-                dir,
-                weight,
-                specular: true,
-                transmitted: false,
+                None => Scattered {
+                    dir: nl,
+                    weight: Vec3A::ZERO,
+                    specular: false,
+                    transmitted: false,
+                    glossy: Vec3A::ZERO,
+                },
             }
         }
     }

@@ -6,7 +6,10 @@
 //! diffuse point is gathered by the shadow rays, so an emitter met by the
 //! following diffuse bounce is not counted again; after a specular bounce it
 //! is (NEE cannot sample a delta lobe). NEE on and off therefore estimate the
-//! same quantity at every depth cap.
+//! same quantity at every depth cap. A `pbr` surface splits its BSDF
+//! (`ggx::eval_cos_parts`): NEE gathers the light of its broad lobes, and
+//! the next hit counts emission weighted by its narrow lobes' share of the
+//! sample (`Scattered::glossy`); the two parts add up to the whole.
 
 pub mod nee;
 
@@ -14,9 +17,10 @@ pub use nee::LightSampling;
 
 use crate::render::camera::CameraRays;
 use crate::render::filter::Filter;
+use crate::render::ggx;
 use crate::render::isa::Isa;
-use crate::render::material::scatter;
-use crate::render::math::{max_component, Vec3A};
+use crate::render::material::{scatter, Bsdf};
+use crate::render::math::{basis, max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
 use crate::render::world::{Hit, Origin, World};
@@ -51,7 +55,11 @@ pub struct Path {
     sampler: Sampler,
     l: Vec3A,
     beta: Vec3A,
-    specular: bool,
+    /// The throughput with which the next hit counts the emission it
+    /// finds: `beta` after a camera ray, a specular bounce or with NEE off;
+    /// zero after a diffuse bounce that NEE gathered; a `pbr` bounce's
+    /// narrow-lobe share.
+    emit: Vec3A,
     bounces: u32,
 }
 
@@ -66,7 +74,7 @@ impl Path {
             sampler,
             l: Vec3A::ZERO,
             beta: Vec3A::ONE,
-            specular: true,
+            emit: Vec3A::ONE,
             bounces: 0,
         }
     }
@@ -84,17 +92,15 @@ impl Path {
     ) -> bool {
         let Some(hit) = hit else {
             // Left the scene: the environment, counted as an emitter's hit.
-            if self.specular || !settings.nee {
-                self.l += self.beta * world.environment;
-            }
+            self.l += self.emit * world.environment;
             return false;
         };
         let ray = &self.ray;
         self.sampler.at_vertex(self.bounces);
         let s = world.surface(&hit, ray);
         let m = world.material(s.material);
-        if m.emissive && (self.specular || !settings.nee) {
-            self.l += self.beta * m.emission;
+        if m.emissive {
+            self.l += self.emit * m.emission;
         }
         if settings.max_depth != 0 && self.bounces >= settings.max_depth {
             return false;
@@ -109,19 +115,31 @@ impl Path {
         } else {
             s.ns
         };
-        if settings.nee && m.bsdf.gathers_light() {
-            let direct = nee::direct(
-                isa,
-                world,
-                &s,
-                nl,
-                ns,
-                settings.light_sampling,
-                &mut self.sampler,
-            );
-            self.l += self.beta * m.albedo * direct * FRAC_1_PI;
+        let gathered = settings.nee && m.bsdf.gathers_light();
+        if gathered {
+            let sampling = settings.light_sampling;
+            if let Bsdf::Pbr(p) = &m.bsdf {
+                let (t, b) = basis(ns);
+                let local = |v: Vec3A| Vec3A::new(v.dot(t), v.dot(b), v.dot(ns));
+                let wo = -local(ray.dir);
+                let tables = ggx::tables();
+                let lobes = ggx::Lobes::new(tables, p, m.albedo, wo);
+                let f =
+                    |dir: Vec3A| ggx::eval_cos_parts(tables, p, m.albedo, &lobes, wo, local(dir)).1;
+                let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
+                self.l += self.beta * direct;
+            } else {
+                let f = |dir: Vec3A| Vec3A::splat(ns.dot(dir));
+                let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
+                self.l += self.beta * m.albedo * direct * FRAC_1_PI;
+            }
             if settings.max_depth != 0 && self.bounces + 1 >= settings.max_depth {
-                return false; // the bounce's own hit would not count its emission
+                // The bounce's own hit would count at most the narrow
+                // lobes' emission: a diffuse surface has none, and a
+                // `pbr` one's is counted below when it goes on.
+                if !matches!(m.bsdf, Bsdf::Pbr(_)) {
+                    return false;
+                }
             }
         }
         let sc = scatter(m, ray.dir, entering, ns, &mut self.sampler);
@@ -131,16 +149,22 @@ impl Path {
         if s.smooth && (sc.dir.dot(nl) > 0.0) == sc.transmitted {
             return false;
         }
+        let glossy = self.beta * sc.glossy;
         self.beta *= sc.weight;
         self.bounces += 1;
+        let mut q = 1.0;
         if self.bounces > settings.rr_depth || !(max_component(self.beta) > 0.0) {
-            let q = max_component(self.beta).min(MAX_SURVIVAL);
+            q = max_component(self.beta).min(MAX_SURVIVAL);
             if !(self.sampler.roulette() < q) {
                 return false;
             }
             self.beta /= q;
         }
-        self.specular = sc.specular;
+        self.emit = match (gathered, &m.bsdf) {
+            (false, _) => self.beta,
+            (true, Bsdf::Pbr(_)) => glossy / q,
+            (true, _) => Vec3A::ZERO,
+        };
         self.from = Origin {
             object: hit.object,
             prim: hit.prim,

@@ -1,4 +1,4 @@
-//! Next-event estimation: at a diffuse point, one shadow ray to one
+//! Next-event estimation: at a diffuse (or `pbr`) point, one shadow ray to one
 //! emitter picked in proportion to its power (an alias table), weighted by
 //! 1 / the probability of the pick; or, for comparison, one shadow ray to
 //! every emitter. Both are unbiased and converge to the same image; the
@@ -24,11 +24,14 @@ pub enum LightSampling {
     All,
 }
 
-/// Sum over the sampled emitters of Le * V * cos(theta_s) / pdf(direction)
-/// for surface `s`, whose geometric normal `nl` and shading normal `ns` face
-/// the side the path came from. Multiply by the BRDF (albedo / pi for
-/// diffuse) to get reflected radiance. `isa` picks the intersection kernels.
+/// Sum over the sampled emitters of Le * V * f(dir) / pdf(direction) for
+/// surface `s`, whose geometric normal `nl` and shading normal `ns` face
+/// the side the path came from; `f` is what the surface makes of light
+/// from a unit direction (for diffuse, cos(theta_s), the caller multiplying
+/// by albedo / pi; for `pbr`, BSDF cos of its broad lobes). `isa` picks the
+/// intersection kernels.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub fn direct<I: Isa>(
     isa: I,
     world: &World,
@@ -37,6 +40,7 @@ pub fn direct<I: Isa>(
     ns: Vec3A,
     sampling: LightSampling,
     sampler: &mut Sampler,
+    f: impl Fn(Vec3A) -> Vec3A,
 ) -> Vec3A {
     let lights = &world.lights;
     match sampling {
@@ -44,7 +48,7 @@ pub fn direct<I: Isa>(
             [] => Vec3A::ZERO,
             // One emitter (the thesis's scenes): picked with probability 1,
             // no random number spent on the pick.
-            [only] => one(isa, world, only, s, nl, ns, sampler.light_2d(0)),
+            [only] => one(isa, world, only, s, nl, ns, sampler.light_2d(0), &f),
             _ => {
                 let Some(table) = &lights.table else {
                     return Vec3A::ZERO;
@@ -58,13 +62,14 @@ pub fn direct<I: Isa>(
                     nl,
                     ns,
                     sampler.light_2d(0),
+                    &f,
                 ) / pmf
             }
         },
         LightSampling::All => {
             let mut sum = Vec3A::ZERO;
             for (k, e) in lights.emitters.iter().enumerate() {
-                sum += one(isa, world, e, s, nl, ns, sampler.light_2d(k as u32));
+                sum += one(isa, world, e, s, nl, ns, sampler.light_2d(k as u32), &f);
             }
             sum
         }
@@ -73,6 +78,7 @@ pub fn direct<I: Isa>(
 
 /// One shadow ray towards `e`.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn one<I: Isa>(
     isa: I,
     world: &World,
@@ -81,6 +87,7 @@ fn one<I: Isa>(
     nl: Vec3A,
     ns: Vec3A,
     (u1, u2): (f32, f32),
+    f: &impl Fn(Vec3A) -> Vec3A,
 ) -> Vec3A {
     let Some((dir, weight)) = e.sample_direction(&s.receiver(nl, ns), u1, u2) else {
         return Vec3A::ZERO;
@@ -100,7 +107,7 @@ fn one<I: Isa>(
         _ => hit.is_some_and(|h| h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim)),
     };
     if visible {
-        e.emission * (cos_s * weight)
+        e.emission * (f(dir) * weight)
     } else {
         Vec3A::ZERO
     }
