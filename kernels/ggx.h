@@ -127,9 +127,9 @@ inline float3 ggx_eval_cos_parts(__global const float *T, float4 p, float3 base,
     float ri = ggx_smith_r(wi, alpha);
     float spec = ggx_d(h, alpha) / (2.0f * (ro * wi.z + ri * wo.z));
     float c5 = ggx_pow5(1.0f - fmin(fmax(ggx_dot(wo, h), 0.0f), 1.0f));
-    float e_i = ggx_at(T, 0u, wi.z, p.z) + ggx_at(T, 1u, wi.z, p.z);
+    float a_i = ggx_at(T, 0u, wi.z, p.z);
     float b_i = ggx_at(T, 1u, wi.z, p.z);
-    float a_i = e_i - b_i;
+    float e_i = a_i + b_i;
     float e_avg = L->a_avg + L->b_avg;
     float ms = (1.0f - L->e_o) * (1.0f - e_i) * M_1_PI_F / fmax(1.0f - e_avg, 1e-6f);
     float es_i = f0 * a_i + b_i + (1.0f - e_i) * L->fms_diel;

@@ -302,9 +302,9 @@ pub fn eval_cos_parts(
     // D G2 / (4 cos_o cos_i), with G2 = 2 cos_o cos_i / (R_o cos_i + R_i cos_o).
     let spec = distribution(h, p.alpha) / (2.0 * (ro * wi.z + ri * wo.z));
     let c5 = pow5(1.0 - wo.dot(h).clamp(0.0, 1.0));
-    let e_i = t.at(0, wi.z, p.roughness) + t.at(1, wi.z, p.roughness);
+    let a_i = t.at(0, wi.z, p.roughness);
     let b_i = t.at(1, wi.z, p.roughness);
-    let a_i = e_i - b_i;
+    let e_i = a_i + b_i;
     let e_avg = lobes.a_avg + lobes.b_avg;
     let ms = (1.0 - lobes.e_o) * (1.0 - e_i) * FRAC_1_PI / (1.0 - e_avg).max(1e-6);
     let es_i = p.f0 * a_i + b_i + (1.0 - e_i) * lobes.fms_diel;
