@@ -9,7 +9,7 @@
 #if HAS_BVH
 /* Entry distances of a node's four boxes; bit i of the result: child i is
  * met before t_max. */
-inline uint bvh_test(__global const BvhNode *node, float3 o, float3 inv, int3 neg, float t_max, float4 *t_near) {
+static inline uint bvh_test(__global const BvhNode *node, float3 o, float3 inv, int3 neg, float t_max, float4 *t_near) {
     float4 lo_x = neg.x ? node->bounds[3] : node->bounds[0];
     float4 hi_x = neg.x ? node->bounds[0] : node->bounds[3];
     float4 lo_y = neg.y ? node->bounds[4] : node->bounds[1];

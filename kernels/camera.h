@@ -1,6 +1,6 @@
 /* Pinhole camera and pixel filters: camera.rs and filter.rs. */
 
-inline float tent(float u) {
+static inline float tent(float u) {
     float r = 2.0f * u;
     return r < 1.0f ? sqrt(r) - 1.0f : 1.0f - sqrt(2.0f - r);
 }
@@ -9,7 +9,7 @@ inline float tent(float u) {
  * sub-pixel from the sample index (samples 2k, 2k+1 share one), Sobol
  * points from each coordinate's top bit (filter.rs,
  * pixel_offset_stratified). */
-inline float2 pixel_offset(__global const Params *P, ulong sample, float2 u, int stratified) {
+static inline float2 pixel_offset(__global const Params *P, ulong sample, float2 u, int stratified) {
     if (USE_BOX_FILTER) {
         return u;
     }
@@ -27,7 +27,7 @@ inline float2 pixel_offset(__global const Params *P, ulong sample, float2 u, int
     return (float2)((sx + 0.5f + tent(u.x)) * 0.5f, (sy + 0.5f + tent(u.y)) * 0.5f);
 }
 
-inline void camera_ray(__global const Params *P, float x, float y, float3 *origin, float3 *dir) {
+static inline void camera_ray(__global const Params *P, float x, float y, float3 *origin, float3 *dir) {
     float3 d = P->forward.xyz
         + P->right.xyz * (x * (1.0f / (float)P->width) - 0.5f)
         + P->up.xyz * (0.5f - y * (1.0f / (float)P->height));

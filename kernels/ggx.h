@@ -7,27 +7,27 @@
 
 #if HAS_GGX
 
-inline float ggx_norm_x(float3 v) {
+static inline float ggx_norm_x(float3 v) {
     return 1.0f / sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
 }
 
-inline float3 ggx_normalize(float3 v) {
+static inline float3 ggx_normalize(float3 v) {
     return v * ggx_norm_x(v);
 }
 
-inline float ggx_dot(float3 a, float3 b) {
+static inline float ggx_dot(float3 a, float3 b) {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 
 /* The cell of x in [0, 1] (*i) and the position within it. */
-inline float ggx_cell(float x, uint *i) {
+static inline float ggx_cell(float x, uint *i) {
     float s = fmin(fmax(x, 0.0f), 1.0f) * (float)(GGX_TABLE_N - 1u);
     uint c = min((uint)s, GGX_TABLE_N - 2u);
     *i = c;
     return s - (float)c;
 }
 
-inline float ggx_at(__global const float *T, uint part, float mu, float roughness) {
+static inline float ggx_at(__global const float *T, uint part, float mu, float roughness) {
     uint n = GGX_TABLE_N;
     uint i, j;
     float tx = ggx_cell(mu, &i);
@@ -38,34 +38,34 @@ inline float ggx_at(__global const float *T, uint part, float mu, float roughnes
     return row0 * (1.0f - ty) + row1 * ty;
 }
 
-inline float ggx_avg(__global const float *T, uint part, float roughness) {
+static inline float ggx_avg(__global const float *T, uint part, float roughness) {
     uint j;
     float t = ggx_cell(roughness, &j);
     __global const float *a = T + 2u * GGX_TABLE_N * GGX_TABLE_N + part * GGX_TABLE_N;
     return a[j] * (1.0f - t) + a[j + 1u] * t;
 }
 
-inline float ggx_pow5(float x) {
+static inline float ggx_pow5(float x) {
     float x2 = x * x;
     return x2 * x2 * x;
 }
 
-inline float ggx_smith_r(float3 w, float alpha) {
+static inline float ggx_smith_r(float3 w, float alpha) {
     float s2 = w.x * w.x + w.y * w.y;
     return sqrt(w.z * w.z + alpha * alpha * s2);
 }
 
-inline float ggx_d(float3 h, float alpha) {
+static inline float ggx_d(float3 h, float alpha) {
     float a2 = alpha * alpha;
     float t = h.x * h.x + h.y * h.y + a2 * (h.z * h.z);
     return a2 / (M_PI_F * (t * t));
 }
 
-inline float3 ggx_reflect(float3 wo, float3 h) {
+static inline float3 ggx_reflect(float3 wo, float3 h) {
     return h * (2.0f * ggx_dot(wo, h)) - wo;
 }
 
-inline float3 ggx_visible_normal(float3 wo, float alpha, float2 u) {
+static inline float3 ggx_visible_normal(float3 wo, float alpha, float2 u) {
     float3 v = ggx_normalize((float3)(wo.x * alpha, wo.y * alpha, wo.z));
     float2 sc = sincos_turns(u.x);
     float z = (1.0f - u.y) * (1.0f + v.z) - v.z;
@@ -80,15 +80,15 @@ typedef struct {
     float fms_diel, es_o, es_avg, p_spec;
 } GgxLobes;
 
-inline float ggx_fresnel_factor(float f_avg, float e_avg) {
+static inline float ggx_fresnel_factor(float f_avg, float e_avg) {
     return f_avg * f_avg * e_avg / (1.0f - f_avg * (1.0f - e_avg));
 }
 
-inline float ggx_mean3(float3 v) {
+static inline float ggx_mean3(float3 v) {
     return (v.x + v.y + v.z) * (1.0f / 3.0f);
 }
 
-inline GgxLobes ggx_lobes(__global const float *T, float4 p, float3 base, float3 wo) {
+static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float3 base, float3 wo) {
     GgxLobes L;
     float f0 = p.w;
     float metallic = p.x;
@@ -113,7 +113,7 @@ inline GgxLobes ggx_lobes(__global const float *T, float4 p, float3 base, float3
 
 /* BSDF cos in two parts (ggx.rs, eval_cos_parts): the narrow single-
  * scattering lobes' (returned) and the broad lobes' (*rest). */
-inline float3 ggx_eval_cos_parts(__global const float *T, float4 p, float3 base, const GgxLobes *L, float3 wo,
+static inline float3 ggx_eval_cos_parts(__global const float *T, float4 p, float3 base, const GgxLobes *L, float3 wo,
                                  float3 wi, float3 *rest) {
     if (!(wi.z > 0.0f && wo.z > 0.0f)) {
         *rest = (float3)(0.0f);
@@ -141,7 +141,7 @@ inline float3 ggx_eval_cos_parts(__global const float *T, float4 p, float3 base,
     return glossy * wi.z;
 }
 
-inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
+static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
     if (!(wi.z > 0.0f && wo.z > 0.0f)) {
         return 0.0f;
     }
@@ -153,7 +153,7 @@ inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
 /* A direction from wo (shading frame), *weight = BSDF cos / pdf and
  * *glossy its narrow lobes' share; returns 0 where the sample leaves below
  * the surface (no contribution). */
-inline int ggx_sample(__global const float *T, float4 p, float3 base, float3 wo, float choice, float2 u, float3 *wi,
+static inline int ggx_sample(__global const float *T, float4 p, float3 base, float3 wo, float choice, float2 u, float3 *wi,
                       float3 *weight, float3 *glossy) {
     if (!(wo.z > 0.0f)) {
         return 0;

@@ -18,7 +18,7 @@ typedef struct {
 /* Le * V * f(dir) / pdf of one shadow ray from surface sf towards emitter
  * L, as nee.rs's `one`. What a scene cannot have is decided when the
  * program is built (on PoCL the cheapest scenes feel every test here). */
-inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u,
+static inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u,
                           const NeeSurface *ne) {
     float3 dir;
     float weight;
@@ -59,7 +59,7 @@ inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *
 #endif
 
 /* One path (integrator.rs, Path::advance until it ends). */
-inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
+static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     __global const Params *P = sc->P;
     __global const Material *materials = sc->materials;
     __global const Light *lights = sc->lights;

@@ -1,6 +1,6 @@
 /* Next-event estimation directions: light.rs. Returns 0 when the emitter
  * contributes nothing; otherwise *dir and *weight (1/pdf in solid angle). */
-inline int sample_light(__global const Object *light_ob, uint light, float3 p, float3 nl, uint at, float2 u,
+static inline int sample_light(__global const Object *light_ob, uint light, float3 p, float3 nl, uint at, float2 u,
                         float3 *dir, float *weight) {
 #if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS
     if (light_ob->kind == KIND_SPHERE) {
@@ -65,7 +65,7 @@ inline int sample_light(__global const Object *light_ob, uint light, float3 p, f
 
 /* The direction from p to q on a flat emitter (unit normal n, area) and
  * 1/pdf in solid angle (emitter.rs, toward_point). */
-inline int toward_point(float3 p, float3 q, float3 n, float area, float3 *dir, float *weight) {
+static inline int toward_point(float3 p, float3 q, float3 n, float area, float3 *dir, float *weight) {
     float3 w = q - p;
     float dist2 = dot(w, w);
     if (!(dist2 > 0.0f)) {
@@ -79,7 +79,7 @@ inline int toward_point(float3 p, float3 q, float3 n, float area, float3 *dir, f
 /* Emitter::sample_direction for emitter L seen from point p on (object,
  * prim), nl and ns its geometric and shading normals on the side the path
  * came from. */
-inline int sample_emitter(const Scene *sc, __global const Light *L, float3 p, uint object, uint prim, float3 nl,
+static inline int sample_emitter(const Scene *sc, __global const Light *L, float3 p, uint object, uint prim, float3 nl,
                           float3 ns, float2 u, float3 *dir, float *weight) {
 #if HAS_TRI_LIGHTS
     if (L->kind == LIGHT_TRIANGLE) {

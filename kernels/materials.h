@@ -1,13 +1,13 @@
 /* Scattering: material.rs and fresnel.rs. */
 
 /* cos of the transmitted angle, or -1 under total internal reflection. */
-inline float cos_transmitted(float cos_i, float n1, float n2) {
+static inline float cos_transmitted(float cos_i, float n1, float n2) {
     float cos2_t = ((n2 - n1) * (n2 + n1) + n1 * n1 * cos_i * cos_i) / (n2 * n2);
     return cos2_t > 0.0f ? sqrt(cos2_t) : -1.0f;
 }
 
 #if HAS_GLASS && HAS_EXACT
-inline float fresnel_exact(float cos_i, float cos_t, float n1, float n2) {
+static inline float fresnel_exact(float cos_i, float cos_t, float n1, float n2) {
     float rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
     float rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
     float r = 0.5f * (rs * rs + rp * rp);
@@ -16,7 +16,7 @@ inline float fresnel_exact(float cos_i, float cos_t, float n1, float n2) {
 #endif
 
 #if HAS_GLASS && HAS_SCHLICK
-inline float fresnel_schlick(float cos_i, float cos_t, float n1, float n2) {
+static inline float fresnel_schlick(float cos_i, float cos_t, float n1, float n2) {
     float r0 = (n1 - n2) / (n1 + n2);
     r0 = r0 * r0;
     float c = n1 <= n2 ? cos_i : cos_t;
@@ -25,7 +25,7 @@ inline float fresnel_schlick(float cos_i, float cos_t, float n1, float n2) {
 }
 #endif
 
-inline float3 cosine_hemisphere(float3 n, float2 u) {
+static inline float3 cosine_hemisphere(float3 n, float2 u) {
     float2 sc = sincos_turns(u.x);
     float r = sqrt(u.y);
     float z = sqrt(fmax(1.0f - u.y, 0.0f));
@@ -34,7 +34,7 @@ inline float3 cosine_hemisphere(float3 n, float2 u) {
     return t * (r * sc.y) + b * (r * sc.x) + n * z;
 }
 
-inline float3 reflect_dir(float3 d, float3 n) {
+static inline float3 reflect_dir(float3 d, float3 n) {
     return d - n * (2.0f * dot(d, n));
 }
 
@@ -45,7 +45,7 @@ inline float3 reflect_dir(float3 d, float3 n) {
  * *specular whether it was a delta lobe, *transmitted whether it went
  * through, *glossy the part of the weight next-event estimation leaves to
  * the next hit (Scattered::glossy). */
-inline float3 scatter(__global const Material *m, __global const float *ggx, float3 d, int entering, float3 nl,
+static inline float3 scatter(__global const Material *m, __global const float *ggx, float3 d, int entering, float3 nl,
                       Sampler *s, float3 *weight, int *specular, int *transmitted, float3 *glossy) {
     *weight = m->albedo.xyz;
     *glossy = m->albedo.xyz;
@@ -106,7 +106,7 @@ inline float3 scatter(__global const Material *m, __global const float *ggx, flo
 }
 
 /* scatter() off a surface of outward normal n (the routine checks). */
-inline float3 scatter_outward(__global const Material *m, __global const float *ggx, float3 d, float3 n, Sampler *s,
+static inline float3 scatter_outward(__global const Material *m, __global const float *ggx, float3 d, float3 n, Sampler *s,
                               float3 *weight, int *specular) {
     int entering = dot(d, n) < 0.0f;
     int transmitted;

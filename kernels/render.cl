@@ -18,7 +18,7 @@
  * work-item renders `count` samples (the host splits tiles' counts into
  * powers of two, one launch each). */
 
-inline void add_compensated(__global float *hi, __global float *lo, float x) {
+static inline void add_compensated(__global float *hi, __global float *lo, float x) {
     float h = *hi;
     float s = h + x;
     float bp = s - h;

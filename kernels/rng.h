@@ -3,7 +3,7 @@
  * is `random` (independent numbers drawn in order) or `sobol` (padded,
  * Owen-scrambled Sobol points, one dimension per use of a vertex). */
 
-inline ulong mix64(ulong z) {
+static inline ulong mix64(ulong z) {
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9UL;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBUL;
     return z ^ (z >> 31);
@@ -18,7 +18,7 @@ typedef struct {
     int sobol;
 } Sampler;
 
-inline uint reverse32(uint x) {
+static inline uint reverse32(uint x) {
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
     x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
@@ -27,7 +27,7 @@ inline uint reverse32(uint x) {
 }
 
 /* The `random` numbers of a sample (sampler/mod.rs, Sampler::new). */
-inline Sampler sampler_new(ulong seed, ulong pixel, ulong sample) {
+static inline Sampler sampler_new(ulong seed, ulong pixel, ulong sample) {
     Sampler s;
     s.key = mix64(mix64(mix64(seed ^ 0x5851F42D4C957F2DUL) ^ pixel) ^ sample);
     s.rkey = 0UL;
@@ -39,7 +39,7 @@ inline Sampler sampler_new(ulong seed, ulong pixel, ulong sample) {
 }
 
 /* A sample's numbers of either kind (Sampler::of_kind). */
-inline Sampler sampler_of_kind(int sobol, ulong seed, ulong pixel, ulong sample) {
+static inline Sampler sampler_of_kind(int sobol, ulong seed, ulong pixel, ulong sample) {
     if (!sobol) {
         return sampler_new(seed, pixel, sample);
     }
@@ -53,22 +53,22 @@ inline Sampler sampler_of_kind(int sobol, ulong seed, ulong pixel, ulong sample)
     return s;
 }
 
-inline ulong next_bits(Sampler *s) {
+static inline ulong next_bits(Sampler *s) {
     s->dim += 1;
     return mix64(s->key + s->dim * 0x9E3779B97F4A7C15UL);
 }
 
-inline float next_f32(Sampler *s) {
+static inline float next_f32(Sampler *s) {
     return (float)(next_bits(s) >> 40) * (1.0f / 16777216.0f);
 }
 
-inline float2 next_2d(Sampler *s) {
+static inline float2 next_2d(Sampler *s) {
     ulong bits = next_bits(s);
     return (float2)((float)(bits >> 40), (float)((bits >> 16) & 0xFFFFFFUL)) * (1.0f / 16777216.0f);
 }
 
 /* Sobol points, as sampler/sobol.rs. */
-inline uint lk_hash(uint x, uint seed) {
+static inline uint lk_hash(uint x, uint seed) {
     x ^= x * 0x3d20adeau;
     x += seed;
     x *= (seed >> 16) | 1u;
@@ -77,7 +77,7 @@ inline uint lk_hash(uint x, uint seed) {
     return x;
 }
 
-inline uint hash32(uint x) {
+static inline uint hash32(uint x) {
     x ^= x >> 16;
     x *= 0x7feb352du;
     x ^= x >> 15;
@@ -85,7 +85,7 @@ inline uint hash32(uint x) {
     return x ^ (x >> 16);
 }
 
-inline uint superset_sum(uint y) {
+static inline uint superset_sum(uint y) {
     y ^= (y >> 1) & 0x55555555u;
     y ^= (y >> 2) & 0x33333333u;
     y ^= (y >> 4) & 0x0F0F0F0Fu;
@@ -94,25 +94,25 @@ inline uint superset_sum(uint y) {
     return y;
 }
 
-inline float unit_f32(uint v) {
+static inline float unit_f32(uint v) {
     return (float)(v >> 8) * (1.0f / 16777216.0f);
 }
 
 /* Seeds of dimension d (index shuffle, x, y) and the shuffled index. */
-inline uint sobol_index(const Sampler *s, ulong d, uint *sx, uint *sy) {
+static inline uint sobol_index(const Sampler *s, ulong d, uint *sx, uint *sy) {
     ulong h = mix64(s->key + d * 0x9E3779B97F4A7C15UL);
     *sx = (uint)(h >> 32);
     *sy = hash32(*sx ^ 0x2545F491u);
     return reverse32(lk_hash(s->rindex, (uint)h));
 }
 
-inline uint sobol_1d(const Sampler *s, ulong d) {
+static inline uint sobol_1d(const Sampler *s, ulong d) {
     uint sx, sy;
     uint i = sobol_index(s, d, &sx, &sy);
     return reverse32(lk_hash(i, sx));
 }
 
-inline float2 sobol_2d(const Sampler *s, ulong d) {
+static inline float2 sobol_2d(const Sampler *s, ulong d) {
     uint sx, sy;
     uint i = sobol_index(s, d, &sx, &sy);
     return (float2)(unit_f32(reverse32(lk_hash(i, sx))), unit_f32(reverse32(lk_hash(superset_sum(i), sy))));
@@ -129,36 +129,36 @@ inline float2 sobol_2d(const Sampler *s, ulong d) {
 #define USE_ROULETTE 4UL
 #define VERTEX_USES 5UL
 
-inline ulong vertex_dim(const Sampler *s, ulong use) {
+static inline ulong vertex_dim(const Sampler *s, ulong use) {
     return 1UL + (ulong)s->vertex * VERTEX_USES + use;
 }
 
-inline int stratified(const Sampler *s) {
+static inline int stratified(const Sampler *s) {
     return s->vertex < SOBOL_VERTICES;
 }
 
-inline ulong pad_bits(const Sampler *s, ulong d) {
+static inline ulong pad_bits(const Sampler *s, ulong d) {
     return mix64(s->rkey + d * 0x9E3779B97F4A7C15UL);
 }
 
-inline float2 pad_2d(const Sampler *s, ulong d) {
+static inline float2 pad_2d(const Sampler *s, ulong d) {
     ulong bits = pad_bits(s, d);
     return (float2)((float)(bits >> 40), (float)((bits >> 16) & 0xFFFFFFUL)) * (1.0f / 16777216.0f);
 }
 
-inline float number_1d(const Sampler *s, ulong d, int strat) {
+static inline float number_1d(const Sampler *s, ulong d, int strat) {
     return strat ? unit_f32(sobol_1d(s, d)) : (float)(pad_bits(s, d) >> 40) * (1.0f / 16777216.0f);
 }
 
-inline void at_vertex(Sampler *s, uint v) {
+static inline void at_vertex(Sampler *s, uint v) {
     s->vertex = v;
 }
 
-inline float2 camera_2d(Sampler *s) {
+static inline float2 camera_2d(Sampler *s) {
     return s->sobol ? sobol_2d(s, 0UL) : next_2d(s);
 }
 
-inline ulong light_pick(Sampler *s, uint n) {
+static inline ulong light_pick(Sampler *s, uint n) {
     if (!s->sobol) {
         return next_bits(s);
     }
@@ -170,7 +170,7 @@ inline ulong light_pick(Sampler *s, uint n) {
     return (hi << 32) | (ulong)(uint)(hi * (ulong)n);
 }
 
-inline float2 light_2d(Sampler *s, uint k) {
+static inline float2 light_2d(Sampler *s, uint k) {
     if (!s->sobol) {
         return next_2d(s);
     }
@@ -178,11 +178,11 @@ inline float2 light_2d(Sampler *s, uint k) {
     return stratified(s) ? sobol_2d(s, d) : pad_2d(s, d);
 }
 
-inline float bsdf_choice(Sampler *s) {
+static inline float bsdf_choice(Sampler *s) {
     return s->sobol ? number_1d(s, vertex_dim(s, USE_BSDF_CHOICE), stratified(s)) : next_f32(s);
 }
 
-inline float2 bsdf_2d(Sampler *s) {
+static inline float2 bsdf_2d(Sampler *s) {
     if (!s->sobol) {
         return next_2d(s);
     }
@@ -190,12 +190,12 @@ inline float2 bsdf_2d(Sampler *s) {
     return stratified(s) ? sobol_2d(s, d) : pad_2d(s, d);
 }
 
-inline float roulette(Sampler *s) {
+static inline float roulette(Sampler *s) {
     return s->sobol ? number_1d(s, vertex_dim(s, USE_ROULETTE), 1) : next_f32(s);
 }
 
 /* sin and cos of 2 pi u, as math.rs's sincos_turns. */
-inline float2 sincos_turns(float u) {
+static inline float2 sincos_turns(float u) {
     float x = u * 4.0f;
     float quarter = floor(x);
     float a = (x - quarter - 0.5f) * 1.57079632679f;
@@ -210,7 +210,7 @@ inline float2 sincos_turns(float u) {
 }
 
 /* Orthonormal basis around unit n (Duff et al. 2017), as math.rs's basis. */
-inline void basis(float3 n, float3 *t, float3 *b) {
+static inline void basis(float3 n, float3 *t, float3 *b) {
     float sign = copysign(1.0f, n.z);
     float a = -1.0f / (sign + n.z);
     float bb = n.x * n.y * a;
@@ -218,6 +218,6 @@ inline void basis(float3 n, float3 *t, float3 *b) {
     *b = (float3)(bb, sign + n.y * n.y * a, -n.y);
 }
 
-inline float max3(float3 v) {
+static inline float max3(float3 v) {
     return fmax(v.x, fmax(v.y, v.z));
 }

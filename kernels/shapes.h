@@ -3,7 +3,7 @@
 /* Sphere: the constant term as o.o - 2 o.c + K (K = |c|^2 - r^2 in f64 on
  * the host) and the stable root pair q, C/q. far_only: the ray starts on
  * this sphere and goes into it. */
-inline float sphere_intersect(__global const Object *ob, float3 o, float3 d, float oo, float od, int far_only) {
+static inline float sphere_intersect(__global const Object *ob, float3 o, float3 d, float oo, float od, int far_only) {
     float3 c = ob->p0.xyz;
     float b = od - dot(d, c);
     float cc = (oo + ob->p1.x) - 2.0f * dot(o, c);
@@ -22,7 +22,7 @@ inline float sphere_intersect(__global const Object *ob, float3 o, float3 d, flo
     return t1 > 0.0f ? t1 : INFINITY;
 }
 
-inline float quad_intersect(__global const Object *ob, float3 o, float3 d) {
+static inline float quad_intersect(__global const Object *ob, float3 o, float3 d) {
     float3 n = ob->p3.xyz;
     float3 to_corner = ob->p0.xyz - o;
     float t = dot(n, to_corner) / dot(n, d);
@@ -37,7 +37,7 @@ inline float quad_intersect(__global const Object *ob, float3 o, float3 d) {
 
 /* Takes (t, object, prim) if it comes before *h: nearer, or as near with a
  * lower (object, prim) (world/mod.rs, Hit::offer). */
-inline void offer_hit(Hit *h, float t, uint object, uint prim, uint slot, float3 bary) {
+static inline void offer_hit(Hit *h, float t, uint object, uint prim, uint slot, float3 bary) {
     if (t < h->t || (t == h->t && t < INFINITY && (object < h->object || (object == h->object && prim < h->prim)))) {
         h->t = t;
         h->object = object;
@@ -64,7 +64,7 @@ typedef struct {
     float dist;
 } Surf;
 
-inline float3 object_normal(__global const Object *ob, float3 p) {
+static inline float3 object_normal(__global const Object *ob, float3 p) {
 #if HAS_SPHERES && HAS_QUADS
     if (ob->kind == KIND_SPHERE) {
         return (p - ob->p0.xyz) * ob->p1.y;

@@ -7,26 +7,26 @@
 #endif
 
 /* glam's Mat3A * v: x * v.x + y * v.y + z * v.z, in that order. */
-inline float3 xf_vector(__global const float4 *m, float3 v) {
+static inline float3 xf_vector(__global const float4 *m, float3 v) {
     return m[0].xyz * v.x + m[1].xyz * v.y + m[2].xyz * v.z;
 }
 
 /* glam's Affine3A::transform_point3a: the matrix, then the translation. */
-inline float3 xf_point(__global const float4 *m, float3 p) {
+static inline float3 xf_point(__global const float4 *m, float3 p) {
     return xf_vector(m, p) + m[3].xyz;
 }
 
 /* glam's normalize_or_zero: v * (1 / |v|) when that is finite and > 0. */
-inline float3 normalize_or_zero(float3 v) {
+static inline float3 normalize_or_zero(float3 v) {
     float rcp = 1.0f / sqrt(dot(v, v));
     return (isfinite(rcp) && rcp > 0.0f) ? v * rcp : (float3)(0.0f);
 }
 
-inline float3 unit_axis(int k) {
+static inline float3 unit_axis(int k) {
     return (float3)(k == 0 ? 1.0f : 0.0f, k == 1 ? 1.0f : 0.0f, k == 2 ? 1.0f : 0.0f);
 }
 
-inline float component(float3 v, int k) {
+static inline float component(float3 v, int k) {
     return k == 0 ? v.x : (k == 1 ? v.y : v.z);
 }
 
@@ -39,7 +39,7 @@ typedef struct {
     float3 rz;
 } TriRay;
 
-inline TriRay tri_ray(float3 o, float3 d) {
+static inline TriRay tri_ray(float3 o, float3 d) {
     float3 a = fabs(d);
     int kz = (a.x > a.y && a.x > a.z) ? 0 : (a.y > a.z ? 1 : 2);
     int kx = (kz + 1) % 3;
@@ -63,7 +63,7 @@ inline TriRay tri_ray(float3 o, float3 d) {
 
 /* An edge function recomputed where f32 gave an exact zero: in f64, where
  * products of floats are exact (Woop et al.'s fallback). */
-inline float edge_exact(float p, float q, float r, float s) {
+static inline float edge_exact(float p, float q, float r, float s) {
 #ifdef cl_khr_fp64
     return (float)((double)p * (double)q - (double)r * (double)s);
 #else
@@ -73,7 +73,7 @@ inline float edge_exact(float p, float q, float r, float s) {
 
 /* TriRay::intersect: 1 and (*t, *bary) when the ray meets the triangle
  * strictly between 0 and t_max. */
-inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2, float t_max, float *t_out,
+static inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2, float t_max, float *t_out,
                          float3 *bary) {
     float3 a = p0 - r->org;
     float3 b = p1 - r->org;
@@ -109,7 +109,7 @@ inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2, float
 
 /* The triangles of leaf slots first .. first+count of instance `in`,
  * offered to *best (all but triangle `skip`). */
-inline void offer_triangles(const Scene *sc, __global const Instance *in, uint id, const TriRay *r, uint first,
+static inline void offer_triangles(const Scene *sc, __global const Instance *in, uint id, const TriRay *r, uint first,
                             uint count, uint skip, Hit *best) {
     for (uint k = first; k < first + count; ++k) {
         uint slot = in->tri_base + k;
@@ -128,7 +128,7 @@ inline void offer_triangles(const Scene *sc, __global const Instance *in, uint i
 
 /* Instance::offer: the ray mapped into object space (direction not
  * normalised, so distances stay the camera ray's) meets the mesh's BVH. */
-inline void offer_instance(const Scene *sc, uint id, __global const Object *ob, float3 o, float3 d, uint skip,
+static inline void offer_instance(const Scene *sc, uint id, __global const Object *ob, float3 o, float3 d, uint skip,
                            Hit *best) {
     __global const Instance *in = &sc->instances[ob->pad0];
     float3 oo = xf_point(in->obj_from_cam, o);
@@ -140,7 +140,7 @@ inline void offer_instance(const Scene *sc, uint id, __global const Object *ob, 
 }
 
 /* Instance::surface, into *sf. */
-inline void mesh_surface(const Scene *sc, const Hit *h, Surf *sf) {
+static inline void mesh_surface(const Scene *sc, const Hit *h, Surf *sf) {
     __global const Instance *in = &sc->instances[sc->objects[h->object].pad0];
     __global const TriVerts *tri = &sc->tris[h->slot];
     float3 v0 = tri->v0.xyz, v1 = tri->v1.xyz, v2 = tri->v2.xyz;
@@ -174,7 +174,7 @@ inline void mesh_surface(const Scene *sc, const Hit *h, Surf *sf) {
 
 /* Instance::spawn_origin: the object-space hit point moved sf->dist off
  * the plane to the side dir goes, each coordinate rounded away from it. */
-inline float3 mesh_spawn(const Scene *sc, const Surf *sf, float3 dir) {
+static inline float3 mesh_spawn(const Scene *sc, const Surf *sf, float3 dir) {
     float3 shift = dot(dir, sf->ng) > 0.0f ? sf->n_obj * sf->dist : sf->n_obj * -sf->dist;
     float3 p = sf->p_obj + shift;
     p.x = shift.x > 0.0f ? nextafter(p.x, INFINITY) : (shift.x < 0.0f ? nextafter(p.x, -INFINITY) : p.x);

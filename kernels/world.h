@@ -5,7 +5,7 @@
  * (offer_object): a sphere the ray leaves outwards is skipped, one it
  * enters gives its far root; a quad it starts on is skipped; an instance
  * skips the triangle it starts on. */
-inline void offer_object(const Scene *sc, uint i, float3 o, float3 d, float oo, float od, uint from, uint from_prim,
+static inline void offer_object(const Scene *sc, uint i, float3 o, float3 d, float oo, float od, uint from, uint from_prim,
                          int entering, Hit *best) {
     __global const Object *ob = &sc->objects[i];
 #if HAS_MESHES
@@ -45,7 +45,7 @@ inline void offer_object(const Scene *sc, uint i, float3 o, float3 d, float oo, 
  * `from`, triangle `from_prim`): every object in turn, or the objects too
  * large for a BVH in turn and then the BVH. h->object is NO_OBJECT when
  * nothing is hit. */
-inline void nearest(const Scene *sc, float3 o, float3 d, uint from, uint from_prim, int entering, Hit *h) {
+static inline void nearest(const Scene *sc, float3 o, float3 d, uint from, uint from_prim, int entering, Hit *h) {
     __global const Params *P = sc->P;
     float oo = dot(o, o);
     float od = dot(o, d);
@@ -74,7 +74,7 @@ inline void nearest(const Scene *sc, float3 o, float3 d, uint from, uint from_pr
 }
 
 /* The nearest hit's distance and object (the routine checks' view). */
-inline float intersect(const Scene *sc, float3 o, float3 d, uint from, int entering, uint *hit) {
+static inline float intersect(const Scene *sc, float3 o, float3 d, uint from, int entering, uint *hit) {
     Hit h;
     nearest(sc, o, d, from, NO_PRIM, entering, &h);
     *hit = h.object;
@@ -82,7 +82,7 @@ inline float intersect(const Scene *sc, float3 o, float3 d, uint from, int enter
 }
 
 /* World::surface: the surface at h, found along (o, d). */
-inline Surf surface_at(const Scene *sc, const Hit *h, float3 o, float3 d) {
+static inline Surf surface_at(const Scene *sc, const Hit *h, float3 o, float3 d) {
     __global const Object *ob = &sc->objects[h->object];
     Surf sf;
     sf.object = h->object;
@@ -103,7 +103,7 @@ inline Surf surface_at(const Scene *sc, const Hit *h, float3 o, float3 d) {
 }
 
 /* World::spawn: where a ray leaving sf along dir starts. */
-inline float3 spawn(const Scene *sc, const Surf *sf, float3 dir) {
+static inline float3 spawn(const Scene *sc, const Surf *sf, float3 dir) {
 #if HAS_MESHES
     if (sf->instance != NO_OBJECT) {
         return mesh_spawn(sc, sf, dir);

@@ -596,10 +596,8 @@ fn launches_split_into_pixel_ranges_give_the_same_image() {
     // A target no launch can meet: one sample per launch.
     tiled.launch_target = std::time::Duration::from_nanos(1);
     // Taller than one launch's worth of pixels: several launches per sample.
-    let (w, h) = (
-        64,
-        (pathstream::render::backend::opencl::TILE / 64 + 3) as u32,
-    );
+    tiled.launch_pixels = 4096;
+    let (w, h) = (64, (tiled.launch_pixels / 64 + 3) as u32);
     let s = scene("cornell-glass");
     let job = RenderJob::new(
         &s,

@@ -41,7 +41,8 @@ pub struct BenchArgs {
     /// device is found].
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     backend: Vec<BackendArg>,
-    /// OpenCL device number (see `pathstream devices`).
+    /// OpenCL device number (see `pathstream devices`). Default: the GPU
+    /// with the most compute units, else device 0.
     #[arg(long, value_name = "N")]
     device: Option<usize>,
     /// Sections to run, comma-separated [default: all].

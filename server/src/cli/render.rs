@@ -109,6 +109,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     backend: BackendArg,
     /// OpenCL device number (see `pathstream devices`); implies --backend opencl.
+    /// Default: the GPU with the most compute units, else device 0.
     #[arg(long, value_name = "N")]
     device: Option<usize>,
     /// Use the one generic OpenCL program (every feature compiled in) instead

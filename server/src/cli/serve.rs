@@ -21,6 +21,7 @@ pub struct ServeArgs {
     #[arg(long, value_enum)]
     backend: Option<BackendArg>,
     /// OpenCL device number (see `pathstream devices`); implies --backend opencl.
+    /// Default: the GPU with the most compute units, else device 0.
     #[arg(long, value_name = "N")]
     device: Option<usize>,
     /// Require this bearer token on every /api route and the WebSocket.

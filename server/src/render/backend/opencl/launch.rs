@@ -3,7 +3,7 @@
 //! adaptive tiles, and the read-back that makes the host film equal the
 //! device's.
 
-use super::{buffers, call, layout, OpenClBackend, OpenClError, ProgramKey, LOCAL_SIZE, TILE};
+use super::{buffers, call, layout, OpenClBackend, OpenClError, ProgramKey};
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
 use opencl3::types::cl_uint;
@@ -29,7 +29,7 @@ impl OpenClBackend {
 
     /// Renders `count` samples of every pixel in launches of about
     /// `launch_target`. Every launch has the same size (the whole image, or
-    /// [`TILE`] pixels and the image in several launches): drivers such as
+    /// `launch_pixels` and the image in several launches): drivers such as
     /// PoCL compile a kernel anew for every new launch size. The number of
     /// samples per launch adapts to the measured time instead.
     fn launch_all(
@@ -39,7 +39,7 @@ impl OpenClBackend {
         pixels: usize,
     ) -> Result<(), OpenClError> {
         let target = self.launch_target.as_secs_f64();
-        let tile = pixels.min(TILE);
+        let tile = pixels.min(self.launch_pixels);
         let mut done = 0u64;
         while done < count {
             let per_sample = self
@@ -129,8 +129,8 @@ impl OpenClBackend {
         // Work-groups of a fixed size: an adaptive launch's busy work-items
         // sit at the start of the range, and a driver free to choose would
         // put them all in one large group, on one core or one SM.
-        let local = [LOCAL_SIZE];
-        let global = [size.next_multiple_of(LOCAL_SIZE)];
+        let local = [self.local_size];
+        let global = [size.next_multiple_of(self.local_size)];
         #[allow(unsafe_code)]
         // SAFETY: every argument is set and the buffers live in `state` past
         // the `finish` below. The kernel reads as many objects, materials and

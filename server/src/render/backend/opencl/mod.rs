@@ -57,8 +57,14 @@ pub const LAUNCH_TARGET: Duration = Duration::from_millis(30);
 const RESIDENT_JOBS: usize = 16;
 /// Most device memory their films may take together.
 const RESIDENT_FILM_BYTES: usize = 1 << 30;
-/// Most pixels one launch covers; larger images take several launches.
+/// Most pixels one launch covers on a CPU device; larger images take
+/// several launches (PoCL compiles a kernel anew for each launch size, and
+/// a CPU's few cores are full long before this).
 pub const TILE: usize = 1 << 16;
+/// Most pixels one launch covers on a GPU: a 65,536-item launch fills a
+/// quarter of an H100 (132 SMs x 2,048 resident work-items), so a GPU takes
+/// images up to 4 Mpixel (1920x1080 and more) in one launch.
+pub const GPU_TILE: usize = 1 << 22;
 /// Work-items per work-group (a multiple of NVIDIA's warp and AMD's
 /// wavefront, and small enough for any device's limit).
 const LOCAL_SIZE: usize = 64;
@@ -66,6 +72,18 @@ const LOCAL_SIZE: usize = 64;
 /// rgb, the odd samples' from `FILM_FLOATS / 2` (a shared constant: the
 /// kernel's stride and offset are this one).
 const FILM_FLOATS: usize = 12;
+
+/// A positive whole number from the environment variable `name`, if set.
+fn env_usize(name: &str) -> Option<usize> {
+    let v = std::env::var(name).ok()?;
+    match v.trim().parse::<usize>() {
+        Ok(n) if n > 0 => Some(n),
+        _ => {
+            tracing::warn!("{name}={v:?} is not a positive whole number: ignored");
+            None
+        }
+    }
+}
 
 #[derive(Debug, thiserror::Error)]
 pub enum OpenClError {
@@ -170,6 +188,15 @@ pub struct OpenClBackend {
     pub memory_limits: MemoryLimits,
     /// How adaptive work reaches the kernel.
     pub tile_dispatch: TileDispatch,
+    /// Most pixels one launch covers ([`TILE`] on CPUs, [`GPU_TILE`] on
+    /// GPUs; `PATHSTREAM_OPENCL_LAUNCH_PIXELS` sets it, to measure).
+    pub launch_pixels: usize,
+    /// Work-items per work-group ([`LOCAL_SIZE`];
+    /// `PATHSTREAM_OPENCL_LOCAL_SIZE` sets it, to measure).
+    pub local_size: usize,
+    /// The film's floats as read back, kept between reads: a 1080p film is
+    /// 100 MB, and allocating (zeroing) it anew cost more than the copy.
+    read_buffer: Vec<f32>,
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -182,7 +209,8 @@ impl std::fmt::Debug for OpenClBackend {
 
 impl OpenClBackend {
     /// A backend on device `index` (as `pathstream devices` numbers them), or
-    /// on the device `auto` picks (a GPU) when `index` is None.
+    /// when `index` is None on the device `auto` picks (the GPU with the
+    /// most compute units), else on device 0.
     pub fn new(index: Option<usize>) -> Result<Self, OpenClError> {
         let devices = list_devices().map_err(OpenClError::Unavailable)?;
         let info = match index {
@@ -193,8 +221,9 @@ impl OpenClBackend {
                     devices.len()
                 ))
             })?,
-            None => devices
-                .first()
+            // A GPU box may list a CPU platform (PoCL) first.
+            None => auto_pick(&devices)
+                .or(devices.first())
                 .cloned()
                 .ok_or_else(|| OpenClError::Unavailable("no device".into()))?,
         };
@@ -216,6 +245,7 @@ impl OpenClBackend {
         let queue =
             CommandQueue::create_default(&context, 0).map_err(call("command queue creation"))?;
         let known = |b: u64| if b > 0 { b } else { u64::MAX };
+        let info_is_gpu = info.kind == "gpu";
         let memory_limits = MemoryLimits {
             max_alloc_bytes: known(info.max_alloc_bytes),
             total_bytes: known(info.global_mem_bytes),
@@ -234,6 +264,13 @@ impl OpenClBackend {
             last_upload: None,
             memory_limits,
             tile_dispatch: TileDispatch::default(),
+            launch_pixels: env_usize("PATHSTREAM_OPENCL_LAUNCH_PIXELS").unwrap_or(if info_is_gpu {
+                GPU_TILE
+            } else {
+                TILE
+            }),
+            local_size: env_usize("PATHSTREAM_OPENCL_LOCAL_SIZE").unwrap_or(LOCAL_SIZE),
+            read_buffer: Vec::new(),
         })
     }
 
@@ -271,7 +308,7 @@ impl OpenClBackend {
             let kernel = Kernel::create(&program, "render").map_err(call("kernel creation"))?;
             if let Ok(log) = program.get_build_log(self.info.device.id()) {
                 if !log.trim().is_empty() {
-                    tracing::debug!(log = %log.trim(), "OpenCL build log");
+                    tracing::info!(log = %log.trim(), "OpenCL build log");
                 }
             }
             tracing::info!(options = %options, ms = start.elapsed().as_millis() as u64, "built OpenCL program");

@@ -7,10 +7,11 @@
 //! to the host film, so that the host always has what the device has and a
 //! device state evicted mid-sample is rebuilt from the host exactly.
 
-use super::{call, OpenClBackend, OpenClError, FILM_FLOATS, TILE};
+use super::{call, OpenClBackend, OpenClError, FILM_FLOATS};
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
 use opencl3::types::CL_BLOCKING;
+use rayon::prelude::*;
 use std::ops::Range;
 
 impl OpenClBackend {
@@ -24,7 +25,7 @@ impl OpenClBackend {
     ) -> Result<(), OpenClError> {
         let key = self.ready(job, film)?;
         let (start, pixels) = (film.slice_start(), film.pixels().len());
-        let tile = pixels.min(TILE);
+        let tile = pixels.min(self.launch_pixels);
         let result = (start..end)
             .step_by(tile)
             .try_for_each(|offset| self.launch(&key, offset, tile, end, 1))
@@ -60,7 +61,11 @@ impl OpenClBackend {
             .last_mut()
             .ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         debug_assert!(range.end <= state.pixels);
-        let mut sums = vec![0f32; range.len() * FILM_FLOATS];
+        let floats = range.len() * FILM_FLOATS;
+        if self.read_buffer.len() < floats {
+            self.read_buffer = vec![0f32; floats];
+        }
+        let sums = &mut self.read_buffer[..floats];
         let mut rejected = [0u32];
         #[allow(unsafe_code)]
         // SAFETY: blocking reads into host slices that outlive the calls:
@@ -72,7 +77,7 @@ impl OpenClBackend {
             if !range.is_empty() {
                 let offset = range.start * FILM_FLOATS * std::mem::size_of::<f32>();
                 self.queue
-                    .enqueue_read_buffer(&state.film, CL_BLOCKING, offset, &mut sums, &[])
+                    .enqueue_read_buffer(&state.film, CL_BLOCKING, offset, sums, &[])
                     .map_err(call("film read"))?;
             }
             self.queue
@@ -80,15 +85,16 @@ impl OpenClBackend {
                 .map_err(call("film read"))?;
         }
         let odd = FILM_FLOATS / 2;
-        for (px, s) in film.pixels_mut()[range]
-            .iter_mut()
-            .zip(sums.chunks_exact(FILM_FLOATS))
-        {
-            for c in 0..3 {
-                px.even[c] = f64::from(s[c]) + f64::from(s[3 + c]);
-                px.odd[c] = f64::from(s[odd + c]) + f64::from(s[odd + 3 + c]);
-            }
-        }
+        film.pixels_mut()[range]
+            .par_iter_mut()
+            .zip(sums.par_chunks_exact(FILM_FLOATS))
+            .with_min_len(4096)
+            .for_each(|(px, s)| {
+                for c in 0..3 {
+                    px.even[c] = f64::from(s[c]) + f64::from(s[3 + c]);
+                    px.odd[c] = f64::from(s[odd + c]) + f64::from(s[odd + 3 + c]);
+                }
+            });
         // The device counter holds the rejections since the film was uploaded.
         let total = u64::from(rejected[0]);
         let new = total - state.rejected_reported.min(total);

@@ -12,7 +12,7 @@
 //! work-item of a launch loops over the same number of samples. Launches keep one size either way (PoCL compiles a kernel anew
 //! for each new size), and the touched rows come back to the host film.
 
-use super::{call, layout, Access, OpenClBackend, OpenClError, TILE};
+use super::{call, layout, Access, OpenClBackend, OpenClError};
 use crate::render::adaptive::{TileWork, TILE_SIZE};
 use crate::render::film::Film;
 use crate::render::job::RenderJob;
@@ -114,7 +114,7 @@ impl OpenClBackend {
         };
         self.upload_work(&list)?;
         // The size of the image's uniform launches (one compiled kernel).
-        let size = (tiles.width as usize * tiles.height as usize).min(TILE);
+        let size = (tiles.width as usize * tiles.height as usize).min(self.launch_pixels);
         (base..end)
             .step_by(size)
             .try_for_each(|offset| self.launch_mode(key, (offset, size, end), count, mode))
