@@ -222,6 +222,10 @@ fn bad_input_exits_2_with_a_message_naming_the_problem() {
         ),
         (vec!["render", "--scene", "cornell"], "--out"),
         (vec!["scenes", "--json", "nope"], "unknown scene 'nope'"),
+        (
+            vec!["serve", "--render-threads", "0"],
+            "--render-threads: must be at least 1",
+        ),
     ];
     for (args, needle) in scene_cases {
         let out = pathstream(&args);

@@ -6,10 +6,11 @@
 mod http;
 
 use futures_util::SinkExt;
-use http::{config, create, next_frame, server, status, ws_connect_with as connect};
+use http::{client, config, create, next_frame, server, status, ws_connect_with as connect};
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
+use tokio_tungstenite::MaybeTlsStream;
 
 type Ws = http::Ws;
 
@@ -30,27 +31,76 @@ async fn generation(base: &str, id: &str) -> u64 {
         .expect("generation")
 }
 
+/// A WebSocket of PNG frames on a socket that takes a few KB before the
+/// sender must wait (a receive buffer set before connecting fixes the window
+/// it offers).
+async fn connect_small_window(base: &str, id: &str) -> Ws {
+    let addr: std::net::SocketAddr = base
+        .trim_start_matches("http://")
+        .parse()
+        .expect("server address");
+    let socket = tokio::net::TcpSocket::new_v4().expect("socket");
+    socket.set_recv_buffer_size(4096).expect("receive buffer");
+    let stream = socket.connect(addr).await.expect("connects");
+    // PNG: the default format follows the link, and a fast one gets small
+    // JPEGs that the kernel's buffers swallow by the dozen.
+    let url = format!("ws://{addr}/api/sessions/{id}/ws?format=png");
+    tokio_tungstenite::client_async(url, MaybeTlsStream::Plain(stream))
+        .await
+        .expect("ws connects")
+        .0
+}
+
+/// Frames the server has finished sending, from `/metrics`.
+async fn frames_sent(base: &str) -> u64 {
+    let metrics = client()
+        .get(format!("{base}/metrics"))
+        .send()
+        .await
+        .expect("metrics")
+        .text()
+        .await
+        .expect("text");
+    (metrics.lines())
+        .find_map(|l| l.strip_prefix("pathstream_frames_sent_total "))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no frames sent line: {metrics}"))
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_change_applies_while_a_stalled_client_blocks_the_frame_going_out() {
     let (_server, base) = server(config()).await;
-    // Noisy 640x480 PNGs (~1 MB each) fill the socket's buffers in moments.
+    // Noisy 640x480 PNGs (up to ~0.8 MB each) fill the socket's buffers.
     let s = create(
         &base,
         json!({"scene": "cornell-glass", "width": 640, "height": 480, "quality": {"spp": 2}}),
     )
     .await;
     let id = s["id"].as_str().expect("id").to_owned();
-    let mut ws = connect(&base, &id, "").await;
+    let mut ws = connect_small_window(&base, &id).await;
     let before = generation(&base, &id).await;
-    // The client reads nothing: after a few seconds the server's send is
-    // stuck on full buffers (the session halts at 2 spp, but each change
-    // below publishes new frames).
-    for spp in 3..6 {
-        send(&mut ws, json!({"quality": {"spp": spp}})).await;
-        tokio::time::sleep(Duration::from_millis(700)).await;
-    }
-    let stuck = generation(&base, &id).await;
-    assert_eq!(stuck, before + 3, "changes before the buffers filled");
+    // The client reads nothing. Each change below publishes new frames
+    // (the session halts at 2 spp, then renders one more sample); once the
+    // socket's buffers are full, no frame finishes going out however many
+    // are published: the send is stuck. Checked, not assumed: previews and
+    // partial frames compress well, so how many changes it takes varies.
+    let mut changes = 0;
+    let mut sent = frames_sent(&base).await;
+    let stuck = loop {
+        changes += 1;
+        assert!(
+            changes <= 30,
+            "the server's send never got stuck ({sent} frames went out)"
+        );
+        send(&mut ws, json!({"quality": {"spp": 2 + changes}})).await;
+        tokio::time::sleep(Duration::from_millis(600)).await;
+        let now = frames_sent(&base).await;
+        if now == sent && changes > 1 {
+            break generation(&base, &id).await;
+        }
+        sent = now;
+    };
+    assert_eq!(stuck, before + changes, "every change applied");
     // Now the socket is blocked; this change must still apply at once.
     send(&mut ws, json!({"camera": {"vfov_deg": 35}})).await;
     let until = Instant::now() + Duration::from_secs(5);
@@ -61,6 +111,14 @@ async fn a_change_applies_while_a_stalled_client_blocks_the_frame_going_out() {
         );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
+    // The precondition, checked: no frame finished going out meanwhile (the
+    // new generation's frames would have, had the send not been stuck).
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    assert_eq!(
+        frames_sent(&base).await,
+        sent,
+        "the server's send was not stuck: this test proved nothing"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -66,6 +66,11 @@ pub struct ServeArgs {
     /// `x-pathstream-node: NAME`. 1 to 32 of a-z, 0-9 and _.
     #[arg(long, env = "PATHSTREAM_NODE_NAME", value_name = "NAME")]
     node_name: Option<String>,
+    /// Threads that render on the CPU (sessions on rayon, and rayon's share
+    /// of `--backend all`), to leave cores to other work [default: one per
+    /// core].
+    #[arg(long, value_name = "N")]
+    render_threads: Option<usize>,
 }
 
 pub fn run(args: ServeArgs) -> Result<(), CliError> {
@@ -95,6 +100,7 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
             args.max_connections_per_ip.map(|v| v as u64),
         ),
         ("--header-timeout-s", args.header_timeout_s),
+        ("--render-threads", args.render_threads.map(|v| v as u64)),
     ] {
         if v == Some(0) {
             return Err(CliError::Usage(format!("{flag}: must be at least 1")));
@@ -140,6 +146,7 @@ pub fn run(args: ServeArgs) -> Result<(), CliError> {
                 .map_or(defaults.connections.header_timeout, Duration::from_secs),
         },
         node_name: args.node_name,
+        render_threads: args.render_threads,
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

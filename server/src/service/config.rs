@@ -36,6 +36,8 @@ pub struct ServeConfig {
     /// session ids start with `NAME-`, and every response carries
     /// `x-pathstream-node: NAME`. Checked by [`check_node_name`].
     pub node_name: Option<String>,
+    /// Threads of the CPU (rayon) worker; None: one per core.
+    pub render_threads: Option<usize>,
 }
 
 /// How many connections, and how long a request head may take.
@@ -99,6 +101,7 @@ impl Default for ServeConfig {
             max_triangles: 16_000_000,
             connections: ConnectionLimits::default(),
             node_name: None,
+            render_threads: None,
         }
     }
 }

@@ -94,7 +94,7 @@ impl AppState {
         default: Placement,
     ) -> Arc<Self> {
         let metrics = Arc::new(Metrics::default());
-        let cpu = Backend::Cpu(CpuBackend::low_priority());
+        let cpu = Backend::Cpu(CpuBackend::low_priority(config.render_threads));
         let workers: Vec<Worker> = (std::iter::once(cpu).chain(devices).enumerate())
             .map(|(i, backend)| Worker::start(i, backend, metrics.clone()))
             .collect();

@@ -39,9 +39,11 @@ impl CpuBackend {
     /// A backend whose render threads run at lower scheduling priority, so
     /// that on a busy machine the service's own threads (requests, frame
     /// encoding, WebSockets) still get the cores at once. Rendering takes
-    /// whatever they leave, which is nearly everything.
-    pub fn low_priority() -> Self {
+    /// whatever they leave, which is nearly everything. `threads`: how many
+    /// render threads (None: one per core).
+    pub fn low_priority(threads: Option<usize>) -> Self {
         let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
             .thread_name(|i| format!("render-cpu-{i}"))
             .start_handler(|_| super::priority::lower_current_thread())
             .build()
