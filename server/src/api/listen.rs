@@ -4,6 +4,7 @@
 //! byte at a time is dropped), TCP_NODELAY, served by hyper's HTTP/1 with
 //! upgrades (WebSockets), and shut down gracefully.
 
+use crate::service::metrics::Metrics;
 use crate::service::ConnectionLimits;
 use axum::Router;
 use hyper_util::rt::{TokioIo, TokioTimer};
@@ -11,6 +12,7 @@ use hyper_util::service::TowerToHyperService;
 use std::collections::HashMap;
 use std::future::Future;
 use std::net::IpAddr;
+use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::net::TcpListener;
@@ -66,11 +68,13 @@ impl Drop for Claim {
 }
 
 /// Serves `app` on `listener` until `stop` resolves; then stops accepting,
-/// asks every connection to finish gracefully and waits for them.
+/// asks every connection to finish gracefully and waits for them. Refused
+/// and timed-out connections are counted in `metrics`.
 pub async fn serve(
     listener: TcpListener,
     app: Router,
     limits: ConnectionLimits,
+    metrics: Arc<Metrics>,
     stop: impl Future<Output = ()>,
 ) -> std::io::Result<()> {
     let total = Arc::new(Semaphore::new(limits.max_connections.max(1)));
@@ -95,11 +99,13 @@ pub async fn serve(
         };
         let Ok(permit) = total.clone().try_acquire_owned() else {
             tracing::debug!(%remote, "connection refused: --max-connections reached");
+            metrics.refused_total_limit.fetch_add(1, Ordering::Relaxed);
             continue;
         };
         let Some(claim) = PerAddress::claim(&per_address, remote.ip(), limits.max_per_address)
         else {
             tracing::debug!(%remote, "connection refused: too many from this address");
+            metrics.refused_per_address.fetch_add(1, Ordering::Relaxed);
             continue;
         };
         // No Nagle: a frame is followed at once by its small stats message,
@@ -111,6 +117,7 @@ pub async fn serve(
             tcp,
             app.clone(),
             limits.header_timeout,
+            metrics.clone(),
             closing.clone(),
             (permit, claim, done_tx.clone()),
         ));
@@ -126,6 +133,7 @@ async fn connection(
     tcp: tokio::net::TcpStream,
     app: Router,
     header_timeout: Duration,
+    metrics: Arc<Metrics>,
     mut closing: watch::Receiver<bool>,
     held: (OwnedSemaphorePermit, Claim, mpsc::Sender<()>),
 ) {
@@ -142,6 +150,9 @@ async fn connection(
         tokio::select! {
             result = conn.as_mut() => {
                 if let Err(e) = result {
+                    if e.is_timeout() {
+                        metrics.head_timeouts.fetch_add(1, Ordering::Relaxed);
+                    }
                     tracing::trace!("connection ended: {e}");
                 }
                 break;

@@ -104,11 +104,18 @@ fn serve(listener: tokio::net::TcpListener, state: Arc<AppState>) -> Result<Runn
         tracing::debug!(open_files = n, "open-file limit");
     }
     let task = tokio::spawn(async move {
-        let result = listen::serve(listener, app(serve_state.clone()), limits, async move {
-            let _ = stopped.await;
-            // Closing WebSockets first lets the connections drain.
-            signal_state.begin_shutdown();
-        })
+        let metrics = serve_state.metrics.clone();
+        let result = listen::serve(
+            listener,
+            app(serve_state.clone()),
+            limits,
+            metrics,
+            async move {
+                let _ = stopped.await;
+                // Closing WebSockets first lets the connections drain.
+                signal_state.begin_shutdown();
+            },
+        )
         .await;
         janitor.abort();
         let s = serve_state.clone();

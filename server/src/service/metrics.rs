@@ -12,6 +12,12 @@ pub struct Metrics {
     pub rejected_samples: AtomicU64,
     pub sessions_created: AtomicU64,
     pub handler_panics: AtomicU64,
+    /// Connections closed at once: `--max-connections` reached.
+    pub refused_total_limit: AtomicU64,
+    /// Connections closed at once: too many from the client's address.
+    pub refused_per_address: AtomicU64,
+    /// Connections closed because no whole request head came in time.
+    pub head_timeouts: AtomicU64,
 }
 
 impl Metrics {
@@ -71,6 +77,27 @@ impl Metrics {
             "counter",
             "Request handlers that panicked (each answered 500).",
             &[(String::new(), get(&self.handler_panics))],
+        );
+        metric(
+            "pathstream_connections_refused_total",
+            "counter",
+            "Connections closed at once, by the limit they met.",
+            &[
+                (
+                    "{limit=\"max_connections\"}".into(),
+                    get(&self.refused_total_limit),
+                ),
+                (
+                    "{limit=\"per_address\"}".into(),
+                    get(&self.refused_per_address),
+                ),
+            ],
+        );
+        metric(
+            "pathstream_request_head_timeouts_total",
+            "counter",
+            "Connections closed because no whole request head came within --header-timeout-s.",
+            &[(String::new(), get(&self.head_timeouts))],
         );
         metric(
             "pathstream_rejected_samples_total",
