@@ -6,7 +6,7 @@
 mod http;
 
 use futures_util::{SinkExt, StreamExt};
-use http::{client, config, create, raw, server, status, ws_connect};
+use http::{client, config, create, metric, metrics, raw, server, status, ws_connect};
 use serde_json::{json, Value};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -376,22 +376,10 @@ async fn slow_and_excess_connections_are_dropped_and_health_keeps_answering() {
     // address's 64 slots were held until their heads timed out, the rest
     // (and health checks while the slots were full) refused at once. A
     // few slots may have gone to the test's own earlier requests.
-    let metrics = client()
-        .get(format!("{base}/metrics"))
-        .send()
-        .await
-        .expect("metrics")
-        .text()
-        .await
-        .expect("text");
-    let count = |prefix: &str| -> u64 {
-        (metrics.lines())
-            .find_map(|l| l.strip_prefix(prefix))
-            .and_then(|v| v.trim().parse().ok())
-            .unwrap_or_else(|| panic!("no {prefix}: {metrics}"))
-    };
-    let timed_out = count("pathstream_request_head_timeouts_total ");
-    let refused = count("pathstream_connections_refused_total{limit=\"per_address\"} ");
+    let text = metrics(&base).await;
+    let count = |name: &str| metric(&text, name);
+    let timed_out = count("pathstream_request_head_timeouts_total");
+    let refused = count("pathstream_connections_refused_total{limit=\"per_address\"}");
     assert!(
         (64 - 5..=64).contains(&timed_out),
         "slow heads timed out: {timed_out}"
@@ -401,7 +389,7 @@ async fn slow_and_excess_connections_are_dropped_and_health_keeps_answering() {
         "excess connections refused: {refused} ({timed_out} timed out)"
     );
     assert_eq!(
-        count("pathstream_connections_refused_total{limit=\"max_connections\"} "),
+        count("pathstream_connections_refused_total{limit=\"max_connections\"}"),
         0
     );
     // The canary kept rendering: it went on from where the attack found it.

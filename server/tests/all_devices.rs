@@ -7,7 +7,7 @@ mod common;
 mod http;
 
 use common::{assert_same_samples, opencl_device, render, scene};
-use http::{client, config, create, halted, patch, pfm, status};
+use http::{client, config, create, halted, metric, metrics, patch, pfm, status};
 use pathstream::api::{start_with_device, start_with_devices, Running};
 use pathstream::render::{Backend, Quality, RenderJob};
 use pathstream::service::Placement;
@@ -99,27 +99,16 @@ async fn both_devices_render_one_image_and_say_how_fast() {
         assert!(x["samples_per_sec"].as_f64() > Some(0.0), "{x}");
     }
     assert_one_device_image(&base, &id, 1024, 4).await;
-    let metrics = client()
-        .get(format!("{base}/metrics"))
-        .send()
-        .await
-        .expect("metrics")
-        .text()
-        .await
-        .expect("text");
+    let metrics = metrics(&base).await;
     for worker in [
         "{worker=\"0\",backend=\"cpu\"}",
         "{worker=\"1\",backend=\"opencl\"}",
     ] {
-        let line = (metrics.lines())
-            .find(|l| l.starts_with(&format!("pathstream_worker_samples_total{worker}")))
-            .unwrap_or_else(|| panic!("no samples line for {worker}: {metrics}"));
-        let n: u64 = line
-            .rsplit(' ')
-            .next()
-            .and_then(|v| v.parse().ok())
-            .expect("count");
-        assert!(n > 0, "{line}");
+        let n = metric(
+            &metrics,
+            &format!("pathstream_worker_samples_total{worker}"),
+        );
+        assert!(n > 0, "worker {worker}: {n} samples");
         assert!(metrics.contains(&format!("pathstream_worker_samples_per_second{worker}")));
     }
 }

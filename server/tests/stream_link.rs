@@ -6,7 +6,9 @@
 mod http;
 
 use futures_util::SinkExt;
-use http::{client, config, create, next_frame, server, status, ws_connect_with as connect};
+use http::{
+    config, create, metric, metrics, next_frame, server, status, ws_connect_with as connect,
+};
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
@@ -53,18 +55,7 @@ async fn connect_small_window(base: &str, id: &str) -> Ws {
 
 /// Frames the server has finished sending, from `/metrics`.
 async fn frames_sent(base: &str) -> u64 {
-    let metrics = client()
-        .get(format!("{base}/metrics"))
-        .send()
-        .await
-        .expect("metrics")
-        .text()
-        .await
-        .expect("text");
-    (metrics.lines())
-        .find_map(|l| l.strip_prefix("pathstream_frames_sent_total "))
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or_else(|| panic!("no frames sent line: {metrics}"))
+    metric(&metrics(base).await, "pathstream_frames_sent_total")
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

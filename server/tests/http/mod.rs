@@ -52,6 +52,26 @@ pub async fn status(base: &str, id: &str) -> Value {
         .expect("json")
 }
 
+/// The server's `/metrics` text.
+pub async fn metrics(base: &str) -> String {
+    client()
+        .get(format!("{base}/metrics"))
+        .send()
+        .await
+        .expect("metrics")
+        .text()
+        .await
+        .expect("text")
+}
+
+/// The value of the `/metrics` line `name` (labels included, as written).
+pub fn metric(text: &str, name: &str) -> u64 {
+    (text.lines())
+        .find_map(|l| l.strip_prefix(name)?.strip_prefix(' '))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no {name} line: {text}"))
+}
+
 /// Linear image after at least `min_spp` samples.
 pub async fn pfm(base: &str, id: &str, min_spp: u64) -> Vec<[f32; 3]> {
     let r = client()
