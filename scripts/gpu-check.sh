@@ -6,8 +6,15 @@
 #   BUNDLE=.gpu OUT=/tmp/gpu-out BUDGET_S=420 scripts/gpu-check.sh [steps]
 #
 # BUNDLE holds bin/ (pathstream, latency, clinfo; stripped), lib/
-# (libOpenCL.so.1: ocl-icd, used when the box has no loader) and tests/ (the
-# release test binaries to run). Steps (default all, in this order): find,
+# (libOpenCL.so.1: ocl-icd; only NVIDIA's platform is registered with it)
+# and tests/ (the release test binaries to run). Made on the build machine:
+#   cargo test --release --workspace --no-run; cargo build --release --example latency
+#   apt-get download ocl-icd-libopencl1 clinfo; dpkg -x each into x/
+#   strip -o .gpu/bin/pathstream target/release/pathstream (and latency, and
+#     target/release/deps/NAME-HASH as .gpu/tests/NAME); cp clinfo, libOpenCL.so.1
+#   tar -cJf .gpub/bundle.tar.xz .gpu    (64 MiB travel to the device: pack it)
+# The device tool sends the working tree, so .gpub/ travels and this script
+# unpacks it where .gpu/ is missing. Steps (default all, in this order): find,
 # tests, tune, parity, throughput, latency, fair, trade. A step that would start
 # after BUDGET_S seconds is skipped. Full logs go to OUT; a summary is
 # printed last.
