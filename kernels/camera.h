@@ -32,6 +32,6 @@ static inline void camera_ray(__global const Params *P, float x, float y, float3
         + P->right.xyz * (x * (1.0f / (float)P->width) - 0.5f)
         + P->up.xyz * (0.5f - y * (1.0f / (float)P->height));
     /* near_clip along the ray itself (smallpt's camera), not to a plane. */
-    *dir = normalize(d);
+    *dir = normalize3(d);
     *origin = *dir * P->forward.w;
 }

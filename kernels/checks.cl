@@ -89,7 +89,7 @@ __kernel void check_intersect(__global float *out, uint n, __global const float4
     __global float *r = out + (size_t)i * (count + 2u);
     for (uint j = 0; j < count; ++j) {
         __global const Object *ob = &objects[j];
-        r[j] = ob->kind == KIND_SPHERE ? sphere_intersect(ob, o, d, dot(o, o), dot(o, d), 0)
+        r[j] = ob->kind == KIND_SPHERE ? sphere_intersect(ob, o, d, dot3(o, o), dot3(o, d), 0)
                                        : quad_intersect(ob, o, d);
     }
     uint hit;

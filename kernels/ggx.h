@@ -7,18 +7,6 @@
 
 #if HAS_GGX
 
-static inline float ggx_norm_x(float3 v) {
-    return 1.0f / sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-}
-
-static inline float3 ggx_normalize(float3 v) {
-    return v * ggx_norm_x(v);
-}
-
-static inline float ggx_dot(float3 a, float3 b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-
 /* The cell of x in [0, 1] (*i) and the position within it. */
 static inline float ggx_cell(float x, uint *i) {
     float s = fmin(fmax(x, 0.0f), 1.0f) * (float)(GGX_TABLE_N - 1u);
@@ -62,16 +50,16 @@ static inline float ggx_d(float3 h, float alpha) {
 }
 
 static inline float3 ggx_reflect(float3 wo, float3 h) {
-    return h * (2.0f * ggx_dot(wo, h)) - wo;
+    return h * (2.0f * dot3(wo, h)) - wo;
 }
 
 static inline float3 ggx_visible_normal(float3 wo, float alpha, float2 u) {
-    float3 v = ggx_normalize((float3)(wo.x * alpha, wo.y * alpha, wo.z));
+    float3 v = normalize3((float3)(wo.x * alpha, wo.y * alpha, wo.z));
     float2 sc = sincos_turns(u.x);
     float z = (1.0f - u.y) * (1.0f + v.z) - v.z;
     float sin_t = sqrt(fmax(1.0f - z * z, 0.0f));
     float3 c = (float3)(sin_t * sc.y, sin_t * sc.x, z) + v;
-    return ggx_normalize((float3)(c.x * alpha, c.y * alpha, c.z));
+    return normalize3((float3)(c.x * alpha, c.y * alpha, c.z));
 }
 
 typedef struct {
@@ -122,11 +110,11 @@ static inline float3 ggx_eval_cos_parts(__global const float *T, float4 p, float
     float alpha = p.y;
     float f0 = p.w;
     float metallic = p.x;
-    float3 h = ggx_normalize(wo + wi);
+    float3 h = normalize3(wo + wi);
     float ro = ggx_smith_r(wo, alpha);
     float ri = ggx_smith_r(wi, alpha);
     float spec = ggx_d(h, alpha) / (2.0f * (ro * wi.z + ri * wo.z));
-    float c5 = ggx_pow5(1.0f - fmin(fmax(ggx_dot(wo, h), 0.0f), 1.0f));
+    float c5 = ggx_pow5(1.0f - fmin(fmax(dot3(wo, h), 0.0f), 1.0f));
     float a_i = ggx_at(T, 0u, wi.z, p.z);
     float b_i = ggx_at(T, 1u, wi.z, p.z);
     float e_i = a_i + b_i;
@@ -145,7 +133,7 @@ static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
     if (!(wi.z > 0.0f && wo.z > 0.0f)) {
         return 0.0f;
     }
-    float3 h = ggx_normalize(wo + wi);
+    float3 h = normalize3(wo + wi);
     float vndf = ggx_d(h, p.y) / (2.0f * (wo.z + ggx_smith_r(wo, p.y)));
     return L->p_spec * vndf + (1.0f - L->p_spec) * wi.z * M_1_PI_F;
 }

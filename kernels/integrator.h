@@ -25,16 +25,16 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, const
     if (!sample_emitter(sc, L, sf->p, sf->object, sf->prim, nl, ns, u, &dir, &weight)) {
         return (float3)(0.0f);
     }
-    float cos_s = dot(ns, dir);
+    float cos_s = dot3(ns, dir);
 #if HAS_MESHES
-    if (!(cos_s > 0.0f && dot(nl, dir) > 0.0f)) {
+    if (!(cos_s > 0.0f && dot3(nl, dir) > 0.0f)) {
 #else
     if (!(cos_s > 0.0f)) { /* ns is nl */
 #endif
         return (float3)(0.0f);
     }
     Hit h;
-    nearest(sc, spawn(sc, sf, dir), dir, sf->object, sf->prim, dot(dir, sf->ng) < 0.0f, &h);
+    nearest(sc, spawn(sc, sf, dir), dir, sf->object, sf->prim, dot3(dir, sf->ng) < 0.0f, &h);
     int visible = h.object == L->object;
 #if HAS_TRI_LIGHTS
     visible = visible && (L->prim == NO_PRIM || h.prim == L->prim);
@@ -50,7 +50,7 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, const
     float3 f = (float3)(cos_s);
 #if HAS_GGX
     if (ne->pbr) {
-        float3 wi = (float3)(dot(dir, ne->t), dot(dir, ne->b), dot(dir, ne->n));
+        float3 wi = (float3)(dot3(dir, ne->t), dot3(dir, ne->b), dot3(dir, ne->n));
         ggx_eval_cos_parts(sc->ggx, ne->m->pbr, ne->m->albedo.xyz, &ne->lobes, ne->wo, wi, &f);
     }
 #endif
@@ -93,9 +93,9 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
             break;
         }
         /* Geometric and shading normals on the side the ray came from. */
-        int arriving = dot(d, sf.ng) < 0.0f;
+        int arriving = dot3(d, sf.ng) < 0.0f;
         float3 nl = arriving ? sf.ng : -sf.ng;
-        float3 ns = !sf.smooth ? nl : (dot(sf.ns, nl) < 0.0f ? -sf.ns : sf.ns);
+        float3 ns = !sf.smooth ? nl : (dot3(sf.ns, nl) < 0.0f ? -sf.ns : sf.ns);
         int gathered = 0;
 #if HAS_DIFFUSE || HAS_GGX
         NeeSurface ne;
@@ -110,7 +110,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
             ne.m = m;
             basis(ns, &ne.t, &ne.b);
             ne.n = ns;
-            ne.wo = -(float3)(dot(d, ne.t), dot(d, ne.b), dot(d, ns));
+            ne.wo = -(float3)(dot3(d, ne.t), dot3(d, ne.b), dot3(d, ns));
             ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->albedo.xyz, ne.wo);
         }
 #endif
@@ -149,7 +149,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         float3 next = scatter(m, sc->ggx, d, arriving, ns, s, &weight, &specular, &transmitted, &glossy);
         /* A shading normal can send a direction to the wrong side of the
          * actual surface: such a sample has no contribution. */
-        if (sf.smooth && (dot(next, nl) > 0.0f) == transmitted) {
+        if (sf.smooth && (dot3(next, nl) > 0.0f) == transmitted) {
             break;
         }
         glossy = beta * glossy;
@@ -166,7 +166,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         emit = !gathered ? beta : (m->kind == MAT_PBR ? glossy / q : (float3)(0.0f));
         from = hit.object;
         from_prim = hit.prim;
-        entering = dot(next, sf.ng) < 0.0f;
+        entering = dot3(next, sf.ng) < 0.0f;
         o = spawn(sc, &sf, next);
         d = next;
     }

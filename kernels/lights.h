@@ -7,10 +7,10 @@ static inline int sample_light(__global const Object *light_ob, uint light, floa
 #endif
 #if HAS_SPHERE_LIGHTS
         float3 to_center = light_ob->p0.xyz - p;
-        float d2 = dot(to_center, to_center);
+        float d2 = dot3(to_center, to_center);
         float r = light_ob->p0.w;
         float r2 = r * r;
-        int inside = light == at ? dot(nl, to_center) > 0.0f : d2 < r2;
+        int inside = light == at ? dot3(nl, to_center) > 0.0f : d2 < r2;
         if (light == at && !inside) {
             return 0;
         }
@@ -20,12 +20,12 @@ static inline int sample_light(__global const Object *light_ob, uint light, floa
             float2 sc = sincos_turns(u.y);
             float3 m = (float3)(rxy * sc.y, rxy * sc.x, z);
             float3 w = light_ob->p0.xyz + m * r - p;
-            float dist2 = dot(w, w);
+            float dist2 = dot3(w, w);
             if (!(dist2 > 0.0f)) {
                 return 0;
             }
             *dir = w / sqrt(dist2);
-            *weight = fabs(dot(m, *dir)) * 4.0f * M_PI_F * r2 / dist2;
+            *weight = fabs(dot3(m, *dir)) * 4.0f * M_PI_F * r2 / dist2;
             return 1;
         }
         float sin2 = r2 / d2;
@@ -50,12 +50,12 @@ static inline int sample_light(__global const Object *light_ob, uint light, floa
         return 0;
     }
     float3 w = light_ob->p0.xyz + light_ob->p1.xyz * u.x + light_ob->p2.xyz * u.y - p;
-    float dist2 = dot(w, w);
+    float dist2 = dot3(w, w);
     if (!(dist2 > 0.0f)) {
         return 0;
     }
     *dir = w / sqrt(dist2);
-    *weight = fabs(dot(light_ob->p3.xyz, *dir)) * light_ob->p0.w / dist2;
+    *weight = fabs(dot3(light_ob->p3.xyz, *dir)) * light_ob->p0.w / dist2;
     return 1;
 #endif
 #if !HAS_QUAD_LIGHTS
@@ -67,12 +67,12 @@ static inline int sample_light(__global const Object *light_ob, uint light, floa
  * 1/pdf in solid angle (emitter.rs, toward_point). */
 static inline int toward_point(float3 p, float3 q, float3 n, float area, float3 *dir, float *weight) {
     float3 w = q - p;
-    float dist2 = dot(w, w);
+    float dist2 = dot3(w, w);
     if (!(dist2 > 0.0f)) {
         return 0;
     }
     *dir = w / sqrt(dist2);
-    *weight = fabs(dot(n, *dir)) * area / dist2;
+    *weight = fabs(dot3(n, *dir)) * area / dist2;
     return 1;
 }
 
@@ -95,7 +95,7 @@ static inline int sample_emitter(const Scene *sc, __global const Light *L, float
 #if HAS_ENV
     if (L->kind == LIGHT_ENVIRONMENT) {
         *dir = cosine_hemisphere(ns, u);
-        float c = dot(ns, *dir);
+        float c = dot3(ns, *dir);
         if (!(c > 0.0f)) {
             return 0;
         }

@@ -35,7 +35,7 @@ static inline float3 cosine_hemisphere(float3 n, float2 u) {
 }
 
 static inline float3 reflect_dir(float3 d, float3 n) {
-    return d - n * (2.0f * dot(d, n));
+    return d - n * (2.0f * dot3(d, n));
 }
 
 /* Samples the continuation of a ray along unit d that arrived at a
@@ -64,7 +64,7 @@ static inline float3 scatter(__global const Material *m, __global const float *g
         float2 u = bsdf_2d(s);
         float3 t, b;
         basis(nl, &t, &b);
-        float3 wo = (float3)(-dot(d, t), -dot(d, b), -dot(d, nl));
+        float3 wo = (float3)(-dot3(d, t), -dot3(d, b), -dot3(d, nl));
         float3 wi;
         if (ggx_sample(ggx, m->pbr, m->albedo.xyz, wo, choice, u, &wi, weight, glossy)) {
             return t * wi.x + b * wi.y + nl * wi.z;
@@ -82,7 +82,7 @@ static inline float3 scatter(__global const Material *m, __global const float *g
         float ior = m->albedo.w;
         float n1 = entering ? 1.0f : ior;
         float n2 = entering ? ior : 1.0f;
-        float cos_i = fmin(fmax(-dot(d, nl), 0.0f), 1.0f);
+        float cos_i = fmin(fmax(-dot3(d, nl), 0.0f), 1.0f);
         float cos_t = cos_transmitted(cos_i, n1, n2);
         float r = 1.0f;
         if (cos_t >= 0.0f) {
@@ -99,7 +99,7 @@ static inline float3 scatter(__global const Material *m, __global const float *g
         }
         *transmitted = 1;
         float eta = n1 / n2;
-        return normalize(d * eta + nl * (eta * cos_i - cos_t));
+        return normalize3(d * eta + nl * (eta * cos_i - cos_t));
     }
 #endif
     return reflect_dir(d, nl);
@@ -108,7 +108,7 @@ static inline float3 scatter(__global const Material *m, __global const float *g
 /* scatter() off a surface of outward normal n (the routine checks). */
 static inline float3 scatter_outward(__global const Material *m, __global const float *ggx, float3 d, float3 n, Sampler *s,
                               float3 *weight, int *specular) {
-    int entering = dot(d, n) < 0.0f;
+    int entering = dot3(d, n) < 0.0f;
     int transmitted;
     float3 glossy;
     return scatter(m, ggx, d, entering, entering ? n : -n, s, weight, specular, &transmitted, &glossy);

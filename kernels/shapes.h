@@ -5,8 +5,8 @@
  * this sphere and goes into it. */
 static inline float sphere_intersect(__global const Object *ob, float3 o, float3 d, float oo, float od, int far_only) {
     float3 c = ob->p0.xyz;
-    float b = od - dot(d, c);
-    float cc = (oo + ob->p1.x) - 2.0f * dot(o, c);
+    float b = od - dot3(d, c);
+    float cc = (oo + ob->p1.x) - 2.0f * dot3(o, c);
     float disc = b * b - cc;
     if (disc < 0.0f) {
         return INFINITY;
@@ -25,13 +25,13 @@ static inline float sphere_intersect(__global const Object *ob, float3 o, float3
 static inline float quad_intersect(__global const Object *ob, float3 o, float3 d) {
     float3 n = ob->p3.xyz;
     float3 to_corner = ob->p0.xyz - o;
-    float t = dot(n, to_corner) / dot(n, d);
+    float t = dot3(n, to_corner) / dot3(n, d);
     if (!(t > 0.0f && t < INFINITY)) {
         return INFINITY;
     }
     float3 q = d * t - to_corner;
-    float a = dot(ob->p4.xyz, cross(q, ob->p2.xyz));
-    float b = dot(ob->p4.xyz, cross(ob->p1.xyz, q));
+    float a = dot3(ob->p4.xyz, cross3(q, ob->p2.xyz));
+    float b = dot3(ob->p4.xyz, cross3(ob->p1.xyz, q));
     return (a >= 0.0f && a <= 1.0f && b >= 0.0f && b <= 1.0f) ? t : INFINITY;
 }
 

@@ -18,7 +18,7 @@ static inline float3 xf_point(__global const float4 *m, float3 p) {
 
 /* glam's normalize_or_zero: v * (1 / |v|) when that is finite and > 0. */
 static inline float3 normalize_or_zero(float3 v) {
-    float rcp = 1.0f / sqrt(dot(v, v));
+    float rcp = 1.0f / sqrt(dot3(v, v));
     return (isfinite(rcp) && rcp > 0.0f) ? v * rcp : (float3)(0.0f);
 }
 
@@ -78,9 +78,9 @@ static inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2
     float3 a = p0 - r->org;
     float3 b = p1 - r->org;
     float3 c = p2 - r->org;
-    float ax = dot(r->rx, a), ay = dot(r->ry, a);
-    float bx = dot(r->rx, b), by = dot(r->ry, b);
-    float cx = dot(r->rx, c), cy = dot(r->ry, c);
+    float ax = dot3(r->rx, a), ay = dot3(r->ry, a);
+    float bx = dot3(r->rx, b), by = dot3(r->ry, b);
+    float cx = dot3(r->rx, c), cy = dot3(r->ry, c);
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
@@ -96,7 +96,7 @@ static inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2
     if (det == 0.0f) {
         return 0;
     }
-    float t_scaled = u * dot(r->rz, a) + v * dot(r->rz, b) + w * dot(r->rz, c);
+    float t_scaled = u * dot3(r->rz, a) + v * dot3(r->rz, b) + w * dot3(r->rz, c);
     float t = t_scaled / det;
     if (!(t > 0.0f && t < t_max)) {
         return 0;
@@ -147,7 +147,7 @@ static inline void mesh_surface(const Scene *sc, const Hit *h, Surf *sf) {
     float3 t0 = v0 * h->bary.x, t1 = v1 * h->bary.y, t2 = v2 * h->bary.z;
     float3 p_obj = t0 + t1 + t2;
     float3 err = (fabs(t0) + fabs(t1) + fabs(t2)) * as_float(GAMMA7_BITS);
-    float3 n_obj = normalize_or_zero(cross(v1 - v0, v2 - v0));
+    float3 n_obj = normalize_or_zero(cross3(v1 - v0, v2 - v0));
     float3 ng = normalize_or_zero(xf_vector(in->normal_from_obj, n_obj));
     sf->ng = ng;
     sf->ns = ng;
@@ -156,7 +156,7 @@ static inline void mesh_surface(const Scene *sc, const Hit *h, Surf *sf) {
         __global const float4 *n = sc->normals + (size_t)(in->normal_base + (h->slot - in->tri_base)) * 3u;
         float3 sn = n[0].xyz * h->bary.x + n[1].xyz * h->bary.y + n[2].xyz * h->bary.z;
         float3 m = xf_vector(in->normal_from_obj, sn);
-        float rcp = 1.0f / sqrt(dot(m, m));
+        float rcp = 1.0f / sqrt(dot3(m, m));
         if (isfinite(rcp) && rcp > 0.0f) {
             sf->ns = m * rcp;
             sf->smooth = 1;
@@ -169,13 +169,13 @@ static inline void mesh_surface(const Scene *sc, const Hit *h, Surf *sf) {
     sf->instance = sc->objects[h->object].pad0;
     sf->p_obj = p_obj;
     sf->n_obj = n_obj;
-    sf->dist = dot(fabs(n_obj), err);
+    sf->dist = dot3(fabs(n_obj), err);
 }
 
 /* Instance::spawn_origin: the object-space hit point moved sf->dist off
  * the plane to the side dir goes, each coordinate rounded away from it. */
 static inline float3 mesh_spawn(const Scene *sc, const Surf *sf, float3 dir) {
-    float3 shift = dot(dir, sf->ng) > 0.0f ? sf->n_obj * sf->dist : sf->n_obj * -sf->dist;
+    float3 shift = dot3(dir, sf->ng) > 0.0f ? sf->n_obj * sf->dist : sf->n_obj * -sf->dist;
     float3 p = sf->p_obj + shift;
     p.x = shift.x > 0.0f ? nextafter(p.x, INFINITY) : (shift.x < 0.0f ? nextafter(p.x, -INFINITY) : p.x);
     p.y = shift.y > 0.0f ? nextafter(p.y, INFINITY) : (shift.y < 0.0f ? nextafter(p.y, -INFINITY) : p.y);

@@ -13,6 +13,22 @@
 #pragma OPENCL FP_CONTRACT OFF
 #endif
 
+/* Vector products as the Rust twins (glam) compute them, product by
+ * product: OpenCL's dot, cross and normalize may use fma or rsqrt (NVIDIA's
+ * do), so the kernel never calls them. dot3 adds left to right, as glam's
+ * dot3_in_x; normalize3 is v * (1 / |v|), as glam's normalize. */
+static inline float dot3(float3 a, float3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+static inline float3 cross3(float3 a, float3 b) {
+    return (float3)(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
+}
+
+static inline float3 normalize3(float3 v) {
+    return v * (1.0f / sqrt(dot3(v, v)));
+}
+
 typedef struct {
     float4 p0;  /* sphere: centre.xyz, radius  | quad: corner.xyz, area */
     float4 p1;  /* sphere: k = |c|^2 - r^2, 1/r | quad: edge_u.xyz       */

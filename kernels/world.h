@@ -47,8 +47,8 @@ static inline void offer_object(const Scene *sc, uint i, float3 o, float3 d, flo
  * nothing is hit. */
 static inline void nearest(const Scene *sc, float3 o, float3 d, uint from, uint from_prim, int entering, Hit *h) {
     __global const Params *P = sc->P;
-    float oo = dot(o, o);
-    float od = dot(o, d);
+    float oo = dot3(o, o);
+    float od = dot3(o, d);
     h->t = INFINITY;
     h->object = NO_OBJECT;
     h->prim = NO_PRIM;
