@@ -166,3 +166,40 @@ fn a_cancelled_slice_says_so() {
         .expect("slice"));
     assert_eq!((film.spp(), film.slice_start()), (0, 0));
 }
+
+/// A device pass that a change makes useless gives up between launches:
+/// the film stays as it was, and the next pass adds exactly the samples an
+/// uninterrupted render adds (the device state was dropped and is rebuilt
+/// from the host's film).
+#[test]
+fn a_device_pass_given_up_between_launches_leaves_the_film_as_it_was() {
+    let Some(mut device) = common::opencl_device() else {
+        return;
+    };
+    device.launch_target = std::time::Duration::from_nanos(1); // a sample a launch
+    let (w, h) = (19, 13);
+    let a = job("cornell", w, h);
+    let mut film = Film::new(w, h);
+    device.render(&a, &mut film, 2).expect("render");
+    let before = film.pixels().to_vec();
+    let launches = std::sync::atomic::AtomicUsize::new(0);
+    let after_two = || launches.fetch_add(1, std::sync::atomic::Ordering::Relaxed) >= 2;
+    let done = device
+        .render_unless(&a, &mut film, 6, &after_two)
+        .expect("pass");
+    assert!(!done, "the pass was not given up");
+    assert_eq!(launches.load(std::sync::atomic::Ordering::Relaxed), 3);
+    assert_eq!(film.spp(), 2);
+    assert_eq!(film.pixels(), &before[..]);
+    device.render(&a, &mut film, 6).expect("render on");
+    let mut whole = Film::new(w, h);
+    common::opencl_device()
+        .expect("device")
+        .render(&a, &mut whole, 8)
+        .expect("render");
+    assert_eq!(film.spp(), 8);
+    assert!(
+        film.pixels() == whole.pixels(),
+        "the pass after the cancelled one differs"
+    );
+}

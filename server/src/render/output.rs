@@ -48,7 +48,9 @@ impl ImageFormat {
     }
 }
 
-/// Tone-mapped 8-bit sRGB PNG of a linear image (row-major, top row first).
+/// Tone-mapped 8-bit sRGB PNG of a linear image (row-major, top row
+/// first); large images on machines of four or more threads are encoded in
+/// strips on every core (`png_strips`).
 pub fn encode_png(
     width: u32,
     height: u32,
@@ -56,6 +58,9 @@ pub fn encode_png(
     tonemap: &Tonemap,
 ) -> Result<Vec<u8>, OutputError> {
     let bytes = tonemap.bytes(rgb);
+    if let Some(png) = crate::render::png_strips::encode(&bytes, width, height) {
+        return Ok(png);
+    }
     let mut out = Vec::with_capacity(bytes.len() / 2 + 64);
     PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Adaptive)
         .write_image(&bytes, width, height, ExtendedColorType::Rgb8)?;
@@ -64,7 +69,8 @@ pub fn encode_png(
 
 /// Tone-mapped 8-bit sRGB JPEG of a linear image at `quality` (1-100),
 /// chroma subsampled 4:2:0: lossy, for streams over slow links (noise makes
-/// PNGs large). At most 65,535 pixels a side.
+/// PNGs large). At most 65,535 pixels a side. Large images are encoded
+/// in strips on every core (`jpeg_strips`).
 pub fn encode_jpeg(
     width: u32,
     height: u32,
@@ -77,14 +83,8 @@ pub fn encode_jpeg(
             "{width}x{height}: each side must be at most 65535"
         )));
     };
-    let bytes = tonemap.bytes(rgb);
-    let mut out = Vec::with_capacity(bytes.len() / 8 + 1024);
-    let mut encoder = jpeg_encoder::Encoder::new(&mut out, quality.clamp(1, 100));
-    encoder.set_sampling_factor(jpeg_encoder::SamplingFactor::R_4_2_0);
-    encoder
-        .encode(&bytes, w, h, jpeg_encoder::ColorType::Rgb)
-        .map_err(|e| OutputError::Jpeg(e.to_string()))?;
-    Ok(out)
+    crate::render::jpeg_strips::encode(&tonemap.bytes(rgb), w, h, quality)
+        .map_err(OutputError::Jpeg)
 }
 
 /// Most pixels a side of a WebP image.

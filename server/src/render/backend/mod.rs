@@ -166,8 +166,8 @@ impl Backend {
         }
     }
 
-    /// As [`Backend::render`], but a CPU pass gives up early once
-    /// `cancelled` says so (a device launch is short and runs to its end);
+    /// As [`Backend::render`], but a pass gives up early once `cancelled`
+    /// says so (a CPU pass between rows, a device's between launches);
     /// Ok(false) then, and the film must be thrown away.
     pub fn render_unless(
         &mut self,
@@ -178,7 +178,12 @@ impl Backend {
     ) -> Result<bool, BackendError> {
         match self {
             Backend::Cpu(b) => Ok(b.render_unless(job, film, count, cancelled)),
-            _ => self.render(job, film, count).map(|()| true),
+            Backend::OpenCl { .. } => self.run(
+                job,
+                film,
+                |b, film| b.render_unless(job, film, count, cancelled),
+                |c, film| c.render_unless(job, film, count, cancelled),
+            ),
         }
     }
 

@@ -419,13 +419,20 @@ impl Session {
         // while someone watches, and not too often (see [`preview`]).
         let whole = finished && film.slice_start() == 0;
         let partial = finished && !whole && partial_due && matches!(pass, Pass::Slice(_));
+        let imaged = Instant::now();
         let image = match (whole, partial) {
             (true, _) => Some(Image::of(&film)),
             (false, true) => Some(Image::partial(&film, preview.as_deref())),
             (false, false) => None,
         };
         let mut st = lock(&self.state);
-        tracing::debug!(session = %self.id, generation, ms = took.as_secs_f64() * 1e3, "pass ends");
+        tracing::debug!(
+            session = %self.id,
+            generation,
+            ms = took.as_secs_f64() * 1e3,
+            image_ms = imaged.elapsed().as_secs_f64() * 1e3,
+            "pass ends"
+        );
         if st.generation != generation || self.is_deleted() {
             return 0; // changed while rendering (that film is stale) or deleted
         }

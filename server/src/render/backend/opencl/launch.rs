@@ -18,17 +18,46 @@ impl OpenClBackend {
         film: &mut Film,
         count: u64,
     ) -> Result<(), OpenClError> {
+        self.render_unless(job, film, count, &|| false).map(|_| ())
+    }
+
+    /// As [`Self::render`], but gives up between launches once `cancelled`
+    /// says so (a change of view makes the pass useless): Ok(false), the
+    /// film as it was and the device's state of this job dropped (rebuilt
+    /// from the host's film if it is rendered again).
+    pub fn render_unless(
+        &mut self,
+        job: &RenderJob,
+        film: &mut Film,
+        count: u64,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, OpenClError> {
+        let start = Instant::now();
         let key = self.ready(job, film)?;
-        let result = self.launch_all(&key, count, film.pixels().len());
-        if result.is_err() {
-            self.states.pop(); // the device film may be half updated: start over from the host's
+        let ready = start.elapsed();
+        let result = self.launch_all(&key, count, film.pixels().len(), cancelled);
+        if !matches!(result, Ok(true)) {
+            // Given up, or failed: the device film may be half updated.
+            self.states.pop();
         }
-        result?;
-        self.read_back(film, count)
+        if !result? {
+            return Ok(false);
+        }
+        let launched = start.elapsed();
+        self.read_back(film, count)?;
+        // Where a pass's time goes (the latency example's breakdown).
+        tracing::debug!(
+            count,
+            ready_ms = ready.as_secs_f64() * 1e3,
+            launch_ms = (launched - ready).as_secs_f64() * 1e3,
+            read_back_ms = (start.elapsed() - launched).as_secs_f64() * 1e3,
+            "opencl render"
+        );
+        Ok(true)
     }
 
     /// Renders `count` samples of every pixel in launches of about
-    /// `launch_target`. Every launch has the same size (the whole image, or
+    /// `launch_target`, or stops before a launch once `cancelled` (false). Every launch has the same size (the whole image, or
     /// `launch_pixels` and the image in several launches): drivers such as
     /// PoCL compile a kernel anew for every new launch size. The number of
     /// samples per launch adapts to the measured time instead.
@@ -37,11 +66,15 @@ impl OpenClBackend {
         key: &ProgramKey,
         count: u64,
         pixels: usize,
-    ) -> Result<(), OpenClError> {
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, OpenClError> {
         let target = self.launch_target.as_secs_f64();
         let tile = pixels.min(self.launch_pixels);
         let mut done = 0u64;
         while done < count {
+            if cancelled() {
+                return Ok(false);
+            }
             let per_sample = self
                 .states
                 .last()
@@ -65,7 +98,7 @@ impl OpenClBackend {
             }
             done += n;
         }
-        Ok(())
+        Ok(true)
     }
 
     /// One launch of `size` work-items: samples `spp .. spp + n` of pixels

@@ -25,6 +25,7 @@ mod layout;
 mod meshes;
 mod program;
 mod slice;
+mod staging;
 mod tiles;
 
 pub use tiles::TileDispatch;
@@ -47,12 +48,17 @@ use opencl3::kernel::Kernel;
 use opencl3::memory::{Buffer, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
 use opencl3::program::Program;
 use opencl3::types::{cl_mem_flags, CL_BLOCKING};
+use staging::Staging;
 use std::collections::HashMap;
 use std::ptr;
 use std::time::{Duration, Instant};
 
 /// A launch should return within about this long, so updates feel immediate.
 pub const LAUNCH_TARGET: Duration = Duration::from_millis(30);
+/// The same on a GPU: a pass gives up for a change between launches, and a
+/// GPU's launch costs microseconds, so its launches are shorter (a change
+/// waits for less; docs/BENCHMARKS.md, *The server on the GPU*).
+pub const GPU_LAUNCH_TARGET: Duration = Duration::from_millis(8);
 /// Most job states kept on the device at once (one per recent session).
 const RESIDENT_JOBS: usize = 16;
 /// Most device memory their films may take together.
@@ -179,7 +185,8 @@ pub struct OpenClBackend {
     pub fail_launches: bool,
     /// Test hook: set `fail_launches` after this many more launches.
     pub fail_after_launches: Option<u64>,
-    /// How long one launch should take (default [`LAUNCH_TARGET`]).
+    /// How long one launch should take ([`LAUNCH_TARGET`], on GPUs
+    /// [`GPU_LAUNCH_TARGET`]).
     pub launch_target: Duration,
     /// How long the last upload of a job's scene and film took, and the
     /// device memory they take.
@@ -196,7 +203,13 @@ pub struct OpenClBackend {
     pub local_size: usize,
     /// The film's floats as read back, kept between reads: a 1080p film is
     /// 100 MB, and allocating (zeroing) it anew cost more than the copy.
-    read_buffer: Vec<f32>,
+    staging: Staging,
+}
+
+impl Drop for OpenClBackend {
+    fn drop(&mut self) {
+        self.staging.release(&self.queue);
+    }
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -260,7 +273,11 @@ impl OpenClBackend {
             inject_nan_every: None,
             fail_launches: false,
             fail_after_launches: None,
-            launch_target: LAUNCH_TARGET,
+            launch_target: if info_is_gpu {
+                GPU_LAUNCH_TARGET
+            } else {
+                LAUNCH_TARGET
+            },
             last_upload: None,
             memory_limits,
             tile_dispatch: TileDispatch::default(),
@@ -270,7 +287,7 @@ impl OpenClBackend {
                 TILE
             }),
             local_size: env_usize("PATHSTREAM_OPENCL_LOCAL_SIZE").unwrap_or(LOCAL_SIZE),
-            read_buffer: Vec::new(),
+            staging: Staging::new(),
         })
     }
 
@@ -465,27 +482,28 @@ impl OpenClBackend {
         {
             self.states.remove(0);
         }
-        let mut device_film = vec![0f32; film.pixels().len() * FILM_FLOATS];
-        if film.total_samples() > 0 {
-            for (px, out) in film
-                .pixels()
-                .iter()
-                .zip(device_film.chunks_exact_mut(FILM_FLOATS))
-            {
-                for c in 0..3 {
-                    for (half, base) in [(px.even[c], 0), (px.odd[c], FILM_FLOATS / 2)] {
-                        let hi = half as f32;
-                        out[base + c] = hi;
-                        out[base + 3 + c] = (half - f64::from(hi)) as f32;
-                    }
-                }
+        let film_floats = film.pixels().len() * FILM_FLOATS;
+        let device_film = if film.total_samples() == 0 && film.slice_start() == 0 {
+            // A fresh film (every change of view starts one) is zeroed on
+            // the device, not uploaded (100 MB at 1080p).
+            let mut b = self.buffer::<f32>(Access::ReadWrite, film_floats)?;
+            #[allow(unsafe_code)]
+            // SAFETY: fills the whole new buffer (film_floats floats) with
+            // zeros; the in-order queue runs it before any launch or read.
+            unsafe {
+                self.queue
+                    .enqueue_fill_buffer(&mut b, &[0f32], 0, film_floats * 4, &[])
             }
-        }
+            .map_err(call("film clear"))?;
+            b
+        } else {
+            self.upload(Access::ReadWrite, &host_film(film))?
+        };
         let state = JobState {
             job_id: job.id,
             key: key.clone(),
             scene: buffers::SceneBuffers::upload(self, &packed)?,
-            film: self.upload(Access::ReadWrite, &device_film)?,
+            film: device_film,
             rejected: self.upload(Access::ReadWrite, &[0u32])?,
             pixels: film.pixels().len(),
             first: film.first_sample(),
@@ -531,4 +549,24 @@ impl OpenClBackend {
         self.prepare(job, film, &key)?;
         Ok(key)
     }
+}
+
+/// The device film's floats holding `film` (each half's f64 sums as a pair
+/// of f32s, hi and lo).
+fn host_film(film: &Film) -> Vec<f32> {
+    let mut device_film = vec![0f32; film.pixels().len() * FILM_FLOATS];
+    for (px, out) in film
+        .pixels()
+        .iter()
+        .zip(device_film.chunks_exact_mut(FILM_FLOATS))
+    {
+        for c in 0..3 {
+            for (half, base) in [(px.even[c], 0), (px.odd[c], FILM_FLOATS / 2)] {
+                let hi = half as f32;
+                out[base + c] = hi;
+                out[base + 3 + c] = (half - f64::from(hi)) as f32;
+            }
+        }
+    }
+    device_film
 }

@@ -62,10 +62,7 @@ impl OpenClBackend {
             .ok_or_else(|| OpenClError::Unavailable("no job".into()))?;
         debug_assert!(range.end <= state.pixels);
         let floats = range.len() * FILM_FLOATS;
-        if self.read_buffer.len() < floats {
-            self.read_buffer = vec![0f32; floats];
-        }
-        let sums = &mut self.read_buffer[..floats];
+        let sums = self.staging.get(&self.context, &self.queue, floats);
         let mut rejected = [0u32];
         #[allow(unsafe_code)]
         // SAFETY: blocking reads into host slices that outlive the calls:
