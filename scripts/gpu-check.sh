@@ -8,21 +8,21 @@
 # BUNDLE holds bin/ (pathstream, latency, clinfo; stripped), lib/
 # (libOpenCL.so.1: ocl-icd; only NVIDIA's platform is registered with it)
 # and tests/ (the release test binaries to run). Made on the build machine:
-#   cargo test --release --workspace --no-run; cargo build --release --example latency
+#   cargo test --release --workspace --no-run; cargo build --release --example latency --example encode_cost
 #   apt-get download ocl-icd-libopencl1 clinfo; dpkg -x each into x/
-#   strip -o .gpu/bin/pathstream target/release/pathstream (and latency, and
+#   strip -o .gpu/bin/pathstream target/release/pathstream (and latency, encode_cost,
 #     target/release/deps/NAME-HASH as .gpu/tests/NAME); cp clinfo, libOpenCL.so.1
 #   tar -cJf .gpub/bundle.tar.xz .gpu    (64 MiB travel to the device: pack it)
 # The device tool sends the working tree, so .gpub/ travels and this script
 # unpacks it where .gpu/ is missing. Steps (default all, in this order): find,
-# tests, tune, parity, throughput, latency, fair, trade. A step that would start
+# tests, tune, parity, throughput, latency, encode, fair, trade. A step that would start
 # after BUDGET_S seconds is skipped. Full logs go to OUT; a summary is
 # printed last.
 set -u
 BUNDLE=$(realpath "${BUNDLE:-.gpu}")
 OUT=${OUT:-/tmp/gpu-out}
 BUDGET_S=${BUDGET_S:-420}
-STEPS=${*:-find tests tune parity throughput latency fair trade}
+STEPS=${*:-find tests tune parity throughput latency encode fair trade}
 mkdir -p "$OUT"
 t0=$(date +%s)
 # The bundle may travel packed (.gpub/bundle.tar.xz, made by `tar -cJf`).
@@ -101,16 +101,18 @@ step_tune() {
     done
 }
 
-# Bit-for-bit parity with the CPU under compiler options: NVIDIA's ptxas
-# fuses a * b + c into fma whatever FP_CONTRACT says.
+# Bit-for-bit parity with the CPU (the routine checks), under extra build
+# options if PARITY_OPTIONS lists them ('' is the default build). OpenCL's
+# dot, cross and normalize are fused on NVIDIA; the kernel uses its own.
 step_parity() {
-    for o in "" "-cl-opt-disable" "-cl-nv-opt-level=0" "-cl-nv-opt-level=1"; do
+    for o in ${PARITY_OPTIONS:-""}; do
         for t in opencl_parity opencl_parity_meshes; do
-            PATHSTREAM_OPENCL_OPTIONS="$o" CI=true timeout 60 "$BUNDLE/tests/$t" --test-threads 16 >"$OUT/parity-$t$o.log" 2>&1
-            note "parity '$o' $t: $(grep -E '^test result' "$OUT/parity-$t$o.log" | cut -c1-40)"
+            PATHSTREAM_OPENCL_OPTIONS="$o" CI=true timeout 90 "$BUNDLE/tests/$t" --test-threads 16 >"$OUT/parity-$t.log" 2>&1
+            note "parity '$o' $t: $(grep -E '^test result' "$OUT/parity-$t.log" | cut -c1-40)"
+            grep -E "^test .* FAILED" "$OUT/parity-$t.log" | head -6 | tee -a "$SUMMARY"
         done
-        [ -n "$o" ] && note "  glass 1080p with '$o': $(PATHSTREAM_OPENCL_OPTIONS="$o" bench_glass)"
     done
+    note "  glass 1080p: $(bench_glass)"
 }
 
 step_throughput() {
@@ -118,12 +120,45 @@ step_throughput() {
     grep -E "^\| opencl|specialised|generic" "$OUT/throughput.txt" | tee -a "$SUMMARY"
 }
 
+# Update-to-frame latency at 1080p, and where a pass's time goes (debug
+# logs: the OpenCL render's stages, the pass, the frame's encoding).
 step_latency() {
-    for s in "" "format=jpeg&quality=85"; do
-        note "latency 1920x1080 stream '$s':"
-        timeout 120 "$BUNDLE/bin/latency" --backend opencl --size 1920 --height 1080 --updates 40 \
-            ${s:+--stream "$s"} --ack 2>&1 | tail -8 | tee -a "$SUMMARY"
+    local i=0 s pinned
+    # stream query, then PATHSTREAM_OPENCL_PINNED (0: pageable read-back).
+    for run in ${LATENCY_RUNS:-":1" "format=jpeg&quality=85:1" ":0"}; do
+        s=${run%:*} pinned=${run##*:}
+        note "latency 1920x1080 stream '$s', pinned read-back $pinned:"
+        PATHSTREAM_OPENCL_PINNED=$pinned RUST_LOG=pathstream=debug,pathstream::api::ws=trace NO_COLOR=1 timeout 150 "$BUNDLE/bin/latency" \
+            --backend opencl --size 1920 --height 1080 --updates 40 ${s:+--stream "$s"} --ack --fov-updates >"$OUT/latency-$i.log" 2>&1
+        grep -E "update ->|frames delivered|encode at" "$OUT/latency-$i.log" | tee -a "$SUMMARY"
+        python3 - "$OUT/latency-$i.log" <<'PY' | tee -a "$SUMMARY"
+import re, statistics, sys
+fields = ["ready_ms", "launch_ms", "read_back_ms", "image_ms", "encode_ms", "ms"]
+seen = {f: [] for f in fields}
+for line in open(sys.argv[1], errors="replace"):
+    line = re.sub(r"\x1b\[[0-9;]*m", "", line)
+    for f in fields:
+        if f == "ms" and "pass ends" not in line:
+            continue
+        m = re.search(r"(?<![a-z_])" + f + r"=([0-9.]+)", line)
+        if m:
+            seen[f].append(float(m.group(1)))
+for f, v in seen.items():
+    if v:
+        v.sort()
+        print(f"  {'pass_ms' if f == 'ms' else f}: n {len(v)}, median {statistics.median(v):.2f}, p95 {v[int(0.95 * (len(v) - 1))]:.2f}")
+PY
+        i=$((i + 1))
     done
+}
+
+step_glass() {
+    note "glass 1080p: $(bench_glass)"
+}
+
+# Frame encodings at 1080p on the box's cores.
+step_encode() {
+    "$BUNDLE/bin/encode_cost" cornell-glass 1920 1080 1 2>&1 | grep -E "PNG|JPEG" | tee -a "$SUMMARY"
 }
 
 # Four 1080p sessions on one GPU: samples each after 10 s.
@@ -144,7 +179,7 @@ step_fair() {
 }
 
 step_trade() {
-    "$P" bench --backend opencl --sections trade,calibration --trade-seconds 3 --out "$OUT/trade" >"$OUT/trade.txt" 2>&1
+    timeout 170 "$P" bench --backend opencl --sections trade,calibration --trade-seconds 2 --trade-size 256x256 --out "$OUT/trade" >"$OUT/trade.txt" 2>&1
     tail -40 "$OUT/trade.txt" | tee -a "$SUMMARY" >/dev/null
     note "trade: rc $?, $(wc -l <"$OUT/trade.txt") lines (trade.txt)"
 }
