@@ -218,7 +218,15 @@ struct Shared<'a, F> {
     /// The lane whose turn it is to claim, where lanes take turns (see
     /// [`render_split_taking_turns`]); None: whoever comes first.
     turn: Option<usize>,
+    /// Which lanes have claimed a block: every lane's first block comes
+    /// before any lane's second (for up to [`FIRST_ROUND_WAIT`]), so that
+    /// a device slow to start (a program to build) still renders a share
+    /// of a short render instead of finding it all taken.
+    started: Vec<bool>,
 }
+
+/// Longest a lane waits for the others' first claims.
+const FIRST_ROUND_WAIT: Duration = Duration::from_secs(5);
 
 /// The lane after `i`, round the list, that has not failed (`i` if none).
 fn next_live(shares: &[DeviceShare], i: usize) -> usize {
@@ -247,8 +255,8 @@ pub fn render_split(
 
 /// [`render_split`] where the lanes that have not failed claim blocks in
 /// turn, round the list: a test hook, so that a test of the merge certainly
-/// merges blocks of every device, interleaved (left to the race, one lane
-/// may take a small render whole).
+/// merges blocks of every device, interleaved (left to the race, the lanes'
+/// later blocks of a small render may all be one lane's).
 #[doc(hidden)]
 pub fn render_split_taking_turns(
     job: &RenderJob,
@@ -282,6 +290,7 @@ fn split(
         stop: false,
         on_progress,
         turn: taking_turns.then_some(0),
+        started: vec![false; backends.len()],
     });
     let errors: Vec<Option<BackendError>> = std::thread::scope(|scope| {
         let handles: Vec<_> = (backends.iter_mut().enumerate())
@@ -359,13 +368,17 @@ fn device_loop<F: FnMut(&Progress) + Send>(
             if s.stop {
                 return None;
             }
-            if s.turn.is_some_and(|t| t != i) && s.ledger.can_claim() {
+            let others_to_start = s.started[i]
+                && start.elapsed() < FIRST_ROUND_WAIT
+                && (s.shares.iter().zip(&s.started)).any(|(sh, &st)| !st && sh.failure.is_none());
+            if (s.turn.is_some_and(|t| t != i) || others_to_start) && s.ledger.can_claim() {
                 drop(s);
                 std::thread::sleep(Duration::from_millis(2));
                 continue;
             }
             match s.ledger.claim(want) {
                 Some(b) => {
+                    s.started[i] = true;
                     if s.turn.is_some() {
                         s.turn = Some(next_live(&s.shares, i));
                     }
