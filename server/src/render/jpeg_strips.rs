@@ -8,12 +8,11 @@
 //! frame took ~45 ms on one core (the stream's frame rate and a change's
 //! latency on a GPU box, docs/BENCHMARKS.md).
 
+use crate::render::png_strips::PARALLEL_FROM;
 use rayon::prelude::*;
 
 /// Height of a 4:2:0 MCU.
 const MCU: usize = 16;
-/// Images with fewer pixels are encoded in one piece.
-const PARALLEL_FROM: usize = 1 << 18;
 
 /// RGB8 `rgb` (w x h, row-major) as a 4:2:0 baseline JPEG at `quality`.
 pub fn encode(rgb: &[u8], w: u16, h: u16, quality: u8) -> Result<Vec<u8>, String> {

@@ -7,13 +7,14 @@
 //! above from the image itself, so strips need nothing from each other.
 //! Deflate comes from `flate2` (its zlib-rs backend at level 1: zlib's
 //! quick strategy, 5x faster here than miniz at the same level), checksums
-//! from `crc32fast` and
-//! `simd-adler32`; only the container and the filters are written here.
+//! from `crc32fast` and `simd-adler32`; only the container and the filters
+//! are written here.
 
 use flate2::{Compress, Compression, FlushCompress, Status};
 use rayon::prelude::*;
 
-/// Images with fewer pixels use the `png` crate in one piece.
+/// Images with fewer pixels are encoded in one piece (PNG by the `png`
+/// crate; JPEG too, `jpeg_strips`).
 pub const PARALLEL_FROM: usize = 1 << 18;
 /// Rows per strip: at least this many.
 const MIN_STRIP_ROWS: usize = 32;

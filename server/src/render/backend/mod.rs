@@ -176,15 +176,12 @@ impl Backend {
         count: u64,
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> Result<bool, BackendError> {
-        match self {
-            Backend::Cpu(b) => Ok(b.render_unless(job, film, count, cancelled)),
-            Backend::OpenCl { .. } => self.run(
-                job,
-                film,
-                |b, film| b.render_unless(job, film, count, cancelled),
-                |c, film| c.render_unless(job, film, count, cancelled),
-            ),
-        }
+        self.run(
+            job,
+            film,
+            |b, film| b.render_unless(job, film, count, cancelled),
+            |c, film| c.render_unless(job, film, count, cancelled),
+        )
     }
 
     /// Adds sample `film.spp()` to pixels `film.slice_start()..end` (a pass

@@ -425,12 +425,13 @@ impl Session {
             (false, true) => Some(Image::partial(&film, preview.as_deref())),
             (false, false) => None,
         };
+        let image_ms = imaged.elapsed().as_secs_f64() * 1e3;
         let mut st = lock(&self.state);
         tracing::debug!(
             session = %self.id,
             generation,
             ms = took.as_secs_f64() * 1e3,
-            image_ms = imaged.elapsed().as_secs_f64() * 1e3,
+            image_ms,
             "pass ends"
         );
         if st.generation != generation || self.is_deleted() {

@@ -57,7 +57,8 @@ impl OpenClBackend {
     }
 
     /// Renders `count` samples of every pixel in launches of about
-    /// `launch_target`, or stops before a launch once `cancelled` (false). Every launch has the same size (the whole image, or
+    /// `launch_target` (true), or stops before a launch once `cancelled`
+    /// (false). Every launch has the same size (the whole image, or
     /// `launch_pixels` and the image in several launches): drivers such as
     /// PoCL compile a kernel anew for every new launch size. The number of
     /// samples per launch adapts to the measured time instead.
