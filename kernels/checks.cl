@@ -244,6 +244,38 @@ __kernel void check_light_sample(__global float *out, uint n, __global const flo
     }
 }
 
+/* emitter_pdf for emitter lights[which[i]] from the point in[4i] (xyz;
+ * w: the object it lies on, as bits, or NO_OBJECT) with normal in[4i+1].xyz
+ * (as both nl and ns), along in[4i+2].xyz meeting the emitter at
+ * in[4i+3].xyz. */
+__kernel void check_emitter_pdf(__global float *out, uint n, __global const float4 *in, __global const uint *which,
+                                __global const Object *objects, __global const Light *lights) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {.objects = objects, .lights = lights};
+    __global const Light *L = &lights[which[i]];
+    uint object = as_uint(in[4 * i].w);
+    uint prim = object == NO_OBJECT ? NO_PRIM : L->prim;
+    float3 n3 = in[4 * i + 1].xyz;
+    out[i] = emitter_pdf(&sc, L, in[4 * i].xyz, object, prim, n3, n3, in[4 * i + 2].xyz, in[4 * i + 3].xyz);
+}
+
+/* light_index of (keys[2i], keys[2i+1]), environment_light, and the power
+ * heuristic of (ab[2i], ab[2i+1]) as bits: three words per item. */
+__kernel void check_mis_routines(__global uint *out, uint n, __global const uint *keys, __global const float *ab,
+                                 __global const Params *P, __global const Light *lights) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {.P = P, .lights = lights};
+    out[3 * i] = (uint)light_index(&sc, keys[2 * i], keys[2 * i + 1]);
+    out[3 * i + 1] = (uint)environment_light(&sc);
+    out[3 * i + 2] = as_uint(power_heuristic(ab[2 * i], ab[2 * i + 1]));
+}
+
 /* sizeof of every shared struct, for the host's layout check. */
 __kernel void check_layout_sizes(__global uint *out, uint n) {
     if (get_global_id(0) != 0) {

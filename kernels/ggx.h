@@ -99,12 +99,11 @@ static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float3 base,
     return L;
 }
 
-/* BSDF cos in two parts (ggx.rs, eval_cos_parts): the narrow single-
- * scattering lobes' (returned) and the broad lobes' (*rest). */
-static inline float3 ggx_eval_cos_parts(__global const float *T, float4 p, float3 base, const GgxLobes *L, float3 wo,
-                                 float3 wi, float3 *rest) {
+/* BSDF cos (ggx.rs, eval_cos): the single-scattering microfacet lobes,
+ * the multiple-scattering lobes and the diffuse base. */
+static inline float3 ggx_eval_cos(__global const float *T, float4 p, float3 base, const GgxLobes *L, float3 wo,
+                                  float3 wi) {
     if (!(wi.z > 0.0f && wo.z > 0.0f)) {
-        *rest = (float3)(0.0f);
         return (float3)(0.0f);
     }
     float alpha = p.y;
@@ -122,11 +121,10 @@ static inline float3 ggx_eval_cos_parts(__global const float *T, float4 p, float
     float ms = (1.0f - L->e_o) * (1.0f - e_i) * M_1_PI_F / fmax(1.0f - e_avg, 1e-6f);
     float es_i = f0 * a_i + b_i + (1.0f - e_i) * L->fms_diel;
     float diffuse = (1.0f - L->es_o) * (1.0f - es_i) * M_1_PI_F / fmax(1.0f - L->es_avg, 1e-6f);
-    float3 glossy = (base + ((float3)(1.0f) - base) * c5) * (spec * metallic) +
+    float3 single = (base + ((float3)(1.0f) - base) * c5) * (spec * metallic) +
                     (float3)((f0 + (1.0f - f0) * c5) * spec * (1.0f - metallic));
-    float3 broad = L->fms_metal * (ms * metallic) + (base * diffuse + (float3)(L->fms_diel * ms)) * (1.0f - metallic);
-    *rest = broad * wi.z;
-    return glossy * wi.z;
+    float3 multiple = L->fms_metal * (ms * metallic) + (base * diffuse + (float3)(L->fms_diel * ms)) * (1.0f - metallic);
+    return (single + multiple) * wi.z;
 }
 
 static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
@@ -138,11 +136,11 @@ static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
     return L->p_spec * vndf + (1.0f - L->p_spec) * wi.z * M_1_PI_F;
 }
 
-/* A direction from wo (shading frame), *weight = BSDF cos / pdf and
- * *glossy its narrow lobes' share; returns 0 where the sample leaves below
- * the surface (no contribution). */
+/* A direction from wo (shading frame), *weight = BSDF cos / pdf and *pdf
+ * its density; returns 0 where the sample leaves below the surface (no
+ * contribution). */
 static inline int ggx_sample(__global const float *T, float4 p, float3 base, float3 wo, float choice, float2 u, float3 *wi,
-                      float3 *weight, float3 *glossy) {
+                      float3 *weight, float *pdf_out) {
     if (!(wo.z > 0.0f)) {
         return 0;
     }
@@ -163,10 +161,8 @@ static inline int ggx_sample(__global const float *T, float4 p, float3 base, flo
         return 0;
     }
     *wi = w;
-    float3 rest;
-    float3 g = ggx_eval_cos_parts(T, p, base, &L, wo, w, &rest);
-    *weight = (g + rest) / pdf;
-    *glossy = g / pdf;
+    *weight = ggx_eval_cos(T, p, base, &L, wo, w) / pdf;
+    *pdf_out = pdf;
     return 1;
 }
 

@@ -1,11 +1,47 @@
 /* The path tracer, loop for loop as integrator.rs. Its Russian roulette
  * cap is the host's MAX_SURVIVAL, passed as its bits (MAX_SURVIVAL_BITS). */
 
+#if HAS_GGX
+/* The power heuristic of density a against b (mis.rs, power_heuristic). */
+static inline float power_heuristic(float a, float b) {
+    if (!(a > 0.0f)) {
+        return 0.0f;
+    }
+    float r = b / a;
+    if (isnan(r)) {
+        return 0.5f; /* both infinite */
+    }
+    return 1.0f / (1.0f + r * r);
+}
+
+/* Where the last BSDF sample left a MAT_PBR vertex that NEE gathered
+ * (mis.rs, BsdfVertex): pdf 0 when the next hit counts emission in full. */
+typedef struct {
+    float3 p, nl, ns;
+    uint object, prim;
+    float pdf;
+} BsdfVertex;
+
+/* The MIS weight of emission that the sample along dir found at q on
+ * emitter e (-1: one no light sample aims at), BsdfVertex::hit_weight. */
+static inline float hit_weight(const Scene *sc, const BsdfVertex *v, int e, float3 dir, float3 q) {
+    __global const Params *P = sc->P;
+    (void)P;
+    if (!(v->pdf > 0.0f) || e < 0) {
+        return 1.0f;
+    }
+    __global const Light *L = &sc->lights[e];
+    float pmf = LIGHT_COUNT > 1u ? L->pmf : 1.0f;
+    float light_pdf = pmf * emitter_pdf(sc, L, v->p, v->object, v->prim, v->nl, v->ns, dir, q);
+    return power_heuristic(v->pdf, light_pdf);
+}
+#endif
+
 #if HAS_DIFFUSE || HAS_GGX
 /* What a surface makes of light from a direction, for next-event
  * estimation (integrator/mod.rs, the closures given to nee::direct):
  * cos(theta_s) for diffuse (the caller multiplies by albedo / pi), the
- * broad lobes' BSDF cos for MAT_PBR. */
+ * BSDF cos weighted against BSDF sampling for MAT_PBR. */
 typedef struct {
     int pbr;
 #if HAS_GGX
@@ -16,10 +52,11 @@ typedef struct {
 } NeeSurface;
 
 /* Le * V * f(dir) / pdf of one shadow ray from surface sf towards emitter
- * L, as nee.rs's `one`. What a scene cannot have is decided when the
- * program is built (on PoCL the cheapest scenes feel every test here). */
-static inline float3 direct_from(const Scene *sc, __global const Light *L, const Surf *sf, float3 nl, float3 ns, float2 u,
-                          const NeeSurface *ne) {
+ * L, picked with probability pmf, as nee.rs's `one`. What a scene cannot
+ * have is decided when the program is built (on PoCL the cheapest scenes
+ * feel every test here). */
+static inline float3 direct_from(const Scene *sc, __global const Light *L, float pmf, const Surf *sf, float3 nl, float3 ns,
+                          float2 u, const NeeSurface *ne) {
     float3 dir;
     float weight;
     if (!sample_emitter(sc, L, sf->p, sf->object, sf->prim, nl, ns, u, &dir, &weight)) {
@@ -51,7 +88,9 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, const
 #if HAS_GGX
     if (ne->pbr) {
         float3 wi = (float3)(dot3(dir, ne->t), dot3(dir, ne->b), dot3(dir, ne->n));
-        ggx_eval_cos_parts(sc->ggx, ne->m->pbr, ne->m->albedo.xyz, &ne->lobes, ne->wo, wi, &f);
+        float bsdf_pdf = ggx_pdf(ne->m->pbr, &ne->lobes, ne->wo, wi);
+        float w = power_heuristic(pmf / weight, bsdf_pdf);
+        f = ggx_eval_cos(sc->ggx, ne->m->pbr, ne->m->albedo.xyz, &ne->lobes, ne->wo, wi) * w;
     }
 #endif
     return L->emission.xyz * (f * weight);
@@ -73,13 +112,21 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     uint from_prim = NO_PRIM;
     int entering = 0;
     uint bounces = 0;
+#if HAS_GGX
+    BsdfVertex last;
+    last.pdf = 0.0f;
+#endif
     for (;;) {
         Hit hit;
         nearest(sc, o, d, from, from_prim, entering, &hit);
         if (hit.object == NO_OBJECT) {
 #if HAS_ENV
             /* Left the scene: the environment, counted as an emitter's hit. */
-            l += emit * P->environment.xyz;
+            float w = 1.0f;
+#if HAS_GGX
+            w = hit_weight(sc, &last, environment_light(sc), d, (float3)(0.0f));
+#endif
+            l += emit * P->environment.xyz * w;
 #endif
             break;
         }
@@ -87,7 +134,13 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         Surf sf = surface_at(sc, &hit, o, d);
         __global const Material *m = &materials[sf.material];
         if (m->emissive) {
-            l += emit * m->emission.xyz;
+            float w = 1.0f;
+#if HAS_GGX
+            if (last.pdf > 0.0f) {
+                w = hit_weight(sc, &last, light_index(sc, sf.object, sf.prim), d, sf.p);
+            }
+#endif
+            l += emit * m->emission.xyz * w;
         }
         if (MAX_DEPTH != 0u && bounces >= MAX_DEPTH) {
             break;
@@ -127,7 +180,8 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
                     int keep = (uint)bits < threshold || threshold == 0xFFFFFFFFu;
                     j = keep ? column : lights[column].alias;
                 }
-                direct = direct_from(sc, &lights[j], &sf, nl, ns, light_2d(s, 0u), &ne);
+                float pmf = LIGHT_COUNT > 1u ? lights[j].pmf : 1.0f;
+                direct = direct_from(sc, &lights[j], pmf, &sf, nl, ns, light_2d(s, 0u), &ne);
                 if (LIGHT_COUNT > 1u) {
                     direct = direct / lights[j].pmf;
                 }
@@ -144,26 +198,35 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         }
 #endif
         float3 weight;
-        float3 glossy;
+        float bsdf_pdf;
         int transmitted;
-        float3 next = scatter(m, sc->ggx, d, arriving, ns, s, &weight, &specular, &transmitted, &glossy);
+        float3 next = scatter(m, sc->ggx, d, arriving, ns, s, &weight, &specular, &transmitted, &bsdf_pdf);
         /* A shading normal can send a direction to the wrong side of the
          * actual surface: such a sample has no contribution. */
         if (sf.smooth && (dot3(next, nl) > 0.0f) == transmitted) {
             break;
         }
-        glossy = beta * glossy;
         beta *= weight;
         bounces += 1u;
-        float q = 1.0f;
         if (bounces > RR_DEPTH || !(max3(beta) > 0.0f)) {
-            q = fmin(max3(beta), as_float(MAX_SURVIVAL_BITS));
+            float q = fmin(max3(beta), as_float(MAX_SURVIVAL_BITS));
             if (!(roulette(s) < q)) {
                 break;
             }
             beta /= q;
         }
-        emit = !gathered ? beta : (m->kind == MAT_PBR ? glossy / q : (float3)(0.0f));
+        emit = !gathered || m->kind == MAT_PBR ? beta : (float3)(0.0f);
+#if HAS_GGX
+        last.pdf = 0.0f;
+        if (gathered && m->kind == MAT_PBR) {
+            last.p = sf.p;
+            last.nl = nl;
+            last.ns = ns;
+            last.object = sf.object;
+            last.prim = sf.prim;
+            last.pdf = bsdf_pdf;
+        }
+#endif
         from = hit.object;
         from_prim = hit.prim;
         entering = dot3(next, sf.ng) < 0.0f;

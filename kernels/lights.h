@@ -109,3 +109,108 @@ static inline int sample_emitter(const Scene *sc, __global const Light *L, float
     return 0;
 #endif
 }
+
+#if HAS_GGX
+/* The index of the emitter that is triangle prim of object (or the whole
+ * object, prim NO_PRIM), or -1 (Lights::index_of): a binary search, the
+ * list being in (object, prim) order. */
+static inline int light_index(const Scene *sc, uint object, uint prim) {
+    __global const Params *P = sc->P; /* LIGHT_COUNT in the generic program */
+    (void)P;
+    uint lo = 0u;
+    uint hi = LIGHT_COUNT;
+    while (lo < hi) {
+        uint mid = lo + (hi - lo) / 2u;
+        __global const Light *L = &sc->lights[mid];
+        if (L->object < object || (L->object == object && L->prim < prim)) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    if (lo < LIGHT_COUNT && sc->lights[lo].object == object && sc->lights[lo].prim == prim) {
+        return (int)lo;
+    }
+    return -1;
+}
+
+/* The environment's emitter (always the last), or -1. */
+static inline int environment_light(const Scene *sc) {
+#if HAS_ENV
+    __global const Params *P = sc->P;
+    (void)P;
+    if (LIGHT_COUNT > 0u && sc->lights[LIGHT_COUNT - 1u].kind == LIGHT_ENVIRONMENT) {
+        return (int)(LIGHT_COUNT - 1u);
+    }
+#endif
+    return -1;
+}
+
+/* The density (solid angle) with which sample_emitter from p on (object,
+ * prim), normals nl and ns, gives direction dir meeting L at q
+ * (Emitter::pdf_direction): the same branches and formulas. */
+static inline float emitter_pdf(const Scene *sc, __global const Light *L, float3 p, uint object, uint prim, float3 nl,
+                                float3 ns, float3 dir, float3 q) {
+    int on_self = L->object == object && L->prim == prim;
+    float weight = 0.0f;
+#if HAS_TRI_LIGHTS
+    if (L->kind == LIGHT_TRIANGLE) {
+        if (on_self) {
+            return 0.0f;
+        }
+        float3 w = q - p;
+        weight = fabs(dot3(L->n.xyz, dir)) * L->n.w / dot3(w, w);
+    } else
+#endif
+#if HAS_ENV
+    if (L->kind == LIGHT_ENVIRONMENT) {
+        float c = dot3(ns, dir);
+        if (!(c > 0.0f)) {
+            return 0.0f;
+        }
+        weight = M_PI_F / c;
+    } else
+#endif
+    {
+#if HAS_SPHERE_LIGHTS || HAS_QUAD_LIGHTS
+        __global const Object *ob = &sc->objects[L->object];
+#if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS
+        if (ob->kind == KIND_SPHERE) {
+#endif
+#if HAS_SPHERE_LIGHTS
+            float3 to_center = ob->p0.xyz - p;
+            float d2 = dot3(to_center, to_center);
+            float r = ob->p0.w;
+            float r2 = r * r;
+            int inside = on_self ? dot3(nl, to_center) > 0.0f : d2 < r2;
+            if (on_self && !inside) {
+                return 0.0f;
+            }
+            if (inside) {
+                float3 m = (q - ob->p0.xyz) * (1.0f / r);
+                float3 w = q - p;
+                weight = fabs(dot3(m, dir)) * 4.0f * M_PI_F * r2 / dot3(w, w);
+            } else {
+                float sin2 = r2 / d2;
+                float cos_max = sqrt(fmax(1.0f - sin2, 0.0f));
+                weight = 2.0f * M_PI_F * (sin2 / (1.0f + cos_max));
+            }
+#endif
+#if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS
+        } else {
+#endif
+#if HAS_QUAD_LIGHTS
+            if (on_self) {
+                return 0.0f;
+            }
+            float3 w = q - p;
+            weight = fabs(dot3(ob->p3.xyz, dir)) * ob->p0.w / dot3(w, w);
+#endif
+#if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS
+        }
+#endif
+#endif
+    }
+    return weight > 0.0f ? 1.0f / weight : 0.0f;
+}
+#endif

@@ -43,17 +43,16 @@ static inline float3 reflect_dir(float3 d, float3 n) {
  * side it came from (material.rs, scatter); ggx is the scene's table for
  * MAT_PBR. Returns the new direction; *weight is BSDF cos / pdf,
  * *specular whether it was a delta lobe, *transmitted whether it went
- * through, *glossy the part of the weight next-event estimation leaves to
- * the next hit (Scattered::glossy). */
+ * through, *pdf the density of a MAT_PBR direction for MIS, else 0
+ * (Scattered::pdf). */
 static inline float3 scatter(__global const Material *m, __global const float *ggx, float3 d, int entering, float3 nl,
-                      Sampler *s, float3 *weight, int *specular, int *transmitted, float3 *glossy) {
+                      Sampler *s, float3 *weight, int *specular, int *transmitted, float *pdf) {
     *weight = m->albedo.xyz;
-    *glossy = m->albedo.xyz;
+    *pdf = 0.0f;
     *transmitted = 0;
 #if HAS_DIFFUSE
     if (m->kind == MAT_DIFFUSE) {
         *specular = 0;
-        *glossy = (float3)(0.0f);
         return cosine_hemisphere(nl, bsdf_2d(s));
     }
 #endif
@@ -66,13 +65,13 @@ static inline float3 scatter(__global const Material *m, __global const float *g
         basis(nl, &t, &b);
         float3 wo = (float3)(-dot3(d, t), -dot3(d, b), -dot3(d, nl));
         float3 wi;
-        if (ggx_sample(ggx, m->pbr, m->albedo.xyz, wo, choice, u, &wi, weight, glossy)) {
+        if (ggx_sample(ggx, m->pbr, m->albedo.xyz, wo, choice, u, &wi, weight, pdf)) {
             return t * wi.x + b * wi.y + nl * wi.z;
         }
         /* Below the surface: no contribution (the path ends on its zero
          * weight). */
         *weight = (float3)(0.0f);
-        *glossy = (float3)(0.0f);
+        *pdf = 0.0f;
         return nl;
     }
 #endif
@@ -110,6 +109,6 @@ static inline float3 scatter_outward(__global const Material *m, __global const 
                               float3 *weight, int *specular) {
     int entering = dot3(d, n) < 0.0f;
     int transmitted;
-    float3 glossy;
-    return scatter(m, ggx, d, entering, entering ? n : -n, s, weight, specular, &transmitted, &glossy);
+    float pdf;
+    return scatter(m, ggx, d, entering, entering ? n : -n, s, weight, specular, &transmitted, &pdf);
 }

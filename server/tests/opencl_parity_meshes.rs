@@ -431,3 +431,117 @@ fn light_picks_and_light_samples_agree_bit_for_bit() {
     eprintln!("{sampled} of {n} samples gave a direction");
     assert!(sampled > n / 2, "most samples give a direction ({sampled})");
 }
+
+/// Multiple importance sampling's routines, bit for bit: each emitter's
+/// density of a direction (1e5 random points, normals, directions and
+/// points on the emitter, a quarter of them on the emitter's own object),
+/// finding an emitter by object and triangle, and the power heuristic.
+#[test]
+fn mis_densities_and_emitter_lookups_agree_bit_for_bit() {
+    use pathstream::render::integrator::mis::power_heuristic;
+    use pathstream::render::light::Receiver;
+    use pathstream::render::world::{NO_OBJECT, NO_PRIM};
+    let Some(d) = device() else { return };
+    let job = RenderJob::new(&every_emitter(), 16, 16, &Quality::default());
+    let lights = &job.world.lights;
+    let packed = pack(&job);
+    let n = 100_000usize;
+    let count = lights.emitters.len() as u64;
+    let (mut input, mut which, mut want) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n as u64 {
+        let k = (i % count) as usize;
+        let e = &lights.emitters[k];
+        let p = Vec3A::new(uniform(i, 30), uniform(i, 31), uniform(i, 32)) * 120.0 - 60.0;
+        let normal = unit(i, 33);
+        let on = if i % 4 == 0 { e.object } else { NO_OBJECT };
+        let r = Receiver {
+            p,
+            object: on,
+            prim: if on == NO_OBJECT { NO_PRIM } else { e.prim },
+            nl: normal,
+            ns: normal,
+        };
+        // Sampled directions where sampling gives one, else any.
+        let dir = e
+            .sample_direction(&r, uniform(i, 34), uniform(i, 35))
+            .map_or(unit(i, 36), |(dir, _)| dir);
+        let q = p + dir * (1.0 + 90.0 * uniform(i, 37));
+        input.extend([
+            p.extend(f32::from_bits(on)).to_array(),
+            normal.extend(0.0).to_array(),
+            dir.extend(0.0).to_array(),
+            q.extend(0.0).to_array(),
+        ]);
+        which.push(k as u32);
+        want.push(e.pdf_direction(&r, dir, q));
+    }
+    let out: Vec<f32> = checks(&d)
+        .run(
+            "check_emitter_pdf",
+            n,
+            1,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&input)),
+                CheckArg::Buffer(bytemuck::cast_slice(&which)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.lights)),
+            ],
+        )
+        .expect("run");
+    let positive = want.iter().filter(|p| **p > 0.0).count();
+    for (i, (&got, &cpu)) in out.iter().zip(&want).enumerate() {
+        let e = &lights.emitters[which[i] as usize];
+        assert_eq!(
+            got.to_bits(),
+            cpu.to_bits(),
+            "density {i} ({:?}): device {got}, CPU {cpu}",
+            e.shape
+        );
+    }
+    assert!(
+        positive > n / 2,
+        "most directions have a density ({positive})"
+    );
+
+    // Every emitter's key, and keys next to them that are none.
+    let mut keys = Vec::new();
+    for e in &lights.emitters {
+        keys.extend([e.object, e.prim, e.object, e.prim.wrapping_add(1)]);
+        keys.extend([e.object.wrapping_add(1), e.prim, e.object, 0]);
+    }
+    let values = [0.0, 1e-30, 0.5, 1.0, 3.0, 1e20, f32::INFINITY];
+    let ab: Vec<f32> = (0..keys.len() / 2)
+        .flat_map(|i| [values[i % 7], values[(i / 7) % 7]])
+        .collect();
+    let m = keys.len() / 2;
+    let out: Vec<u32> = checks(&d)
+        .run(
+            "check_mis_routines",
+            m,
+            3,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&keys)),
+                CheckArg::Buffer(bytemuck::cast_slice(&ab)),
+                CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.lights)),
+            ],
+        )
+        .expect("run");
+    let env = lights.environment().map_or(u32::MAX, |i| i as u32);
+    for i in 0..m {
+        let index = lights
+            .index_of(keys[2 * i], keys[2 * i + 1])
+            .map_or(u32::MAX, |j| j as u32);
+        let w = power_heuristic(ab[2 * i], ab[2 * i + 1]);
+        assert_eq!(
+            (out[3 * i], out[3 * i + 1], out[3 * i + 2]),
+            (index, env, w.to_bits()),
+            "key ({}, {}), heuristic of {} and {}",
+            keys[2 * i],
+            keys[2 * i + 1],
+            ab[2 * i],
+            ab[2 * i + 1]
+        );
+    }
+    assert_ne!(env, u32::MAX, "the sky is an emitter");
+}

@@ -19,6 +19,7 @@ pub mod devices;
 pub mod fit;
 pub mod measure;
 pub mod meshes;
+pub mod mis;
 pub mod plot;
 pub mod report;
 mod run;
@@ -49,6 +50,8 @@ pub struct Sections {
     pub adaptive: bool,
     /// Random numbers vs Sobol points: time to 5%, 2%, 1% on every scene.
     pub samplers: bool,
+    /// BSDF sampling alone vs MIS: time to 5%, 2%, 1% on glossy scenes.
+    pub mis: bool,
     /// Every backend alone, then all at once on one render.
     pub devices: bool,
 }
@@ -62,6 +65,7 @@ impl Sections {
         meshes: true,
         adaptive: true,
         samplers: true,
+        mis: true,
         devices: true,
     };
 }
@@ -85,7 +89,9 @@ pub struct Config {
     pub adaptive_scenes: Vec<String>,
     /// Scenes of the samplers section (at the trade size and time).
     pub sampler_scenes: Vec<String>,
-    /// Seeds of the paired sections (adaptive, samplers): each pair of
+    /// Scenes of the MIS section (at the trade size and time).
+    pub mis_scenes: Vec<String>,
+    /// Seeds of the paired sections (adaptive, samplers, mis): each pair of
     /// curves is rendered with every one (a single curve's time to 1%
     /// varies by 10-15%).
     pub seeds: u64,
@@ -145,6 +151,9 @@ impl Config {
             ]
             .map(String::from)
             .to_vec(),
+            mis_scenes: [scenes::GLOSSY_PLANE, scenes::CORNELL_MESH_PBR]
+                .map(String::from)
+                .to_vec(),
             seeds: 3,
             trade_size: (64, 64),
             trade_seconds: 10.0,
@@ -166,6 +175,7 @@ impl Config {
             trade_scenes: vec!["cornell".into()],
             adaptive_scenes: vec!["cornell".into()],
             sampler_scenes: vec!["cornell".into()],
+            mis_scenes: vec![scenes::GLOSSY_PLANE.into()],
             seeds: 1,
             trade_size: (16, 16),
             trade_seconds: 0.15,
@@ -262,6 +272,9 @@ pub struct Results {
     /// The samplers section: per scene, backend and seed, the random curve
     /// then the Sobol one.
     pub samplers: Vec<TradeCurve>,
+    /// The MIS section: per scene, backend and seed, the BSDF-only curve
+    /// then the MIS one.
+    pub mis: Vec<TradeCurve>,
     pub specialisation: Vec<SpecialisationRow>,
     pub meshes: Vec<meshes::MeshRow>,
     pub devices: Vec<devices::DevicesRow>,

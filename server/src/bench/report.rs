@@ -28,6 +28,7 @@ pub fn markdown(r: &Results) -> String {
     trade(w, r);
     super::adaptive::markdown(w, r);
     super::samplers::markdown(w, r);
+    super::mis::markdown(w, r);
     calibration(w, r);
     specialisation(w, r);
     meshes(w, r);

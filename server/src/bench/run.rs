@@ -5,8 +5,8 @@ use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
 use super::measure::TRACE_SEED;
 use super::settings::{self, Setting};
 use super::{
-    adaptive, cells, fit, measure, samplers, scenes, BenchError, CalibrationRow, Config, Observer,
-    Results, SpecialisationRow, ThroughputRow, TradeCurve,
+    adaptive, cells, fit, measure, mis, samplers, scenes, BenchError, CalibrationRow, Config,
+    Observer, Results, SpecialisationRow, ThroughputRow, TradeCurve,
 };
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
 use crate::render::{Backend, BackendChoice, Quality, RenderJob, Scene};
@@ -54,6 +54,10 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         true => load(&config.sampler_scenes)?,
         false => Vec::new(),
     };
+    let mis_scenes = match config.sections.mis {
+        true => load(&config.mis_scenes)?,
+        false => Vec::new(),
+    };
     let backends = open_backends(config, observer)?;
     let s = config.sections;
     let settings: Vec<Setting> = if s.trade {
@@ -68,7 +72,7 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         .iter()
         .filter(|b| matches!(b, Backend::OpenCl { .. }))
         .count() as u64;
-    let na = (adaptive_scenes.len() + sampler_scenes.len()) as u64;
+    let na = (adaptive_scenes.len() + sampler_scenes.len() + mis_scenes.len()) as u64;
     let (nb, nt, nr) = (
         backends.len() as u64,
         throughput_scenes.len() as u64,
@@ -118,6 +122,9 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     }
     if s.samplers {
         work.results.samplers = work.pairs(&sampler_scenes, samplers::pair())?;
+    }
+    if s.mis {
+        work.results.mis = work.pairs(&mis_scenes, mis::pair())?;
     }
     if s.specialisation {
         work.specialisation(&throughput_scenes)?;

@@ -11,7 +11,11 @@
 //!   would light the ceiling above it from a hair's breadth);
 //! - `cornell-mesh-pbr`: `cornell-mesh` with glTF metallic-roughness balls,
 //!   a rough gold metal and a coated blue plastic (what the GGX lobes
-//!   cost against the diffuse ones).
+//!   cost against the diffuse ones);
+//! - `glossy-plane`: a rough metal plane (roughness 0.3) reflecting a
+//!   small bright sphere light, a large dim quad light, an 80-triangle
+//!   glowing ball and a dim sky (every emitter kind in a glossy
+//!   reflection: where multiple importance sampling matters).
 
 use crate::model::generate::{bumpy_sphere, icosphere};
 use crate::model::MeshData;
@@ -24,6 +28,8 @@ pub const GLASS_MESH: &str = "cornell-glass-mesh";
 pub const CORNELL_MESH: &str = "cornell-mesh";
 /// `cornell-mesh-pbr`.
 pub const CORNELL_MESH_PBR: &str = "cornell-mesh-pbr";
+/// `glossy-plane`.
+pub const GLOSSY_PLANE: &str = "glossy-plane";
 
 /// The scene by name: a mesh scene of this module's, else a built-in one
 /// or a file.
@@ -32,6 +38,7 @@ pub fn load(name: &str) -> Result<Scene, SceneError> {
         GLASS_MESH => glass_mesh(),
         CORNELL_MESH => cornell_mesh(),
         CORNELL_MESH_PBR => cornell_mesh_pbr(),
+        GLOSSY_PLANE => glossy_plane(0.3),
         _ => crate::resolve::load_scene(name),
     }
 }
@@ -154,6 +161,29 @@ fn box_with_balls(left: Value, right: Value) -> Result<Scene, SceneError> {
     }))
 }
 
+/// `glossy-plane`, its metal of `roughness`.
+pub fn glossy_plane(roughness: f64) -> Result<Scene, SceneError> {
+    let ball = icosphere(1);
+    Scene::from_json_value(json!({
+        "camera": {"position": [0, 1.2, 4], "look_at": [0, 0, 0], "vfov_deg": 50},
+        "environment": [0.05, 0.06, 0.08],
+        "materials": {
+            "metal": {"type": "pbr", "base_color": [0.9, 0.8, 0.7], "metallic": 1, "roughness": roughness},
+            "small": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [100, 80, 60]},
+            "large": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [0.6, 0.7, 0.9]},
+            "glow": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 1, 1]}
+        },
+        "objects": [
+            {"type": "quad", "corner": [-3, 0, -3], "edge_u": [0, 0, 6], "edge_v": [6, 0, 0], "material": "metal"},
+            {"type": "sphere", "center": [-0.8, 1.0, -1.5], "radius": 0.15, "material": "small"},
+            {"type": "quad", "corner": [0.2, 0.8, -3], "edge_u": [3, 0, 0], "edge_v": [0, 2.5, 0], "material": "large"},
+            {"type": "mesh", "material": "glow",
+             "data": {"positions": ball.positions, "triangles": ball.triangles},
+             "transform": {"translate": [-1.6, 0.5, -0.6], "scale": 0.25}}
+        ]
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -178,5 +208,8 @@ mod tests {
             .materials
             .iter()
             .any(|m| matches!(m.kind, crate::render::scene::MaterialKind::Pbr { .. })));
+        let g = load(GLOSSY_PLANE).expect("valid");
+        assert_eq!(g.emitters().count(), 3, "sphere, quad and ball glow");
+        assert!(g.warnings.is_empty(), "{:?}", g.warnings);
     }
 }

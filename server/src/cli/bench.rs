@@ -26,6 +26,8 @@ pub enum SectionArg {
     Adaptive,
     /// Random numbers vs Sobol points: time to 5/2/1% error on every built-in scene and two mesh scenes.
     Samplers,
+    /// BSDF sampling alone vs MIS: time to 5/2/1% error on glossy-plane and cornell-mesh-pbr.
+    Mis,
     /// Every backend alone, then all at once on one render (--backend all): paths/s of each and combined.
     Devices,
 }
@@ -48,12 +50,13 @@ pub struct BenchArgs {
     /// Sections to run, comma-separated [default: all].
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     sections: Vec<SectionArg>,
-    /// Scenes for every section, comma-separated (built-in names, the mesh
-    /// scenes cornell-glass-mesh, cornell-mesh and cornell-mesh-pbr, or JSON
-    /// files) [default: throughput on cornell, cornell-glass,
-    /// cornell-quads, smallpt, furnace, cornell-mesh, cornell-mesh-pbr;
-    /// trade on cornell, cornell-glass, smallpt; adaptive and samplers on
-    /// the five built-in scenes and the first two mesh scenes].
+    /// Scenes for every section, comma-separated (built-in names, the bench
+    /// scenes cornell-glass-mesh, cornell-mesh, cornell-mesh-pbr and
+    /// glossy-plane, or JSON files) [default: throughput on cornell,
+    /// cornell-glass, cornell-quads, smallpt, furnace, cornell-mesh,
+    /// cornell-mesh-pbr; trade on cornell, cornell-glass, smallpt; adaptive
+    /// and samplers on the five built-in scenes and the first two mesh
+    /// scenes; mis on glossy-plane and cornell-mesh-pbr].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     scenes: Vec<String>,
     /// A small version that runs in seconds (small images, short runs,
@@ -76,7 +79,7 @@ pub struct BenchArgs {
     /// Seconds per throughput measurement [default: 3; 0.1 with --quick].
     #[arg(long, value_name = "S")]
     throughput_seconds: Option<f64>,
-    /// Seeds of the paired sections (adaptive, samplers): both settings are
+    /// Seeds of the paired sections (adaptive, samplers, mis): both settings are
     /// rendered with each, and the tables give the median speed-up and the
     /// range [default: 3; 1 with --quick].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100))]
@@ -163,6 +166,7 @@ impl BenchArgs {
                 meshes: has(SectionArg::Meshes),
                 adaptive: has(SectionArg::Adaptive),
                 samplers: has(SectionArg::Samplers),
+                mis: has(SectionArg::Mis),
                 devices: has(SectionArg::Devices),
             };
         }
@@ -171,6 +175,7 @@ impl BenchArgs {
             c.trade_scenes = self.scenes.clone();
             c.adaptive_scenes = self.scenes.clone();
             c.sampler_scenes = self.scenes.clone();
+            c.mis_scenes = self.scenes.clone();
         }
         if let Some(dir) = &self.cache {
             c.cache_dir = dir.clone();

@@ -275,27 +275,13 @@ impl Lobes {
     }
 }
 
-/// BSDF times cos(theta_i) for `wo` and `wi` in the shading frame.
+/// BSDF times cos(theta_i) for `wo` and `wi` in the shading frame: the
+/// single-scattering microfacet lobes, the multiple-scattering lobes and
+/// the diffuse base.
 #[inline(always)]
 pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> Vec3A {
-    let (glossy, rest) = eval_cos_parts(t, p, base, lobes, wo, wi);
-    glossy + rest
-}
-
-/// [`eval_cos`] in two parts: the single-scattering microfacet lobes
-/// (narrow: found by sampling them) and the rest, the multiple-scattering
-/// and diffuse lobes (broad: found by next-event estimation).
-#[inline(always)]
-pub fn eval_cos_parts(
-    t: &Tables,
-    p: &Pbr,
-    base: Vec3A,
-    lobes: &Lobes,
-    wo: Vec3A,
-    wi: Vec3A,
-) -> (Vec3A, Vec3A) {
     if !(wi.z > 0.0 && wo.z > 0.0) {
-        return (Vec3A::ZERO, Vec3A::ZERO);
+        return Vec3A::ZERO;
     }
     let h = (wo + wi).normalize();
     let (ro, ri) = (smith_r(wo, p.alpha), smith_r(wi, p.alpha));
@@ -309,11 +295,11 @@ pub fn eval_cos_parts(
     let ms = (1.0 - lobes.e_o) * (1.0 - e_i) * FRAC_1_PI / (1.0 - e_avg).max(1e-6);
     let es_i = p.f0 * a_i + b_i + (1.0 - e_i) * lobes.fms_diel;
     let diffuse = (1.0 - lobes.es_o) * (1.0 - es_i) * FRAC_1_PI / (1.0 - lobes.es_avg).max(1e-6);
-    let glossy = (base + (Vec3A::ONE - base) * c5) * (spec * p.metallic)
+    let single = (base + (Vec3A::ONE - base) * c5) * (spec * p.metallic)
         + Vec3A::splat((p.f0 + (1.0 - p.f0) * c5) * spec * (1.0 - p.metallic));
-    let rest = lobes.fms_metal * (ms * p.metallic)
+    let multiple = lobes.fms_metal * (ms * p.metallic)
         + (base * diffuse + Vec3A::splat(lobes.fms_diel * ms)) * (1.0 - p.metallic);
-    (glossy * wi.z, rest * wi.z)
+    (single + multiple) * wi.z
 }
 
 /// The sampling density of direction `wi` (solid angle) from `wo`.
@@ -334,9 +320,9 @@ pub struct Sample {
     pub wi: Vec3A,
     /// BSDF cos / pdf.
     pub weight: Vec3A,
-    /// The single-scattering lobes' share of it (what next-event
-    /// estimation leaves to this sample: see [`eval_cos_parts`]).
-    pub glossy: Vec3A,
+    /// The density it was drawn with ([`pdf`]), for multiple importance
+    /// sampling.
+    pub pdf: f32,
 }
 
 /// A direction from `wo` (shading frame), drawn with `choice` and (u1, u2)
@@ -369,11 +355,10 @@ pub fn sample(
     if !(pdf > 0.0) {
         return None;
     }
-    let (glossy, rest) = eval_cos_parts(t, p, base, &lobes, wo, wi);
     Some(Sample {
         wi,
-        weight: (glossy + rest) / pdf,
-        glossy: glossy / pdf,
+        weight: eval_cos(t, p, base, &lobes, wo, wi) / pdf,
+        pdf,
     })
 }
 

@@ -71,11 +71,11 @@ pub struct Scattered {
     pub specular: bool,
     /// Through the surface (refraction), not back off it.
     pub transmitted: bool,
-    /// The part of `weight` whose light next-event estimation at this
-    /// vertex does not gather (where it runs): the next hit counts its
-    /// emission with this weight (diffuse: none; `pbr`: its narrow
-    /// single-scattering lobes', `ggx::eval_cos_parts`).
-    pub glossy: Vec3A,
+    /// The density (solid angle) the direction was drawn with, where
+    /// multiple importance sampling weighs it against next-event
+    /// estimation (`pbr`); 0 elsewhere (a diffuse surface leaves emitters
+    /// to next-event estimation alone; a delta lobe has no density).
+    pub pdf: f32,
 }
 
 /// Mirror reflection of `d` about unit `n`.
@@ -113,7 +113,7 @@ pub fn scatter(
                 weight: m.albedo,
                 specular: false,
                 transmitted: false,
-                glossy: Vec3A::ZERO,
+                pdf: 0.0,
             }
         }
         Bsdf::Mirror => Scattered {
@@ -121,7 +121,7 @@ pub fn scatter(
             weight: m.albedo,
             specular: true,
             transmitted: false,
-            glossy: m.albedo,
+            pdf: 0.0,
         },
         Bsdf::Glass { ior, schlick } => {
             let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
@@ -143,7 +143,7 @@ pub fn scatter(
                 weight: m.albedo,
                 specular: true,
                 transmitted: !reflected,
-                glossy: m.albedo,
+                pdf: 0.0,
             }
         }
         Bsdf::Pbr(p) => {
@@ -157,7 +157,7 @@ pub fn scatter(
                     weight: s.weight,
                     specular: false,
                     transmitted: false,
-                    glossy: s.glossy,
+                    pdf: s.pdf,
                 },
                 // Below the surface: no contribution (the path ends on its
                 // zero weight).
@@ -166,7 +166,7 @@ pub fn scatter(
                     weight: Vec3A::ZERO,
                     specular: false,
                     transmitted: false,
-                    glossy: Vec3A::ZERO,
+                    pdf: 0.0,
                 },
             }
         }

@@ -123,6 +123,7 @@ impl Quality {
             nee: self.nee,
             clamp: self.clamp,
             light_sampling: crate::render::integrator::LightSampling::Power,
+            combine: crate::render::integrator::Combine::Mis,
         }
     }
 }

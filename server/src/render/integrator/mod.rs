@@ -6,13 +6,15 @@
 //! diffuse point is gathered by the shadow rays, so an emitter met by the
 //! following diffuse bounce is not counted again; after a specular bounce it
 //! is (NEE cannot sample a delta lobe). NEE on and off therefore estimate the
-//! same quantity at every depth cap. A `pbr` surface splits its BSDF
-//! (`ggx::eval_cos_parts`): NEE gathers the light of its broad lobes, and
-//! the next hit counts emission weighted by its narrow lobes' share of the
-//! sample (`Scattered::glossy`); the two parts add up to the whole.
+//! same quantity at every depth cap. At a `pbr` surface both find the
+//! light, weighted by multiple importance sampling (`mis`): the shadow ray
+//! by the power heuristic of its density against the BSDF's, the next hit's
+//! emission by the BSDF sample's against the light's.
 
+pub mod mis;
 pub mod nee;
 
+pub use mis::Combine;
 pub use nee::LightSampling;
 
 use crate::render::camera::CameraRays;
@@ -24,6 +26,7 @@ use crate::render::math::{basis, max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
 use crate::render::world::{Hit, Origin, World};
+use mis::BsdfVertex;
 use std::f32::consts::FRAC_1_PI;
 
 /// Largest Russian-roulette survival probability: even albedo-1 mirrors end
@@ -43,6 +46,9 @@ pub struct PathSettings {
     /// How next-event estimation picks emitters (not a quality setting:
     /// `Power` always, except where tests compare the two).
     pub light_sampling: LightSampling,
+    /// How a `pbr` vertex weighs its light and BSDF samples (`Mis` always,
+    /// except where tests compare the strategies).
+    pub combine: Combine,
 }
 
 /// A path between bounces: everything the path loop carries, so that the
@@ -56,10 +62,11 @@ pub struct Path {
     l: Vec3A,
     beta: Vec3A,
     /// The throughput with which the next hit counts the emission it
-    /// finds: `beta` after a camera ray, a specular bounce or with NEE off;
-    /// zero after a diffuse bounce that NEE gathered; a `pbr` bounce's
-    /// narrow-lobe share.
+    /// finds: `beta`, except zero after a diffuse bounce that NEE gathered.
     emit: Vec3A,
+    /// After a `pbr` bounce that NEE gathered: where it left and its
+    /// density, for the emission's MIS weight.
+    last: BsdfVertex,
     bounces: u32,
 }
 
@@ -75,8 +82,31 @@ impl Path {
             l: Vec3A::ZERO,
             beta: Vec3A::ONE,
             emit: Vec3A::ONE,
+            last: BsdfVertex::NONE,
             bounces: 0,
         }
+    }
+
+    /// What emission `le` found by the last sample along `self.ray` at `q`
+    /// adds to the path: weighted by MIS where the last vertex asks for it,
+    /// `emitter` finding the emitter (a `world.lights` index) only then.
+    #[inline(always)]
+    fn emission(
+        &self,
+        world: &World,
+        settings: &PathSettings,
+        le: Vec3A,
+        emitter: impl FnOnce() -> Option<usize>,
+        q: Vec3A,
+    ) -> Vec3A {
+        let mut c = self.emit * le;
+        if self.last.pdf > 0.0 {
+            let how = (settings.light_sampling, settings.combine);
+            c *= self
+                .last
+                .hit_weight(&world.lights, how, emitter(), self.ray.dir, q);
+        }
+        c
     }
 
     /// Continues the path at `hit`, the nearest hit along `self.ray`
@@ -92,7 +122,8 @@ impl Path {
     ) -> bool {
         let Some(hit) = hit else {
             // Left the scene: the environment, counted as an emitter's hit.
-            self.l += self.emit * world.environment;
+            let sky = || world.lights.environment();
+            self.l += self.emission(world, settings, world.environment, sky, Vec3A::ZERO);
             return false;
         };
         let ray = &self.ray;
@@ -100,7 +131,8 @@ impl Path {
         let s = world.surface(&hit, ray);
         let m = world.material(s.material);
         if m.emissive {
-            self.l += self.emit * m.emission;
+            let emitter = || world.lights.index_of(s.object, s.prim);
+            self.l += self.emission(world, settings, m.emission, emitter, s.p);
         }
         if settings.max_depth != 0 && self.bounces >= settings.max_depth {
             return false;
@@ -124,19 +156,22 @@ impl Path {
                 let wo = -local(ray.dir);
                 let tables = ggx::tables();
                 let lobes = ggx::Lobes::new(tables, p, m.albedo, wo);
-                let f =
-                    |dir: Vec3A| ggx::eval_cos_parts(tables, p, m.albedo, &lobes, wo, local(dir)).1;
+                let f = |dir: Vec3A, light_pdf: f32| {
+                    let wi = local(dir);
+                    let bsdf_pdf = ggx::pdf(p, &lobes, wo, wi);
+                    let w = mis::light_weight(settings.combine, light_pdf, bsdf_pdf);
+                    ggx::eval_cos(tables, p, m.albedo, &lobes, wo, wi) * w
+                };
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
                 self.l += self.beta * direct;
             } else {
-                let f = |dir: Vec3A| Vec3A::splat(ns.dot(dir));
+                let f = |dir: Vec3A, _pdf: f32| Vec3A::splat(ns.dot(dir));
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
                 self.l += self.beta * m.albedo * direct * FRAC_1_PI;
             }
             if settings.max_depth != 0 && self.bounces + 1 >= settings.max_depth {
-                // The bounce's own hit would count at most the narrow
-                // lobes' emission: a diffuse surface has none, and a
-                // `pbr` one's is counted below when it goes on.
+                // The bounce's own hit would count no emission after a
+                // diffuse surface; after a `pbr` one, its MIS share.
                 if !matches!(m.bsdf, Bsdf::Pbr(_)) {
                     return false;
                 }
@@ -149,21 +184,25 @@ impl Path {
         if s.smooth && (sc.dir.dot(nl) > 0.0) == sc.transmitted {
             return false;
         }
-        let glossy = self.beta * sc.glossy;
         self.beta *= sc.weight;
         self.bounces += 1;
-        let mut q = 1.0;
         if self.bounces > settings.rr_depth || !(max_component(self.beta) > 0.0) {
-            q = max_component(self.beta).min(MAX_SURVIVAL);
+            let q = max_component(self.beta).min(MAX_SURVIVAL);
             if !(self.sampler.roulette() < q) {
                 return false;
             }
             self.beta /= q;
         }
-        self.emit = match (gathered, &m.bsdf) {
-            (false, _) => self.beta,
-            (true, Bsdf::Pbr(_)) => glossy / q,
-            (true, _) => Vec3A::ZERO,
+        (self.emit, self.last) = match (gathered, &m.bsdf) {
+            (false, _) => (self.beta, BsdfVertex::NONE),
+            (true, Bsdf::Pbr(_)) => (
+                self.beta,
+                BsdfVertex {
+                    from: s.receiver(nl, ns),
+                    pdf: sc.pdf,
+                },
+            ),
+            (true, _) => (Vec3A::ZERO, BsdfVertex::NONE),
         };
         self.from = Origin {
             object: hit.object,

@@ -24,12 +24,13 @@ pub enum LightSampling {
     All,
 }
 
-/// Sum over the sampled emitters of Le * V * f(dir) / pdf(direction) for
-/// surface `s`, whose geometric normal `nl` and shading normal `ns` face
-/// the side the path came from; `f` is what the surface makes of light
-/// from a unit direction (for diffuse, cos(theta_s), the caller multiplying
-/// by albedo / pi; for `pbr`, BSDF cos of its broad lobes). `isa` picks the
-/// intersection kernels.
+/// Sum over the sampled emitters of Le * V * f(dir, pdf) / pdf for surface
+/// `s`, whose geometric normal `nl` and shading normal `ns` face the side
+/// the path came from; `f` is what the surface makes of light from a unit
+/// direction drawn with density `pdf` (the pick's probability times the
+/// emitter's solid-angle density): for diffuse, cos(theta_s), the caller
+/// multiplying by albedo / pi; for `pbr`, BSDF cos weighted against BSDF
+/// sampling (`mis`). `isa` picks the intersection kernels.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn direct<I: Isa>(
@@ -40,7 +41,7 @@ pub fn direct<I: Isa>(
     ns: Vec3A,
     sampling: LightSampling,
     sampler: &mut Sampler,
-    f: impl Fn(Vec3A) -> Vec3A,
+    f: impl Fn(Vec3A, f32) -> Vec3A,
 ) -> Vec3A {
     let lights = &world.lights;
     match sampling {
@@ -48,7 +49,7 @@ pub fn direct<I: Isa>(
             [] => Vec3A::ZERO,
             // One emitter (the thesis's scenes): picked with probability 1,
             // no random number spent on the pick.
-            [only] => one(isa, world, only, s, nl, ns, sampler.light_2d(0), &f),
+            [only] => one(isa, world, (only, 1.0), s, nl, ns, sampler.light_2d(0), &f),
             _ => {
                 let Some(table) = &lights.table else {
                     return Vec3A::ZERO;
@@ -57,7 +58,7 @@ pub fn direct<I: Isa>(
                 one(
                     isa,
                     world,
-                    &lights.emitters[i],
+                    (&lights.emitters[i], pmf),
                     s,
                     nl,
                     ns,
@@ -69,25 +70,34 @@ pub fn direct<I: Isa>(
         LightSampling::All => {
             let mut sum = Vec3A::ZERO;
             for (k, e) in lights.emitters.iter().enumerate() {
-                sum += one(isa, world, e, s, nl, ns, sampler.light_2d(k as u32), &f);
+                sum += one(
+                    isa,
+                    world,
+                    (e, 1.0),
+                    s,
+                    nl,
+                    ns,
+                    sampler.light_2d(k as u32),
+                    &f,
+                );
             }
             sum
         }
     }
 }
 
-/// One shadow ray towards `e`.
+/// One shadow ray towards `e`, picked with probability `pmf`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn one<I: Isa>(
     isa: I,
     world: &World,
-    e: &Emitter,
+    (e, pmf): (&Emitter, f32),
     s: &Surface,
     nl: Vec3A,
     ns: Vec3A,
     (u1, u2): (f32, f32),
-    f: &impl Fn(Vec3A) -> Vec3A,
+    f: &impl Fn(Vec3A, f32) -> Vec3A,
 ) -> Vec3A {
     let Some((dir, weight)) = e.sample_direction(&s.receiver(nl, ns), u1, u2) else {
         return Vec3A::ZERO;
@@ -107,7 +117,7 @@ fn one<I: Isa>(
         _ => hit.is_some_and(|h| h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim)),
     };
     if visible {
-        e.emission * (f(dir) * weight)
+        e.emission * (f(dir, pmf / weight) * weight)
     } else {
         Vec3A::ZERO
     }

@@ -12,14 +12,16 @@
 //! Every emitter is two-sided (emission leaves both sides of a surface).
 //!
 //! ## Adding an emitter kind ([`EmitterShape`])
-//! 1. Here: its `EmitterShape` variant, its `power` and how
-//!    `sample_direction` samples it (a chi-square test of the pdf).
+//! 1. Here: its `EmitterShape` variant, its `power`, how
+//!    `sample_direction` samples it (a chi-square test of the pdf) and
+//!    `pdf_direction`, the same density for MIS (`emitter_tests.rs`).
 //! 2. `render/world/emitters.rs`: which objects make it; the shadow ray's
 //!    visibility test in `render/integrator/nee.rs`.
 //! 3. OpenCL: a `LIGHT_` constant and its packing (`kernel_lights` in
 //!    `backend/opencl/layout.rs`), its `HAS_` feature (`program.rs`), its
-//!    case in `kernels/lights.h`, and a case in the light-sampling parity
-//!    test (`tests/opencl_parity_meshes.rs`).
+//!    cases in `kernels/lights.h` (`sample_emitter`, `emitter_pdf`), and a
+//!    case in the light-sampling parity tests
+//!    (`tests/opencl_parity_meshes.rs`).
 
 use super::alias::AliasTable;
 use crate::render::material::cosine_hemisphere;
@@ -87,6 +89,12 @@ impl Lights {
     /// power; an environment among them counts as seen from everywhere
     /// within `radius` of the origin.
     pub fn new(emitters: Vec<Emitter>, radius: f64) -> Self {
+        debug_assert!(
+            emitters
+                .windows(2)
+                .all(|w| (w[0].object, w[0].prim) < (w[1].object, w[1].prim)),
+            "emitters in (object, prim) order, for index_of"
+        );
         let power: Vec<f64> = emitters.iter().map(|e| e.power(radius)).collect();
         Self {
             table: AliasTable::new(&power),
@@ -96,6 +104,35 @@ impl Lights {
 
     pub fn is_empty(&self) -> bool {
         self.emitters.is_empty()
+    }
+
+    /// The emitter that is triangle `prim` of `object` (or the whole
+    /// object, `prim` the world's `NO_PRIM`). The list is in object order
+    /// and a mesh's triangles in triangle order (`world/emitters.rs`), so
+    /// this is a binary search; the kernel's `light_index` does the same.
+    #[inline(always)]
+    pub fn index_of(&self, object: u32, prim: u32) -> Option<usize> {
+        self.emitters
+            .binary_search_by(|e| (e.object, e.prim).cmp(&(object, prim)))
+            .ok()
+    }
+
+    /// The environment's emitter (always the last).
+    #[inline(always)]
+    pub fn environment(&self) -> Option<usize> {
+        let last = self.emitters.len().checked_sub(1)?;
+        matches!(self.emitters[last].shape, EmitterShape::Environment).then_some(last)
+    }
+
+    /// The probability that one power-proportional pick chooses emitter
+    /// `i`: 1 for the only one, 0 where nothing is picked (no table).
+    #[inline(always)]
+    pub fn pick_pmf(&self, i: usize) -> f32 {
+        match (self.emitters.len(), &self.table) {
+            (1, _) => 1.0,
+            (_, Some(t)) => t.pmf(i),
+            (_, None) => 0.0,
+        }
     }
 }
 
@@ -143,6 +180,63 @@ impl Emitter {
                 let cos = ns.dot(dir);
                 (cos > 0.0).then(|| (dir, PI / cos))
             }
+        }
+    }
+}
+
+impl Emitter {
+    /// The density (solid angle) with which [`Emitter::sample_direction`]
+    /// from `r` gives the unit direction `dir` that meets this emitter at
+    /// `q` (ignored for the environment): what multiple importance
+    /// sampling weighs a BSDF sample that found the emitter against. The
+    /// same branches and formulas as sampling, so that 1/pdf is the weight
+    /// sampling would have returned for that direction; 0 where sampling
+    /// cannot give it.
+    #[inline(always)]
+    pub fn pdf_direction(&self, r: &Receiver, dir: Vec3A, q: Vec3A) -> f32 {
+        let on_self = self.object == r.object && self.prim == r.prim;
+        let weight = match &self.shape {
+            EmitterShape::Sphere(s) => {
+                let to_center = s.center - r.p;
+                let d2 = to_center.length_squared();
+                let r2 = s.radius * s.radius;
+                let inside = if on_self {
+                    r.nl.dot(to_center) > 0.0
+                } else {
+                    d2 < r2
+                };
+                if on_self && !inside {
+                    return 0.0;
+                }
+                if inside {
+                    let m = (q - s.center) * (1.0 / s.radius);
+                    let dist2 = (q - r.p).length_squared();
+                    m.dot(dir).abs() * 4.0 * PI * r2 / dist2
+                } else {
+                    let sin2 = r2 / d2;
+                    let cos_max = (1.0 - sin2).max(0.0).sqrt();
+                    TAU * (sin2 / (1.0 + cos_max))
+                }
+            }
+            EmitterShape::Quad(quad) if !on_self => {
+                quad.normal.dot(dir).abs() * quad.area / (q - r.p).length_squared()
+            }
+            EmitterShape::Triangle(t) if !on_self => {
+                t.n.dot(dir).abs() * t.area / (q - r.p).length_squared()
+            }
+            EmitterShape::Quad(_) | EmitterShape::Triangle(_) => return 0.0,
+            EmitterShape::Environment => {
+                let cos = r.ns.dot(dir);
+                if !(cos > 0.0) {
+                    return 0.0;
+                }
+                PI / cos
+            }
+        };
+        if weight > 0.0 {
+            1.0 / weight
+        } else {
+            0.0
         }
     }
 }
@@ -209,3 +303,7 @@ fn sample_sphere(
         Some((dir, TAU * one_minus_cos_max))
     }
 }
+
+#[cfg(test)]
+#[path = "emitter_tests.rs"]
+mod tests;

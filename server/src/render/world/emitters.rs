@@ -1,6 +1,10 @@
 //! The world's emitters, listed for next-event estimation: emissive
 //! spheres and quads, each emissive triangle of a mesh instance, and the
 //! environment when it is not black.
+//!
+//! The list is in (object, triangle) order, the environment last:
+//! `Lights::index_of` (and the kernel's `light_index`) find the emitter a
+//! BSDF sample hit by binary search on it.
 
 use super::{Geometry, Instance, WorldObject, NO_PRIM};
 use crate::render::light::{Emitter, EmitterShape, LightTri, Lights};
