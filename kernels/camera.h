@@ -1,4 +1,4 @@
-/* Pinhole camera and pixel filters: camera.rs and filter.rs. */
+/* Pinhole and thin-lens camera, pixel filters: camera.rs and filter.rs. */
 
 static inline float tent(float u) {
     float r = 2.0f * u;
@@ -27,10 +27,24 @@ static inline float2 pixel_offset(__global const Params *P, ulong sample, float2
     return (float2)((sx + 0.5f + tent(u.x)) * 0.5f, (sy + 0.5f + tent(u.y)) * 0.5f);
 }
 
-static inline void camera_ray(__global const Params *P, float x, float y, float3 *origin, float3 *dir) {
+/* The ray through raster (x, y) (CameraRays::ray, lens_ray): from the
+ * pinhole, or from a point of the lens drawn from s towards where the
+ * pinhole ray meets the plane in focus. */
+static inline void camera_ray(__global const Params *P, float x, float y, Sampler *s, float3 *origin, float3 *dir) {
     float3 d = P->forward.xyz
         + P->right.xyz * (x * (1.0f / (float)P->width) - 0.5f)
         + P->up.xyz * (0.5f - y * (1.0f / (float)P->height));
+#if HAS_LENS
+    if (P->lens_x > 0.0f) {
+        float2 u = lens_2d(s);
+        float r = sqrt(u.x);
+        float2 sc = sincos_turns(u.y);
+        float3 o = P->right.xyz * (P->lens_x * (r * sc.y)) + P->up.xyz * (P->lens_y * (r * sc.x));
+        *dir = normalize3(d * P->right.w - o);
+        *origin = o + *dir * P->forward.w;
+        return;
+    }
+#endif
     /* near_clip along the ray itself (smallpt's camera), not to a plane. */
     *dir = normalize3(d);
     *origin = *dir * P->forward.w;

@@ -20,29 +20,31 @@ __kernel void check_rng(__global ulong *out, uint n, __global const ulong *in) {
 
 /* A path's numbers by use from sampler_of_kind(sobol, seed, pixel, sample)
  * (4 ulongs per item: sobol, seed, pixel, sample): at vertices 0 and 3,
- * the camera's 2-D, a light pick among 7, light 2-D for emitters 0 and 2,
- * the BSDF's choice and 2-D, the roulette: 12 floats per vertex as bits
- * (the pick as its two halves), 24 per item. */
+ * the camera's 2-D, the lens's 2-D, a light pick among 7, light 2-D for
+ * emitters 0 and 2, the BSDF's choice and 2-D, the roulette: 14 floats per
+ * vertex as bits (the pick as its two halves), 28 per item. */
 __kernel void check_sampler_uses(__global uint *out, uint n, __global const ulong *in) {
     uint i = (uint)get_global_id(0);
     if (i >= n) {
         return;
     }
     Sampler s = sampler_of_kind((int)in[4 * i], in[4 * i + 1], in[4 * i + 2], in[4 * i + 3]);
-    __global uint *o = out + 24 * i;
+    __global uint *o = out + 28 * i;
     for (uint k = 0; k < 2u; ++k) {
         at_vertex(&s, 3u * k);
         float2 c = camera_2d(&s);
+        float2 lens = lens_2d(&s);
         ulong pick = light_pick(&s, 7u);
         float2 l0 = light_2d(&s, 0u);
         float2 l2 = light_2d(&s, 2u);
         float b = bsdf_choice(&s);
         float2 d = bsdf_2d(&s);
         float r = roulette(&s);
-        uint v[12] = {as_uint(c.x), as_uint(c.y), (uint)(pick >> 32), (uint)pick, as_uint(l0.x), as_uint(l0.y),
-                      as_uint(l2.x), as_uint(l2.y), as_uint(b), as_uint(d.x), as_uint(d.y), as_uint(r)};
-        for (uint j = 0; j < 12u; ++j) {
-            o[12 * k + j] = v[j];
+        uint v[14] = {as_uint(c.x),  as_uint(c.y),  as_uint(lens.x), as_uint(lens.y), (uint)(pick >> 32),
+                      (uint)pick,    as_uint(l0.x), as_uint(l0.y),   as_uint(l2.x),   as_uint(l2.y),
+                      as_uint(b),    as_uint(d.x),  as_uint(d.y),    as_uint(r)};
+        for (uint j = 0; j < 14u; ++j) {
+            o[14 * k + j] = v[j];
         }
     }
 }
@@ -274,6 +276,28 @@ __kernel void check_mis_routines(__global uint *out, uint n, __global const uint
     out[3 * i] = (uint)light_index(&sc, keys[2 * i], keys[2 * i + 1]);
     out[3 * i + 1] = (uint)environment_light(&sc);
     out[3 * i + 2] = as_uint(power_heuristic(ab[2 * i], ab[2 * i + 1]));
+}
+
+/* camera_ray through raster (xy[2i], xy[2i+1]) with the numbers of
+ * sampler_of_kind(in[4i..4i+4]) (sobol, seed, pixel, sample), after its
+ * camera_2d: origin.xyz, dir.xyz as 6 floats. */
+__kernel void check_camera_ray(__global float *out, uint n, __global const float *xy, __global const ulong *in,
+                               __global const Params *P) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Sampler s = sampler_of_kind((int)in[4 * i], in[4 * i + 1], in[4 * i + 2], in[4 * i + 3]);
+    (void)camera_2d(&s);
+    float3 o, d;
+    camera_ray(P, xy[2 * i], xy[2 * i + 1], &s, &o, &d);
+    __global float *r = out + 6 * i;
+    r[0] = o.x;
+    r[1] = o.y;
+    r[2] = o.z;
+    r[3] = d.x;
+    r[4] = d.y;
+    r[5] = d.z;
 }
 
 /* sizeof of every shared struct, for the host's layout check. */

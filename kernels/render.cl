@@ -71,7 +71,7 @@ __kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global ui
         Sampler s = sampler_of_kind(USE_SOBOL, P->seed, (ulong)gid, sample);
         float2 off = pixel_offset(P, sample, camera_2d(&s), s.sobol);
         float3 o, d;
-        camera_ray(P, (float)x + off.x, (float)y + off.y, &o, &d);
+        camera_ray(P, (float)x + off.x, (float)y + off.y, &s, &o, &d);
         float3 l = radiance(&sc, o, d, &s);
 #ifdef INJECT_NAN_EVERY
         if (sample % INJECT_NAN_EVERY == 0UL) {

@@ -158,6 +158,11 @@ static inline float2 camera_2d(Sampler *s) {
     return s->sobol ? sobol_2d(s, 0UL) : next_2d(s);
 }
 
+/* A thin lens's point on its aperture (Sampler::lens_2d). */
+static inline float2 lens_2d(Sampler *s) {
+    return s->sobol ? sobol_2d(s, (ulong)LENS_DIMENSION_HI << 32) : next_2d(s);
+}
+
 static inline ulong light_pick(Sampler *s, uint n) {
     if (!s->sobol) {
         return next_bits(s);

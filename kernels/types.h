@@ -68,8 +68,8 @@ typedef struct {
     uint sampler;    /* 0 = random, 1 = sobol */
     uint use_bvh;    /* nearest hits through the BVH (nodes, prims, big) */
     uint num_big;    /* objects tested one by one before the BVH */
-    uint pad1;
-    uint pad2;
+    float lens_x;    /* thin lens: radius / |right|, 0 for a pinhole */
+    float lens_y;    /* radius / |up|; right.w: the focus distance */
     float4 environment; /* radiance of rays that leave the scene */
 } Params;
 
@@ -165,6 +165,7 @@ typedef struct {
 #define MESH_STACK MAX_BVH_STACK
 #define HAS_TRI_LIGHTS 1
 #define HAS_ENV 1
+#define HAS_LENS 1
 #define USE_BVH (P->use_bvh != 0u)
 #define OBJECT_COUNT (P->num_objects)
 #define LIGHT_COUNT (P->num_lights)

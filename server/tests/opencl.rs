@@ -368,6 +368,8 @@ fn every_feature_combination_builds() {
                         mesh_stack: if shapes.2 { 40 } else { 0 },
                         tri_lights: shapes.2 && lights & 1 != 0,
                         environment: shapes.2 && lights & 2 != 0,
+                        // A thin lens in half the combinations.
+                        lens: materials % 2 == 0,
                         inject_nan_every: None,
                     }));
                 }

@@ -70,7 +70,7 @@ fn every_use_of_either_sampler_gives_the_same_bits() {
         .run(
             "check_sampler_uses",
             n as usize,
-            24,
+            28,
             &[CheckArg::Buffer(bytemuck::cast_slice(&input))],
         )
         .expect("run");
@@ -81,6 +81,7 @@ fn every_use_of_either_sampler_gives_the_same_bits() {
         for k in 0..2 {
             s.at_vertex(3 * k);
             let c = s.camera_2d();
+            let lens = s.lens_2d();
             let pick = s.light_pick(7);
             let (l0, l2) = (s.light_2d(0), s.light_2d(2));
             let b = s.bsdf_choice();
@@ -89,12 +90,14 @@ fn every_use_of_either_sampler_gives_the_same_bits() {
             cpu.extend([
                 c.0.to_bits(),
                 c.1.to_bits(),
+                lens.0.to_bits(),
+                lens.1.to_bits(),
                 (pick >> 32) as u32,
                 pick as u32,
             ]);
             cpu.extend([l0.0, l0.1, l2.0, l2.1, b, d.0, d.1, r].map(f32::to_bits));
         }
-        assert_eq!(&out[24 * i..24 * i + 24], &cpu[..], "item {i} ({kind:?})");
+        assert_eq!(&out[28 * i..28 * i + 28], &cpu[..], "item {i} ({kind:?})");
     }
 }
 

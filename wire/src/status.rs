@@ -121,6 +121,12 @@ pub struct Camera {
     pub vfov_deg: f64,
     /// Camera rays start on the plane at this distance along the view axis.
     pub near_clip: f64,
+    /// Thin-lens radius (depth of field); 0: a pinhole.
+    #[serde(default)]
+    pub aperture: f64,
+    /// Distance along the view axis that is sharp; absent: look_at's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_distance: Option<f64>,
 }
 
 /// The scene's light, as `PATCH .../light` changes it.

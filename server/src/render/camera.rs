@@ -1,5 +1,5 @@
-//! Pinhole camera in the camera-relative frame (the camera sits at the
-//! origin; see `render::world`).
+//! Pinhole or thin-lens camera in the camera-relative frame (the camera
+//! sits at the origin; see `render::world`).
 //!
 //! Raster (x right, y down, in pixels) maps to a direction
 //!     forward + right * (x/w - 1/2) + up * (1/2 - y/h)
@@ -8,8 +8,16 @@
 //! as smallpt's camera does: it normalises the direction, then pushes the
 //! origin 140 units out along it. (A plane would start the top row of
 //! smallpt's image above its ceiling, seeing the light.)
+//!
+//! A thin lens (`aperture` > 0, its radius) starts each ray at a point
+//! of the lens disc, drawn uniformly (r = sqrt(u1), angle u2 turns) in the
+//! plane of `right` and `up`, and aims it at the point the pinhole ray meets
+//! on the plane in focus (`focus_distance` along `forward`): points on that
+//! plane stay sharp, others blur into discs of the thin-lens circle of
+//! confusion. Aperture 0 draws no numbers and gives the pinhole's rays bit
+//! for bit.
 
-use crate::render::math::{DVec3, Vec3A};
+use crate::render::math::{sincos_turns, DVec3, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::scene::Camera;
 
@@ -24,6 +32,13 @@ pub struct CameraRays {
     /// Spans the image plane's height at distance 1.
     pub up: Vec3A,
     pub near_clip: f32,
+    /// The lens radius over |right| and over |up| (0: a pinhole): a lens
+    /// point is `right * (lens_x * a) + up * (lens_y * b)` for (a, b) in the
+    /// unit disc.
+    pub lens_x: f32,
+    pub lens_y: f32,
+    /// Distance along `forward` of the plane in focus.
+    pub focus: f32,
     inv_width: f32,
     inv_height: f32,
 }
@@ -36,6 +51,13 @@ impl CameraRays {
         let extent = 2.0 * (camera.vfov_deg.to_radians() * 0.5).tan();
         let aspect = f64::from(width) / f64::from(height);
         let f = |v: DVec3| -> Vec3A { v.as_vec3().into() };
+        let (lens_x, lens_y) = match camera.aperture > 0.0 {
+            true => (
+                (camera.aperture / (extent * aspect)) as f32,
+                (camera.aperture / extent) as f32,
+            ),
+            false => (0.0, 0.0),
+        };
         Self {
             width,
             height,
@@ -43,19 +65,48 @@ impl CameraRays {
             right: f(right_unit * (extent * aspect)),
             up: f(up_unit * extent),
             near_clip: camera.near_clip as f32,
+            lens_x,
+            lens_y,
+            focus: camera.focus() as f32,
             inv_width: 1.0 / width as f32,
             inv_height: 1.0 / height as f32,
         }
     }
 
-    /// The ray through raster position (`x`, `y`).
+    /// Whether rays leave a lens (they need [`CameraRays::lens_ray`]).
+    #[inline(always)]
+    pub fn has_lens(&self) -> bool {
+        self.lens_x > 0.0
+    }
+
+    /// The pinhole's direction (not unit) through raster (`x`, `y`): its
+    /// component along `forward` is 1.
+    #[inline(always)]
+    fn through(&self, x: f32, y: f32) -> Vec3A {
+        self.forward
+            + self.right * (x * self.inv_width - 0.5)
+            + self.up * (0.5 - y * self.inv_height)
+    }
+
+    /// The pinhole ray through raster position (`x`, `y`).
     #[inline(always)]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let d = (self.forward
-            + self.right * (x * self.inv_width - 0.5)
-            + self.up * (0.5 - y * self.inv_height))
-            .normalize();
+        let d = self.through(x, y).normalize();
         Ray::new(d * self.near_clip, d)
+    }
+
+    /// The ray through raster (`x`, `y`) from the lens point drawn with
+    /// (`u1`, `u2`) in [0, 1) (the pinhole's where there is no lens).
+    #[inline(always)]
+    pub fn lens_ray(&self, x: f32, y: f32, (u1, u2): (f32, f32)) -> Ray {
+        if !self.has_lens() {
+            return self.ray(x, y);
+        }
+        let r = u1.sqrt();
+        let (sin, cos) = sincos_turns(u2);
+        let o = self.right * (self.lens_x * (r * cos)) + self.up * (self.lens_y * (r * sin));
+        let d = (self.through(x, y) * self.focus - o).normalize();
+        Ray::new(o + d * self.near_clip, d)
     }
 }
 
@@ -71,6 +122,8 @@ mod tests {
             up: DVec3::Y,
             vfov_deg: 90.0,
             near_clip: 0.0,
+            aperture: 0.0,
+            focus_distance: None,
         };
         let rays = CameraRays::new(&cam, 200, 100);
         let centre = rays.ray(100.0, 50.0);
@@ -91,12 +144,71 @@ mod tests {
             up: DVec3::Y,
             vfov_deg: 60.0,
             near_clip: 140.0,
+            aperture: 0.0,
+            focus_distance: None,
         };
         let rays = CameraRays::new(&cam, 64, 64);
         for (x, y) in [(0.0, 0.0), (63.0, 10.0), (32.0, 32.0)] {
             let r = rays.ray(x, y);
             assert!((r.origin.length() - 140.0).abs() < 1e-3, "{:?}", r.origin);
             assert!((r.origin.normalize() - r.dir).length() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn a_lens_keeps_the_plane_in_focus_sharp_and_blurs_the_rest_by_the_circle_of_confusion() {
+        let cam = Camera {
+            position: DVec3::ZERO,
+            look_at: DVec3::new(0.0, 0.0, -1.0),
+            up: DVec3::Y,
+            vfov_deg: 40.0,
+            near_clip: 0.0,
+            aperture: 0.1,
+            focus_distance: Some(3.0),
+        };
+        let rays = CameraRays::new(&cam, 64, 48);
+        let pinhole = CameraRays::new(
+            &Camera {
+                aperture: 0.0,
+                ..cam
+            },
+            64,
+            48,
+        );
+        for (x, y) in [(32.0, 24.0), (3.5, 40.25), (60.0, 2.0)] {
+            let p = pinhole.ray(x, y);
+            // Where the pinhole ray meets the plane in focus (z = -3).
+            let focus_point = p.origin + p.dir * (3.0 / -p.dir.z);
+            let mut widest = 0.0f32;
+            for i in 0..64 {
+                let u = ((i % 8) as f32 / 8.0 + 0.01, (i / 8) as f32 / 8.0);
+                let r = rays.lens_ray(x, y, u);
+                assert!(
+                    r.origin.z.abs() < 1e-6,
+                    "starts on the lens: {:?}",
+                    r.origin
+                );
+                assert!(r.origin.length() <= 0.1 + 1e-6, "within the aperture");
+                let at = r.origin + r.dir * ((3.0 - -r.origin.z) / -r.dir.z);
+                assert!(
+                    (at - focus_point).length() < 1e-5,
+                    "sharp at the focus: {at} vs {focus_point}"
+                );
+                // At depth 6 the rays spread over the circle of confusion:
+                // radius aperture * |6 - 3| / 3 around the pinhole's point.
+                let far = r.origin + r.dir * (6.0 / -r.dir.z);
+                let centre = p.origin + p.dir * (6.0 / -p.dir.z);
+                widest = widest.max((far - centre).length());
+            }
+            assert!(
+                (widest - 0.1).abs() < 0.01,
+                "circle of confusion radius {widest}, expected 0.1"
+            );
+        }
+        // Aperture 0: the pinhole, bit for bit, whatever the numbers.
+        for (x, y) in [(1.0, 2.0), (31.5, 7.25)] {
+            let (a, b) = (pinhole.lens_ray(x, y, (0.3, 0.7)), pinhole.ray(x, y));
+            assert_eq!((a.origin, a.dir), (b.origin, b.dir));
         }
     }
 }

@@ -89,6 +89,8 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
         up: c.up,
         vfov_deg: c.vfov_deg,
         near_clip: 0.0,
+        aperture: 0.0,
+        focus_distance: None,
     });
     LoadedModel::new(name, meshes, materials, instances, camera, model.warnings)
 }

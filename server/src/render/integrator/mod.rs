@@ -257,5 +257,10 @@ pub fn camera_path(
     } else {
         filter.pixel_offset(sample, u1, u2)
     };
-    Path::new(camera.ray(x as f32 + dx, y as f32 + dy), sampler)
+    let (px, py) = (x as f32 + dx, y as f32 + dy);
+    let ray = match camera.has_lens() {
+        true => camera.lens_ray(px, py, sampler.lens_2d()),
+        false => camera.ray(px, py),
+    };
+    Path::new(ray, sampler)
 }

@@ -7,7 +7,8 @@
 //! - `sobol` (the default): low-discrepancy points, Owen-scrambled Sobol
 //!   padded in 2-D ([`sobol`]). Each use a path makes of random numbers has
 //!   its own dimension, chosen deliberately rather than by the order of
-//!   draws: the camera's pixel position (2-D); at every vertex v, the light
+//!   draws: the camera's pixel position (2-D) and lens point (2-D, a
+//!   dimension of its own far from the rest); at every vertex v, the light
 //!   pick (1-D), the light position (2-D), the BSDF's choice of lobe (1-D)
 //!   and direction (2-D), and Russian roulette (1-D). A vertex that does
 //!   not use one (a mirror draws no direction) leaves it unused, so the
@@ -92,6 +93,11 @@ enum Use {
 
 /// Dimensions per vertex (one per [`Use`]).
 const USES: u64 = 5;
+/// The lens's dimension (a thin-lens camera's point on the aperture) is
+/// this shifted left by 32: far from every vertex's, and shared with the
+/// kernel as a 32-bit constant.
+pub const LENS_DIMENSION_HI: u32 = 1 << 30;
+const LENS_DIMENSION: u64 = (LENS_DIMENSION_HI as u64) << 32;
 /// Dimensions of the light positions of every emitter but the first
 /// (`LightSampling::All`, for tests) start here.
 const EXTRA_LIGHTS: u64 = 1 << 63;
@@ -247,6 +253,18 @@ impl Sampler {
     pub fn camera_2d(&mut self) -> (f32, f32) {
         if self.sobol {
             self.sobol_2d(0)
+        } else {
+            self.next_2d()
+        }
+    }
+
+    /// A thin lens's point on its aperture (drawn after [`Sampler::camera_2d`],
+    /// only by a camera that has a lens): a Sobol point of its own
+    /// dimension, or the next random numbers.
+    #[inline(always)]
+    pub fn lens_2d(&mut self) -> (f32, f32) {
+        if self.sobol {
+            self.sobol_2d(LENS_DIMENSION)
         } else {
             self.next_2d()
         }

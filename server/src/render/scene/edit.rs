@@ -32,6 +32,8 @@ pub struct CameraEdit {
     pub up: Option<[f64; 3]>,
     pub vfov_deg: Option<f64>,
     pub near_clip: Option<f64>,
+    pub aperture: Option<f64>,
+    pub focus_distance: Option<f64>,
 }
 
 /// Move, recolour or rescale the scene's light.
@@ -100,12 +102,16 @@ impl Scene {
             up,
             vfov_deg,
             near_clip,
+            aperture,
+            focus_distance,
         } = *edit;
         c.position = position.unwrap_or(c.position);
         c.look_at = look_at.unwrap_or(c.look_at);
         c.up = up.unwrap_or(c.up);
         c.vfov_deg = vfov_deg.unwrap_or(c.vfov_deg);
         c.near_clip = near_clip.unwrap_or(c.near_clip);
+        c.aperture = aperture.unwrap_or(c.aperture);
+        c.focus_distance = focus_distance.or(c.focus_distance);
         Ok(self.revalidate(&json)?)
     }
 

@@ -86,5 +86,7 @@ pub(super) fn framed(lo: DVec3, hi: DVec3) -> Camera {
         up: DVec3::Y,
         vfov_deg: FRAMED_VFOV_DEG,
         near_clip: 0.0,
+        aperture: 0.0,
+        focus_distance: None,
     }
 }

@@ -58,7 +58,7 @@ pub struct SceneJson {
     pub environment: Option<[f64; 3]>,
 }
 
-/// Pinhole camera.
+/// Pinhole or thin-lens camera.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraJson {
@@ -71,6 +71,16 @@ pub struct CameraJson {
     /// Camera rays start on the plane at this distance along the view axis.
     #[serde(default)]
     pub near_clip: f64,
+    /// Thin-lens radius in scene units (depth of field); 0: a pinhole.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub aperture: f64,
+    /// Distance along the view axis that is sharp [default: look_at's].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_distance: Option<f64>,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 fn default_up() -> [f64; 3] {

@@ -82,7 +82,7 @@ impl SceneError {
     }
 }
 
-/// Pinhole camera in world space.
+/// Camera in world space: a pinhole, or a thin lens where `aperture` > 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub position: DVec3,
@@ -90,6 +90,19 @@ pub struct Camera {
     pub up: DVec3,
     pub vfov_deg: f64,
     pub near_clip: f64,
+    /// The thin lens's radius (scene units); 0: a pinhole.
+    pub aperture: f64,
+    /// Distance along the view axis of the plane in focus; None: the
+    /// `look_at` point's.
+    pub focus_distance: Option<f64>,
+}
+
+impl Camera {
+    /// The distance along the view axis that is in focus.
+    pub fn focus(&self) -> f64 {
+        self.focus_distance
+            .unwrap_or_else(|| (self.look_at - self.position).length())
+    }
 }
 
 /// Fresnel model of glass.

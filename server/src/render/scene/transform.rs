@@ -33,6 +33,8 @@ impl Scene {
         s.camera.position = point(s.camera.position);
         s.camera.look_at = point(s.camera.look_at);
         s.camera.near_clip *= scale;
+        s.camera.aperture *= scale;
+        s.camera.focus_distance = s.camera.focus_distance.map(|f| f * scale);
         for o in &mut s.objects {
             o.shape = match o.shape {
                 Shape::Sphere { center, radius } => Shape::Sphere {

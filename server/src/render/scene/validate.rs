@@ -106,6 +106,8 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
                         up: t.transform_vector3(DVec3::from_array(c.up)).to_array(),
                         vfov_deg: c.vfov_deg,
                         near_clip: 0.0,
+                        aperture: 0.0,
+                        focus_distance: None,
                     })
                 });
             match from_model {
@@ -186,6 +188,26 @@ fn camera(c: &CameraJson) -> Result<Camera> {
             format!("must be >= 0 (got {near_clip})"),
         ));
     }
+    let aperture = finite("camera.aperture", c.aperture)?;
+    if !(0.0..=MAX_COORDINATE).contains(&aperture) {
+        return Err(SceneError::new(
+            "camera.aperture",
+            format!("must be >= 0 (the lens radius; 0 is a pinhole) (got {aperture})"),
+        ));
+    }
+    let focus_distance = match c.focus_distance {
+        None => None,
+        Some(f) => {
+            let f = finite("camera.focus_distance", f)?;
+            if !(f > 0.0 && f <= MAX_COORDINATE) {
+                return Err(SceneError::new(
+                    "camera.focus_distance",
+                    format!("must be > 0 (got {f})"),
+                ));
+            }
+            Some(f)
+        }
+    };
     let view = look_at - position;
     if view.length() <= 1e-12 * position.abs().max_element().max(1.0) {
         return Err(SceneError::new(
@@ -209,6 +231,8 @@ fn camera(c: &CameraJson) -> Result<Camera> {
         up,
         vfov_deg,
         near_clip,
+        aperture,
+        focus_distance,
     })
 }
 
@@ -332,6 +356,8 @@ impl Camera {
             up: self.up.to_array(),
             vfov_deg: self.vfov_deg,
             near_clip: self.near_clip,
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
         }
     }
 }

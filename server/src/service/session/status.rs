@@ -67,6 +67,8 @@ fn camera(c: CameraJson) -> wire::Camera {
         up: c.up,
         vfov_deg: c.vfov_deg,
         near_clip: c.near_clip,
+        aperture: c.aperture,
+        focus_distance: c.focus_distance,
     }
 }
 
@@ -130,6 +132,8 @@ mod tests {
             up: [0.0, 0.0, 1.0],
             vfov_deg: 33.0,
             near_clip: 0.25,
+            aperture: 0.05,
+            focus_distance: Some(4.5),
         };
         assert_eq!(json_of(&camera(c.clone())), json_of(&c));
         let l = LightInfo {

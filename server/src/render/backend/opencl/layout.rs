@@ -47,7 +47,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 23] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 24] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -70,6 +70,10 @@ pub const SHARED_CONSTANTS: [(&str, u32); 23] = [
     ),
     ("ADAPTIVE_TILE", crate::render::adaptive::TILE_SIZE),
     ("SOBOL_VERTICES", crate::render::sampler::SOBOL_VERTICES),
+    (
+        "LENS_DIMENSION_HI",
+        crate::render::sampler::LENS_DIMENSION_HI,
+    ),
     ("WORK_LIST", WORK_LIST),
     ("WORK_DENSE", WORK_DENSE),
     // The generic program's traversal stacks (specialised ones are sized
@@ -148,8 +152,10 @@ pub struct Params {
     pub use_bvh: u32,
     /// Objects tested one by one before the BVH (`big`).
     pub num_big: u32,
-    pub pad1: u32,
-    pub pad2: u32,
+    /// A thin lens: its radius over |right| and over |up| (`CameraRays`;
+    /// 0: a pinhole); `right.w` is the focus distance.
+    pub lens_x: f32,
+    pub lens_y: f32,
     /// Radiance of rays that leave the scene (w unused).
     pub environment: [f32; 4],
 }
@@ -348,7 +354,7 @@ pub fn pack(job: &RenderJob) -> Packed {
     let s = &job.settings;
     let params = Params {
         forward: v4(c.forward, c.near_clip),
-        right: v4(c.right, 0.0),
+        right: v4(c.right, c.focus),
         up: v4(c.up, 0.0),
         seed: job.seed,
         width: c.width,
@@ -363,8 +369,8 @@ pub fn pack(job: &RenderJob) -> Packed {
         sampler: u32::from(job.sampler == SamplerKind::Sobol),
         use_bvh: 0,
         num_big: 0,
-        pad1: 0,
-        pad2: 0,
+        lens_x: c.lens_x,
+        lens_y: c.lens_y,
         environment: v4(w.environment, 0.0),
     };
     let mut packed = Packed {

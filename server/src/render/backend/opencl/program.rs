@@ -64,6 +64,8 @@ pub struct Features {
     pub tri_lights: bool,
     /// A non-black environment (its light and its emitter).
     pub environment: bool,
+    /// A thin-lens camera (aperture > 0).
+    pub lens: bool,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
     pub inject_nan_every: Option<u64>,
 }
@@ -150,6 +152,7 @@ impl Features {
                     .iter()
                     .any(|e| matches!(e.shape, EmitterShape::Triangle(_))),
             environment: w.environment.max_element() > 0.0,
+            lens: job.camera.has_lens(),
             inject_nan_every: None,
         }
     }
@@ -161,7 +164,7 @@ impl Features {
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
-             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={}",
+             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_LENS={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -184,6 +187,7 @@ impl Features {
             self.mesh_stack.max(1),
             b(self.tri_lights),
             b(self.environment),
+            b(self.lens),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));
