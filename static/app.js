@@ -22,6 +22,7 @@ import { $, el } from "./js/dom.js";
 import "./js/export.js";
 import "./js/hud.js";
 import "./js/input.js";
+import "./js/lens.js";
 import { showMessage } from "./js/messages.js";
 import "./js/models.js";
 import "./js/panels.js";

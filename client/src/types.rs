@@ -50,6 +50,12 @@ pub struct CameraPatch {
     pub vfov_deg: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub near_clip: Option<f64>,
+    /// Thin-lens radius (depth of field); 0: a pinhole.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub aperture: Option<f64>,
+    /// Distance along the view axis that stays sharp.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub focus_distance: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

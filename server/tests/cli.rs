@@ -200,6 +200,8 @@ fn bad_input_exits_2_with_a_message_naming_the_problem() {
         (vec!["--nee", "maybe"], "--nee"),
         (vec!["--filter", "gauss"], "--filter"),
         (vec!["--max-depth", "100001"], "--max-depth"),
+        (vec!["--aperture", "-1"], "camera.aperture"),
+        (vec!["--focus-distance", "0"], "camera.focus_distance"),
     ];
     for (extra, needle) in cases {
         let (out, _) = render(dir.path(), "x.png", &extra);

@@ -27,5 +27,7 @@ export const el = {
   lColor: $("l-color"),
   lIntensity: $("l-intensity"),
   lPosition: $("l-position"),
+  cAperture: $("c-aperture"),
+  cFocus: $("c-focus"),
 };
 export const ctx = el.view.getContext("2d");

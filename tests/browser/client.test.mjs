@@ -222,6 +222,28 @@ describe("browser client", { timeout: 600000 }, () => {
     });
   });
 
+  it("lens panel: aperture and focus reach the server's camera; a bad value is named", T, async () => {
+    const before = await status();
+    assert.equal(before.camera.aperture ?? 0, 0, "a pinhole to begin with");
+    assert.equal(await page.inputValue("#c-aperture"), "0");
+    await page.fill("#c-aperture", "1.5");
+    await page.press("#c-aperture", "Tab");
+    await waitFor("aperture 1.5 on the server", async () => (await status()).camera.aperture === 1.5);
+    await page.fill("#c-focus", "120");
+    await page.press("#c-focus", "Tab");
+    await waitFor("focus 120 on the server", async () => (await status()).camera.focus_distance === 120);
+    await page.fill("#c-aperture", "-1");
+    await page.press("#c-aperture", "Tab");
+    await page.waitForSelector("#message:not([hidden])");
+    assert.match(await page.textContent("#message-text"), /camera\.aperture/);
+    await page.click("#message-close");
+    assert.equal((await status()).camera.aperture, 1.5, "a refused value changes nothing");
+    assert.equal(await page.inputValue("#c-aperture"), "1.5", "the panel shows the kept value");
+    await page.fill("#c-aperture", "0");
+    await page.press("#c-aperture", "Tab");
+    await waitFor("a pinhole again", async () => (await status()).camera.aperture === 0);
+  });
+
   it("quality panel: max depth reaches the server, a bad value shows the server's error", T, async () => {
     const before = await status();
     assert.notEqual(before.quality.max_depth, 3);

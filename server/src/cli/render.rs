@@ -116,6 +116,14 @@ pub struct RenderArgs {
     /// of one specialised to the scene: for measuring what specialisation buys.
     #[arg(long)]
     generic_kernel: bool,
+    /// Thin-lens radius in scene units (depth of field) [default: the
+    /// scene's camera's; 0 = pinhole].
+    #[arg(long, value_name = "R")]
+    aperture: Option<f64>,
+    /// Distance along the view axis that stays sharp [default: the scene's
+    /// camera's, else the distance to its look_at point].
+    #[arg(long, value_name = "D")]
+    focus_distance: Option<f64>,
     /// Exposure in stops applied before tone mapping (PNG only).
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
@@ -164,8 +172,19 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     quality
         .validate()
         .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
-    let scene = pathstream::resolve::load_scene(&args.scene)
+    let mut scene = pathstream::resolve::load_scene(&args.scene)
         .map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
+    if args.aperture.is_some() || args.focus_distance.is_some() {
+        let lens = pathstream::render::scene::CameraEdit {
+            aperture: args.aperture,
+            focus_distance: args.focus_distance,
+            ..Default::default()
+        };
+        // The message names camera.aperture or camera.focus_distance.
+        scene = scene
+            .edit_camera(&lens)
+            .map_err(|e| usage(format!("--aperture/--focus-distance: {e}")))?;
+    }
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

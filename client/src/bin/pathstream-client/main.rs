@@ -152,6 +152,12 @@ struct CameraArgs {
     up: Option<[f64; 3]>,
     #[arg(long)]
     vfov_deg: Option<f64>,
+    /// Thin-lens radius in scene units (depth of field); 0: a pinhole.
+    #[arg(long)]
+    aperture: Option<f64>,
+    /// Distance along the view axis that stays sharp.
+    #[arg(long)]
+    focus_distance: Option<f64>,
 }
 
 #[derive(Args, Debug)]
@@ -455,6 +461,8 @@ async fn run(cli: Cli) -> Result<(), Failure> {
                         up: a.up,
                         vfov_deg: a.vfov_deg,
                         near_clip: None,
+                        aperture: a.aperture,
+                        focus_distance: a.focus_distance,
                     },
                 )
                 .await?,
