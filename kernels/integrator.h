@@ -124,7 +124,9 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
             /* Left the scene: the environment, counted as an emitter's hit. */
             float w = 1.0f;
 #if HAS_GGX
-            w = hit_weight(sc, &last, environment_light(sc), d, (float3)(0.0f));
+            if (last.pdf > 0.0f) {
+                w = hit_weight(sc, &last, environment_light(sc), d, (float3)(0.0f));
+            }
 #endif
             l += emit * P->environment.xyz * w;
 #endif
@@ -183,7 +185,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
                 float pmf = LIGHT_COUNT > 1u ? lights[j].pmf : 1.0f;
                 direct = direct_from(sc, &lights[j], pmf, &sf, nl, ns, light_2d(s, 0u), &ne);
                 if (LIGHT_COUNT > 1u) {
-                    direct = direct / lights[j].pmf;
+                    direct = direct / pmf;
                 }
             }
             if (ne.pbr) {

@@ -1,3 +1,23 @@
+#if HAS_SPHERE_LIGHTS
+/* A sphere (centre c, radius r) seen from p (emitter.rs, SphereView): 0
+ * where p is on its outside (on_self and facing away), else *to_center,
+ * *d2 and whether p is inside (area sampling) or not (cone). */
+static inline int sphere_view(float3 c, float r, float3 p, float3 nl, int on_self, float3 *to_center, float *d2,
+                              int *inside) {
+    *to_center = c - p;
+    *d2 = dot3(*to_center, *to_center);
+    *inside = on_self ? dot3(nl, *to_center) > 0.0f : *d2 < r * r;
+    return *inside || !on_self;
+}
+
+/* 1 - cos(theta_max) of the cone a sphere fills, without cancellation. */
+static inline float one_minus_cos_max(float r2, float d2) {
+    float sin2 = r2 / d2;
+    float cos_max = sqrt(fmax(1.0f - sin2, 0.0f));
+    return sin2 / (1.0f + cos_max);
+}
+#endif
+
 /* Next-event estimation directions: light.rs. Returns 0 when the emitter
  * contributes nothing; otherwise *dir and *weight (1/pdf in solid angle). */
 static inline int sample_light(__global const Object *light_ob, uint light, float3 p, float3 nl, uint at, float2 u,
@@ -6,12 +26,12 @@ static inline int sample_light(__global const Object *light_ob, uint light, floa
     if (light_ob->kind == KIND_SPHERE) {
 #endif
 #if HAS_SPHERE_LIGHTS
-        float3 to_center = light_ob->p0.xyz - p;
-        float d2 = dot3(to_center, to_center);
+        float3 to_center;
+        float d2;
+        int inside;
         float r = light_ob->p0.w;
         float r2 = r * r;
-        int inside = light == at ? dot3(nl, to_center) > 0.0f : d2 < r2;
-        if (light == at && !inside) {
+        if (!sphere_view(light_ob->p0.xyz, r, p, nl, light == at, &to_center, &d2, &inside)) {
             return 0;
         }
         if (inside) {
@@ -28,10 +48,8 @@ static inline int sample_light(__global const Object *light_ob, uint light, floa
             *weight = fabs(dot3(m, *dir)) * 4.0f * M_PI_F * r2 / dist2;
             return 1;
         }
-        float sin2 = r2 / d2;
-        float cos_max = sqrt(fmax(1.0f - sin2, 0.0f));
-        float one_minus_cos_max = sin2 / (1.0f + cos_max);
-        float a = u.x * one_minus_cos_max;
+        float cone = one_minus_cos_max(r2, d2);
+        float a = u.x * cone;
         float cos_t = 1.0f - a;
         float sin_t = sqrt(fmax(a * (2.0f - a), 0.0f));
         float2 sc = sincos_turns(u.y);
@@ -39,7 +57,7 @@ static inline int sample_light(__global const Object *light_ob, uint light, floa
         float3 t, b;
         basis(axis, &t, &b);
         *dir = t * (sin_t * sc.y) + b * (sin_t * sc.x) + axis * cos_t;
-        *weight = 2.0f * M_PI_F * one_minus_cos_max;
+        *weight = 2.0f * M_PI_F * cone;
         return 1;
 #endif
 #if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS
@@ -178,12 +196,12 @@ static inline float emitter_pdf(const Scene *sc, __global const Light *L, float3
         if (ob->kind == KIND_SPHERE) {
 #endif
 #if HAS_SPHERE_LIGHTS
-            float3 to_center = ob->p0.xyz - p;
-            float d2 = dot3(to_center, to_center);
+            float3 to_center;
+            float d2;
+            int inside;
             float r = ob->p0.w;
             float r2 = r * r;
-            int inside = on_self ? dot3(nl, to_center) > 0.0f : d2 < r2;
-            if (on_self && !inside) {
+            if (!sphere_view(ob->p0.xyz, r, p, nl, on_self, &to_center, &d2, &inside)) {
                 return 0.0f;
             }
             if (inside) {
@@ -191,9 +209,7 @@ static inline float emitter_pdf(const Scene *sc, __global const Light *L, float3
                 float3 w = q - p;
                 weight = fabs(dot3(m, dir)) * 4.0f * M_PI_F * r2 / dot3(w, w);
             } else {
-                float sin2 = r2 / d2;
-                float cos_max = sqrt(fmax(1.0f - sin2, 0.0f));
-                weight = 2.0f * M_PI_F * (sin2 / (1.0f + cos_max));
+                weight = 2.0f * M_PI_F * one_minus_cos_max(r2, d2);
             }
 #endif
 #if HAS_SPHERE_LIGHTS && HAS_QUAD_LIGHTS

@@ -197,25 +197,15 @@ impl Emitter {
         let on_self = self.object == r.object && self.prim == r.prim;
         let weight = match &self.shape {
             EmitterShape::Sphere(s) => {
-                let to_center = s.center - r.p;
-                let d2 = to_center.length_squared();
-                let r2 = s.radius * s.radius;
-                let inside = if on_self {
-                    r.nl.dot(to_center) > 0.0
-                } else {
-                    d2 < r2
-                };
-                if on_self && !inside {
+                let Some(v) = SphereView::new(s, r.p, r.nl, on_self) else {
                     return 0.0;
-                }
-                if inside {
+                };
+                if v.inside {
                     let m = (q - s.center) * (1.0 / s.radius);
                     let dist2 = (q - r.p).length_squared();
-                    m.dot(dir).abs() * 4.0 * PI * r2 / dist2
+                    m.dot(dir).abs() * 4.0 * PI * v.r2 / dist2
                 } else {
-                    let sin2 = r2 / d2;
-                    let cos_max = (1.0 - sin2).max(0.0).sqrt();
-                    TAU * (sin2 / (1.0 + cos_max))
+                    TAU * v.one_minus_cos_max()
                 }
             }
             EmitterShape::Quad(quad) if !on_self => {
@@ -254,6 +244,47 @@ fn toward_point(p: Vec3A, q: Vec3A, n: Vec3A, area: f32) -> Option<(Vec3A, f32)>
     Some((dir, n.dot(dir).abs() * area / dist2))
 }
 
+/// A sphere as seen from a point: which way its centre lies, and whether
+/// the point is inside it (from its own surface: facing its interior),
+/// which decides between area and cone sampling. None where the point is on
+/// the sphere's outside, which sees none of it.
+struct SphereView {
+    to_center: Vec3A,
+    d2: f32,
+    r2: f32,
+    inside: bool,
+}
+
+impl SphereView {
+    #[inline(always)]
+    fn new(s: &Sphere, p: Vec3A, nl: Vec3A, on_self: bool) -> Option<Self> {
+        let to_center = s.center - p;
+        let d2 = to_center.length_squared();
+        let r2 = s.radius * s.radius;
+        let inside = if on_self {
+            // On the light itself: inside when facing its interior.
+            nl.dot(to_center) > 0.0
+        } else {
+            d2 < r2
+        };
+        (inside || !on_self).then_some(Self {
+            to_center,
+            d2,
+            r2,
+            inside,
+        })
+    }
+
+    /// 1 - cos(theta_max) of the cone it fills, without cancellation for
+    /// small lights.
+    #[inline(always)]
+    fn one_minus_cos_max(&self) -> f32 {
+        let sin2 = self.r2 / self.d2;
+        let cos_max = (1.0 - sin2).max(0.0).sqrt();
+        sin2 / (1.0 + cos_max)
+    }
+}
+
 #[inline(always)]
 fn sample_sphere(
     s: &Sphere,
@@ -263,19 +294,8 @@ fn sample_sphere(
     u1: f32,
     u2: f32,
 ) -> Option<(Vec3A, f32)> {
-    let to_center = s.center - p;
-    let d2 = to_center.length_squared();
-    let r2 = s.radius * s.radius;
-    let inside = if on_self {
-        // On the light itself: inside when facing its interior.
-        nl.dot(to_center) > 0.0
-    } else {
-        d2 < r2
-    };
-    if on_self && !inside {
-        return None;
-    }
-    if inside {
+    let v = SphereView::new(s, p, nl, on_self)?;
+    if v.inside {
         let z = 1.0 - 2.0 * u1;
         let rxy = (1.0 - z * z).max(0.0).sqrt();
         let (sin, cos) = sincos_turns(u2);
@@ -287,17 +307,14 @@ fn sample_sphere(
         }
         let dir = w / dist2.sqrt();
         let cos_l = m.dot(dir).abs();
-        Some((dir, cos_l * 4.0 * PI * r2 / dist2))
+        Some((dir, cos_l * 4.0 * PI * v.r2 / dist2))
     } else {
-        // 1 - cos(theta_max) without cancellation for small lights.
-        let sin2 = r2 / d2;
-        let cos_max = (1.0 - sin2).max(0.0).sqrt();
-        let one_minus_cos_max = sin2 / (1.0 + cos_max);
+        let one_minus_cos_max = v.one_minus_cos_max();
         let a = u1 * one_minus_cos_max;
         let cos_t = 1.0 - a;
         let sin_t = (a * (2.0 - a)).max(0.0).sqrt();
         let (sin, cos) = sincos_turns(u2);
-        let axis = to_center / d2.sqrt();
+        let axis = v.to_center / v.d2.sqrt();
         let (t, b) = basis(axis);
         let dir = t * (sin_t * cos) + b * (sin_t * sin) + axis * cos_t;
         Some((dir, TAU * one_minus_cos_max))
