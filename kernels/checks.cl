@@ -278,6 +278,35 @@ __kernel void check_mis_routines(__global uint *out, uint n, __global const uint
     out[3 * i + 2] = as_uint(power_heuristic(ab[2 * i], ab[2 * i + 1]));
 }
 
+/* The environment map's routines (envmap.h) on direction dirs[i].xyz and
+ * numbers u[i]: radiance (3), pdf, sample (ok, dir (3), weight) and
+ * atan2_turns(d.y, d.x): ten floats per item. */
+__kernel void check_env_map(__global float *out, uint n, __global const float4 *dirs, __global const float2 *u,
+                            __global const Params *P, __global const float *env_texels,
+                            __global const float *env_dist) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {.P = P, .env_texels = env_texels, .env_dist = env_dist};
+    float3 d = dirs[i].xyz;
+    float3 r = env_radiance(&sc, d);
+    float3 dir = (float3)(0.0f);
+    float weight = 0.0f;
+    int ok = env_sample(&sc, u[i], &dir, &weight);
+    __global float *o = out + 10 * i;
+    o[0] = r.x;
+    o[1] = r.y;
+    o[2] = r.z;
+    o[3] = env_pdf(&sc, d);
+    o[4] = ok ? 1.0f : 0.0f;
+    o[5] = dir.x;
+    o[6] = dir.y;
+    o[7] = dir.z;
+    o[8] = weight;
+    o[9] = atan2_turns(d.y, d.x);
+}
+
 /* camera_ray through raster (xy[2i], xy[2i+1]) with the numbers of
  * sampler_of_kind(in[4i..4i+4]) (sobol, seed, pixel, sample), after its
  * camera_2d: origin.xyz, dir.xyz as 6 floats. */

@@ -1,7 +1,7 @@
 /* The path tracer, loop for loop as integrator.rs. Its Russian roulette
  * cap is the host's MAX_SURVIVAL, passed as its bits (MAX_SURVIVAL_BITS). */
 
-#if HAS_GGX
+#if HAS_MIS
 /* The power heuristic of density a against b (mis.rs, power_heuristic). */
 static inline float power_heuristic(float a, float b) {
     if (!(a > 0.0f)) {
@@ -14,7 +14,7 @@ static inline float power_heuristic(float a, float b) {
     return 1.0f / (1.0f + r * r);
 }
 
-/* Where the last BSDF sample left a MAT_PBR vertex that NEE gathered
+/* Where the last BSDF sample left a vertex that NEE gathered with MIS
  * (mis.rs, BsdfVertex): pdf 0 when the next hit counts emission in full. */
 typedef struct {
     float3 p, nl, ns;
@@ -76,8 +76,8 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, float
 #if HAS_TRI_LIGHTS
     visible = visible && (L->prim == NO_PRIM || h.prim == L->prim);
 #endif
-#if HAS_ENV
-    if (L->kind == LIGHT_ENVIRONMENT) {
+#if HAS_ENV || HAS_ENV_MAP
+    if (L->kind == LIGHT_ENVIRONMENT || L->kind == LIGHT_ENV_MAP) {
         visible = h.object == NO_OBJECT;
     }
 #endif
@@ -93,7 +93,19 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, float
         f = ggx_eval_cos(sc->ggx, ne->m->pbr, ne->m->albedo.xyz, &ne->lobes, ne->wo, wi) * w;
     }
 #endif
-    return L->emission.xyz * (f * weight);
+    float3 le = L->emission.xyz;
+#if HAS_ENV_MAP
+    __global const Params *P = sc->P; /* USE_ENV_MAP in the generic program */
+    (void)P;
+    if (!ne->pbr && USE_ENV_MAP) {
+        /* Diffuse under a map: weighed against cosine sampling. */
+        f = (float3)(cos_s * power_heuristic(pmf / weight, cos_s * M_1_PI_F));
+    }
+    if (L->kind == LIGHT_ENV_MAP) {
+        le = env_radiance(sc, dir);
+    }
+#endif
+    return le * (f * weight);
 }
 #endif
 
@@ -103,6 +115,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     __global const Material *materials = sc->materials;
     __global const Light *lights = sc->lights;
     int nee = USE_NEE; /* a variable: `x || !CONSTANT` draws a warning */
+    int env_map = USE_ENV_MAP; /* diffuse vertices weigh by MIS under a map */
     float3 l = (float3)(0.0f);
     float3 beta = (float3)(1.0f);
     /* The throughput with which the next hit counts emission (Path::emit). */
@@ -112,7 +125,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
     uint from_prim = NO_PRIM;
     int entering = 0;
     uint bounces = 0;
-#if HAS_GGX
+#if HAS_MIS
     BsdfVertex last;
     last.pdf = 0.0f;
 #endif
@@ -120,15 +133,26 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         Hit hit;
         nearest(sc, o, d, from, from_prim, entering, &hit);
         if (hit.object == NO_OBJECT) {
-#if HAS_ENV
-            /* Left the scene: the environment, counted as an emitter's hit. */
+#if HAS_ENV || HAS_ENV_MAP
+            /* Left the scene: the environment, counted as an emitter's hit
+             * (what a camera ray sees of a map it may not see is no light). */
+            float3 le = P->environment.xyz;
+            int hidden = 0;
+#if HAS_ENV_MAP
+            if (USE_ENV_MAP) {
+                hidden = bounces == 0u && P->environment.w == 0.0f;
+                if (!hidden) {
+                    le = env_radiance(sc, d);
+                }
+            }
+#endif
             float w = 1.0f;
-#if HAS_GGX
-            if (last.pdf > 0.0f) {
+#if HAS_MIS
+            if (!hidden && last.pdf > 0.0f) {
                 w = hit_weight(sc, &last, environment_light(sc), d, (float3)(0.0f));
             }
 #endif
-            l += emit * P->environment.xyz * w;
+            l += hidden ? le : emit * le * w;
 #endif
             break;
         }
@@ -137,7 +161,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
         __global const Material *m = &materials[sf.material];
         if (m->emissive) {
             float w = 1.0f;
-#if HAS_GGX
+#if HAS_MIS
             if (last.pdf > 0.0f) {
                 w = hit_weight(sc, &last, light_index(sc, sf.object, sf.prim), d, sf.p);
             }
@@ -192,8 +216,9 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
                 l += beta * direct;
             } else {
                 l += beta * m->albedo.xyz * direct * M_1_PI_F;
-                /* The bounce's own hit would not count its emission. */
-                if (MAX_DEPTH != 0u && bounces + 1u >= MAX_DEPTH) {
+                /* The bounce's own hit would not count its emission (under
+                 * a map, only its MIS share). */
+                if (MAX_DEPTH != 0u && bounces + 1u >= MAX_DEPTH && !env_map) {
                     break;
                 }
             }
@@ -217,16 +242,17 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
             }
             beta /= q;
         }
-        emit = !gathered || m->kind == MAT_PBR ? beta : (float3)(0.0f);
-#if HAS_GGX
+        int mis = gathered && (m->kind == MAT_PBR || env_map);
+        emit = !gathered || mis ? beta : (float3)(0.0f);
+#if HAS_MIS
         last.pdf = 0.0f;
-        if (gathered && m->kind == MAT_PBR) {
+        if (mis) {
             last.p = sf.p;
             last.nl = nl;
             last.ns = ns;
             last.object = sf.object;
             last.prim = sf.prim;
-            last.pdf = bsdf_pdf;
+            last.pdf = m->kind == MAT_PBR ? bsdf_pdf : dot3(ns, next) * M_1_PI_F;
         }
 #endif
         from = hit.object;

@@ -110,6 +110,11 @@ static inline int sample_emitter(const Scene *sc, __global const Light *L, float
         return toward_point(p, L->p0.xyz + L->e1.xyz * b1 + L->e2.xyz * b2, L->n.xyz, L->n.w, dir, weight);
     }
 #endif
+#if HAS_ENV_MAP
+    if (L->kind == LIGHT_ENV_MAP) {
+        return env_sample(sc, u, dir, weight);
+    }
+#endif
 #if HAS_ENV
     if (L->kind == LIGHT_ENVIRONMENT) {
         *dir = cosine_hemisphere(ns, u);
@@ -128,7 +133,7 @@ static inline int sample_emitter(const Scene *sc, __global const Light *L, float
 #endif
 }
 
-#if HAS_GGX
+#if HAS_MIS
 /* The index of the emitter that is triangle prim of object (or the whole
  * object, prim NO_PRIM), or -1 (Lights::index_of): a binary search, the
  * list being in (object, prim) order. */
@@ -154,11 +159,14 @@ static inline int light_index(const Scene *sc, uint object, uint prim) {
 
 /* The environment's emitter (always the last), or -1. */
 static inline int environment_light(const Scene *sc) {
-#if HAS_ENV
+#if HAS_ENV || HAS_ENV_MAP
     __global const Params *P = sc->P;
     (void)P;
-    if (LIGHT_COUNT > 0u && sc->lights[LIGHT_COUNT - 1u].kind == LIGHT_ENVIRONMENT) {
-        return (int)(LIGHT_COUNT - 1u);
+    if (LIGHT_COUNT > 0u) {
+        uint kind = sc->lights[LIGHT_COUNT - 1u].kind;
+        if (kind == LIGHT_ENVIRONMENT || kind == LIGHT_ENV_MAP) {
+            return (int)(LIGHT_COUNT - 1u);
+        }
     }
 #endif
     return -1;
@@ -171,6 +179,11 @@ static inline float emitter_pdf(const Scene *sc, __global const Light *L, float3
                                 float3 ns, float3 dir, float3 q) {
     int on_self = L->object == object && L->prim == prim;
     float weight = 0.0f;
+#if HAS_ENV_MAP
+    if (L->kind == LIGHT_ENV_MAP) {
+        return env_pdf(sc, dir);
+    }
+#endif
 #if HAS_TRI_LIGHTS
     if (L->kind == LIGHT_TRIANGLE) {
         if (on_self) {

@@ -25,4 +25,6 @@
     X(TriVerts, tris)                                                            \
     X(float4, normals)     /* vertex normals per triangle slot */                \
     X(uint, slots)         /* world material of each instance slot */        \
-    X(float, ggx)          /* metallic-roughness albedo tables (ggx.h) */
+    X(float, ggx)          /* metallic-roughness albedo tables (ggx.h) */  \
+    X(float, env_texels)   /* environment map, RGB per texel (envmap.h) */ \
+    X(float, env_dist)     /* its sampling tables (envmap.h) */

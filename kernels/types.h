@@ -70,7 +70,11 @@ typedef struct {
     uint num_big;    /* objects tested one by one before the BVH */
     float lens_x;    /* thin lens: radius / |right|, 0 for a pinhole */
     float lens_y;    /* radius / |up|; right.w: the focus distance */
-    float4 environment; /* radiance of rays that leave the scene */
+    float4 environment; /* radiance of rays that leave the scene; with a map,
+                           what camera rays see where it is hidden (w: 1 where
+                           it is visible) */
+    float4 env;      /* environment map: rotation's cos, sin; intensity */
+    uint4 env_size;  /* its width and height (0: no map) */
 } Params;
 
 /* A BVH node (render/bvh/mod.rs, BvhNode): four children's boxes as
@@ -165,6 +169,7 @@ typedef struct {
 #define MESH_STACK MAX_BVH_STACK
 #define HAS_TRI_LIGHTS 1
 #define HAS_ENV 1
+#define HAS_ENV_MAP 1
 #define HAS_LENS 1
 #define USE_BVH (P->use_bvh != 0u)
 #define OBJECT_COUNT (P->num_objects)
@@ -174,6 +179,7 @@ typedef struct {
 #define USE_NEE (P->nee != 0u)
 #define USE_BOX_FILTER (P->filter != 0u)
 #define USE_SOBOL (P->sampler != 0u)
+#define USE_ENV_MAP (P->env_size.x != 0u)
 #else
 #define USE_BVH HAS_BVH
 #define OBJECT_COUNT NUM_OBJECTS
@@ -183,4 +189,8 @@ typedef struct {
 #define USE_NEE NEE
 #define USE_BOX_FILTER BOX_FILTER
 #define USE_SOBOL SOBOL
+#define USE_ENV_MAP HAS_ENV_MAP
 #endif
+/* Multiple importance sampling: at MAT_PBR vertices, and at diffuse ones
+ * under an environment map (integrator.rs, World::diffuse_mis). */
+#define HAS_MIS (HAS_GGX || HAS_ENV_MAP)

@@ -271,3 +271,77 @@ async fn a_full_asset_store_answers_507() {
     );
     running.shutdown().await.expect("shutdown");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn uploaded_environment_maps_light_sessions() {
+    let (running, base) = server(config()).await;
+    let hdr = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/sunset-64.hdr"
+    ))
+    .expect("read");
+    let (status, a) = upload(&base, "sunset.hdr", hdr.clone()).await;
+    assert_eq!(status, 201, "{a}");
+    assert_eq!(
+        (a["format"].as_str(), &a["map_size"]),
+        (Some("hdr"), &json!([64, 32])),
+        "{a}"
+    );
+    let id = a["id"].as_str().expect("id").to_owned();
+    // A ball under the map: camera rays that miss it see the map.
+    let scene = |env: Value| {
+        json!({"width": 16, "height": 16, "quality": {"spp": 4},
+            "scene": {"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "vfov_deg": 60},
+                "materials": {"grey": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
+                "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "grey"}],
+                "environment": env}})
+    };
+    let s = create(&base, scene(json!({"map": id}))).await;
+    let sid = s["id"].as_str().expect("id").to_owned();
+    let img = pfm(&base, &sid, 4).await;
+    assert!(
+        img[0].iter().all(|c| *c > 0.0),
+        "the map behind: {:?}",
+        img[0]
+    );
+    let hidden = create(&base, scene(json!({"map": id, "visible": false}))).await;
+    let img = pfm(&base, hidden["id"].as_str().expect("id"), 4).await;
+    assert_eq!(img[0], [0.0, 0.0, 0.0], "a hidden map shows black");
+    assert!(img[8 * 16 + 8][0] > 0.0, "but lights the ball");
+
+    // A map is no mesh, a mesh no map, a broken map no asset.
+    let (_, ply) = upload(&base, "ball.ply", ball_ply()).await;
+    let refusals = [
+        (
+            json!({"objects": [{"type": "mesh", "asset": id, "material": "x"}]}),
+            "environment map",
+        ),
+        (
+            json!({"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}],
+                   "materials": {"m": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
+                   "environment": {"map": ply["id"]}}),
+            "is a model",
+        ),
+    ];
+    for (scene, words) in refusals {
+        let r = client()
+            .post(format!("{base}/api/sessions"))
+            .json(&json!({"scene": scene}))
+            .send()
+            .await
+            .expect("req");
+        assert_eq!(r.status(), 400);
+        let e: Value = r.json().await.expect("json");
+        assert!(
+            e["error"].as_str().is_some_and(|e| e.contains(words)),
+            "{e}"
+        );
+    }
+    let (status, e) = upload(&base, "cut.hdr", hdr[..hdr.len() / 3].to_vec()).await;
+    assert_eq!(status, 400, "{e}");
+    assert!(
+        e["error"].as_str().is_some_and(|e| e.contains("cut.hdr")),
+        "{e}"
+    );
+    running.shutdown().await.expect("shutdown");
+}

@@ -27,7 +27,7 @@ fn shared_structs_have_the_same_size_on_the_device() {
     let sizes = d.device_layout_sizes().expect("layout kernel");
     assert_eq!(
         sizes,
-        [96, 64, 128, 128, 112, 208, 48],
+        [96, 64, 160, 128, 112, 208, 48],
         "Object, Material, Params, BvhNode, Light, Instance, TriVerts as the device compiler sees them"
     );
 }
@@ -368,6 +368,9 @@ fn every_feature_combination_builds() {
                         mesh_stack: if shapes.2 { 40 } else { 0 },
                         tri_lights: shapes.2 && lights & 1 != 0,
                         environment: shapes.2 && lights & 2 != 0,
+                        // An environment map where there are no meshes and
+                        // there is a light (with and without MAT_PBR).
+                        env_map: !shapes.2 && lights & 2 != 0,
                         // A thin lens in half the combinations.
                         lens: materials % 2 == 0,
                         inject_nan_every: None,

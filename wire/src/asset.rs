@@ -1,5 +1,7 @@
-//! Uploaded model files: which file names are models, and what
-//! `POST /api/assets`, `GET /api/assets` and `GET /api/assets/{id}` answer.
+//! Uploaded model files and environment maps: which file names are which,
+//! and what `POST /api/assets`, `GET /api/assets` and
+//! `GET /api/assets/{id}` answer (a map: `"format": "hdr"` or `"exr"`, its
+//! `map_size`, no triangles).
 //!
 //! ```json
 //! {"id": "9f86d0…", "name": "bunny.obj", "format": "obj", "bytes": 3021416,
@@ -20,14 +22,24 @@ pub fn is_model_name(name: &str) -> bool {
     MODEL_EXTENSIONS.iter().any(|e| lower.ends_with(e))
 }
 
-/// An uploaded model file, read and built.
+/// How the names of environment map files end (in any case).
+pub const ENVIRONMENT_EXTENSIONS: [&str; 2] = [".hdr", ".exr"];
+
+/// Whether a file name has an environment map's extension (any case).
+pub fn is_environment_name(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    ENVIRONMENT_EXTENSIONS.iter().any(|e| lower.ends_with(e))
+}
+
+/// An uploaded model file (read and built) or environment map.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Asset {
     /// SHA-256 of the file: what scenes name as `"asset"`.
     pub id: String,
     /// The name it was uploaded under.
     pub name: String,
-    /// `obj`, `gltf`, `glb` or `ply`.
+    /// `obj`, `gltf`, `glb` or `ply`; `hdr` or `exr` for an environment
+    /// map.
     pub format: String,
     /// Size of the uploaded file.
     pub bytes: u64,
@@ -45,6 +57,10 @@ pub struct Asset {
     pub has_camera: bool,
     /// What the file holds that the renderer does not model.
     pub warnings: Vec<String>,
+    /// An environment map's width and height in texels (a scene uses it
+    /// as `"environment": {"map": ID}`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map_size: Option<[u32; 2]>,
 }
 
 /// The answer to an upload: the asset, and whether the same bytes were

@@ -25,7 +25,7 @@ pub mod status;
 pub mod stream;
 pub mod tonemap;
 
-pub use asset::{Asset, AssetList, Uploaded};
+pub use asset::{is_environment_name, Asset, AssetList, Uploaded};
 pub use error::ErrorBody;
 pub use health::{BackendInfo, Devices, Health, OpenClDevice, Scenes, WorkerLoad};
 pub use status::{Camera, DeviceShare, Light, Quality, SessionList, SessionStatus, SppSpread};

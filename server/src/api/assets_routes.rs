@@ -84,7 +84,7 @@ async fn upload(
         full @ AssetError::Full { .. } => ApiError::Full(full.to_string()),
     })?;
     if new {
-        tracing::info!(asset = %asset.id, name = %asset.name, triangles = asset.model.triangles(), "asset uploaded");
+        tracing::info!(asset = %asset.id, name = %asset.name, triangles = asset.triangles(), "asset uploaded");
     }
     let status = if new {
         StatusCode::CREATED

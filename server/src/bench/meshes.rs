@@ -12,7 +12,9 @@ use crate::render::camera::CameraRays;
 use crate::render::material::cosine_hemisphere;
 use crate::render::ray::Ray;
 use crate::render::sampler::Sampler;
-use crate::render::scene::{ImportJson, MeshDataJson, ObjectJson, SceneJson, SurfaceJson};
+use crate::render::scene::{
+    EnvironmentJson, ImportJson, MeshDataJson, ObjectJson, SceneJson, SurfaceJson,
+};
 use crate::render::world::{Origin, World};
 use crate::render::{Backend, BackendChoice, BackendError, Film, Quality, RenderJob, Scene};
 use std::collections::BTreeMap;
@@ -77,7 +79,7 @@ pub fn ray_set(triangles: usize) -> RaySet {
             material: Some("clay".into()),
         })],
         light: None,
-        environment: Some([1.0; 3]),
+        environment: Some(EnvironmentJson::Color([1.0; 3])),
     };
     let start = Instant::now();
     let scene = Scene::from_json(&raw).expect("a generated mesh is valid");

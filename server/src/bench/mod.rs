@@ -151,9 +151,13 @@ impl Config {
             ]
             .map(String::from)
             .to_vec(),
-            mis_scenes: [scenes::GLOSSY_PLANE, scenes::CORNELL_MESH_PBR]
-                .map(String::from)
-                .to_vec(),
+            mis_scenes: [
+                scenes::GLOSSY_PLANE,
+                scenes::CORNELL_MESH_PBR,
+                scenes::SUNSET_BALLS,
+            ]
+            .map(String::from)
+            .to_vec(),
             seeds: 3,
             trade_size: (64, 64),
             trade_seconds: 10.0,

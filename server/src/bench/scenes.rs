@@ -15,12 +15,19 @@
 //! - `glossy-plane`: a rough metal plane (roughness 0.3) reflecting a
 //!   small bright sphere light, a large dim quad light, an 80-triangle
 //!   glowing ball and a dim sky (every emitter kind in a glossy
-//!   reflection: where multiple importance sampling matters).
+//!   reflection: where multiple importance sampling matters);
+//! - `sunset-balls`: a diffuse ball and a rough metal ball (roughness 0.3)
+//!   on a diffuse floor, lit only by a real HDR environment map (Poly
+//!   Haven's CC0 "Venice Sunset" at 256 x 128, `assets/hdri/`, its sun a
+//!   few texels): where the map's importance sampling matters.
 
 use crate::model::generate::{bumpy_sphere, icosphere};
 use crate::model::MeshData;
+use crate::render::envmap::EnvMap;
+use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
 use crate::render::{Scene, SceneError};
 use serde_json::{json, Value};
+use std::sync::Arc;
 
 /// `cornell-glass-mesh`.
 pub const GLASS_MESH: &str = "cornell-glass-mesh";
@@ -30,6 +37,8 @@ pub const CORNELL_MESH: &str = "cornell-mesh";
 pub const CORNELL_MESH_PBR: &str = "cornell-mesh-pbr";
 /// `glossy-plane`.
 pub const GLOSSY_PLANE: &str = "glossy-plane";
+/// `sunset-balls`.
+pub const SUNSET_BALLS: &str = "sunset-balls";
 
 /// The scene by name: a mesh scene of this module's, else a built-in one
 /// or a file.
@@ -39,6 +48,7 @@ pub fn load(name: &str) -> Result<Scene, SceneError> {
         CORNELL_MESH => cornell_mesh(),
         CORNELL_MESH_PBR => cornell_mesh_pbr(),
         GLOSSY_PLANE => glossy_plane(0.3),
+        SUNSET_BALLS => sunset_balls(),
         _ => crate::resolve::load_scene(name),
     }
 }
@@ -182,6 +192,40 @@ pub fn glossy_plane(roughness: f64) -> Result<Scene, SceneError> {
              "transform": {"translate": [-1.6, 0.5, -0.6], "scale": 0.25}}
         ]
     }))
+}
+
+/// The map built into the binary for `sunset-balls`.
+struct Sunset;
+
+impl Resolver for Sunset {
+    fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
+        NoFiles.resolve(source)
+    }
+
+    fn environment(&self, _: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
+        static MAP: std::sync::OnceLock<Result<Arc<EnvMap>, String>> = std::sync::OnceLock::new();
+        let bytes = include_bytes!("../../assets/hdri/sunset-256.hdr");
+        MAP.get_or_init(|| crate::resolve::env_map_bytes(bytes, "sunset-256.hdr").map(Arc::new))
+            .clone()
+    }
+}
+
+/// `sunset-balls`.
+pub fn sunset_balls() -> Result<Scene, SceneError> {
+    let json = json!({
+        "camera": {"position": [0, 1.0, 3.5], "look_at": [0, 0.5, 0], "vfov_deg": 45},
+        "environment": {"map": "sunset-256.hdr", "rotation_deg": 200},
+        "materials": {
+            "white": {"type": "diffuse", "albedo": [0.7, 0.7, 0.7]},
+            "metal": {"type": "pbr", "base_color": [0.9, 0.8, 0.6], "metallic": 1, "roughness": 0.3}
+        },
+        "objects": [
+            {"type": "quad", "corner": [-4, 0, -4], "edge_u": [0, 0, 8], "edge_v": [8, 0, 0], "material": "white"},
+            {"type": "sphere", "center": [-0.6, 0.5, 0], "radius": 0.5, "material": "metal"},
+            {"type": "sphere", "center": [0.6, 0.5, 0], "radius": 0.5, "material": "white"}
+        ]
+    });
+    Scene::from_json_str_with(&json.to_string(), &Sunset)
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@ pub enum SectionArg {
     Adaptive,
     /// Random numbers vs Sobol points: time to 5/2/1% error on every built-in scene and two mesh scenes.
     Samplers,
-    /// BSDF sampling alone vs MIS: time to 5/2/1% error on glossy-plane and cornell-mesh-pbr.
+    /// BSDF sampling alone vs MIS: time to 5/2/1% error on glossy-plane, cornell-mesh-pbr and sunset-balls.
     Mis,
     /// Every backend alone, then all at once on one render (--backend all): paths/s of each and combined.
     Devices,
@@ -51,12 +51,12 @@ pub struct BenchArgs {
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     sections: Vec<SectionArg>,
     /// Scenes for every section, comma-separated (built-in names, the bench
-    /// scenes cornell-glass-mesh, cornell-mesh, cornell-mesh-pbr and
-    /// glossy-plane, or JSON files) [default: throughput on cornell,
+    /// scenes cornell-glass-mesh, cornell-mesh, cornell-mesh-pbr,
+    /// glossy-plane and sunset-balls, or JSON files) [default: throughput on cornell,
     /// cornell-glass, cornell-quads, smallpt, furnace, cornell-mesh,
     /// cornell-mesh-pbr; trade on cornell, cornell-glass, smallpt; adaptive
     /// and samplers on the five built-in scenes and the first two mesh
-    /// scenes; mis on glossy-plane and cornell-mesh-pbr].
+    /// scenes; mis on glossy-plane, cornell-mesh-pbr and sunset-balls].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     scenes: Vec<String>,
     /// A small version that runs in seconds (small images, short runs,

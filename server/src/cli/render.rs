@@ -124,6 +124,27 @@ pub struct RenderArgs {
     /// camera's, else the distance to its look_at point].
     #[arg(long, value_name = "D")]
     focus_distance: Option<f64>,
+    /// An equirectangular HDR environment map (.hdr or .exr; its top row
+    /// is up, its centre faces -z) lighting the scene in place of the
+    /// scene's own environment.
+    #[arg(long, value_name = "FILE")]
+    environment: Option<PathBuf>,
+    /// Scales the --environment map's radiance.
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 1.0,
+        requires = "environment"
+    )]
+    env_intensity: f64,
+    /// Turns the --environment map about +y, in degrees (right-handed).
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        requires = "environment"
+    )]
+    env_rotation: f64,
     /// Exposure in stops applied before tone mapping (PNG only).
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
@@ -184,6 +205,16 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         scene = scene
             .edit_camera(&lens)
             .map_err(|e| usage(format!("--aperture/--focus-distance: {e}")))?;
+    }
+    if let Some(map) = &args.environment {
+        // The message names environment.map, .intensity or .rotation_deg.
+        scene = pathstream::resolve::with_environment(
+            &scene,
+            map,
+            args.env_intensity,
+            args.env_rotation,
+        )
+        .map_err(|e| usage(format!("--environment: {e}")))?;
     }
     for w in &scene.warnings {
         eprintln!("warning: {w}");

@@ -39,6 +39,7 @@ mod tests;
 pub mod write;
 
 pub mod generate;
+pub mod hdr;
 
 /// A model file, read.
 #[derive(Clone, Debug, PartialEq)]

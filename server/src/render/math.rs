@@ -54,6 +54,43 @@ pub fn sincos_turns(u: f32) -> (f32, f32) {
     (f32::from_bits(sin ^ neg), f32::from_bits(cos ^ neg))
 }
 
+/// atan2(y, x) in turns, in [-1/2, 1/2], without a libm call, so that the
+/// kernel's twin (`kernels/rng.h`) gives the same bits: the ratio of the
+/// smaller to the larger magnitude is reduced to [0, tan(pi/8)] and Cephes'
+/// `atanf` polynomial applied (relative error about 1e-7); octants by
+/// symmetry. (0, 0) gives 0.
+#[inline(always)]
+pub fn atan2_turns(y: f32, x: f32) -> f32 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let steep = ay > ax;
+    let (num, den) = if steep { (ax, ay) } else { (ay, ax) };
+    if !(den > 0.0) {
+        return 0.0;
+    }
+    let t = num / den;
+    let reduce = t > 0.414_213_57;
+    let (base, t) = if reduce {
+        (std::f32::consts::FRAC_PI_4, (t - 1.0) / (t + 1.0))
+    } else {
+        (0.0, t)
+    };
+    let z = t * t;
+    let p =
+        (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z * t
+            + t;
+    let mut a = base + p;
+    if steep {
+        a = std::f32::consts::FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = std::f32::consts::PI - a;
+    }
+    if y < 0.0 {
+        a = -a;
+    }
+    a * (0.5 * std::f32::consts::FRAC_1_PI)
+}
+
 /// pbrt's bound on the relative error of n rounded operations:
 /// gamma(n) = n eps / (1 - n eps), eps = 2^-24.
 pub const fn gamma(n: u32) -> f32 {
@@ -81,6 +118,25 @@ mod tests {
             worst = worst.max((s - s0).abs()).max((c - c0).abs());
         }
         assert!(worst < 1e-6, "worst error {worst}");
+    }
+
+    #[test]
+    fn atan2_turns_matches_libm_in_every_octant() {
+        let mut worst = 0.0f64;
+        for i in 0..20_000 {
+            let a = i as f64 / 20_000.0 * std::f64::consts::TAU - std::f64::consts::PI;
+            for r in [1e-30, 1e-3, 1.0, 7.5e3] {
+                let (y, x) = ((a.sin() * r) as f32, (a.cos() * r) as f32);
+                let exact = f64::from(y).atan2(f64::from(x)) / std::f64::consts::TAU;
+                // Turns modulo 1: -1/2 and 1/2 are the same direction.
+                let diff = (f64::from(atan2_turns(y, x)) - exact).rem_euclid(1.0);
+                worst = worst.max(diff.min(1.0 - diff));
+            }
+        }
+        assert!(worst < 6e-8, "worst error {worst} turns");
+        assert_eq!(atan2_turns(0.0, 0.0), 0.0);
+        assert_eq!(atan2_turns(0.0, -1.0), 0.5);
+        assert_eq!(atan2_turns(1.0, 0.0), 0.25);
     }
 
     #[test]

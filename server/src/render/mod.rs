@@ -17,6 +17,7 @@ pub mod adaptive;
 pub mod backend;
 pub mod bvh;
 pub mod camera;
+pub mod envmap;
 pub mod film;
 pub mod filter;
 pub mod fresnel;

@@ -11,10 +11,11 @@ mod files;
 pub use files::FileResolver;
 
 use crate::model::{self, Model};
+use crate::render::envmap::EnvMap;
 use crate::render::math::{DAffine3, DMat3, DVec3};
 use crate::render::scene::{
-    builtin, CameraJson, GlassJson, ImportJson, LoadedModel, MaterialJson, ObjectJson, PbrJson,
-    SceneJson, SurfaceJson, BUILTIN_NAMES,
+    builtin, CameraJson, EnvMapJson, EnvironmentJson, GlassJson, ImportJson, LoadedModel,
+    MaterialJson, ObjectJson, PbrJson, SceneJson, SurfaceJson, BUILTIN_NAMES,
 };
 use crate::render::scene::{FresnelJson, Scene, SceneError};
 use crate::render::shape::MeshData;
@@ -61,6 +62,56 @@ pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| SceneError::new(".", format!("cannot read {name_or_path}: {e}")))?;
     Scene::from_json_str_with(&text, &resolver)
+}
+
+/// `scene` lit by the environment map in file `map` (read relative to the
+/// working directory), `intensity` times as bright and turned by
+/// `rotation_deg` about +y: the command line's `--environment`.
+pub fn with_environment(
+    scene: &Scene,
+    map: &Path,
+    intensity: f64,
+    rotation_deg: f64,
+) -> Result<Scene, SceneError> {
+    let mut json = scene.to_json();
+    json.environment = Some(EnvironmentJson::Map(EnvMapJson {
+        map: map.to_string_lossy().into_owned(),
+        intensity,
+        rotation_deg,
+        visible: true,
+        background: None,
+    }));
+    scene.revalidate_with(&json, &FileResolver::new(Path::new(".")))
+}
+
+/// An environment map read from an `.hdr` or `.exr` file and its sampling
+/// tables built; errors name the file.
+pub fn env_map_file(path: &Path) -> Result<EnvMap, String> {
+    let name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
+    if !model::hdr::is_hdr_name(&name) {
+        return Err(format!(
+            "'{name}': an environment map must be an .hdr or .exr file"
+        ));
+    }
+    let bytes =
+        std::fs::read(path).map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+    env_map_bytes(&bytes, &name)
+}
+
+/// An environment map from an image file's bytes (`name` for messages).
+pub fn env_map_bytes(bytes: &[u8], name: &str) -> Result<EnvMap, String> {
+    let image = model::hdr::read_hdr(bytes, name)?;
+    let mut map = EnvMap::new(name, image.width, image.height, image.texels);
+    if image.clamped > 0 {
+        map.warning = Some(format!(
+            "{name}: {} slightly negative texel values (rounding of the file's compression) read as 0",
+            image.clamped
+        ));
+    }
+    Ok(map)
 }
 
 /// A model as the renderer takes it: its meshes built (BVHs in parallel),

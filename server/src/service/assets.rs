@@ -1,7 +1,9 @@
-//! Uploaded model files (`POST /api/assets`): read once, kept as built
-//! meshes, named by the SHA-256 of their bytes (the same file uploaded twice
-//! is one asset). Scenes refer to them as `{"type": "mesh", "asset": ID}`;
-//! the store is the server's [`Resolver`], and it reads no files.
+//! Uploaded model files and environment maps (`POST /api/assets`): read
+//! once, kept as built meshes or as a map with its sampling tables, named
+//! by the SHA-256 of their bytes (the same file uploaded twice is one
+//! asset). Scenes refer to them as `{"type": "mesh", "asset": ID}` or
+//! `"environment": {"map": ID}`; the store is the server's [`Resolver`],
+//! and it reads no files.
 //!
 //! Limits: the size of one upload (checked from `Content-Length` before the
 //! body is read, by the route), the triangles and vertices of one file, and
@@ -9,6 +11,7 @@
 //! session's scene holds its meshes any more.
 
 use crate::model::{self, Limits};
+use crate::render::envmap::EnvMap;
 use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
 use sha2::{Digest, Sha256};
 use std::collections::HashMap;
@@ -45,10 +48,17 @@ pub struct Asset {
     pub format: &'static str,
     /// Size of the uploaded file.
     pub bytes: usize,
-    /// Memory of its built meshes.
+    /// Memory of its built meshes (or its map and tables).
     pub memory: usize,
-    pub model: Arc<LoadedModel>,
+    pub content: AssetContent,
     pub created: SystemTime,
+}
+
+/// What an asset holds.
+#[derive(Debug, Clone)]
+pub enum AssetContent {
+    Model(Arc<LoadedModel>),
+    Environment(Arc<EnvMap>),
 }
 
 /// An asset as the API reports it.
@@ -56,19 +66,42 @@ pub use pathstream_wire::Asset as AssetInfo;
 
 impl Asset {
     pub fn info(&self) -> AssetInfo {
-        let m = &self.model;
-        AssetInfo {
+        let mut info = AssetInfo {
             id: self.id.clone(),
             name: self.name.clone(),
             format: self.format.to_owned(),
             bytes: self.bytes as u64,
             memory_bytes: self.memory as u64,
-            triangles: m.triangles(),
-            meshes: m.meshes.len() as u64,
-            instances: m.instances.len() as u64,
-            materials: m.materials.iter().map(|(n, _)| n.clone()).collect(),
-            has_camera: m.camera.is_some(),
-            warnings: m.warnings.clone(),
+            triangles: 0,
+            meshes: 0,
+            instances: 0,
+            materials: Vec::new(),
+            has_camera: false,
+            warnings: Vec::new(),
+            map_size: None,
+        };
+        match &self.content {
+            AssetContent::Model(m) => {
+                info.triangles = m.triangles();
+                info.meshes = m.meshes.len() as u64;
+                info.instances = m.instances.len() as u64;
+                info.materials = m.materials.iter().map(|(n, _)| n.clone()).collect();
+                info.has_camera = m.camera.is_some();
+                info.warnings = m.warnings.clone();
+            }
+            AssetContent::Environment(e) => {
+                info.map_size = Some([e.width, e.height]);
+                info.warnings.extend(e.warning.clone());
+            }
+        }
+        info
+    }
+
+    /// Triangles of a model (0 for a map), for the log.
+    pub fn triangles(&self) -> u64 {
+        match &self.content {
+            AssetContent::Model(m) => m.triangles(),
+            AssetContent::Environment(_) => 0,
         }
     }
 }
@@ -127,33 +160,39 @@ impl AssetStore {
         } else {
             name.trim()
         };
-        let format = match model::detect(name, bytes) {
-            Some(model::Format::Obj) => "obj",
-            Some(model::Format::Gltf) => "gltf",
-            Some(model::Format::Glb) => "glb",
-            Some(model::Format::Ply) => "ply",
-            None => {
-                return Err(AssetError::Invalid(format!(
-                    "{name}: not a model file this server reads (OBJ, glTF 2.0 .gltf/.glb, PLY); \
-                     name the upload with ?name=FILE.ext if its content does not say"
-                )))
-            }
+        let (format, content, memory) = if let Some(format) = model::hdr::detect(name, bytes) {
+            let map = crate::resolve::env_map_bytes(bytes, name).map_err(AssetError::Invalid)?;
+            let memory = map.memory_bytes();
+            (format, AssetContent::Environment(Arc::new(map)), memory)
+        } else {
+            let format = match model::detect(name, bytes) {
+                Some(model::Format::Obj) => "obj",
+                Some(model::Format::Gltf) => "gltf",
+                Some(model::Format::Glb) => "glb",
+                Some(model::Format::Ply) => "ply",
+                None => return Err(AssetError::Invalid(format!(
+                    "{name}: not a model file (OBJ, glTF 2.0 .gltf/.glb, PLY) or an environment \
+                         map (.hdr, .exr) this server reads; name the upload with ?name=FILE.ext \
+                         if its content does not say"
+                ))),
+            };
+            let limits = Limits {
+                max_triangles: self.limits.max_triangles,
+                max_vertices: self.limits.max_triangles,
+            };
+            let read = model::load_bytes(bytes, name, &limits)
+                .map_err(|e| AssetError::Invalid(e.to_string()))?;
+            let loaded = crate::resolve::loaded_model(name, read).map_err(AssetError::Invalid)?;
+            let memory = loaded.memory_bytes();
+            (format, AssetContent::Model(Arc::new(loaded)), memory)
         };
-        let limits = Limits {
-            max_triangles: self.limits.max_triangles,
-            max_vertices: self.limits.max_triangles,
-        };
-        let read = model::load_bytes(bytes, name, &limits)
-            .map_err(|e| AssetError::Invalid(e.to_string()))?;
-        let loaded = crate::resolve::loaded_model(name, read).map_err(AssetError::Invalid)?;
-        let memory = loaded.memory_bytes();
         let asset = Arc::new(Asset {
             id: id.clone(),
             name: name.to_owned(),
             format,
             bytes: bytes.len(),
             memory,
-            model: Arc::new(loaded),
+            content,
             created: SystemTime::now(),
         });
         let mut assets = self.assets.write().unwrap_or_else(|e| e.into_inner());
@@ -215,12 +254,34 @@ impl AssetStore {
 impl Resolver for AssetStore {
     fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
         match source {
-            ModelSource::Asset(id) => self.get(id).map(|a| a.model.clone()).ok_or_else(|| {
-                format!("no asset '{id}' on this server (upload the file with POST /api/assets)")
-            }),
+            ModelSource::Asset(id) => match self.get(id).map(|a| a.content.clone()) {
+                Some(AssetContent::Model(m)) => Ok(m),
+                Some(AssetContent::Environment(_)) => Err(format!(
+                    "asset '{id}' is an environment map: use it as \"environment\": {{\"map\": ID}}"
+                )),
+                None => Err(missing(id)),
+            },
             ModelSource::File(_) => NoFiles.resolve(source),
         }
     }
+
+    fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
+        match source {
+            ModelSource::Asset(id) => match self.get(id).map(|a| a.content.clone()) {
+                Some(AssetContent::Environment(e)) => Ok(e),
+                Some(AssetContent::Model(_)) => Err(format!(
+                    "asset '{id}' is a model, not an environment map (.hdr or .exr)"
+                )),
+                None => Err(missing(id)),
+            },
+            ModelSource::File(_) => NoFiles.environment(source),
+        }
+    }
+}
+
+/// Why a scene cannot use asset `id`.
+fn missing(id: &str) -> String {
+    format!("no asset '{id}' on this server (upload the file with POST /api/assets)")
 }
 
 #[cfg(test)]

@@ -12,7 +12,8 @@ use futures_util::StreamExt;
 use guard::{create_guarded, owning, Interrupt};
 use indicatif::{ProgressBar, ProgressStyle};
 use pathstream_client::{
-    CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SessionStatus,
+    CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SceneSpec,
+    SessionStatus,
 };
 use quality::{spp_summary, QualityArgs};
 use scene::{scene_spec, upload};
@@ -125,6 +126,27 @@ struct CreateArgs {
     /// auto, opencl, cpu or all (every device of the server at once).
     #[arg(long)]
     backend: Option<String>,
+    /// An equirectangular HDR environment map (.hdr or .exr), uploaded and
+    /// lighting the scene in place of its own environment (a scene JSON or
+    /// model file: built-in scenes are sent by name).
+    #[arg(long, value_name = "FILE")]
+    environment: Option<PathBuf>,
+    /// Scales the --environment map's radiance.
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 1.0,
+        requires = "environment"
+    )]
+    env_intensity: f64,
+    /// Turns the --environment map about +y, in degrees.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        requires = "environment"
+    )]
+    env_rotation: f64,
     #[command(flatten)]
     quality: QualityArgs,
 }
@@ -238,8 +260,21 @@ async fn session_request(
     if default_spp && !args.quality.halts() {
         quality.spp = Some(Some(64));
     }
+    let mut spec = scene_spec(client, &args.scene).await?;
+    if let Some(map) = &args.environment {
+        let id = upload(client, map, "--environment").await?;
+        let SceneSpec::Json(json) = &mut spec else {
+            return Err(usage(format!(
+                "--environment: built-in scene '{}' is sent by name; give a scene JSON or model file",
+                args.scene
+            )));
+        };
+        json["environment"] = serde_json::json!({
+            "map": id, "intensity": args.env_intensity, "rotation_deg": args.env_rotation
+        });
+    }
     Ok(CreateSession {
-        scene: Some(scene_spec(client, &args.scene).await?),
+        scene: Some(spec),
         width: Some(args.width),
         height: Some(args.height),
         quality: Some(quality),

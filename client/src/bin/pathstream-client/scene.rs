@@ -1,8 +1,9 @@
 //! What `--scene` names: a built-in scene, a scene JSON file (its model
-//! files uploaded first), or a model file uploaded and placed whole.
+//! files and environment map uploaded first), or a model file uploaded and
+//! placed whole.
 
 use super::{usage, Failure};
-use pathstream_client::wire::asset::is_model_name;
+use pathstream_client::wire::asset::{is_environment_name, is_model_name};
 use pathstream_client::{Client, ClientError, SceneSpec};
 use std::path::Path;
 
@@ -48,6 +49,17 @@ pub async fn scene_spec(client: &Client, scene: &str) -> Result<SceneSpec, Failu
     let mut json: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| usage(format!("--scene {scene}: not JSON: {e}")))?;
     let dir = path.parent().unwrap_or(Path::new("."));
+    // An environment map file: uploaded, named by asset.
+    let map = json.pointer("/environment/map").and_then(|m| m.as_str());
+    if let Some(file) = map.filter(|m| is_environment_name(m)).map(str::to_owned) {
+        let id = upload(
+            client,
+            &dir.join(&file),
+            &format!("--scene {scene}: environment.map"),
+        )
+        .await?;
+        json["environment"]["map"] = serde_json::Value::String(id);
+    }
     if let Some(objects) = json.get_mut("objects").and_then(|o| o.as_array_mut()) {
         for (i, o) in objects.iter_mut().enumerate() {
             let Some(file) = o.get("file").and_then(|f| f.as_str()).map(str::to_owned) else {

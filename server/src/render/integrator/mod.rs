@@ -121,9 +121,16 @@ impl Path {
         hit: Option<Hit>,
     ) -> bool {
         let Some(hit) = hit else {
-            // Left the scene: the environment, counted as an emitter's hit.
-            let sky = || world.lights.environment();
-            self.l += self.emission(world, settings, world.environment, sky, Vec3A::ZERO);
+            // Left the scene: the environment, counted as an emitter's hit
+            // (what a camera ray sees of a map it may not see is no light).
+            let camera = self.bounces == 0;
+            let le = world.sky(self.ray.dir, camera);
+            if camera && world.env_map.as_ref().is_some_and(|m| !m.visible) {
+                self.l += le;
+            } else {
+                let sky = || world.lights.environment();
+                self.l += self.emission(world, settings, le, sky, Vec3A::ZERO);
+            }
             return false;
         };
         let ray = &self.ray;
@@ -164,6 +171,14 @@ impl Path {
                 };
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
                 self.l += self.beta * direct;
+            } else if world.diffuse_mis() {
+                let f = |dir: Vec3A, light_pdf: f32| {
+                    let cos = ns.dot(dir);
+                    let w = mis::light_weight(settings.combine, light_pdf, cos * FRAC_1_PI);
+                    Vec3A::splat(cos * w)
+                };
+                let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
+                self.l += self.beta * m.albedo * direct * FRAC_1_PI;
             } else {
                 let f = |dir: Vec3A, _pdf: f32| Vec3A::splat(ns.dot(dir));
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
@@ -171,8 +186,9 @@ impl Path {
             }
             if settings.max_depth != 0 && self.bounces + 1 >= settings.max_depth {
                 // The bounce's own hit would count no emission after a
-                // diffuse surface; after a `pbr` one, its MIS share.
-                if !matches!(m.bsdf, Bsdf::Pbr(_)) {
+                // diffuse surface lit by NEE alone; after one weighed by
+                // MIS, its share.
+                if !matches!(m.bsdf, Bsdf::Pbr(_)) && !world.diffuse_mis() {
                     return false;
                 }
             }
@@ -200,6 +216,13 @@ impl Path {
                 BsdfVertex {
                     from: s.receiver(nl, ns),
                     pdf: sc.pdf,
+                },
+            ),
+            (true, _) if world.diffuse_mis() => (
+                self.beta,
+                BsdfVertex {
+                    from: s.receiver(nl, ns),
+                    pdf: ns.dot(sc.dir) * FRAC_1_PI,
                 },
             ),
             (true, _) => (Vec3A::ZERO, BsdfVertex::NONE),

@@ -9,7 +9,7 @@
 //! emitter there is no pick.
 
 use crate::render::isa::Isa;
-use crate::render::light::{Emitter, EmitterShape};
+use crate::render::light::Emitter;
 use crate::render::math::Vec3A;
 use crate::render::sampler::Sampler;
 use crate::render::world::{Origin, Surface, World, NO_PRIM};
@@ -112,12 +112,13 @@ fn one<I: Isa>(
         entering: dir.dot(s.ng) < 0.0,
     };
     let hit = world.intersect(isa, &world.spawn(s, dir), from);
-    let visible = match e.shape {
-        EmitterShape::Environment => hit.is_none(),
-        _ => hit.is_some_and(|h| h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim)),
+    let visible = if e.shape.is_environment() {
+        hit.is_none()
+    } else {
+        hit.is_some_and(|h| h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim))
     };
     if visible {
-        e.emission * (f(dir, pmf / weight) * weight)
+        e.radiance(dir) * (f(dir, pmf / weight) * weight)
     } else {
         Vec3A::ZERO
     }

@@ -7,7 +7,8 @@
 //!   for tiny lights); from inside, or from their own inner surface (the
 //!   furnace), uniformly by area, since every point is then visible;
 //! - quads and triangles: uniformly by area;
-//! - the environment: cosine-weighted about the shading normal.
+//! - a uniform environment: cosine-weighted about the shading normal;
+//! - an environment map: in proportion to its brightness (`envmap`).
 //!
 //! Every emitter is two-sided (emission leaves both sides of a surface).
 //!
@@ -24,6 +25,7 @@
 //!    (`tests/opencl_parity_meshes.rs`).
 
 use super::alias::AliasTable;
+use super::sky::EnvLight;
 use crate::render::material::cosine_hemisphere;
 use crate::render::math::{basis, sincos_turns, Vec3A};
 use crate::render::shape::{Quad, Sphere};
@@ -40,12 +42,15 @@ pub struct LightTri {
     pub area: f32,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub enum EmitterShape {
     Sphere(Sphere),
     Quad(Quad),
     Triangle(LightTri),
+    /// A uniform environment (its radiance the emitter's `emission`).
     Environment,
+    /// An environment map.
+    Map(std::sync::Arc<EnvLight>),
 }
 
 /// The point a shadow ray leaves from, as light sampling sees it.
@@ -62,7 +67,7 @@ pub struct Receiver {
 }
 
 /// One thing next-event estimation can aim at.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Emitter {
     /// The object a shadow ray must hit to see it (unused for the environment).
     pub object: u32,
@@ -121,7 +126,7 @@ impl Lights {
     #[inline(always)]
     pub fn environment(&self) -> Option<usize> {
         let last = self.emitters.len().checked_sub(1)?;
-        matches!(self.emitters[last].shape, EmitterShape::Environment).then_some(last)
+        self.emitters[last].shape.is_environment().then_some(last)
     }
 
     /// The probability that one power-proportional pick chooses emitter
@@ -136,7 +141,26 @@ impl Lights {
     }
 }
 
+impl EmitterShape {
+    /// Whether this is the environment (uniform or a map): what rays that
+    /// leave the scene meet.
+    #[inline(always)]
+    pub fn is_environment(&self) -> bool {
+        matches!(self, EmitterShape::Environment | EmitterShape::Map(_))
+    }
+}
+
 impl Emitter {
+    /// The radiance this emitter sends along `-dir` (towards a receiver
+    /// looking along unit `dir`).
+    #[inline(always)]
+    pub fn radiance(&self, dir: Vec3A) -> Vec3A {
+        match &self.shape {
+            EmitterShape::Map(m) => m.radiance(dir),
+            _ => self.emission,
+        }
+    }
+
     /// Power up to a common factor (brightness x area, the solid-angle
     /// factor folded into the constants; only ratios matter): an
     /// environment as bright as a sphere of `radius` lit from everywhere.
@@ -150,6 +174,9 @@ impl Emitter {
             EmitterShape::Quad(q) => b * 2.0 * f64::from(q.area),
             EmitterShape::Triangle(t) => b * 2.0 * f64::from(t.area),
             EmitterShape::Environment => b * 4.0 * std::f64::consts::PI * radius * radius,
+            EmitterShape::Map(m) => {
+                m.mean_brightness() * 4.0 * std::f64::consts::PI * radius * radius
+            }
         }
     }
 
@@ -180,6 +207,7 @@ impl Emitter {
                 let cos = ns.dot(dir);
                 (cos > 0.0).then(|| (dir, PI / cos))
             }
+            EmitterShape::Map(m) => m.sample(u1, u2),
         }
     }
 }
@@ -222,6 +250,7 @@ impl Emitter {
                 }
                 PI / cos
             }
+            EmitterShape::Map(m) => return m.pdf(dir),
         };
         if weight > 0.0 {
             1.0 / weight

@@ -94,7 +94,7 @@ fn the_density_of_every_sampled_direction_is_one_over_its_weight() {
             EmitterShape::Sphere(s) => sphere_hit(r.p, dir, s),
             EmitterShape::Quad(q) => plane_hit(r.p, dir, q.corner, q.normal),
             EmitterShape::Triangle(t) => plane_hit(r.p, dir, t.p0, t.n),
-            EmitterShape::Environment => Vec3A::ZERO,
+            EmitterShape::Environment | EmitterShape::Map(_) => Vec3A::ZERO,
         };
         let pdf = e.pdf_direction(&r, dir, q);
         let product = pdf * weight;

@@ -2,10 +2,13 @@
 //! towards itself from a receiving point, with its pdf; [`Lights`] lists
 //! them with an alias table that picks one in proportion to its power.
 //! Lights know nothing of the scene's intersection: the integrator traces
-//! the shadow rays (`render::integrator::nee`).
+//! the shadow rays (`render::integrator::nee`). An environment map as a
+//! light is in `sky` (its image and tables in `render::envmap`).
 
 mod alias;
 mod emitter;
+pub mod sky;
 
 pub use alias::AliasTable;
 pub use emitter::{Emitter, EmitterShape, LightTri, Lights, Receiver};
+pub use sky::EnvLight;

@@ -53,9 +53,46 @@ pub struct SceneJson {
     /// Index of the object that the `light` API verb moves and recolours.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub light: Option<usize>,
-    /// Radiance of rays that leave the scene (default black).
+    /// Radiance of rays that leave the scene (default black): a colour or
+    /// an HDR map.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub environment: Option<[f64; 3]>,
+    pub environment: Option<EnvironmentJson>,
+}
+
+/// `environment`: `[r, g, b]`, or `{"map": FILE|ASSET, ...}`.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum EnvironmentJson {
+    Color([f64; 3]),
+    Map(EnvMapJson),
+}
+
+/// An equirectangular HDR environment map (`.hdr` or `.exr`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EnvMapJson {
+    /// A file (relative to the scene file) or an uploaded asset's id.
+    pub map: String,
+    /// Scales the map's radiance.
+    #[serde(default = "one")]
+    pub intensity: f64,
+    /// Turns the map about +y (right-handed); 0: its centre faces -z.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub rotation_deg: f64,
+    /// Whether camera rays that leave the scene see the map.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub visible: bool,
+    /// What camera rays see instead when `visible` is false (default black).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub background: Option<[f64; 3]>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_true(v: &bool) -> bool {
+    *v
 }
 
 /// Pinhole or thin-lens camera.
@@ -264,7 +301,7 @@ impl SceneJson {
             #[serde(default)]
             light: Option<usize>,
             #[serde(default)]
-            environment: Option<[f64; 3]>,
+            environment: Option<Value>,
         }
         let shell: Shell = at("", value)?;
         let materials = shell
@@ -302,8 +339,20 @@ impl SceneJson {
             materials,
             objects,
             light: shell.light,
-            environment: shell.environment,
+            environment: shell.environment.map(environment).transpose()?,
         })
+    }
+}
+
+/// `environment`: a colour or a map, told apart by their JSON kinds.
+fn environment(value: Value) -> Result<EnvironmentJson, SceneError> {
+    match value {
+        Value::Object(_) => Ok(EnvironmentJson::Map(at("environment", value)?)),
+        Value::Array(_) => Ok(EnvironmentJson::Color(at("environment", value)?)),
+        _ => Err(SceneError::new(
+            "environment",
+            "expected a colour [r, g, b] or a map {\"map\": \"studio.hdr\", ...}",
+        )),
     }
 }
 

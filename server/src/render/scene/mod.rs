@@ -35,6 +35,7 @@
 
 mod builtin;
 mod edit;
+mod environment;
 mod frame;
 mod import;
 mod json;
@@ -47,10 +48,12 @@ mod values;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
+pub use environment::EnvironmentMap;
 pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
-    CameraJson, FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson,
-    PbrJson, QuadJson, RotateJson, ScaleJson, SceneJson, SphereJson, SurfaceJson, TransformJson,
+    CameraJson, EnvMapJson, EnvironmentJson, FresnelJson, GlassJson, ImportJson, MaterialJson,
+    MeshDataJson, ObjectJson, PbrJson, QuadJson, RotateJson, ScaleJson, SceneJson, SphereJson,
+    SurfaceJson, TransformJson,
 };
 pub use resolve::{LoadedModel, ModelSource, NoFiles, Resolver};
 pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};
@@ -186,8 +189,10 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The object the `light` verb acts on, if the scene has one.
     pub light: Option<usize>,
-    /// Radiance of rays that leave the scene.
+    /// Radiance of rays that leave the scene (black where a map is given).
     pub environment: DVec3,
+    /// An HDR environment map, in place of the uniform colour.
+    pub environment_map: Option<EnvironmentMap>,
     /// The meshes and models that `Shape::Import` objects place.
     pub imports: Vec<Import>,
     /// What the scene's files hold that is not rendered, and what was
@@ -234,7 +239,17 @@ impl Scene {
     /// taken from this scene where the edit still refers to them (nothing
     /// is read or rebuilt), else as `from_json` would.
     pub fn revalidate(&self, raw: &SceneJson) -> Result<Scene, SceneError> {
-        Self::from_json_with(raw, &resolve::Reuse::new(self, &NoFiles))
+        self.revalidate_with(raw, &NoFiles)
+    }
+
+    /// As [`Scene::revalidate`], with what this scene does not hold read by
+    /// `fallback` (an environment map given on the command line).
+    pub fn revalidate_with(
+        &self,
+        raw: &SceneJson,
+        fallback: &dyn Resolver,
+    ) -> Result<Scene, SceneError> {
+        Self::from_json_with(raw, &resolve::Reuse::new(self, fallback))
     }
 
     /// The scene back in its JSON form (round-trips through `from_json`

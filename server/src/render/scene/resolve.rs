@@ -9,6 +9,7 @@
 //! - `Reuse`: the models of an existing scene (edits), else another resolver.
 
 use super::{CameraJson, ImportJson, MaterialJson, Scene};
+use crate::render::envmap::EnvMap;
 use crate::render::math::DAffine3;
 use crate::render::shape::{Mesh, MeshData};
 use rayon::prelude::*;
@@ -22,6 +23,17 @@ pub enum ModelSource<'a> {
 }
 
 impl<'a> ModelSource<'a> {
+    /// What an environment's `map` string names: an uploaded asset (a
+    /// SHA-256 in hex, as `POST /api/assets` answers) or a file.
+    pub fn of_map(name: &'a str) -> Self {
+        let is_id = name.len() == 64 && name.bytes().all(|b| b.is_ascii_hexdigit());
+        if is_id {
+            Self::Asset(name)
+        } else {
+            Self::File(name)
+        }
+    }
+
     /// The source an import names, if it names a file or an asset.
     pub fn of(json: &'a ImportJson) -> Option<Self> {
         match (&json.file, &json.asset) {
@@ -36,6 +48,12 @@ impl<'a> ModelSource<'a> {
 /// naming the problem (the caller adds the JSON path).
 pub trait Resolver: Sync {
     fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String>;
+
+    /// The environment map (`.hdr` or `.exr`) a scene's `environment.map`
+    /// names, read and its sampling tables built.
+    fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
+        Err(NoFiles::refusal(source))
+    }
 }
 
 /// A model file read and its meshes built.
@@ -98,15 +116,22 @@ impl LoadedModel {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoFiles;
 
-impl Resolver for NoFiles {
-    fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
-        Err(match source {
+impl NoFiles {
+    /// Why a reference to `source` cannot be followed here.
+    pub fn refusal(source: ModelSource<'_>) -> String {
+        match source {
             ModelSource::File(f) => format!(
                 "'{f}': files are read only from scene files on the command line; \
                  over the API upload the file (POST /api/assets) and use \"asset\""
             ),
             ModelSource::Asset(a) => format!("asset '{a}': assets are only known to a server"),
-        })
+        }
+    }
+}
+
+impl Resolver for NoFiles {
+    fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
+        Err(Self::refusal(source))
     }
 }
 
@@ -130,5 +155,12 @@ impl Resolver for Reuse<'_> {
             .find(|i| ModelSource::of(&i.json) == Some(source))
             .map(|i| i.model.clone())
             .map_or_else(|| self.fallback.resolve(source), Ok)
+    }
+
+    fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
+        match &self.scene.environment_map {
+            Some(e) if ModelSource::of_map(&e.json.map) == source => Ok(e.map.clone()),
+            _ => self.fallback.environment(source),
+        }
     }
 }

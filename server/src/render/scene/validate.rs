@@ -2,13 +2,11 @@
 //! of the field it rejects.
 
 use super::import::{ImportKind, Importer};
-use super::json::{CameraJson, ObjectJson, QuadJson, SceneJson, SphereJson};
+use super::json::{CameraJson, EnvironmentJson, ObjectJson, QuadJson, SceneJson, SphereJson};
 use super::materials::{self, unknown_material};
 use super::resolve::Resolver;
-use super::values::{finite, point, vec3};
-use super::{
-    frame, Camera, Object, Scene, SceneError, Shape, MAX_COORDINATE, MAX_EMISSION, MAX_OBJECTS,
-};
+use super::values::{finite, point};
+use super::{frame, Camera, Object, Scene, SceneError, Shape, MAX_COORDINATE, MAX_OBJECTS};
 use crate::render::math::DVec3;
 use std::collections::{BTreeMap, HashMap};
 
@@ -125,19 +123,9 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
         }
     };
 
-    let environment = match raw.environment {
-        Some(e) => {
-            let e = vec3("environment", e)?;
-            if e.min_element() < 0.0 || e.max_element() > MAX_EMISSION {
-                return Err(SceneError::new(
-                    "environment",
-                    format!("components must be between 0 and {MAX_EMISSION:e}"),
-                ));
-            }
-            e
-        }
-        None => DVec3::ZERO,
-    };
+    let (environment, environment_map) =
+        super::environment::environment(raw.environment.as_ref(), resolver)?;
+    warnings.extend(environment_map.as_ref().and_then(|m| m.map.warning.clone()));
 
     let mut scene = Scene {
         camera,
@@ -145,6 +133,7 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
         objects,
         light: None,
         environment,
+        environment_map,
         imports,
         warnings,
     };
@@ -343,7 +332,11 @@ pub(super) fn to_json(s: &Scene) -> SceneJson {
         materials,
         objects,
         light: s.light,
-        environment: (s.environment != DVec3::ZERO).then(|| s.environment.to_array()),
+        environment: match &s.environment_map {
+            Some(m) => Some(EnvironmentJson::Map(m.json.clone())),
+            None => (s.environment != DVec3::ZERO)
+                .then(|| EnvironmentJson::Color(s.environment.to_array())),
+        },
     }
 }
 

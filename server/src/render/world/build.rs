@@ -8,12 +8,15 @@
 //! f32 matrices). The padding costs nothing measurable and keeps the BVH
 //! from culling a hit that the scan would report.
 
+use super::emitters::Sky;
 use super::{Accel, Geometry, Instance, World, WorldObject};
 use crate::render::bvh::{Aabb, Bvh};
+use crate::render::light::EnvLight;
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::{DAffine3, DVec3, Vec3A};
 use crate::render::scene::{Scene, Shape};
 use crate::render::shape::{Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
+use std::sync::Arc;
 
 /// Scenes whose scan costs at most this much (and without meshes) are
 /// scanned, not searched through a BVH; see [`scan_cost`]. Measured with
@@ -110,7 +113,21 @@ impl World {
             f64::from(scene_box.extent().length()) * 0.5
         };
         let environment: Vec3A = scene.environment.as_vec3().into();
-        let lights = super::emitters::lights(&objects, &instances, &materials, environment, radius);
+        let env_map = scene.environment_map.as_ref().map(|m| {
+            let j = &m.json;
+            Arc::new(EnvLight::new(
+                m.map.clone(),
+                j.intensity,
+                j.rotation_deg,
+                j.visible,
+                DVec3::from_array(j.background.unwrap_or([0.0; 3])),
+            ))
+        });
+        let sky = match &env_map {
+            Some(m) => Sky::Map(m.clone()),
+            None => Sky::Uniform(environment),
+        };
+        let lights = super::emitters::lights(&objects, &instances, &materials, sky, radius);
         let scan = instances.is_empty()
             && match choice {
                 AccelChoice::Auto => {
@@ -156,6 +173,7 @@ impl World {
             materials,
             lights,
             environment,
+            env_map,
             accel,
             accel_choice: choice,
         }

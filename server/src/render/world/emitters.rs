@@ -7,17 +7,24 @@
 //! BSDF sample hit by binary search on it.
 
 use super::{Geometry, Instance, WorldObject, NO_PRIM};
-use crate::render::light::{Emitter, EmitterShape, LightTri, Lights};
+use crate::render::light::{Emitter, EmitterShape, EnvLight, LightTri, Lights};
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::Vec3A;
+use std::sync::Arc;
 
-/// The emitters of these objects; `environment` (if not black) as seen
+/// What lights the scene from outside.
+pub(super) enum Sky {
+    Uniform(Vec3A),
+    Map(Arc<EnvLight>),
+}
+
+/// The emitters of these objects; the sky (if not black) as seen
 /// from everywhere within `radius` of the origin.
 pub(super) fn lights(
     objects: &[WorldObject],
     instances: &[Instance],
     materials: &[SurfaceMaterial],
-    environment: Vec3A,
+    sky: Sky,
     radius: f64,
 ) -> Lights {
     let mut emitters = Vec::new();
@@ -40,12 +47,17 @@ pub(super) fn lights(
             }
         }
     }
-    if environment.max_element() > 0.0 {
+    let sky = match sky {
+        Sky::Uniform(e) if e.max_element() > 0.0 => Some((e, EmitterShape::Environment)),
+        Sky::Uniform(_) => None,
+        Sky::Map(m) => (m.mean_brightness() > 0.0).then_some((Vec3A::ZERO, EmitterShape::Map(m))),
+    };
+    if let Some((emission, shape)) = sky {
         emitters.push(Emitter {
             object: u32::MAX,
             prim: NO_PRIM,
-            emission: environment,
-            shape: EmitterShape::Environment,
+            emission,
+            shape,
         });
     }
     Lights::new(emitters, radius)

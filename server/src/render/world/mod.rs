@@ -24,7 +24,7 @@ pub use instance::Instance;
 
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
 use crate::render::isa::Isa;
-use crate::render::light::{Lights, Receiver};
+use crate::render::light::{EnvLight, Lights, Receiver};
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
@@ -170,8 +170,13 @@ pub struct World {
     pub instances: Vec<Instance>,
     pub materials: Vec<SurfaceMaterial>,
     pub lights: Lights,
-    /// Radiance of rays that leave the scene.
+    /// Radiance of rays that leave the scene, where there is no map.
     pub environment: Vec3A,
+    /// The environment map: radiance of rays that leave the scene (and its
+    /// emitter is the last of `lights`). Diffuse surfaces then weigh their
+    /// light and BSDF samples by multiple importance sampling, as `pbr`
+    /// ones always do.
+    pub env_map: Option<std::sync::Arc<EnvLight>>,
     accel: Accel,
     /// What the world was asked for: `Auto` lets each backend choose by
     /// its own measurement; `Bvh` and `Scan` hold for every backend.
@@ -179,6 +184,24 @@ pub struct World {
 }
 
 impl World {
+    /// The radiance that a ray leaving the scene along unit `dir` finds:
+    /// as light (`camera` false), or as the camera sees it.
+    #[inline(always)]
+    pub fn sky(&self, dir: Vec3A, camera: bool) -> Vec3A {
+        match &self.env_map {
+            None => self.environment,
+            Some(m) if camera && !m.visible => m.background,
+            Some(m) => m.radiance(dir),
+        }
+    }
+
+    /// Whether diffuse surfaces weigh light and BSDF samples by MIS (a
+    /// scene with an environment map): else NEE alone lights them.
+    #[inline(always)]
+    pub fn diffuse_mis(&self) -> bool {
+        self.env_map.is_some()
+    }
+
     /// Whether nearest hits are found through a BVH (else by a scan).
     pub fn uses_bvh(&self) -> bool {
         matches!(self.accel, Accel::Bvh { .. })

@@ -64,7 +64,7 @@ macro_rules! scene_array {
 
 /// The scene's arrays in the order of `kernels/scene_arrays.h`: the
 /// `render` kernel's first parameters.
-pub(super) const SCENE_ARRAYS: [SceneArray; 13] = [
+pub(super) const SCENE_ARRAYS: [SceneArray; 15] = [
     scene_array!("P": "Params", "params", [layout::Params], |p| {
         std::slice::from_ref(&p.params)
     }),
@@ -86,6 +86,10 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 13] = [
     }),
     scene_array!("slots": "uint", "material slots", [u32], |p| &p.meshes.slots),
     scene_array!("ggx": "float", "GGX albedo tables", [f32], |p| &p.ggx),
+    scene_array!("env_texels": "float", "environment map", [f32], |p| p.env_texels()),
+    scene_array!("env_dist": "float", "environment map tables", [f32], |p| {
+        p.env_dist()
+    }),
 ];
 
 /// The `render` kernel's parameters after the scene's arrays, in order:

@@ -293,6 +293,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         mesh_stack: 1,
         tri_lights: true,
         environment: true,
+        env_map: true,
         lens: true,
         inject_nan_every: Some(1),
     };

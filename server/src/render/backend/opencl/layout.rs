@@ -35,6 +35,8 @@ pub const KIND_INSTANCE: u32 = 2;
 pub const LIGHT_OBJECT: u32 = 0;
 pub const LIGHT_TRIANGLE: u32 = 1;
 pub const LIGHT_ENVIRONMENT: u32 = 2;
+/// An environment map (`HAS_ENV_MAP`; the map's tables are scene arrays).
+pub const LIGHT_ENV_MAP: u32 = 3;
 pub const MAT_DIFFUSE: u32 = 0;
 pub const MAT_MIRROR: u32 = 1;
 pub const MAT_GLASS: u32 = 2;
@@ -47,13 +49,14 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 24] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 27] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
     ("LIGHT_OBJECT", LIGHT_OBJECT),
     ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
     ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
+    ("LIGHT_ENV_MAP", LIGHT_ENV_MAP),
     ("NO_NORMALS", super::meshes::NO_NORMALS),
     ("NO_PRIM", crate::render::world::NO_PRIM),
     ("MAT_DIFFUSE", MAT_DIFFUSE),
@@ -80,6 +83,11 @@ pub const SHARED_CONSTANTS: [(&str, u32); 24] = [
     // to the scene's trees, `program::bvh_stack`).
     ("MAX_BVH_STACK", crate::render::bvh::STACK as u32),
     ("FILM_FLOATS", super::FILM_FLOATS as u32),
+    (
+        "ONE_BELOW_BITS",
+        crate::render::envmap::distribution::ONE_BELOW.to_bits(),
+    ),
+    ("TWO_PI2_BITS", crate::render::envmap::TWO_PI2.to_bits()),
 ];
 
 /// How a launch finds its pixels and samples (the kernel's `mode`): every
@@ -156,8 +164,13 @@ pub struct Params {
     /// 0: a pinhole); `right.w` is the focus distance.
     pub lens_x: f32,
     pub lens_y: f32,
-    /// Radiance of rays that leave the scene (w unused).
+    /// Radiance of rays that leave the scene (w unused); with a map, what
+    /// camera rays see where it is hidden (w: 1 where it is visible).
     pub environment: [f32; 4],
+    /// An environment map: its rotation's cos and sin, its intensity.
+    pub env: [f32; 4],
+    /// The map's width and height (0: no map).
+    pub env_size: [u32; 4],
 }
 
 /// An emitter for next-event estimation and its column of the power alias
@@ -188,7 +201,7 @@ pub struct Light {
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
 const _: () = assert!(std::mem::size_of::<Material>() == 64);
-const _: () = assert!(std::mem::size_of::<Params>() == 128);
+const _: () = assert!(std::mem::size_of::<Params>() == 160);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
@@ -261,6 +274,7 @@ pub fn kernel_lights(w: &World) -> Vec<Light> {
                         (v4(t.p0, 0.0), v4(t.e1, 0.0), v4(t.e2, 0.0), v4(t.n, t.area));
                 }
                 EmitterShape::Environment => l.kind = LIGHT_ENVIRONMENT,
+                EmitterShape::Map(_) => l.kind = LIGHT_ENV_MAP,
             }
             l
         })
@@ -292,6 +306,23 @@ pub struct Packed {
     /// The metallic-roughness BSDF's albedo tables (`ggx::Tables`), where
     /// a material uses it.
     pub ggx: Vec<f32>,
+    /// The environment map, whose texels and tables the kernel reads as
+    /// they are (no copy: `buffers.rs` uploads their bytes).
+    pub env_map: Option<std::sync::Arc<crate::render::envmap::EnvMap>>,
+}
+
+impl Packed {
+    /// The map's texels as floats (RGB per texel), or none.
+    pub fn env_texels(&self) -> &[f32] {
+        self.env_map
+            .as_deref()
+            .map_or(&[], |m| bytemuck::cast_slice(&m.texels))
+    }
+
+    /// The map's sampling tables (`Distribution2D::data`), or none.
+    pub fn env_dist(&self) -> &[f32] {
+        self.env_map.as_deref().map_or(&[], |m| &m.dist.data)
+    }
 }
 
 pub fn pack(job: &RenderJob) -> Packed {
@@ -371,7 +402,18 @@ pub fn pack(job: &RenderJob) -> Packed {
         num_big: 0,
         lens_x: c.lens_x,
         lens_y: c.lens_y,
-        environment: v4(w.environment, 0.0),
+        environment: match &w.env_map {
+            Some(m) => v4(m.background, if m.visible { 1.0 } else { 0.0 }),
+            None => v4(w.environment, 0.0),
+        },
+        env: w
+            .env_map
+            .as_ref()
+            .map_or([0.0; 4], |m| [m.cos_rot, m.sin_rot, m.intensity, 0.0]),
+        env_size: w
+            .env_map
+            .as_ref()
+            .map_or([0; 4], |m| [m.map.width, m.map.height, 0, 0]),
     };
     let mut packed = Packed {
         params,
@@ -382,6 +424,7 @@ pub fn pack(job: &RenderJob) -> Packed {
         prims: Vec::new(),
         big: Vec::new(),
         meshes: super::meshes::pack(w),
+        env_map: w.env_map.as_ref().map(|m| m.map.clone()),
         ggx: if w.materials.iter().any(|m| matches!(m.bsdf, Bsdf::Pbr(_))) {
             crate::render::ggx::tables().data.to_vec()
         } else {

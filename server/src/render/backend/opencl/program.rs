@@ -17,7 +17,7 @@ use opencl3::context::Context;
 use opencl3::program::Program;
 
 /// The kernel's sources in dependency order (`kernels/`, built into the binary).
-pub const SOURCES: [&str; 13] = [
+pub const SOURCES: [&str; 14] = [
     include_str!("../../../../../kernels/scene_arrays.h"),
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
@@ -28,6 +28,7 @@ pub const SOURCES: [&str; 13] = [
     include_str!("../../../../../kernels/world.h"),
     include_str!("../../../../../kernels/ggx.h"),
     include_str!("../../../../../kernels/materials.h"),
+    include_str!("../../../../../kernels/envmap.h"),
     include_str!("../../../../../kernels/lights.h"),
     include_str!("../../../../../kernels/integrator.h"),
     include_str!("../../../../../kernels/render.cl"),
@@ -64,6 +65,9 @@ pub struct Features {
     pub tri_lights: bool,
     /// A non-black environment (its light and its emitter).
     pub environment: bool,
+    /// An environment map (its lookups, sampling and MIS at diffuse
+    /// surfaces).
+    pub env_map: bool,
     /// A thin-lens camera (aperture > 0).
     pub lens: bool,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
@@ -112,7 +116,9 @@ impl Features {
             emitters.iter().any(|e| match e.shape {
                 EmitterShape::Sphere(_) => k == KIND_SPHERE,
                 EmitterShape::Quad(_) => k == KIND_QUAD,
-                EmitterShape::Triangle(_) | EmitterShape::Environment => false,
+                EmitterShape::Triangle(_) | EmitterShape::Environment | EmitterShape::Map(_) => {
+                    false
+                }
             })
         };
         Self {
@@ -152,6 +158,7 @@ impl Features {
                     .iter()
                     .any(|e| matches!(e.shape, EmitterShape::Triangle(_))),
             environment: w.environment.max_element() > 0.0,
+            env_map: w.env_map.is_some(),
             lens: job.camera.has_lens(),
             inject_nan_every: None,
         }
@@ -164,7 +171,7 @@ impl Features {
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
-             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_LENS={}",
+             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_LENS={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -187,6 +194,7 @@ impl Features {
             self.mesh_stack.max(1),
             b(self.tri_lights),
             b(self.environment),
+            b(self.env_map),
             b(self.lens),
         );
         if let Some(n) = self.inject_nan_every {
