@@ -170,11 +170,13 @@ impl AssetStore {
                 Some(model::Format::Gltf) => "gltf",
                 Some(model::Format::Glb) => "glb",
                 Some(model::Format::Ply) => "ply",
-                None => return Err(AssetError::Invalid(format!(
+                None => {
+                    return Err(AssetError::Invalid(format!(
                     "{name}: not a model file (OBJ, glTF 2.0 .gltf/.glb, PLY) or an environment \
                          map (.hdr, .exr) this server reads; name the upload with ?name=FILE.ext \
                          if its content does not say"
-                ))),
+                )))
+                }
             };
             let limits = Limits {
                 max_triangles: self.limits.max_triangles,

@@ -8,6 +8,8 @@
 //! twins (`kernels/envmap.h`) repeat bit for bit: a binary search over a
 //! cumulative table, one division to place the point inside its cell.
 
+use rayon::prelude::*;
+
 /// The density of `height` rows of `width` cells each. Its tables are one
 /// array, as the kernel reads them (`data`):
 /// - the marginal's cumulative masses, `height + 1` entries: 0, the
@@ -81,17 +83,22 @@ impl Distribution2D {
     pub fn new(width: u32, height: u32, weights: &[f64]) -> Self {
         let (w, h) = (width as usize, height as usize);
         assert_eq!(weights.len(), w * h, "one weight per cell");
-        let mut conditional_cdf = Vec::with_capacity(h * (w + 1));
-        let mut conditional_pdf = Vec::with_capacity(h * w);
-        let rows: Vec<f64> = weights
-            .chunks_exact(w)
-            .map(|row| table(row, &mut conditional_cdf, &mut conditional_pdf))
+        // Each row's table in parallel, then joined in row order.
+        let per_row: Vec<(Vec<f32>, Vec<f32>, f64)> = weights
+            .par_chunks_exact(w)
+            .map(|row| {
+                let (mut cdf, mut pdf) = (Vec::with_capacity(w + 1), Vec::with_capacity(w));
+                let total = table(row, &mut cdf, &mut pdf);
+                (cdf, pdf, total)
+            })
             .collect();
+        let rows: Vec<f64> = per_row.iter().map(|r| r.2).collect();
         let (mut data, mut marginal_pdf) = (Vec::new(), Vec::new());
         table(&rows, &mut data, &mut marginal_pdf);
+        data.reserve(h + h * (2 * w + 1));
         data.extend(marginal_pdf);
-        data.extend(conditional_cdf);
-        data.extend(conditional_pdf);
+        data.extend(per_row.iter().flat_map(|r| r.0.iter().copied()));
+        data.extend(per_row.iter().flat_map(|r| r.1.iter().copied()));
         Self {
             width,
             height,
