@@ -219,3 +219,34 @@ fn the_command_line_exits_2_naming_a_broken_map() {
         "{stderr}"
     );
 }
+
+#[test]
+fn the_command_line_lights_any_scene_with_a_map_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.pfm");
+    let run = |map: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_pathstream"))
+            .args([
+                "render", "--scene", "cornell", "--width", "8", "--height", "8",
+            ])
+            .args(["--spp", "2", "--environment", map, "--env-rotation", "45"])
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .expect("runs")
+    };
+    let ok = run(SUNSET);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(out.is_file());
+    let missing = run("/no/such/map.exr");
+    let stderr = String::from_utf8_lossy(&missing.stderr);
+    assert_eq!(missing.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--environment") && stderr.contains("map.exr"),
+        "{stderr}"
+    );
+}

@@ -28,7 +28,7 @@ pub fn pair() -> [Setting; 2] {
 pub fn markdown(w: &mut String, r: &Results) {
     let table = Table {
         title: "MIS: BSDF sampling alone vs multiple importance sampling",
-        about: "The unbiased setting with next-event estimation off (emitters found by BSDF samples only) and on (at `pbr` surfaces the shadow ray and the BSDF sample weighted by the power heuristic).",
+        about: "The unbiased setting with next-event estimation off (emitters found by BSDF samples only) and on (at `pbr` surfaces, and at every surface under an environment map, the shadow ray and the BSDF sample weighted by the power heuristic).",
         names: ["BSDF only", "MIS"],
     };
     compare::markdown(w, &r.mis, r.trade_size, &table);
