@@ -123,13 +123,13 @@ impl Path {
         let Some(hit) = hit else {
             // Left the scene: the environment, counted as an emitter's hit
             // (what a camera ray sees of a map it may not see is no light).
-            let camera = self.bounces == 0;
-            let le = world.sky(self.ray.dir, camera);
-            if camera && world.env_map.as_ref().is_some_and(|m| !m.visible) {
-                self.l += le;
-            } else {
-                let sky = || world.lights.environment();
-                self.l += self.emission(world, settings, le, sky, Vec3A::ZERO);
+            match &world.env_map {
+                Some(m) if self.bounces == 0 && !m.visible => self.l += m.background,
+                _ => {
+                    let le = world.sky(self.ray.dir);
+                    let sky = || world.lights.environment();
+                    self.l += self.emission(world, settings, le, sky, Vec3A::ZERO);
+                }
             }
             return false;
         };

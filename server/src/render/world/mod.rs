@@ -184,13 +184,12 @@ pub struct World {
 }
 
 impl World {
-    /// The radiance that a ray leaving the scene along unit `dir` finds:
-    /// as light (`camera` false), or as the camera sees it.
+    /// The radiance that a ray leaving the scene along unit `dir` finds
+    /// (a hidden map's background, which camera rays see, is no light).
     #[inline(always)]
-    pub fn sky(&self, dir: Vec3A, camera: bool) -> Vec3A {
+    pub fn sky(&self, dir: Vec3A) -> Vec3A {
         match &self.env_map {
             None => self.environment,
-            Some(m) if camera && !m.visible => m.background,
             Some(m) => m.radiance(dir),
         }
     }
