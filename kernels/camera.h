@@ -29,8 +29,24 @@ static inline float2 pixel_offset(__global const Params *P, ulong sample, float2
 
 /* The ray through raster (x, y) (CameraRays::ray, lens_ray): from the
  * pinhole, or from a point of the lens drawn from s towards where the
- * pinhole ray meets the plane in focus. */
+ * pinhole ray meets the plane in focus; parallel to forward from the
+ * image rectangle (orthographic); or in the direction an environment map's
+ * point (x/w, y/h) has (panorama: right, up and -forward unit vectors). */
 static inline void camera_ray(__global const Params *P, float x, float y, Sampler *s, float3 *origin, float3 *dir) {
+    if (CAMERA_PROJECTION == PROJ_ORTHOGRAPHIC) {
+        float3 o = P->right.xyz * (x * (1.0f / (float)P->width) - 0.5f)
+            + P->up.xyz * (0.5f - y * (1.0f / (float)P->height));
+        *dir = P->forward.xyz;
+        *origin = o + P->forward.xyz * P->forward.w;
+        return;
+    }
+    if (CAMERA_PROJECTION == PROJ_PANORAMA) {
+        float sin_theta;
+        float3 m = env_map_direction(x * (1.0f / (float)P->width), y * (1.0f / (float)P->height), &sin_theta);
+        *dir = normalize3(P->right.xyz * m.x + P->up.xyz * m.y - P->forward.xyz * m.z);
+        *origin = *dir * P->forward.w;
+        return;
+    }
     float3 d = P->forward.xyz
         + P->right.xyz * (x * (1.0f / (float)P->width) - 0.5f)
         + P->up.xyz * (0.5f - y * (1.0f / (float)P->height));

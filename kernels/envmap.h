@@ -39,6 +39,15 @@ static inline float atan2_turns(float y, float x) {
     return a * (0.5f * 0.31830987f);
 }
 
+/* map_direction: the map direction of point (u, v) and sin(theta) (also
+ * the panorama camera's rays). */
+static inline float3 env_map_direction(float u, float v, float *sin_theta) {
+    float2 t = sincos_turns(v * 0.5f);
+    float2 p = sincos_turns(u);
+    *sin_theta = t.x;
+    return (float3)(-(t.x * p.x), t.y, t.x * p.y);
+}
+
 #if HAS_ENV_MAP
 static inline float3 env_texel(const Scene *sc, uint w, uint i, uint j) {
     uint k = 3u * (j * w + i);
@@ -72,14 +81,6 @@ static inline float2 env_map_uv(float3 m) {
     float s = sqrt(m.x * m.x + m.z * m.z);
     float v = 2.0f * atan2_turns(s, m.y);
     return (float2)(u, v);
-}
-
-/* map_direction: the map direction of point (u, v) and sin(theta). */
-static inline float3 env_map_direction(float u, float v, float *sin_theta) {
-    float2 t = sincos_turns(v * 0.5f);
-    float2 p = sincos_turns(u);
-    *sin_theta = t.x;
-    return (float3)(-(t.x * p.x), t.y, t.x * p.y);
 }
 
 static inline float3 env_to_map(__global const Params *P, float3 d) {

@@ -75,6 +75,7 @@ typedef struct {
                            it is visible) */
     float4 env;      /* environment map: rotation's cos, sin; intensity */
     uint4 env_size;  /* its width and height (0: no map) */
+    uint4 camera;    /* x: the projection (PROJ_*) */
 } Params;
 
 /* A BVH node (render/bvh/mod.rs, BvhNode): four children's boxes as
@@ -180,7 +181,9 @@ typedef struct {
 #define USE_BOX_FILTER (P->filter != 0u)
 #define USE_SOBOL (P->sampler != 0u)
 #define USE_ENV_MAP (P->env_size.x != 0u)
+#define CAMERA_PROJECTION (P->camera.x)
 #else
+#define CAMERA_PROJECTION PROJECTION
 #define USE_BVH HAS_BVH
 #define OBJECT_COUNT NUM_OBJECTS
 #define LIGHT_COUNT NUM_LIGHTS

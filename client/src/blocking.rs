@@ -56,6 +56,11 @@ impl Client {
         self.runtime.block_on(self.inner.set_camera(id, patch))
     }
 
+    /// The surface under pixel (`x`, `y`) of the session's image.
+    pub fn pick(&self, id: &str, x: f64, y: f64) -> Result<crate::Pick> {
+        self.runtime.block_on(self.inner.pick(id, x, y))
+    }
+
     pub fn set_light(&self, id: &str, patch: &LightPatch) -> Result<SessionStatus> {
         self.runtime.block_on(self.inner.set_light(id, patch))
     }

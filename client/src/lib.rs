@@ -31,8 +31,8 @@ pub use pathstream_wire as wire;
 pub use pathstream_wire::tonemap::srgb8;
 /// What the server answers: the contract's types, shared with the server.
 pub use pathstream_wire::{
-    Asset, AssetList, BackendInfo, Camera, DeviceShare, Devices, Health, Light, OpenClDevice,
-    Quality, Scenes, SessionList, SessionStatus, SppSpread, Uploaded, WorkerLoad,
+    Asset, AssetList, BackendInfo, Camera, DeviceShare, Devices, Health, Light, OpenClDevice, Pick,
+    Projection, Quality, Scenes, SessionList, SessionStatus, SppSpread, Uploaded, WorkerLoad,
 };
 pub use stream::FrameStream;
 pub use types::*;
@@ -158,6 +158,12 @@ impl Client {
 
     pub async fn set_camera(&self, id: &str, patch: &CameraPatch) -> Result<SessionStatus> {
         self.patch(id, "camera", patch).await
+    }
+
+    /// The surface under pixel (`x`, `y`) of the session's image.
+    pub async fn pick(&self, id: &str, x: f64, y: f64) -> Result<Pick> {
+        self.json(self.request(Method::GET, &format!("/api/sessions/{id}/pick?x={x}&y={y}")))
+            .await
     }
 
     pub async fn set_light(&self, id: &str, patch: &LightPatch) -> Result<SessionStatus> {

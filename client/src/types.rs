@@ -53,9 +53,17 @@ pub struct CameraPatch {
     /// Thin-lens radius (depth of field); 0: a pinhole.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub aperture: Option<f64>,
+    /// The lens as an f-number (full-frame focal length, metres).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub f_number: Option<f64>,
     /// Distance along the view axis that stays sharp.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub focus_distance: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub projection: Option<pathstream_wire::Projection>,
+    /// An orthographic view's height in scene units.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ortho_height: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

@@ -373,6 +373,8 @@ fn every_feature_combination_builds() {
                         env_map: !shapes.2 && lights & 2 != 0,
                         // A thin lens in half the combinations.
                         lens: materials % 2 == 0,
+                        // Each projection (perspective most often).
+                        projection: u32::from(materials % 3 == 1) * (1 + u32::from(lights) % 2),
                         inject_nan_every: None,
                     }));
                 }

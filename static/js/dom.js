@@ -29,5 +29,7 @@ export const el = {
   lPosition: $("l-position"),
   cAperture: $("c-aperture"),
   cFocus: $("c-focus"),
+  cFNumber: $("c-fnumber"),
+  cProjection: $("c-projection"),
 };
 export const ctx = el.view.getContext("2d");

@@ -244,6 +244,46 @@ describe("browser client", { timeout: 600000 }, () => {
     await waitFor("a pinhole again", async () => (await status()).camera.aperture === 0);
   });
 
+  it("lens panel: a double-click focuses on the surface under the cursor; f-number and projection reach the server", T, async () => {
+    // The server's own answer for the image's centre (cornell: the back
+    // wall, one depth across it).
+    const s0 = await status();
+    const r = await fetch(`${server.base}/api/sessions/${await id()}/pick?x=${s0.width / 2}&y=${s0.height / 2}`);
+    const centre = await r.json();
+    assert.equal(centre.hit, true, "the centre shows a surface");
+    await page.dblclick("#view");
+    await waitFor("the focus on the surface under the cursor", async () => {
+      const f = (await status()).camera.focus_distance;
+      return f != null && Math.abs(f - centre.focus_distance) < 1e-3 * centre.focus_distance;
+    });
+    assert.match(await page.textContent("#c-pick"), /focused at/);
+    const bad = await fetch(`${server.base}/api/sessions/${await id()}/pick?x=-5&y=1`);
+    assert.equal(bad.status, 400);
+    assert.match((await bad.json()).error, /^x: /);
+
+    await page.fill("#c-fnumber", "2.8");
+    await page.press("#c-fnumber", "Tab");
+    await waitFor("f/2.8 on the server", async () => (await status()).camera.f_number === 2.8);
+    await page.fill("#c-aperture", "0.5");
+    await page.press("#c-aperture", "Tab");
+    await waitFor("the aperture replacing it", async () => {
+      const c = (await status()).camera;
+      return c.aperture === 0.5 && c.f_number == null;
+    });
+    await page.selectOption("#c-projection", "panorama");
+    await waitFor("a panorama on the server", async () => (await status()).camera.projection === "panorama");
+    assert.equal((await status()).camera.aperture, 0, "a panorama has no lens");
+    assert.equal(await page.isDisabled("#c-aperture"), true, "nor does the panel offer one");
+    await page.selectOption("#c-projection", "orthographic");
+    await waitFor("orthographic on the server", async () => (await status()).camera.projection === "orthographic");
+    assert.ok((await status()).camera.ortho_height > 0, "with the server's default height");
+    await page.selectOption("#c-projection", "perspective");
+    await waitFor("perspective again", async () => {
+      const c = (await status()).camera;
+      return c.projection == null && c.ortho_height == null;
+    });
+  });
+
   it("quality panel: max depth reaches the server, a bad value shows the server's error", T, async () => {
     const before = await status();
     assert.notEqual(before.quality.max_depth, 3);

@@ -28,5 +28,7 @@ pub mod tonemap;
 pub use asset::{is_environment_name, Asset, AssetList, Uploaded};
 pub use error::ErrorBody;
 pub use health::{BackendInfo, Devices, Health, OpenClDevice, Scenes, WorkerLoad};
-pub use status::{Camera, DeviceShare, Light, Quality, SessionList, SessionStatus, SppSpread};
+pub use status::{
+    Camera, DeviceShare, Light, Pick, Projection, Quality, SessionList, SessionStatus, SppSpread,
+};
 pub use stream::{Stats, StreamError, StreamFormat, StreamMessage, StreamRequest, StreamSettings};

@@ -108,7 +108,7 @@ pub struct SessionList {
     pub sessions: Vec<SessionStatus>,
 }
 
-/// A pinhole camera, as scene JSON gives it.
+/// A camera, as scene JSON gives it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
     /// Where the camera is.
@@ -124,9 +124,38 @@ pub struct Camera {
     /// Thin-lens radius (depth of field); 0: a pinhole.
     #[serde(default)]
     pub aperture: f64,
+    /// The lens given as an f-number (`aperture` is then 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub f_number: Option<f64>,
     /// Distance along the view axis that is sharp; absent: look_at's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_distance: Option<f64>,
+    /// Absent: perspective.
+    #[serde(default, skip_serializing_if = "Projection::is_perspective")]
+    pub projection: Projection,
+    /// An orthographic view's height in scene units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ortho_height: Option<f64>,
+}
+
+/// How camera rays leave the camera.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Projection {
+    /// Through a pinhole or a thin lens.
+    #[default]
+    Perspective,
+    /// Parallel rays from a rectangle `ortho_height` tall.
+    Orthographic,
+    /// Every direction, equirectangular.
+    Panorama,
+}
+
+impl Projection {
+    /// Whether this is the default, perspective.
+    pub fn is_perspective(&self) -> bool {
+        *self == Projection::Perspective
+    }
 }
 
 /// The scene's light, as `PATCH .../light` changes it.
@@ -248,4 +277,22 @@ pub(crate) mod tests {
         let share = serde_json::to_value(DeviceShare::default()).expect("serializes");
         assert!(share.get("failure").is_none(), "{share}");
     }
+}
+
+/// `GET /api/sessions/{id}/pick?x=&y=`: the surface under a point of the
+/// image.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pick {
+    /// Whether the ray through the point meets a surface.
+    pub hit: bool,
+    /// Where, in world space.
+    #[serde(default)]
+    pub point: Option<[f64; 3]>,
+    /// How far from the camera, along the ray.
+    #[serde(default)]
+    pub distance: Option<f64>,
+    /// Its depth along the view axis: the focus distance that makes it
+    /// sharp (none behind the camera's plane).
+    #[serde(default)]
+    pub focus_distance: Option<f64>,
 }

@@ -44,6 +44,7 @@ pub fn app(state: Arc<AppState>) -> Router {
         .route("/sessions/{id}/light", patch(patch_light))
         .route("/sessions/{id}/quality", patch(patch_quality_route))
         .route("/sessions/{id}/scene", put(put_scene))
+        .route("/sessions/{id}/pick", get(pick))
         .route("/sessions/{id}/frame.png", get(frame_png))
         .route("/sessions/{id}/frame.pfm", get(frame_pfm))
         .route("/sessions/{id}/samples.png", get(samples_png))
@@ -283,6 +284,37 @@ async fn put_scene(
         Change::scene(v, &state.scene_rules())
     })
     .await
+}
+
+/// `?x=&y=` of `GET .../pick`: a point of the image, in pixels.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PickQuery {
+    x: f64,
+    y: f64,
+    /// Accepted here so that `?token=` works on every route.
+    #[allow(dead_code)]
+    token: Option<String>,
+}
+
+/// The surface under a point of the image: `{"hit": false}`, or `{"hit":
+/// true, "point": [x, y, z], "distance": d, "focus_distance": f}`.
+async fn pick(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+    query: Result<Query<PickQuery>, QueryRejection>,
+) -> AppResult<Json<Value>> {
+    let Query(q) = query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
+    let session = state.session(&id)?;
+    session.touch();
+    Ok(Json(match session.pick(q.x, q.y)? {
+        Some(p) => {
+            let mut v = json!(p);
+            v["hit"] = json!(true);
+            v
+        }
+        None => json!({"hit": false}),
+    }))
 }
 
 /// `?min_spp=N&timeout_ms=T` on the frame routes.

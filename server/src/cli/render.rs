@@ -118,12 +118,25 @@ pub struct RenderArgs {
     generic_kernel: bool,
     /// Thin-lens radius in scene units (depth of field) [default: the
     /// scene's camera's; 0 = pinhole].
-    #[arg(long, value_name = "R")]
+    #[arg(long, value_name = "R", conflicts_with = "f_number")]
     aperture: Option<f64>,
+    /// The lens as an f-number instead of --aperture: radius = focal length
+    /// / (2 N), the focal length that gives the field of view on a 24 mm
+    /// (full-frame) sensor, scene units read as metres.
+    #[arg(long, value_name = "N")]
+    f_number: Option<f64>,
     /// Distance along the view axis that stays sharp [default: the scene's
     /// camera's, else the distance to its look_at point].
     #[arg(long, value_name = "D")]
     focus_distance: Option<f64>,
+    /// How rays leave the camera [default: the scene camera's]; panorama is
+    /// an equirectangular 360-degree image (make it twice as wide as tall).
+    #[arg(long, value_enum)]
+    projection: Option<ProjectionArg>,
+    /// An orthographic view's height in scene units [default: the
+    /// perspective view's height at the look_at point].
+    #[arg(long, value_name = "H")]
+    ortho_height: Option<f64>,
     /// An equirectangular HDR environment map (.hdr or .exr; its top row
     /// is up, its centre faces -z) lighting the scene in place of the
     /// scene's own environment.
@@ -195,16 +208,19 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
     let mut scene = pathstream::resolve::load_scene(&args.scene)
         .map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
-    if args.aperture.is_some() || args.focus_distance.is_some() {
-        let lens = pathstream::render::scene::CameraEdit {
-            aperture: args.aperture,
-            focus_distance: args.focus_distance,
-            ..Default::default()
-        };
-        // The message names camera.aperture or camera.focus_distance.
+    let lens = pathstream::render::scene::CameraEdit {
+        aperture: args.aperture,
+        f_number: args.f_number,
+        focus_distance: args.focus_distance,
+        projection: args.projection.map(ProjectionArg::json),
+        ortho_height: args.ortho_height,
+        ..Default::default()
+    };
+    if lens != Default::default() {
+        // The message names the camera's field (camera.aperture, ...).
         scene = scene
             .edit_camera(&lens)
-            .map_err(|e| usage(format!("--aperture/--focus-distance: {e}")))?;
+            .map_err(|e| usage(format!("camera options: {e}")))?;
     }
     if let Some(map) = &args.environment {
         // The message names environment.map, .intensity or .rotation_deg.
@@ -346,5 +362,24 @@ fn progress_bar(quality: &Quality) -> ProgressBar {
             ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} spp  {msg}")
                 .unwrap_or_else(|_| ProgressStyle::default_spinner()),
         ),
+    }
+}
+
+/// `--projection`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum ProjectionArg {
+    Perspective,
+    Orthographic,
+    Panorama,
+}
+
+impl ProjectionArg {
+    fn json(self) -> pathstream::render::scene::ProjectionJson {
+        use pathstream::render::scene::ProjectionJson as P;
+        match self {
+            Self::Perspective => P::Perspective,
+            Self::Orthographic => P::Orthographic,
+            Self::Panorama => P::Panorama,
+        }
     }
 }

@@ -17,9 +17,10 @@
 //!   file's factors and ior. The albedo is the base colour factor's rgb; emission is the emissive factor
 //!   times KHR_materials_emissive_strength. Textures, normal and occlusion
 //!   maps, alpha modes other than OPAQUE: noted.
-//! - The first perspective camera met in the walk (preorder) becomes the
-//!   model's camera, in world space (it looks down -Z, +Y up, in its node's
-//!   frame); orthographic cameras are noted.
+//! - The first camera met in the walk (preorder), perspective or
+//!   orthographic (its view 2 ymag tall), becomes the model's camera, in
+//!   world space (it looks down -Z, +Y up, in its node's frame); the others
+//!   are noted.
 //!
 //! f32 factors are widened to f64 by their shortest decimal form, so a
 //! file's 0.1 reads as 0.1.
@@ -218,7 +219,7 @@ fn walk(
     let mut visited = vec![false; doc.nodes().len()];
     let mut stack: Vec<(Node, M4)> = roots.into_iter().rev().map(|n| (n, ID4)).collect();
     let (mut placed, mut camera) = (Vec::new(), None);
-    let (mut more_cameras, mut orthographic, mut skinned) = (0, 0, false);
+    let (mut more_cameras, mut skinned) = (0, false);
     while let Some((node, parent)) = stack.pop() {
         let i = node.index();
         if std::mem::replace(&mut visited[i], true) {
@@ -236,18 +237,22 @@ fn walk(
             skinned |= node.skin().is_some();
         }
         if let Some(cam) = node.camera() {
-            match cam.projection() {
-                Projection::Perspective(p) if camera.is_none() => {
-                    match perspective(&world, p.yfov()) {
-                        Ok(c) => camera = Some(c),
-                        Err(why) => ctx.warn(format!(
-                            "cameras[{}] on nodes[{i}] ignored: {why}",
-                            cam.index()
-                        )),
+            if camera.is_some() {
+                more_cameras += 1;
+            } else {
+                let placed = match cam.projection() {
+                    Projection::Perspective(p) => view(&world, widen(p.yfov()), None),
+                    Projection::Orthographic(o) => {
+                        view(&world, 40f64.to_radians(), Some(2.0 * widen(o.ymag())))
                     }
+                };
+                match placed {
+                    Ok(c) => camera = Some(c),
+                    Err(why) => ctx.warn(format!(
+                        "cameras[{}] on nodes[{i}] ignored: {why}",
+                        cam.index()
+                    )),
                 }
-                Projection::Perspective(_) => more_cameras += 1,
-                Projection::Orthographic(_) => orthographic += 1,
             }
         }
         let children: Vec<Node> = node.children().collect();
@@ -256,19 +261,18 @@ fn walk(
     if skinned {
         ctx.warn("skins ignored (skinned meshes are placed by their node's transform)");
     }
-    if orthographic > 0 {
-        ctx.warn(format!("{orthographic} orthographic cameras ignored"));
-    }
     if more_cameras > 0 {
         ctx.warn(format!(
-            "{more_cameras} more perspective cameras ignored (the first one is used)"
+            "{more_cameras} more cameras ignored (the first one is used)"
         ));
     }
     Ok((placed, camera))
 }
 
-/// A camera at `world`'s origin looking down its -Z, +Y up.
-fn perspective(world: &M4, yfov: f32) -> Result<ModelCamera, String> {
+/// A camera at `world`'s origin looking down its -Z, +Y up: perspective
+/// (`yfov` radians), or orthographic `ortho_height` tall (in the node's
+/// units, scaled by its transform along +Y).
+fn view(world: &M4, yfov: f64, ortho_height: Option<f64>) -> Result<ModelCamera, String> {
     let position = [world[0][3], world[1][3], world[2][3]];
     let unit = |v: [f64; 3]| {
         let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -276,17 +280,24 @@ fn perspective(world: &M4, yfov: f32) -> Result<ModelCamera, String> {
     };
     let forward = unit([-world[0][2], -world[1][2], -world[2][2]])
         .ok_or("its node's transform has no view direction")?;
-    let up = unit([world[0][1], world[1][1], world[2][1]])
-        .ok_or("its node's transform has no up direction")?;
-    let yfov = widen(yfov);
+    let y_axis = [world[0][1], world[1][1], world[2][1]];
+    let up = unit(y_axis).ok_or("its node's transform has no up direction")?;
     if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
         return Err(format!("yfov {yfov} is not between 0 and pi"));
     }
+    let scale = y_axis.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let ortho_height = match ortho_height {
+        Some(h) if !(h > 0.0 && (h * scale).is_finite()) => {
+            return Err(format!("ymag {} is not > 0", h / 2.0));
+        }
+        h => h.map(|h| h * scale),
+    };
     Ok(ModelCamera {
         position,
         look_at: [0, 1, 2].map(|k| position[k] + forward[k]),
         up,
         vfov_deg: yfov.to_degrees(),
+        ortho_height,
     })
 }
 

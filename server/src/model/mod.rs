@@ -108,14 +108,17 @@ pub struct Instance {
     pub transform: [[f64; 4]; 3],
 }
 
-/// A perspective camera in world space.
+/// A perspective or orthographic camera in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ModelCamera {
     pub position: [f64; 3],
     pub look_at: [f64; 3],
     pub up: [f64; 3],
-    /// Full vertical field of view in degrees.
+    /// Full vertical field of view in degrees (a perspective camera's).
     pub vfov_deg: f64,
+    /// An orthographic camera's view height (glTF's 2 ymag), in the
+    /// model's units.
+    pub ortho_height: Option<f64>,
 }
 
 /// Limits checked while reading, before anything large is allocated.

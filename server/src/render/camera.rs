@@ -16,10 +16,27 @@
 //! plane stay sharp, others blur into discs of the thin-lens circle of
 //! confusion. Aperture 0 draws no numbers and gives the pinhole's rays bit
 //! for bit.
+//!
+//! An orthographic camera starts parallel rays along `forward` from the
+//! point `right * (x/w - 1/2) + up * (1/2 - y/h)` (|up| is the view's
+//! height), moved `near_clip` along them. A panorama maps raster (x, y) to
+//! the direction that an environment map's point (x/w, y/h) has
+//! ([`map_direction`]) in the frame of `right`, `up` and `-forward` (unit
+//! vectors here): its centre column looks along `forward`, its top row up.
 
+use crate::render::envmap::map_direction;
 use crate::render::math::{sincos_turns, DVec3, Vec3A};
 use crate::render::ray::Ray;
-use crate::render::scene::Camera;
+use crate::render::scene::{Camera, Projection};
+
+/// How [`CameraRays`] makes rays (the kernel's `PROJ_*`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum RayProjection {
+    Perspective = 0,
+    Orthographic = 1,
+    Panorama = 2,
+}
 
 #[derive(Clone, Copy, Debug)]
 pub struct CameraRays {
@@ -39,6 +56,7 @@ pub struct CameraRays {
     pub lens_y: f32,
     /// Distance along `forward` of the plane in focus.
     pub focus: f32,
+    pub projection: RayProjection,
     inv_width: f32,
     inv_height: f32,
 }
@@ -48,16 +66,27 @@ impl CameraRays {
         let forward = (camera.look_at - camera.position).normalize();
         let right_unit = forward.cross(camera.up).normalize();
         let up_unit = right_unit.cross(forward);
-        let extent = 2.0 * (camera.vfov_deg.to_radians() * 0.5).tan();
         let aspect = f64::from(width) / f64::from(height);
-        let f = |v: DVec3| -> Vec3A { v.as_vec3().into() };
-        let (lens_x, lens_y) = match camera.aperture > 0.0 {
-            true => (
-                (camera.aperture / (extent * aspect)) as f32,
-                (camera.aperture / extent) as f32,
+        // The image plane's height: at distance 1, or the orthographic
+        // view's own; a panorama keeps unit vectors.
+        let (extent, aspect, projection) = match camera.projection {
+            Projection::Perspective => (
+                2.0 * (camera.vfov_deg.to_radians() * 0.5).tan(),
+                aspect,
+                RayProjection::Perspective,
             ),
-            false => (0.0, 0.0),
+            Projection::Orthographic { height } => (height, aspect, RayProjection::Orthographic),
+            Projection::Panorama => (1.0, 1.0, RayProjection::Panorama),
         };
+        let f = |v: DVec3| -> Vec3A { v.as_vec3().into() };
+        let (lens_x, lens_y) =
+            match camera.aperture > 0.0 && projection == RayProjection::Perspective {
+                true => (
+                    (camera.aperture / (extent * aspect)) as f32,
+                    (camera.aperture / extent) as f32,
+                ),
+                false => (0.0, 0.0),
+            };
         Self {
             width,
             height,
@@ -68,6 +97,7 @@ impl CameraRays {
             lens_x,
             lens_y,
             focus: camera.focus() as f32,
+            projection,
             inv_width: 1.0 / width as f32,
             inv_height: 1.0 / height as f32,
         }
@@ -88,11 +118,26 @@ impl CameraRays {
             + self.up * (0.5 - y * self.inv_height)
     }
 
-    /// The pinhole ray through raster position (`x`, `y`).
+    /// The ray through raster position (`x`, `y`) (a perspective
+    /// camera's through its pinhole).
     #[inline(always)]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let d = self.through(x, y).normalize();
-        Ray::new(d * self.near_clip, d)
+        match self.projection {
+            RayProjection::Perspective => {
+                let d = self.through(x, y).normalize();
+                Ray::new(d * self.near_clip, d)
+            }
+            RayProjection::Orthographic => {
+                let o =
+                    self.right * (x * self.inv_width - 0.5) + self.up * (0.5 - y * self.inv_height);
+                Ray::new(o + self.forward * self.near_clip, self.forward)
+            }
+            RayProjection::Panorama => {
+                let (m, _) = map_direction(x * self.inv_width, y * self.inv_height);
+                let d = (self.right * m.x + self.up * m.y - self.forward * m.z).normalize();
+                Ray::new(d * self.near_clip, d)
+            }
+        }
     }
 
     /// The ray through raster (`x`, `y`) from the lens point drawn with
@@ -116,15 +161,7 @@ mod tests {
 
     #[test]
     fn centre_and_corners_follow_the_field_of_view() {
-        let cam = Camera {
-            position: DVec3::new(1.0, 2.0, 3.0),
-            look_at: DVec3::new(1.0, 2.0, 2.0),
-            up: DVec3::Y,
-            vfov_deg: 90.0,
-            near_clip: 0.0,
-            aperture: 0.0,
-            focus_distance: None,
-        };
+        let cam = Camera::pinhole(DVec3::new(1.0, 2.0, 3.0), DVec3::new(1.0, 2.0, 2.0), 90.0);
         let rays = CameraRays::new(&cam, 200, 100);
         let centre = rays.ray(100.0, 50.0);
         assert!((centre.dir - -Vec3A::Z).length() < 1e-6);
@@ -139,13 +176,8 @@ mod tests {
     #[test]
     fn near_clip_starts_rays_that_far_along_themselves() {
         let cam = Camera {
-            position: DVec3::ZERO,
-            look_at: DVec3::new(0.0, 0.0, -1.0),
-            up: DVec3::Y,
-            vfov_deg: 60.0,
             near_clip: 140.0,
-            aperture: 0.0,
-            focus_distance: None,
+            ..Camera::pinhole(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), 60.0)
         };
         let rays = CameraRays::new(&cam, 64, 64);
         for (x, y) in [(0.0, 0.0), (63.0, 10.0), (32.0, 32.0)] {
@@ -158,13 +190,9 @@ mod tests {
     #[test]
     fn a_lens_keeps_the_plane_in_focus_sharp_and_blurs_the_rest_by_the_circle_of_confusion() {
         let cam = Camera {
-            position: DVec3::ZERO,
-            look_at: DVec3::new(0.0, 0.0, -1.0),
-            up: DVec3::Y,
-            vfov_deg: 40.0,
-            near_clip: 0.0,
             aperture: 0.1,
             focus_distance: Some(3.0),
+            ..Camera::pinhole(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), 40.0)
         };
         let rays = CameraRays::new(&cam, 64, 48);
         let pinhole = CameraRays::new(
@@ -209,6 +237,54 @@ mod tests {
         for (x, y) in [(1.0, 2.0), (31.5, 7.25)] {
             let (a, b) = (pinhole.lens_ray(x, y, (0.3, 0.7)), pinhole.ray(x, y));
             assert_eq!((a.origin, a.dir), (b.origin, b.dir));
+        }
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel_and_span_the_height() {
+        let cam = Camera {
+            projection: Projection::Orthographic { height: 4.0 },
+            near_clip: 0.5,
+            ..Camera::pinhole(DVec3::new(0.0, 0.0, 0.0), DVec3::new(0.0, 0.0, -1.0), 40.0)
+        };
+        let rays = CameraRays::new(&cam, 200, 100);
+        for (x, y, ox, oy) in [
+            (100.0, 50.0, 0.0, 0.0),
+            (0.0, 0.0, -4.0, 2.0),
+            (200.0, 100.0, 4.0, -2.0),
+        ] {
+            let r = rays.ray(x, y);
+            assert_eq!(r.dir, -Vec3A::Z);
+            let want = Vec3A::new(ox, oy, -0.5);
+            assert!(
+                (r.origin - want).length() < 1e-6,
+                "{x}, {y}: {:?}",
+                r.origin
+            );
+        }
+    }
+
+    #[test]
+    fn a_panorama_looks_everywhere_from_the_centre_column_forward() {
+        let cam = Camera {
+            projection: Projection::Panorama,
+            ..Camera::pinhole(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), 40.0)
+        };
+        let rays = CameraRays::new(&cam, 64, 32);
+        let at = |x: f32, y: f32| rays.ray(x, y).dir;
+        for (x, y, want) in [
+            (32.0, 16.0, -Vec3A::Z), // centre: forward
+            (48.0, 16.0, Vec3A::X),  // a quarter turn right
+            (16.0, 16.0, -Vec3A::X), // a quarter turn left
+            (0.0, 16.0, Vec3A::Z),   // the seam: behind
+            (20.0, 0.0, Vec3A::Y),   // top row: up
+            (20.0, 32.0, -Vec3A::Y), // bottom: down
+        ] {
+            assert!((at(x, y) - want).length() < 1e-6, "{x}, {y}: {}", at(x, y));
+        }
+        for i in 0..100 {
+            let d = at(i as f32 * 0.64, i as f32 * 0.32);
+            assert!((d.length() - 1.0).abs() < 1e-6);
         }
     }
 }

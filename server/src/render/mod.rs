@@ -31,6 +31,7 @@ pub mod material;
 pub mod math;
 pub mod output;
 pub mod pass;
+pub mod pick;
 pub mod png_strips;
 pub mod preset;
 pub mod progressive;

@@ -15,7 +15,7 @@ use crate::render::envmap::EnvMap;
 use crate::render::math::{DAffine3, DMat3, DVec3};
 use crate::render::scene::{
     builtin, CameraJson, EnvMapJson, EnvironmentJson, GlassJson, ImportJson, LoadedModel,
-    MaterialJson, ObjectJson, PbrJson, SceneJson, SurfaceJson, BUILTIN_NAMES,
+    MaterialJson, ObjectJson, PbrJson, ProjectionJson, SceneJson, SurfaceJson, BUILTIN_NAMES,
 };
 use crate::render::scene::{FresnelJson, Scene, SceneError};
 use crate::render::shape::MeshData;
@@ -139,9 +139,12 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
         look_at: c.look_at,
         up: c.up,
         vfov_deg: c.vfov_deg,
-        near_clip: 0.0,
-        aperture: 0.0,
-        focus_distance: None,
+        projection: match c.ortho_height {
+            Some(_) => ProjectionJson::Orthographic,
+            None => ProjectionJson::Perspective,
+        },
+        ortho_height: c.ortho_height,
+        ..CameraJson::default()
     });
     LoadedModel::new(name, meshes, materials, instances, camera, model.warnings)
 }

@@ -3,6 +3,7 @@
 //! 4 server unreachable.
 
 mod fanout;
+mod focus;
 mod guard;
 mod quality;
 mod scene;
@@ -57,6 +58,8 @@ enum Command {
     Status { id: String },
     /// Move or turn a session's camera.
     Camera(CameraArgs),
+    /// Focus a session's lens on the surface under a pixel of its image.
+    Focus(focus::FocusArgs),
     /// Move, recolour or rescale a session's light.
     Light(LightArgs),
     /// Change a session's quality settings.
@@ -175,11 +178,26 @@ struct CameraArgs {
     #[arg(long)]
     vfov_deg: Option<f64>,
     /// Thin-lens radius in scene units (depth of field); 0: a pinhole.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "f_number")]
     aperture: Option<f64>,
+    /// The lens as an f-number instead (full-frame focal length of the
+    /// field of view; scene units read as metres).
+    #[arg(long)]
+    f_number: Option<f64>,
     /// Distance along the view axis that stays sharp.
     #[arg(long)]
     focus_distance: Option<f64>,
+    /// perspective, orthographic or panorama (equirectangular 360 degrees).
+    #[arg(long, value_parser = projection)]
+    projection: Option<pathstream_client::Projection>,
+    /// An orthographic view's height in scene units.
+    #[arg(long)]
+    ortho_height: Option<f64>,
+}
+
+fn projection(s: &str) -> Result<pathstream_client::Projection, String> {
+    serde_json::from_value(serde_json::Value::String(s.to_owned()))
+        .map_err(|_| format!("'{s}': expected perspective, orthographic or panorama"))
 }
 
 #[derive(Args, Debug)]
@@ -486,6 +504,7 @@ async fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Create(args) => print_status(&create(&client, &args, false).await?),
         Command::Status { id } => print_status(&client.session(&id).await?),
+        Command::Focus(a) => focus::focus(&client, &a).await,
         Command::Camera(a) => print_status(
             &client
                 .set_camera(
@@ -497,7 +516,10 @@ async fn run(cli: Cli) -> Result<(), Failure> {
                         vfov_deg: a.vfov_deg,
                         near_clip: None,
                         aperture: a.aperture,
+                        f_number: a.f_number,
                         focus_distance: a.focus_distance,
+                        projection: a.projection,
+                        ortho_height: a.ortho_height,
                     },
                 )
                 .await?,

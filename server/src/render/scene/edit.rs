@@ -19,7 +19,7 @@
 //! Edits re-validate through [`Scene::revalidate`]: meshes are not read or
 //! rebuilt.
 
-use super::{ImportKind, Scene, SceneError, Shape, MAX_COORDINATE, MAX_EMISSION};
+use super::{ImportKind, ProjectionJson, Scene, SceneError, Shape, MAX_COORDINATE, MAX_EMISSION};
 use crate::render::math::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -33,7 +33,10 @@ pub struct CameraEdit {
     pub vfov_deg: Option<f64>,
     pub near_clip: Option<f64>,
     pub aperture: Option<f64>,
+    pub f_number: Option<f64>,
     pub focus_distance: Option<f64>,
+    pub projection: Option<ProjectionJson>,
+    pub ortho_height: Option<f64>,
 }
 
 /// Move, recolour or rescale the scene's light.
@@ -103,15 +106,44 @@ impl Scene {
             vfov_deg,
             near_clip,
             aperture,
+            f_number,
             focus_distance,
+            projection,
+            ortho_height,
         } = *edit;
         c.position = position.unwrap_or(c.position);
         c.look_at = look_at.unwrap_or(c.look_at);
         c.up = up.unwrap_or(c.up);
         c.vfov_deg = vfov_deg.unwrap_or(c.vfov_deg);
         c.near_clip = near_clip.unwrap_or(c.near_clip);
-        c.aperture = aperture.unwrap_or(c.aperture);
         c.focus_distance = focus_distance.or(c.focus_distance);
+        if let Some(p) = projection {
+            // Another projection drops what belonged to the old one: the
+            // lens (only a perspective camera has one) and the height.
+            if p != c.projection {
+                c.ortho_height = None;
+            }
+            if p != ProjectionJson::Perspective {
+                (c.aperture, c.f_number) = (0.0, None);
+            }
+            c.projection = p;
+        }
+        c.ortho_height = ortho_height.or(c.ortho_height);
+        // The lens is given one way or the other: the newer replaces it
+        // (an aperture of 0 beside an f-number, as a status carries it, is
+        // the f-number's).
+        if aperture.is_some_and(|a| a != 0.0) && f_number.is_some() {
+            return Err(EditError::Field {
+                field: "camera.f_number",
+                reason: "give the lens as camera.aperture or as camera.f_number, not both".into(),
+            });
+        }
+        if let Some(a) = aperture {
+            (c.aperture, c.f_number) = (a, None);
+        }
+        if let Some(n) = f_number {
+            (c.aperture, c.f_number) = (0.0, Some(n));
+        }
         Ok(self.revalidate(&json)?)
     }
 

@@ -80,13 +80,5 @@ pub(super) fn framed(lo: DVec3, hi: DVec3) -> Camera {
     let half = (FRAMED_VFOV_DEG * 0.5).to_radians();
     let distance = radius / half.sin() * 1.05;
     let from = DVec3::new(0.35, 0.3, 1.0).normalize();
-    Camera {
-        position: center + from * distance,
-        look_at: center,
-        up: DVec3::Y,
-        vfov_deg: FRAMED_VFOV_DEG,
-        near_clip: 0.0,
-        aperture: 0.0,
-        focus_distance: None,
-    }
+    Camera::pinhole(center + from * distance, center, FRAMED_VFOV_DEG)
 }

@@ -95,15 +95,15 @@ fn is_true(v: &bool) -> bool {
     *v
 }
 
-/// Pinhole or thin-lens camera.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+/// Pinhole or thin-lens camera, orthographic, or a 360-degree panorama.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraJson {
     pub position: [f64; 3],
     pub look_at: [f64; 3],
     #[serde(default = "default_up")]
     pub up: [f64; 3],
-    /// Full vertical field of view in degrees.
+    /// Full vertical field of view in degrees (perspective).
     pub vfov_deg: f64,
     /// Camera rays start on the plane at this distance along the view axis.
     #[serde(default)]
@@ -111,9 +111,42 @@ pub struct CameraJson {
     /// Thin-lens radius in scene units (depth of field); 0: a pinhole.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub aperture: f64,
+    /// The lens's f-number instead of `aperture`: radius = focal length /
+    /// (2 N), the focal length that gives `vfov_deg` on a 24 mm tall
+    /// (full-frame) sensor, scene units read as metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub f_number: Option<f64>,
     /// Distance along the view axis that is sharp [default: look_at's].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_distance: Option<f64>,
+    #[serde(default, skip_serializing_if = "ProjectionJson::is_perspective")]
+    pub projection: ProjectionJson,
+    /// An orthographic view's height in scene units [default: the
+    /// perspective view's height at the look-at point].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ortho_height: Option<f64>,
+}
+
+/// How camera rays leave the camera.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum ProjectionJson {
+    /// Through a pinhole or a thin lens, `vfov_deg` tall.
+    #[default]
+    Perspective,
+    /// Parallel rays along the view axis from a rectangle `ortho_height`
+    /// tall.
+    Orthographic,
+    /// Every direction: an equirectangular (latitude-longitude) image, its
+    /// centre column looking at `look_at`, its top row straight `up` (the
+    /// environment map's layout).
+    Panorama,
+}
+
+impl ProjectionJson {
+    pub fn is_perspective(&self) -> bool {
+        *self == ProjectionJson::Perspective
+    }
 }
 
 fn is_zero(v: &f64) -> bool {

@@ -52,8 +52,8 @@ pub use environment::EnvironmentMap;
 pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
     CameraJson, EnvMapJson, EnvironmentJson, FresnelJson, GlassJson, ImportJson, MaterialJson,
-    MeshDataJson, ObjectJson, PbrJson, QuadJson, RotateJson, ScaleJson, SceneJson, SphereJson,
-    SurfaceJson, TransformJson,
+    MeshDataJson, ObjectJson, PbrJson, ProjectionJson, QuadJson, RotateJson, ScaleJson, SceneJson,
+    SphereJson, SurfaceJson, TransformJson,
 };
 pub use resolve::{LoadedModel, ModelSource, NoFiles, Resolver};
 pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};
@@ -85,7 +85,8 @@ impl SceneError {
     }
 }
 
-/// Camera in world space: a pinhole, or a thin lens where `aperture` > 0.
+/// Camera in world space: a pinhole, or a thin lens where `aperture` > 0;
+/// orthographic, or a panorama.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub position: DVec3,
@@ -95,17 +96,57 @@ pub struct Camera {
     pub near_clip: f64,
     /// The thin lens's radius (scene units); 0: a pinhole.
     pub aperture: f64,
+    /// The f-number the aperture was given as, if it was.
+    pub f_number: Option<f64>,
+    pub projection: Projection,
     /// Distance along the view axis of the plane in focus; None: the
     /// `look_at` point's.
     pub focus_distance: Option<f64>,
 }
 
 impl Camera {
+    /// A pinhole at `position` looking at `look_at`, +y up.
+    pub fn pinhole(position: DVec3, look_at: DVec3, vfov_deg: f64) -> Camera {
+        Camera {
+            position,
+            look_at,
+            up: DVec3::Y,
+            vfov_deg,
+            near_clip: 0.0,
+            aperture: 0.0,
+            f_number: None,
+            focus_distance: None,
+            projection: Projection::Perspective,
+        }
+    }
+
     /// The distance along the view axis that is in focus.
     pub fn focus(&self) -> f64 {
         self.focus_distance
             .unwrap_or_else(|| (self.look_at - self.position).length())
     }
+}
+
+/// How camera rays leave the camera (`ProjectionJson`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    Perspective,
+    /// Parallel rays from a rectangle this tall (scene units).
+    Orthographic {
+        height: f64,
+    },
+    Panorama,
+}
+
+/// A full-frame (35 mm) sensor's height: the f-number's focal length.
+pub const SENSOR_HEIGHT_M: f64 = 0.024;
+
+/// The lens radius of f-number `n` at vertical field of view `vfov_deg`:
+/// focal length / (2 n), the focal length giving that field of view on a
+/// sensor [`SENSOR_HEIGHT_M`] tall.
+pub fn aperture_of_f_number(n: f64, vfov_deg: f64) -> f64 {
+    let focal = 0.5 * SENSOR_HEIGHT_M / (0.5 * vfov_deg.to_radians()).tan();
+    focal / (2.0 * n)
 }
 
 /// Fresnel model of glass.

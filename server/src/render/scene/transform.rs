@@ -1,7 +1,7 @@
 //! Whole-scene similarity transforms: uniform scale and translation. The
 //! invariance checks use them; a scene's image must not change under either.
 
-use super::{placement, Scene, Shape};
+use super::{placement, Projection, Scene, Shape};
 use crate::render::math::{DAffine3, DVec3};
 
 impl Scene {
@@ -34,6 +34,11 @@ impl Scene {
         s.camera.look_at = point(s.camera.look_at);
         s.camera.near_clip *= scale;
         s.camera.aperture *= scale;
+        // An f-number's aperture is in metres: the scaled one is not.
+        s.camera.f_number = None;
+        if let Projection::Orthographic { height } = &mut s.camera.projection {
+            *height *= scale;
+        }
         s.camera.focus_distance = s.camera.focus_distance.map(|f| f * scale);
         for o in &mut s.objects {
             o.shape = match o.shape {

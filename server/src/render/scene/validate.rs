@@ -2,11 +2,16 @@
 //! of the field it rejects.
 
 use super::import::{ImportKind, Importer};
-use super::json::{CameraJson, EnvironmentJson, ObjectJson, QuadJson, SceneJson, SphereJson};
+use super::json::{
+    CameraJson, EnvironmentJson, ObjectJson, ProjectionJson, QuadJson, SceneJson, SphereJson,
+};
 use super::materials::{self, unknown_material};
 use super::resolve::Resolver;
 use super::values::{finite, point};
-use super::{frame, Camera, Object, Scene, SceneError, Shape, MAX_COORDINATE, MAX_OBJECTS};
+use super::{
+    aperture_of_f_number, frame, Camera, Object, Projection, Scene, SceneError, Shape,
+    MAX_COORDINATE, MAX_OBJECTS,
+};
 use crate::render::math::DVec3;
 use std::collections::{BTreeMap, HashMap};
 
@@ -103,9 +108,17 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
                         look_at: t.transform_point3(DVec3::from_array(c.look_at)).to_array(),
                         up: t.transform_vector3(DVec3::from_array(c.up)).to_array(),
                         vfov_deg: c.vfov_deg,
-                        near_clip: 0.0,
-                        aperture: 0.0,
-                        focus_distance: None,
+                        projection: match c.ortho_height {
+                            Some(_) => ProjectionJson::Orthographic,
+                            None => ProjectionJson::Perspective,
+                        },
+                        // The placement's scale along the camera's up.
+                        ortho_height: c.ortho_height.map(|h| {
+                            h * t
+                                .transform_vector3(DVec3::from_array(c.up).normalize())
+                                .length()
+                        }),
+                        ..CameraJson::default()
                     })
                 });
             match from_model {
@@ -184,6 +197,25 @@ fn camera(c: &CameraJson) -> Result<Camera> {
             format!("must be >= 0 (the lens radius; 0 is a pinhole) (got {aperture})"),
         ));
     }
+    let f_number = match c.f_number {
+        None => None,
+        Some(n) => {
+            let n = finite("camera.f_number", n)?;
+            if !(n > 0.0 && n <= 1e6) {
+                return Err(SceneError::new(
+                    "camera.f_number",
+                    format!("must be > 0 (got {n})"),
+                ));
+            }
+            if aperture > 0.0 {
+                return Err(SceneError::new(
+                    "camera.f_number",
+                    "give the lens as camera.aperture or as camera.f_number, not both",
+                ));
+            }
+            Some(n)
+        }
+    };
     let focus_distance = match c.focus_distance {
         None => None,
         Some(f) => {
@@ -197,6 +229,19 @@ fn camera(c: &CameraJson) -> Result<Camera> {
             Some(f)
         }
     };
+    let projection = projection(c, position, look_at, vfov_deg)?;
+    if projection != Projection::Perspective {
+        let (field, given) = match f_number {
+            Some(_) => ("camera.f_number", true),
+            None => ("camera.aperture", aperture > 0.0),
+        };
+        if given {
+            return Err(SceneError::new(
+                field,
+                "only a perspective camera has a lens (set camera.projection to \"perspective\")",
+            ));
+        }
+    }
     let view = look_at - position;
     if view.length() <= 1e-12 * position.abs().max_element().max(1.0) {
         return Err(SceneError::new(
@@ -220,9 +265,48 @@ fn camera(c: &CameraJson) -> Result<Camera> {
         up,
         vfov_deg,
         near_clip,
-        aperture,
+        aperture: f_number.map_or(aperture, |n| aperture_of_f_number(n, vfov_deg)),
+        f_number,
         focus_distance,
+        projection,
     })
+}
+
+/// The projection and, for an orthographic one, its height (by default the
+/// perspective view's at the look-at point, so that switching keeps the
+/// framing there).
+fn projection(
+    c: &CameraJson,
+    position: DVec3,
+    look_at: DVec3,
+    vfov_deg: f64,
+) -> Result<Projection> {
+    let height = match c.ortho_height {
+        None => None,
+        Some(h) => {
+            let h = finite("camera.ortho_height", h)?;
+            if !(h > 0.0 && h <= MAX_COORDINATE) {
+                return Err(SceneError::new(
+                    "camera.ortho_height",
+                    format!("must be > 0 (got {h})"),
+                ));
+            }
+            Some(h)
+        }
+    };
+    match c.projection {
+        ProjectionJson::Orthographic => Ok(Projection::Orthographic {
+            height: height.unwrap_or_else(|| {
+                2.0 * (look_at - position).length() * (0.5 * vfov_deg.to_radians()).tan()
+            }),
+        }),
+        _ if height.is_some() => Err(SceneError::new(
+            "camera.ortho_height",
+            "only an orthographic camera has one (set camera.projection to \"orthographic\")",
+        )),
+        ProjectionJson::Perspective => Ok(Projection::Perspective),
+        ProjectionJson::Panorama => Ok(Projection::Panorama),
+    }
 }
 
 fn object(path: &str, o: &ObjectJson, index_of: &BTreeMap<String, usize>) -> Result<Object> {
@@ -349,8 +433,22 @@ impl Camera {
             up: self.up.to_array(),
             vfov_deg: self.vfov_deg,
             near_clip: self.near_clip,
-            aperture: self.aperture,
+            aperture: if self.f_number.is_some() {
+                0.0
+            } else {
+                self.aperture
+            },
+            f_number: self.f_number,
             focus_distance: self.focus_distance,
+            projection: match self.projection {
+                Projection::Perspective => ProjectionJson::Perspective,
+                Projection::Orthographic { .. } => ProjectionJson::Orthographic,
+                Projection::Panorama => ProjectionJson::Panorama,
+            },
+            ortho_height: match self.projection {
+                Projection::Orthographic { height } => Some(height),
+                _ => None,
+            },
         }
     }
 }

@@ -5,6 +5,7 @@
 //! HTTP and the WebSocket alike.
 
 mod lanes;
+mod pick;
 mod preview;
 mod status;
 

@@ -4,7 +4,7 @@
 //! worker number) become the contract's here, at the edge.
 
 use super::{lock, Session};
-use crate::render::scene::{CameraJson, LightInfo};
+use crate::render::scene::{CameraJson, LightInfo, ProjectionJson};
 use crate::render::split::DeviceShare;
 use crate::render::Quality;
 use pathstream_wire as wire;
@@ -68,7 +68,14 @@ fn camera(c: CameraJson) -> wire::Camera {
         vfov_deg: c.vfov_deg,
         near_clip: c.near_clip,
         aperture: c.aperture,
+        f_number: c.f_number,
         focus_distance: c.focus_distance,
+        projection: match c.projection {
+            ProjectionJson::Perspective => wire::Projection::Perspective,
+            ProjectionJson::Orthographic => wire::Projection::Orthographic,
+            ProjectionJson::Panorama => wire::Projection::Panorama,
+        },
+        ortho_height: c.ortho_height,
     }
 }
 
@@ -133,7 +140,10 @@ mod tests {
             vfov_deg: 33.0,
             near_clip: 0.25,
             aperture: 0.05,
+            f_number: Some(2.8),
             focus_distance: Some(4.5),
+            projection: ProjectionJson::Orthographic,
+            ortho_height: Some(3.0),
         };
         assert_eq!(json_of(&camera(c.clone())), json_of(&c));
         let l = LightInfo {

@@ -295,6 +295,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         environment: true,
         env_map: true,
         lens: true,
+        projection: 0,
         inject_nan_every: Some(1),
     };
     let mut known: BTreeSet<String> =

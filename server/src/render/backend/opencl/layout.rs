@@ -18,6 +18,7 @@
 //! checklist in `buffers.rs`.
 
 use crate::render::bvh::BvhNode;
+use crate::render::camera::RayProjection;
 use crate::render::job::RenderJob;
 use crate::render::light::EmitterShape;
 use crate::render::material::Bsdf;
@@ -49,7 +50,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 27] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 30] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -88,6 +89,9 @@ pub const SHARED_CONSTANTS: [(&str, u32); 27] = [
         crate::render::envmap::distribution::ONE_BELOW.to_bits(),
     ),
     ("TWO_PI2_BITS", crate::render::envmap::TWO_PI2.to_bits()),
+    ("PROJ_PERSPECTIVE", RayProjection::Perspective as u32),
+    ("PROJ_ORTHOGRAPHIC", RayProjection::Orthographic as u32),
+    ("PROJ_PANORAMA", RayProjection::Panorama as u32),
 ];
 
 /// How a launch finds its pixels and samples (the kernel's `mode`): every
@@ -171,6 +175,8 @@ pub struct Params {
     pub env: [f32; 4],
     /// The map's width and height (0: no map).
     pub env_size: [u32; 4],
+    /// x: the camera's projection (`RayProjection`, `PROJ_*`).
+    pub camera: [u32; 4],
 }
 
 /// An emitter for next-event estimation and its column of the power alias
@@ -201,7 +207,7 @@ pub struct Light {
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
 const _: () = assert!(std::mem::size_of::<Material>() == 64);
-const _: () = assert!(std::mem::size_of::<Params>() == 160);
+const _: () = assert!(std::mem::size_of::<Params>() == 176);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
@@ -414,6 +420,7 @@ pub fn pack(job: &RenderJob) -> Packed {
             .env_map
             .as_ref()
             .map_or([0; 4], |m| [m.map.width, m.map.height, 0, 0]),
+        camera: [c.projection as u32, 0, 0, 0],
     };
     let mut packed = Packed {
         params,

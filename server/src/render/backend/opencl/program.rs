@@ -21,7 +21,6 @@ pub const SOURCES: [&str; 14] = [
     include_str!("../../../../../kernels/scene_arrays.h"),
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
-    include_str!("../../../../../kernels/camera.h"),
     include_str!("../../../../../kernels/shapes.h"),
     include_str!("../../../../../kernels/bvh.h"),
     include_str!("../../../../../kernels/triangles.h"),
@@ -29,6 +28,7 @@ pub const SOURCES: [&str; 14] = [
     include_str!("../../../../../kernels/ggx.h"),
     include_str!("../../../../../kernels/materials.h"),
     include_str!("../../../../../kernels/envmap.h"),
+    include_str!("../../../../../kernels/camera.h"),
     include_str!("../../../../../kernels/lights.h"),
     include_str!("../../../../../kernels/integrator.h"),
     include_str!("../../../../../kernels/render.cl"),
@@ -70,6 +70,8 @@ pub struct Features {
     pub env_map: bool,
     /// A thin-lens camera (aperture > 0).
     pub lens: bool,
+    /// The camera's projection (`PROJ_*`).
+    pub projection: u32,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
     pub inject_nan_every: Option<u64>,
 }
@@ -160,6 +162,7 @@ impl Features {
             environment: w.environment.max_element() > 0.0,
             env_map: w.env_map.is_some(),
             lens: job.camera.has_lens(),
+            projection: job.camera.projection as u32,
             inject_nan_every: None,
         }
     }
@@ -171,7 +174,8 @@ impl Features {
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
-             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_LENS={}",
+             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_LENS={} \
+             -D PROJECTION={}u",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -196,6 +200,7 @@ impl Features {
             b(self.environment),
             b(self.env_map),
             b(self.lens),
+            self.projection,
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));
