@@ -9,9 +9,7 @@ mod common;
 mod parity;
 
 use common::{assert_clean, backends, render_on};
-use parity::{checks, ulps, uniform};
-use pathstream::render::backend::opencl::{pack, CheckArg, KernelParams};
-use pathstream::render::sampler::{mix64, Sampler, SamplerKind};
+use parity::assert_camera_rays_agree;
 use pathstream::render::scene::CameraEdit;
 use pathstream::render::{Film, Filter, Quality, RenderJob, Scene};
 use serde_json::{json, Value};
@@ -127,45 +125,7 @@ fn camera_rays_through_the_lens_agree_within_a_few_ulps() {
     );
     let job = RenderJob::new(&scene, 64, 48, &Quality::default());
     assert!(job.camera.has_lens());
-    let packed = pack(&job);
-    let n = 20_000u64;
-    let xy: Vec<f32> = (0..n)
-        .flat_map(|i| [uniform(i, 1) * 64.0, uniform(i, 2) * 48.0])
-        .collect();
-    let input: Vec<u64> = (0..n)
-        .flat_map(|i| [i % 2, mix64(i) % 7, mix64(i + n) % 3072, i / 2])
-        .collect();
-    let out: Vec<f32> = checks(&d)
-        .run(
-            "check_camera_ray",
-            n as usize,
-            6,
-            &[
-                CheckArg::Buffer(bytemuck::cast_slice(&xy)),
-                CheckArg::Buffer(bytemuck::cast_slice(&input)),
-                CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
-            ],
-        )
-        .expect("run");
-    for i in 0..n as usize {
-        let kind = [SamplerKind::Random, SamplerKind::Sobol][input[4 * i] as usize];
-        let mut s = Sampler::of_kind(kind, input[4 * i + 1], input[4 * i + 2], input[4 * i + 3]);
-        let _ = s.camera_2d();
-        let r = job.camera.lens_ray(xy[2 * i], xy[2 * i + 1], s.lens_2d());
-        // The pinhole's direction already differs by an ulp now and then
-        // (PoCL; the image tests are statistical), so ulps, not bits.
-        let cpu = [
-            r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z,
-        ];
-        let dev = &out[6 * i..6 * i + 6];
-        // An origin's component near 0 is a difference (lens point plus
-        // near_clip along the ray): compared to the operands' scale.
-        let close = cpu
-            .iter()
-            .zip(dev)
-            .all(|(a, b)| ulps(*a, *b) <= 4 || (a - b).abs() <= 1e-6);
-        assert!(close, "ray {i} ({kind:?}): device {dev:?}, CPU {cpu:?}");
-    }
+    assert_camera_rays_agree(&d, &job, "thin lens");
 }
 
 #[test]
