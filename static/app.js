@@ -19,6 +19,7 @@
 
 import { api, authHeaders } from "./js/api.js";
 import { $, el } from "./js/dom.js";
+import "./js/environment.js";
 import "./js/export.js";
 import "./js/hud.js";
 import "./js/input.js";

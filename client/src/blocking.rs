@@ -61,6 +61,16 @@ impl Client {
         self.runtime.block_on(self.inner.pick(id, x, y))
     }
 
+    /// Replaces the session's environment.
+    pub fn set_environment(
+        &self,
+        id: &str,
+        environment: &crate::Environment,
+    ) -> Result<SessionStatus> {
+        self.runtime
+            .block_on(self.inner.set_environment(id, environment))
+    }
+
     pub fn set_light(&self, id: &str, patch: &LightPatch) -> Result<SessionStatus> {
         self.runtime.block_on(self.inner.set_light(id, patch))
     }

@@ -31,8 +31,9 @@ pub use pathstream_wire as wire;
 pub use pathstream_wire::tonemap::srgb8;
 /// What the server answers: the contract's types, shared with the server.
 pub use pathstream_wire::{
-    Asset, AssetList, BackendInfo, Camera, DeviceShare, Devices, Health, Light, OpenClDevice, Pick,
-    Projection, Quality, Scenes, SessionList, SessionStatus, SppSpread, Uploaded, WorkerLoad,
+    Asset, AssetList, BackendInfo, Camera, DeviceShare, Devices, Environment, EnvironmentMap,
+    Health, Light, OpenClDevice, Pick, Projection, Quality, Scenes, SessionList, SessionStatus,
+    SppSpread, Uploaded, WorkerLoad,
 };
 pub use stream::FrameStream;
 pub use types::*;
@@ -178,6 +179,20 @@ impl Client {
         self.json(
             self.request(Method::PUT, &format!("/api/sessions/{id}/scene"))
                 .json(scene),
+        )
+        .await
+    }
+
+    /// Replaces the session's environment (a colour, or a map: an uploaded
+    /// asset's id or a built-in map's name).
+    pub async fn set_environment(
+        &self,
+        id: &str,
+        environment: &Environment,
+    ) -> Result<SessionStatus> {
+        self.json(
+            self.request(Method::PUT, &format!("/api/sessions/{id}/environment"))
+                .json(environment),
         )
         .await
     }

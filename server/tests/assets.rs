@@ -345,3 +345,97 @@ async fn uploaded_environment_maps_light_sessions() {
     );
     running.shutdown().await.expect("shutdown");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_environment_alone_changes_by_its_own_verb() {
+    let (running, base) = server(config()).await;
+    let hdr = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/sunset-64.hdr"
+    ))
+    .expect("read");
+    let (_, a) = upload(&base, "sunset.hdr", hdr).await;
+    let map = a["id"].as_str().expect("id").to_owned();
+    // A ball in a black world: every pixel that misses it is black.
+    let s = create(
+        &base,
+        json!({"width": 16, "height": 16, "quality": {"spp": 4},
+            "scene": {"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "vfov_deg": 60},
+                "materials": {"grey": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
+                "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "grey"}],
+                "environment": [0, 0, 0]}}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id").to_owned();
+    assert_eq!(s["environment"], json!([0.0, 0.0, 0.0]), "{s}");
+    assert_eq!(pfm(&base, &id, 4).await[0], [0.0, 0.0, 0.0]);
+    let put = |body: Value| {
+        let (base, id) = (base.clone(), id.clone());
+        async move {
+            let r = client()
+                .put(format!("{base}/api/sessions/{id}/environment"))
+                .json(&body)
+                .send()
+                .await
+                .expect("req");
+            (r.status().as_u16(), r.json::<Value>().await.expect("json"))
+        }
+    };
+    let (code, st) = put(json!({"map": map, "intensity": 2, "rotation_deg": 90})).await;
+    assert_eq!(code, 200, "{st}");
+    assert_eq!(
+        st["environment"],
+        json!({"map": map, "intensity": 2.0, "rotation_deg": 90.0}),
+        "{st}"
+    );
+    assert_eq!(st["environment_name"], json!("sunset.hdr"));
+    // The camera is the scene's still; the corner now shows the map.
+    assert_eq!(st["camera"], s["camera"]);
+    let lit = pfm(&base, &id, 4).await;
+    assert!(lit[0].iter().all(|c| *c > 0.0), "{:?}", lit[0]);
+    // Twice as bright as at intensity 1, the same samples otherwise.
+    let (_, st1) = put(json!({"map": map, "rotation_deg": 90})).await;
+    assert_eq!(st1["environment"]["intensity"], json!(1.0));
+    let half = pfm(&base, &id, 4).await;
+    for c in 0..3 {
+        let ratio = lit[0][c] / half[0][c];
+        assert!(
+            (ratio - 2.0).abs() < 1e-5,
+            "corner: intensity 2 over 1 is {ratio}"
+        );
+    }
+    // Over the WebSocket as well, beside a camera change.
+    let mut ws = ws_connect(&base, &id).await;
+    ws_send(
+        &mut ws,
+        json!({"environment": [0.25, 0.5, 1.0], "camera": {"vfov_deg": 50}}),
+    )
+    .await;
+    let st = wait_status(&base, &id, |st| st["camera"]["vfov_deg"] == json!(50.0)).await;
+    assert_eq!(st["environment"], json!([0.25, 0.5, 1.0]));
+    assert!(st.get("environment_name").is_none(), "{st}");
+    // Refusals name the field and change nothing.
+    for (body, words) in [
+        (
+            json!({"map": map, "intensity": -1}),
+            "environment.intensity",
+        ),
+        (json!({"map": "a".repeat(64)}), "environment.map"),
+        (json!({"map": "/etc/passwd"}), "environment.map"),
+        (json!({"map": map, "size": 3}), "environment"),
+        (json!([1, 2]), "environment"),
+        (json!([-1, 0, 0]), "environment"),
+    ] {
+        let (code, e) = put(body.clone()).await;
+        assert_eq!(code, 400, "{body}: {e}");
+        assert!(
+            e["error"].as_str().is_some_and(|e| e.contains(words)),
+            "{body}: {e}"
+        );
+    }
+    assert_eq!(
+        status(&base, &id).await["environment"],
+        json!([0.25, 0.5, 1.0])
+    );
+    running.shutdown().await.expect("shutdown");
+}

@@ -31,5 +31,11 @@ export const el = {
   cFocus: $("c-focus"),
   cFNumber: $("c-fnumber"),
   cProjection: $("c-projection"),
+  eMap: $("e-map"),
+  eColor: $("e-color"),
+  eIntensity: $("e-intensity"),
+  eRotation: $("e-rotation"),
+  eVisible: $("e-visible"),
+  eName: $("e-name"),
 };
 export const ctx = el.view.getContext("2d");

@@ -1,11 +1,12 @@
 // Model files (.obj, .gltf, .glb, .ply): picked with the "open model" button
-// or dropped on the page, uploaded as an asset (POST /api/assets), and the
+// or dropped on the page (a dropped .hdr or .exr goes to environment.js), uploaded as an asset (POST /api/assets), and the
 // session switched to them; the server frames a model without a camera and
 // lights one without emitters by a default sky. What the server does not
 // render as given comes back as warnings, shown in the message bar.
 
 import { api } from "./api.js";
 import { $, el } from "./dom.js";
+import { MAP_FILE, openEnvironment } from "./environment.js";
 import { showMessage } from "./messages.js";
 import { setScene } from "./session.js";
 
@@ -75,9 +76,11 @@ document.addEventListener("drop", (e) => {
   depth = 0;
   el.viewport.classList.remove("dropping");
   const files = [...e.dataTransfer.files];
-  const file = files.find((f) => MODEL.test(f.name)) || files[0];
+  const file = files.find((f) => MODEL.test(f.name) || MAP_FILE.test(f.name)) || files[0];
   if (files.length > 1) {
-    showMessage(`${files.length} files dropped: opening ${file.name} (one model file at a time; its textures and .mtl are not read)`, "info", 6000);
+    showMessage(`${files.length} files dropped: opening ${file.name} (one model or map file at a time; a model's textures and .mtl are not read)`, "info", 6000);
   }
-  if (file) openModel(file);
+  // An .hdr or .exr lights the scene; anything else is read as a model.
+  if (file && MAP_FILE.test(file.name)) openEnvironment(file);
+  else if (file) openModel(file);
 });

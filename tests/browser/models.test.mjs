@@ -6,8 +6,10 @@
 //   node --test tests/browser/models.test.mjs
 
 import assert from "node:assert/strict";
+import fs from "node:fs";
+import path from "node:path";
 import { after, before, describe, it } from "node:test";
-import { canvasStats, openPage, session, waitFor, waitFrame } from "./harness.mjs";
+import { REPO, canvasStats, openPage, session, waitFor, waitFrame } from "./harness.mjs";
 
 const T = { timeout: 90000 };
 
@@ -103,5 +105,62 @@ describe("model files in the browser", { timeout: 300000 }, () => {
     await page.selectOption("#scene", "custom");
     await waitFor("the model again", async () => (await session(server.base, before)).scene === "custom");
     assert.equal(await page.$eval("#scene", (e) => e.selectedOptions[0].textContent), "cube.obj");
+  });
+
+  it("an .hdr dropped on the page lights the scene; the environment panel picks built-in maps, intensity, rotation, visibility", T, async () => {
+    const sid = await id();
+    const hdr = fs.readFileSync(path.join(REPO, "server/tests/data/sunset-64.hdr"));
+    await page.evaluate((bytes) => {
+      const dt = new DataTransfer();
+      dt.items.add(new File([new Uint8Array(bytes)], "sunset-64.hdr"));
+      const target = document.getElementById("view");
+      for (const type of ["dragenter", "dragover", "drop"]) {
+        target.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+      }
+    }, [...hdr]);
+    await waitFor("the map's upload", async () => (await session(server.base, sid)).environment_name === "sunset-64.hdr");
+    const uploaded = (await session(server.base, sid)).environment.map;
+    assert.match(uploaded, /^[0-9a-f]{64}$/);
+    assert.equal(await page.textContent("#hud-env"), "sunset-64.hdr");
+    assert.equal((await session(server.base, sid)).scene, "custom", "the model stays");
+
+    // A built-in map from the menu.
+    const builtin = await (await fetch(`${server.base}/api/environments`)).json();
+    const studio = builtin.maps.find((m) => m.name === "studio");
+    assert.ok(studio, JSON.stringify(builtin));
+    await page.focus("#e-map");
+    await waitFor("the menu's built-in maps", async () => (await page.$$eval("#e-map option", (o) => o.map((x) => x.value))).includes(studio.id));
+    await page.selectOption("#e-map", studio.id);
+    await waitFor("the studio map", async () => (await session(server.base, sid)).environment.map === studio.id);
+    assert.equal((await session(server.base, sid)).environment_name, "studio");
+
+    await page.fill("#e-intensity", "2");
+    await page.press("#e-intensity", "Tab");
+    await waitFor("intensity 2", async () => (await session(server.base, sid)).environment.intensity === 2);
+    await page.fill("#e-rotation", "90");
+    await page.press("#e-rotation", "Tab");
+    await waitFor("rotation 90", async () => (await session(server.base, sid)).environment.rotation_deg === 90);
+    const shown = Number(await page.evaluate(() => document.body.dataset.generation));
+    await page.uncheck("#e-visible");
+    await waitFor("a hidden map", async () => (await session(server.base, sid)).environment.visible === false);
+    // Hidden: the corner (sky) shows black; the cube, lit by the map, does not.
+    const hidden = (await session(server.base, sid)).generation;
+    assert.ok(hidden > shown);
+    await waitFrame(page, { spp: 4, after: hidden - 1 });
+    const img = await canvasStats(page, 8);
+    assert.ok(img.blocks[0] < 1, `corner ${img.blocks[0]}: the hidden map shows black`);
+    const bw = img.width / 8;
+    assert.ok(img.blocks[3 * bw + 3] > 10, "the cube is lit by the map");
+
+    await page.fill("#e-intensity", "-1");
+    await page.press("#e-intensity", "Tab");
+    await page.waitForSelector("#message:not([hidden])");
+    assert.match(await page.textContent("#message-text"), /environment\.intensity/);
+    assert.equal((await session(server.base, sid)).environment.intensity, 2, "a refused value changes nothing");
+
+    await page.selectOption("#e-map", "");
+    await waitFor("a uniform colour again", async () => Array.isArray((await session(server.base, sid)).environment));
+    assert.deepEqual((await session(server.base, sid)).environment, [1, 1, 1]);
+    assert.equal(await page.isHidden("#hud-env-row"), true);
   });
 });

@@ -409,7 +409,7 @@ async fn the_streams_messages_and_the_error_bodies_match_the_wire_types() {
     for (sent, said) in [
         (
             r#"{"nonsense": 1}"#,
-            "message: unknown key 'nonsense' (expected camera, light, quality or scene)",
+            "message: unknown key 'nonsense' (expected camera, environment, light, quality or scene)",
         ),
         (
             r#"{"stream": {"format": "gif"}}"#,

@@ -29,6 +29,7 @@ pub use asset::{is_environment_name, Asset, AssetList, Uploaded};
 pub use error::ErrorBody;
 pub use health::{BackendInfo, Devices, Health, OpenClDevice, Scenes, WorkerLoad};
 pub use status::{
-    Camera, DeviceShare, Light, Pick, Projection, Quality, SessionList, SessionStatus, SppSpread,
+    Camera, DeviceShare, Environment, EnvironmentMap, Light, Pick, Projection, Quality,
+    SessionList, SessionStatus, SppSpread,
 };
 pub use stream::{Stats, StreamError, StreamFormat, StreamMessage, StreamRequest, StreamSettings};

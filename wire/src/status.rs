@@ -40,6 +40,13 @@ pub struct SessionStatus {
     pub camera: Camera,
     /// The light that `PATCH .../light` changes; None when the scene has none.
     pub light: Option<Light>,
+    /// The light from outside the scene, as `PUT .../environment` sets it
+    /// (absent from servers before environment maps).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub environment: Option<Environment>,
+    /// The environment map's name (its file's or asset's), if it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub environment_name: Option<String>,
     /// The quality settings and halt conditions in force.
     pub quality: Quality,
     /// `rendering` or `halted` (also after a device failure, see `failure`).
@@ -156,6 +163,52 @@ impl Projection {
     pub fn is_perspective(&self) -> bool {
         *self == Projection::Perspective
     }
+}
+
+/// The light from outside the scene: a uniform colour, or an HDR map.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Environment {
+    /// Uniform radiance.
+    Color([f64; 3]),
+    /// An equirectangular map.
+    Map(EnvironmentMap),
+}
+
+/// An environment map and its settings, as scene JSON gives them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentMap {
+    /// An uploaded asset's id (or a file, in a scene file).
+    pub map: String,
+    /// Scales the map's radiance.
+    #[serde(default = "one")]
+    pub intensity: f64,
+    /// Turns the map about +y (right-handed); 0: its centre faces -z.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub rotation_deg: f64,
+    /// Whether camera rays that leave the scene see the map.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub visible: bool,
+    /// What they see instead when it is hidden (default black).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub background: Option<[f64; 3]>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+fn is_true(v: &bool) -> bool {
+    *v
 }
 
 /// The scene's light, as `PATCH .../light` changes it.

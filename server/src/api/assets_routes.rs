@@ -9,6 +9,9 @@
 //! GET    /api/assets                  {"assets": [...], "memory_bytes", "memory_limit_bytes"}
 //! GET    /api/assets/{id}             one asset
 //! DELETE /api/assets/{id}             204; sessions using it keep rendering it
+//! GET    /api/environments            {"maps": [{"id", "name"}]}: the maps built
+//!                                     into the server, usable as "environment":
+//!                                     {"map": ID or NAME} without an upload
 //! ```
 //! An upload larger than `--max-asset-bytes` is refused from its
 //! `Content-Length` before the body is read (413). A file that is not a
@@ -39,6 +42,16 @@ pub fn router(max_bytes: usize) -> Router<Arc<AppState>> {
                 .layer(DefaultBodyLimit::max(max_bytes.saturating_add(1))),
         )
         .route("/assets/{id}", get(one).delete(remove))
+        .route("/environments", get(environments))
+}
+
+/// The environment maps built into the server.
+async fn environments() -> Json<serde_json::Value> {
+    let maps: Vec<_> = crate::resolve::builtin_maps()
+        .iter()
+        .map(|m| serde_json::json!({"id": m.id, "name": m.name}))
+        .collect();
+    Json(serde_json::json!({"maps": maps}))
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -45,6 +45,7 @@ pub fn app(state: Arc<AppState>) -> Router {
         .route("/sessions/{id}/quality", patch(patch_quality_route))
         .route("/sessions/{id}/scene", put(put_scene))
         .route("/sessions/{id}/pick", get(pick))
+        .route("/sessions/{id}/environment", put(put_environment))
         .route("/sessions/{id}/frame.png", get(frame_png))
         .route("/sessions/{id}/frame.pfm", get(frame_pfm))
         .route("/sessions/{id}/samples.png", get(samples_png))
@@ -249,6 +250,17 @@ async fn patch_camera(
 ) -> AppResult<Json<Status>> {
     change(state, id, body, |edit: CameraEdit, _| {
         Ok(Change::Camera(edit))
+    })
+    .await
+}
+
+async fn put_environment(
+    State(state): State<Arc<AppState>>,
+    Path(id): Path<String>,
+    body: Result<Bytes, BytesRejection>,
+) -> AppResult<Json<Status>> {
+    change(state, id, body, |v: Value, state| {
+        Change::environment(v, &state.scene_rules())
     })
     .await
 }

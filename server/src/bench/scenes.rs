@@ -203,10 +203,9 @@ impl Resolver for Sunset {
     }
 
     fn environment(&self, _: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
-        static MAP: std::sync::OnceLock<Result<Arc<EnvMap>, String>> = std::sync::OnceLock::new();
-        let bytes = include_bytes!("../../assets/hdri/sunset-256.hdr");
-        MAP.get_or_init(|| crate::resolve::env_map_bytes(bytes, "sunset-256.hdr").map(Arc::new))
-            .clone()
+        crate::resolve::builtin_map("sunset")
+            .ok_or("no built-in map 'sunset'")?
+            .map()
     }
 }
 

@@ -6,6 +6,7 @@
 //! uses it for uploads), and loads a scene by built-in name, scene JSON file
 //! or model file ([`load_scene`]).
 
+mod builtin_maps;
 mod files;
 
 pub use files::FileResolver;
@@ -20,6 +21,18 @@ use crate::render::scene::{
 use crate::render::scene::{FresnelJson, Scene, SceneError};
 use crate::render::shape::MeshData;
 use std::path::Path;
+
+pub use builtin_maps::{builtin_map, builtin_maps, BuiltinMap};
+
+/// The id of some bytes (an asset's, a built-in map's): their SHA-256, in
+/// hex.
+pub fn asset_id(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
 
 /// A scene given by built-in name, as a scene JSON file, or as a model file
 /// (`.obj`, `.gltf`, `.glb`, `.ply`) framed and lit by default. Files that a
@@ -73,15 +86,14 @@ pub fn with_environment(
     intensity: f64,
     rotation_deg: f64,
 ) -> Result<Scene, SceneError> {
-    let mut json = scene.to_json();
-    json.environment = Some(EnvironmentJson::Map(EnvMapJson {
+    let environment = EnvironmentJson::Map(EnvMapJson {
         map: map.to_string_lossy().into_owned(),
         intensity,
         rotation_deg,
         visible: true,
         background: None,
-    }));
-    scene.revalidate_with(&json, &FileResolver::new(Path::new(".")))
+    });
+    scene.with_environment(environment, &FileResolver::new(Path::new(".")))
 }
 
 /// An environment map read from an `.hdr` or `.exr` file and its sampling

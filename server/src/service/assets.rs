@@ -13,7 +13,7 @@
 use crate::model::{self, Limits};
 use crate::render::envmap::EnvMap;
 use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
-use sha2::{Digest, Sha256};
+use crate::resolve::builtin_map;
 use std::collections::HashMap;
 use std::sync::{Arc, RwLock};
 use std::time::SystemTime;
@@ -125,13 +125,7 @@ pub struct AssetStore {
     assets: RwLock<HashMap<String, Arc<Asset>>>,
 }
 
-/// The id of some bytes: their SHA-256, in hex.
-pub fn asset_id(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
+pub use crate::resolve::asset_id;
 
 impl AssetStore {
     pub fn new(limits: AssetLimits) -> Self {
@@ -274,9 +268,17 @@ impl Resolver for AssetStore {
                 Some(AssetContent::Model(_)) => Err(format!(
                     "asset '{id}' is a model, not an environment map (.hdr or .exr)"
                 )),
-                None => Err(missing(id)),
+                // The maps built into the server answer to their ids too.
+                None => match builtin_map(id) {
+                    Some(m) => m.map(),
+                    None => Err(missing(id)),
+                },
             },
-            ModelSource::File(_) => NoFiles.environment(source),
+            // A built-in map by name ("sunset"): no file is read.
+            ModelSource::File(name) => match builtin_map(name) {
+                Some(m) => m.map(),
+                None => NoFiles.environment(source),
+            },
         }
     }
 }

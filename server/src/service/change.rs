@@ -8,19 +8,23 @@
 //! {"quality": {"max_depth": 4, "nee": false, "spp": null}}
 //! {"quality": {"preset": "interactive", "seed": 3}}
 //! {"scene": "cornell"}  or  {"scene": { ...scene JSON... }}
+//! {"environment": {"map": ASSET_ID, "intensity": 2, "rotation_deg": 90}}  or  {"environment": [r, g, b]}
 //! ```
 //!
 //! A WebSocket message may hold several keys. JSON objects have no order, so
 //! they apply in a fixed one: `scene` first (a camera or light change in the
-//! same message then applies to the new scene), then `camera`, `light` and
-//! `quality`.
+//! same message then applies to the new scene), then `environment`,
+//! `camera`, `light` and `quality`.
 
 use super::error::{parse_field, parse_json, ApiError};
+use crate::render::envmap::EnvMap;
 use crate::render::scene::{
-    builtin, CameraEdit, LightEdit, NoFiles, Resolver, SceneJson, BUILTIN_NAMES,
+    builtin, CameraEdit, EnvironmentJson, LightEdit, LoadedModel, ModelSource, NoFiles, Resolver,
+    SceneJson, BUILTIN_NAMES,
 };
 use crate::render::{Preset, Quality, Scene};
 use serde_json::Value;
+use std::sync::Arc;
 
 /// One change to a session.
 #[derive(Debug)]
@@ -35,6 +39,35 @@ pub enum Change {
         name: String,
         scene: Box<Scene>,
     },
+    /// The scene's environment replaced; its map (an asset) already read.
+    Environment {
+        json: EnvironmentJson,
+        map: Option<Arc<EnvMap>>,
+    },
+}
+
+/// Serves the one map an environment change read (and nothing else).
+struct Preloaded(Option<Arc<EnvMap>>);
+
+impl Resolver for Preloaded {
+    fn resolve(&self, source: ModelSource<'_>) -> Result<Arc<LoadedModel>, String> {
+        Err(NoFiles::refusal(source))
+    }
+
+    fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
+        self.0.clone().ok_or_else(|| NoFiles::refusal(source))
+    }
+}
+
+/// `scene` lit by the environment of a [`Change::Environment`].
+pub fn with_environment(
+    scene: &Scene,
+    json: EnvironmentJson,
+    map: Option<Arc<EnvMap>>,
+) -> Result<Scene, ApiError> {
+    scene
+        .with_environment(json, &Preloaded(map))
+        .map_err(|e| ApiError::BadRequest(e.to_string()))
 }
 
 /// What a scene sent to the server may use: meshes from `resolver` (the
@@ -96,6 +129,22 @@ impl Change {
         })
     }
 
+    /// The scene's environment: `[r, g, b]`, or a map (an uploaded asset
+    /// of `rules`' resolver) with its settings. The map is read now; the
+    /// settings are checked when the change applies.
+    pub fn environment(value: Value, rules: &SceneRules<'_>) -> Result<Change, ApiError> {
+        let json =
+            EnvironmentJson::from_value(value).map_err(|e| ApiError::BadRequest(e.to_string()))?;
+        let map = match &json {
+            EnvironmentJson::Color(_) => None,
+            EnvironmentJson::Map(m) => Some(
+                (rules.resolver.environment(ModelSource::of_map(&m.map)))
+                    .map_err(|e| ApiError::BadRequest(format!("environment.map: {e}")))?,
+            ),
+        };
+        Ok(Change::Environment { json, map })
+    }
+
     /// One WebSocket message: a JSON object with any of the keys `scene`,
     /// `camera`, `light` and `quality`; the changes in that order.
     pub fn parse_message(text: &str, rules: &SceneRules<'_>) -> Result<Vec<Change>, ApiError> {
@@ -114,10 +163,10 @@ impl Change {
         mut map: serde_json::Map<String, Value>,
         rules: &SceneRules<'_>,
     ) -> Result<Vec<Change>, ApiError> {
-        const ORDER: [&str; 4] = ["scene", "camera", "light", "quality"];
+        const ORDER: [&str; 5] = ["scene", "environment", "camera", "light", "quality"];
         if let Some(other) = map.keys().find(|k| !ORDER.contains(&k.as_str())) {
             return Err(ApiError::BadRequest(format!(
-                "message: unknown key '{other}' (expected camera, light, quality or scene)"
+                "message: unknown key '{other}' (expected camera, environment, light, quality or scene)"
             )));
         }
         ORDER
@@ -125,6 +174,7 @@ impl Change {
             .filter_map(|&key| map.remove(key).map(|v| (key, v)))
             .map(|(key, v)| match key {
                 "scene" => Change::scene(v, rules),
+                "environment" => Change::environment(v, rules),
                 "camera" => Ok(Change::Camera(parse_field(key, v)?)),
                 "light" => Ok(Change::Light(parse_field(key, v)?)),
                 _ => Ok(Change::Quality(v)),
@@ -202,7 +252,7 @@ mod tests {
             ("[1]", "message: must be a JSON object"),
             (
                 r#"{"zoom": 1}"#,
-                "message: unknown key 'zoom' (expected camera, light, quality or scene)",
+                "message: unknown key 'zoom' (expected camera, environment, light, quality or scene)",
             ),
             (
                 r#"{"camera": {"zoom": 2}}"#,

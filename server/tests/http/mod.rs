@@ -266,3 +266,24 @@ pub fn served_url(child: &mut std::process::Child) -> String {
         .trim_end_matches('/')
         .to_owned()
 }
+
+/// Sends `message` as a WebSocket text message.
+pub async fn ws_send(ws: &mut Ws, message: Value) {
+    use futures_util::SinkExt;
+    ws.send(Message::text(message.to_string()))
+        .await
+        .expect("ws send");
+}
+
+/// The session's status once `done` holds for it (at most 30 s).
+pub async fn wait_status(base: &str, id: &str, done: impl Fn(&Value) -> bool) -> Value {
+    let until = Instant::now() + Duration::from_secs(30);
+    loop {
+        let st = status(base, id).await;
+        if done(&st) {
+            return st;
+        }
+        assert!(Instant::now() < until, "status never came: {st}");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}

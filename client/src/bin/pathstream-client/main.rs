@@ -2,6 +2,7 @@
 //! Exit codes: 0 success, 2 bad arguments, 3 server error (message shown),
 //! 4 server unreachable.
 
+mod environment;
 mod fanout;
 mod focus;
 mod guard;
@@ -60,6 +61,9 @@ enum Command {
     Camera(CameraArgs),
     /// Focus a session's lens on the surface under a pixel of its image.
     Focus(focus::FocusArgs),
+    /// Replace a session's environment: a map (a file, uploaded; a
+    /// built-in map's name; an asset id) or a uniform colour.
+    Environment(environment::EnvironmentArgs),
     /// Move, recolour or rescale a session's light.
     Light(LightArgs),
     /// Change a session's quality settings.
@@ -505,6 +509,7 @@ async fn run(cli: Cli) -> Result<(), Failure> {
         Command::Create(args) => print_status(&create(&client, &args, false).await?),
         Command::Status { id } => print_status(&client.session(&id).await?),
         Command::Focus(a) => focus::focus(&client, &a).await,
+        Command::Environment(a) => environment::set(&client, &a).await,
         Command::Camera(a) => print_status(
             &client
                 .set_camera(

@@ -146,7 +146,7 @@ mod tests {
             (r#"{"stream": {"fps": 3}}"#, "stream: unknown field `fps`"),
             (
                 r#"{"ack": 1, "bogus": 1}"#,
-                "message: unknown key 'bogus' (expected camera, light, quality or scene)",
+                "message: unknown key 'bogus' (expected camera, environment, light, quality or scene)",
             ),
             (r#"{"scene": "nowhere"}"#, "scene: unknown scene 'nowhere'"),
         ] {

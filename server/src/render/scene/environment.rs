@@ -5,7 +5,7 @@
 use super::json::{EnvMapJson, EnvironmentJson};
 use super::resolve::{ModelSource, Resolver};
 use super::values::vec3;
-use super::{SceneError, MAX_EMISSION};
+use super::{Scene, SceneError, MAX_EMISSION};
 use crate::render::envmap::EnvMap;
 use crate::render::math::DVec3;
 use std::sync::Arc;
@@ -77,4 +77,26 @@ pub(super) fn environment(
             map,
         }),
     ))
+}
+
+impl Scene {
+    /// This scene lit by `environment` instead: its map, where it names
+    /// one, is this scene's own if it is the same, else read by `resolver`.
+    pub fn with_environment(
+        &self,
+        environment: EnvironmentJson,
+        resolver: &dyn Resolver,
+    ) -> Result<Scene, SceneError> {
+        let mut json = self.to_json();
+        json.environment = Some(environment);
+        self.revalidate_with(&json, resolver)
+    }
+
+    /// The environment as scene JSON gives it (a colour, black included).
+    pub fn environment_json(&self) -> EnvironmentJson {
+        match &self.environment_map {
+            Some(m) => EnvironmentJson::Map(m.json.clone()),
+            None => EnvironmentJson::Color(self.environment.to_array()),
+        }
+    }
 }

@@ -377,6 +377,13 @@ impl SceneJson {
     }
 }
 
+impl EnvironmentJson {
+    /// `environment` as scene JSON gives it; errors name the field.
+    pub fn from_value(value: Value) -> Result<EnvironmentJson, SceneError> {
+        environment(value)
+    }
+}
+
 /// `environment`: a colour or a map, told apart by their JSON kinds.
 fn environment(value: Value) -> Result<EnvironmentJson, SceneError> {
     match value {

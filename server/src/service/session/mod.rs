@@ -283,6 +283,9 @@ impl Session {
                 st.scene_name = name;
                 st.scene = *scene;
             }
+            Change::Environment { json, map } => {
+                st.scene = super::change::with_environment(&st.scene, json, map)?;
+            }
         }
         st.job = Arc::new(RenderJob::new(&st.scene, st.width, st.height, &st.quality));
         st.film = Some(Film::new(st.width, st.height));

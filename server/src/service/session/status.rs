@@ -4,7 +4,7 @@
 //! worker number) become the contract's here, at the edge.
 
 use super::{lock, Session};
-use crate::render::scene::{CameraJson, LightInfo, ProjectionJson};
+use crate::render::scene::{CameraJson, EnvironmentJson, LightInfo, ProjectionJson};
 use crate::render::split::DeviceShare;
 use crate::render::Quality;
 use pathstream_wire as wire;
@@ -27,6 +27,8 @@ impl Session {
             height: st.height,
             camera: camera(c),
             light: st.scene.light_info().map(light),
+            environment: Some(environment(st.scene.environment_json())),
+            environment_name: (st.scene.environment_map.as_ref()).map(|m| m.map.name.clone()),
             quality: quality(&st.quality),
             state: if st.halted { "halted" } else { "rendering" }.to_owned(),
             spp: if current { frame.spp } else { 0 },
@@ -76,6 +78,19 @@ fn camera(c: CameraJson) -> wire::Camera {
             ProjectionJson::Panorama => wire::Projection::Panorama,
         },
         ortho_height: c.ortho_height,
+    }
+}
+
+fn environment(e: EnvironmentJson) -> wire::Environment {
+    match e {
+        EnvironmentJson::Color(c) => wire::Environment::Color(c),
+        EnvironmentJson::Map(m) => wire::Environment::Map(wire::EnvironmentMap {
+            map: m.map,
+            intensity: m.intensity,
+            rotation_deg: m.rotation_deg,
+            visible: m.visible,
+            background: m.background,
+        }),
     }
 }
 
@@ -133,6 +148,7 @@ mod tests {
     /// there cannot go missing from the contract unnoticed.
     #[test]
     fn conversions_lose_nothing() {
+        use crate::render::scene::EnvMapJson;
         let c = CameraJson {
             position: [1.0, 2.0, 3.0],
             look_at: [0.0, 0.5, 0.0],
@@ -153,6 +169,18 @@ mod tests {
             intensity: 12.0,
         };
         assert_eq!(json_of(&light(l.clone())), json_of(&l));
+        for e in [
+            EnvironmentJson::Color([0.1, 0.2, 0.3]),
+            EnvironmentJson::Map(EnvMapJson {
+                map: "a".repeat(64),
+                intensity: 2.0,
+                rotation_deg: 30.0,
+                visible: false,
+                background: Some([0.5, 0.5, 0.5]),
+            }),
+        ] {
+            assert_eq!(json_of(&environment(e.clone())), json_of(&e));
+        }
         let q = Quality {
             spp: Some(64),
             target_error: Some(0.01),
