@@ -55,7 +55,7 @@ impl Resolver for Preloaded {
     }
 
     fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
-        self.0.clone().ok_or_else(|| NoFiles::refusal(source))
+        self.0.clone().ok_or_else(|| NoFiles::map_refusal(source))
     }
 }
 

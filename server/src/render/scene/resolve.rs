@@ -52,7 +52,7 @@ pub trait Resolver: Sync {
     /// The environment map (`.hdr` or `.exr`) a scene's `environment.map`
     /// names, read and its sampling tables built.
     fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
-        Err(NoFiles::refusal(source))
+        Err(NoFiles::map_refusal(source))
     }
 }
 
@@ -125,6 +125,18 @@ impl NoFiles {
                  over the API upload the file (POST /api/assets) and use \"asset\""
             ),
             ModelSource::Asset(a) => format!("asset '{a}': assets are only known to a server"),
+        }
+    }
+
+    /// Why an environment map `source` cannot be read here.
+    pub fn map_refusal(source: ModelSource<'_>) -> String {
+        match source {
+            ModelSource::File(f) => format!(
+                "'{f}': files are read only from scene files on the command line; over the \
+                 API upload the map (POST /api/assets) and give its id as \"map\", or name \
+                 a built-in map (GET /api/environments)"
+            ),
+            ModelSource::Asset(_) => Self::refusal(source),
         }
     }
 }
