@@ -56,10 +56,16 @@ pub struct RenderJob {
 impl RenderJob {
     /// `scene` and `quality` are already validated; width and height >= 1.
     pub fn new(scene: &Scene, width: u32, height: u32, quality: &Quality) -> Self {
+        let camera = CameraRays::new(&scene.camera, width, height);
+        let mut world = World::new(scene, scene.camera.position);
+        // A sky that walls hide gets few shadow rays (`sky_probe`).
+        if quality.nee {
+            crate::render::sky_probe::weigh_sky(&mut world, &camera);
+        }
         Self {
             id: next_id(),
-            world: World::new(scene, scene.camera.position),
-            camera: CameraRays::new(&scene.camera, width, height),
+            world,
+            camera,
             settings: quality.path_settings(),
             filter: quality.filter,
             sampler: quality.sampler,

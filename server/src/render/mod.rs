@@ -40,6 +40,7 @@ pub mod ray;
 pub mod sampler;
 pub mod scene;
 pub mod shape;
+pub mod sky_probe;
 pub mod split;
 pub mod tonemap;
 pub mod world;

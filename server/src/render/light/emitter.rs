@@ -82,6 +82,8 @@ pub struct Emitter {
 pub struct Lights {
     pub emitters: Vec<Emitter>,
     pub table: Option<AliasTable>,
+    /// Each emitter's weight in the table (its power, up to a factor).
+    power: Vec<f64>,
 }
 
 /// Radiance's brightness for the power estimate.
@@ -104,7 +106,27 @@ impl Lights {
         Self {
             table: AliasTable::new(&power),
             emitters,
+            power,
         }
+    }
+
+    /// Scales emitter `i`'s weight in the table by `factor` (> 0): it is
+    /// then picked less often, and every estimate divides by its new
+    /// probability, so images stay unbiased.
+    pub fn scale_power(&mut self, i: usize, factor: f64) {
+        self.power[i] *= factor;
+        self.table = AliasTable::new(&self.power);
+    }
+
+    /// Gives emitter `i` the weight that makes its pick probability
+    /// `share` (in (0, 1)) of all (the others keep their proportions).
+    pub fn set_share(&mut self, i: usize, share: f64) {
+        let others: f64 = (self.power.iter().enumerate())
+            .filter(|&(k, _)| k != i)
+            .map(|(_, p)| p)
+            .sum();
+        self.power[i] = others * share / (1.0 - share);
+        self.table = AliasTable::new(&self.power);
     }
 
     pub fn is_empty(&self) -> bool {
