@@ -10,6 +10,7 @@ import { $, el } from "./dom.js";
 import { showMessage } from "./messages.js";
 import { applyAnswer, edit } from "./session.js";
 import { on, state } from "./state.js";
+import { uploadAsset } from "./upload.js";
 
 export const MAP_FILE = /\.(hdr|exr)$/i;
 const picker = $("env-file");
@@ -102,16 +103,8 @@ export async function openEnvironment(file) {
     showMessage(`${file.name}: not an environment map (.hdr or .exr)`);
     return null;
   }
-  el.body.dataset.upload = "uploading";
-  showMessage(`uploading ${file.name}…`, "info", 0);
-  let asset;
-  try {
-    asset = await api("POST", `/assets?name=${encodeURIComponent(file.name)}`, file);
-  } catch (e) {
-    el.body.dataset.upload = "failed";
-    showMessage(`${file.name}: ${e.message}`);
-    return null;
-  }
+  const asset = await uploadAsset(file);
+  if (!asset) return null;
   const status = await setEnvironment(withChanges({ map: asset.id, intensity: 1, rotation_deg: 0, visible: true, background: undefined }));
   el.body.dataset.upload = status ? "done" : "failed";
   if (status) {

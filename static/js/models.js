@@ -1,22 +1,18 @@
 // Model files (.obj, .gltf, .glb, .ply): picked with the "open model" button
-// or dropped on the page (a dropped .hdr or .exr goes to environment.js), uploaded as an asset (POST /api/assets), and the
+// or dropped on the page (a dropped .hdr or .exr goes to environment.js),
+// uploaded as an asset (POST /api/assets, upload.js), and the
 // session switched to them; the server frames a model without a camera and
 // lights one without emitters by a default sky. What the server does not
 // render as given comes back as warnings, shown in the message bar.
 
-import { api } from "./api.js";
 import { $, el } from "./dom.js";
 import { MAP_FILE, openEnvironment } from "./environment.js";
 import { showMessage } from "./messages.js";
 import { setScene } from "./session.js";
+import { uploadAsset } from "./upload.js";
 
 const MODEL = /\.(obj|gltf|glb|ply)$/i;
 const picker = $("model-file");
-
-function size(bytes) {
-  if (bytes < 1024 * 1024) return `${(bytes / 1024).toFixed(1)} KiB`;
-  return `${(bytes / 1024 / 1024).toFixed(1)} MiB`;
-}
 
 /** Uploads one model file and renders it; resolves to the session status
  *  (null when refused: the server's message is shown). */
@@ -25,16 +21,8 @@ export async function openModel(file) {
     showMessage(`${file.name}: not a model file (.obj, .gltf, .glb or .ply)`);
     return null;
   }
-  el.body.dataset.upload = "uploading";
-  showMessage(`uploading ${file.name} (${size(file.size)})…`, "info", 0);
-  let asset;
-  try {
-    asset = await api("POST", `/assets?name=${encodeURIComponent(file.name)}`, file);
-  } catch (e) {
-    el.body.dataset.upload = "failed";
-    showMessage(`${file.name}: ${e.message}`);
-    return null;
-  }
+  const asset = await uploadAsset(file);
+  if (!asset) return null;
   const status = await setScene({ objects: [{ type: "model", asset: asset.id }] }, file.name);
   el.body.dataset.upload = status ? "done" : "failed";
   if (!status) return null;
