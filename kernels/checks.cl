@@ -307,6 +307,31 @@ __kernel void check_env_map(__global float *out, uint n, __global const float4 *
     o[9] = atan2_turns(d.y, d.x);
 }
 
+#if HAS_SUN
+/* The sun's routines (lights.h) on numbers u[i] and direction dirs[i].xyz:
+ * sun_sample's dir (3) and 1/pdf, sun_covers, and the density emitter_pdf
+ * gives the sun's emitter lights[which]: six floats per item. */
+__kernel void check_sun(__global float *out, uint n, __global const float2 *u, __global const float4 *dirs,
+                        __global const Params *P, __global const Light *lights, uint which) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {.P = P, .lights = lights};
+    float3 dir;
+    float weight;
+    sun_sample(P, u[i], &dir, &weight);
+    float3 d = dirs[i].xyz;
+    __global float *o = out + 6 * i;
+    o[0] = dir.x;
+    o[1] = dir.y;
+    o[2] = dir.z;
+    o[3] = weight;
+    o[4] = sun_covers(P, d) ? 1.0f : 0.0f;
+    o[5] = emitter_pdf(&sc, &lights[which], (float3)(0.0f), NO_OBJECT, NO_PRIM, d, d, d, d);
+}
+#endif
+
 /* camera_ray through raster (xy[2i], xy[2i+1]) with the numbers of
  * sampler_of_kind(in[4i..4i+4]) (sobol, seed, pixel, sample), after its
  * camera_2d: origin.xyz, dir.xyz as 6 floats. */

@@ -77,7 +77,7 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, float
     visible = visible && (L->prim == NO_PRIM || h.prim == L->prim);
 #endif
 #if HAS_ENV || HAS_ENV_MAP
-    if (L->kind == LIGHT_ENVIRONMENT || L->kind == LIGHT_ENV_MAP) {
+    if (L->kind == LIGHT_ENVIRONMENT || L->kind == LIGHT_ENV_MAP || L->kind == LIGHT_SUN) {
         visible = h.object == NO_OBJECT;
     }
 #endif
@@ -153,6 +153,17 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
             }
 #endif
             l += hidden ? le : emit * le * w;
+#if HAS_SUN
+            if (!hidden && USE_SUN && sun_covers(P, d)) {
+                float ws = 1.0f;
+#if HAS_MIS
+                if (last.pdf > 0.0f) {
+                    ws = hit_weight(sc, &last, sun_light(sc), d, (float3)(0.0f));
+                }
+#endif
+                l += emit * P->sun_radiance.xyz * ws;
+            }
+#endif
 #endif
             break;
         }

@@ -1,3 +1,24 @@
+#if HAS_SUN
+/* Whether unit direction d looks into the sun's disc (SunLight::covers). */
+static inline int sun_covers(__global const Params *P, float3 d) {
+    float3 w = d - P->sun.xyz;
+    return 0.5f * dot3(w, w) <= P->sun.w;
+}
+
+/* A direction uniformly in the sun's cone and 1/pdf (SunLight::sample). */
+static inline void sun_sample(__global const Params *P, float2 u, float3 *dir, float *weight) {
+    float a = u.x * P->sun.w;
+    float cos_t = 1.0f - a;
+    float sin_t = sqrt(fmax(a * (2.0f - a), 0.0f));
+    float2 sc = sincos_turns(u.y);
+    float3 axis = P->sun.xyz;
+    float3 t, b;
+    basis(axis, &t, &b);
+    *dir = t * (sin_t * sc.y) + b * (sin_t * sc.x) + axis * cos_t;
+    *weight = 2.0f * M_PI_F * P->sun.w;
+}
+#endif
+
 #if HAS_SPHERE_LIGHTS
 /* A sphere (centre c, radius r) seen from p (emitter.rs, SphereView): 0
  * where p is on its outside (on_self and facing away), else *to_center,
@@ -115,6 +136,12 @@ static inline int sample_emitter(const Scene *sc, __global const Light *L, float
         return env_sample(sc, u, dir, weight);
     }
 #endif
+#if HAS_SUN
+    if (L->kind == LIGHT_SUN) {
+        sun_sample(sc->P, u, dir, weight);
+        return 1;
+    }
+#endif
 #if HAS_ENV
     if (L->kind == LIGHT_ENVIRONMENT) {
         *dir = cosine_hemisphere(ns, u);
@@ -172,6 +199,21 @@ static inline int environment_light(const Scene *sc) {
     return -1;
 }
 
+/* The sun's emitter (just before the environment's, or the last), or -1
+ * (Lights::sun). */
+static inline int sun_light(const Scene *sc) {
+#if HAS_SUN
+    __global const Params *P = sc->P;
+    (void)P;
+    for (uint i = LIGHT_COUNT > 2u ? LIGHT_COUNT - 2u : 0u; i < LIGHT_COUNT; i++) {
+        if (sc->lights[i].kind == LIGHT_SUN) {
+            return (int)i;
+        }
+    }
+#endif
+    return -1;
+}
+
 /* The density (solid angle) with which sample_emitter from p on (object,
  * prim), normals nl and ns, gives direction dir meeting L at q
  * (Emitter::pdf_direction): the same branches and formulas. */
@@ -182,6 +224,12 @@ static inline float emitter_pdf(const Scene *sc, __global const Light *L, float3
 #if HAS_ENV_MAP
     if (L->kind == LIGHT_ENV_MAP) {
         return env_pdf(sc, dir);
+    }
+#endif
+#if HAS_SUN
+    if (L->kind == LIGHT_SUN) {
+        __global const Params *P = sc->P;
+        return sun_covers(P, dir) ? 1.0f / (2.0f * M_PI_F * P->sun.w) : 0.0f;
     }
 #endif
 #if HAS_TRI_LIGHTS

@@ -76,6 +76,8 @@ typedef struct {
     float4 env;      /* environment map: rotation's cos, sin; intensity */
     uint4 env_size;  /* its width and height (0: no map) */
     uint4 camera;    /* x: the projection (PROJ_*) */
+    float4 sun;      /* a sky's sun: unit direction towards it; w: 1 - cos(radius) */
+    float4 sun_radiance; /* w: 1 where there is a sun */
 } Params;
 
 /* A BVH node (render/bvh/mod.rs, BvhNode): four children's boxes as
@@ -98,7 +100,7 @@ typedef struct {
     uint threshold;
     uint alias;
     float pmf;
-    uint kind;       /* LIGHT_OBJECT (its Object), LIGHT_TRIANGLE, LIGHT_ENVIRONMENT */
+    uint kind;       /* LIGHT_OBJECT (its Object), LIGHT_TRIANGLE, LIGHT_ENVIRONMENT, LIGHT_ENV_MAP, LIGHT_SUN */
     uint pad0;
     uint pad1;
     float4 emission;
@@ -171,6 +173,7 @@ typedef struct {
 #define HAS_TRI_LIGHTS 1
 #define HAS_ENV 1
 #define HAS_ENV_MAP 1
+#define HAS_SUN 1
 #define HAS_LENS 1
 #define USE_BVH (P->use_bvh != 0u)
 #define OBJECT_COUNT (P->num_objects)
@@ -181,6 +184,7 @@ typedef struct {
 #define USE_BOX_FILTER (P->filter != 0u)
 #define USE_SOBOL (P->sampler != 0u)
 #define USE_ENV_MAP (P->env_size.x != 0u)
+#define USE_SUN (P->sun_radiance.w != 0.0f)
 #define CAMERA_PROJECTION (P->camera.x)
 #else
 #define CAMERA_PROJECTION PROJECTION
@@ -193,6 +197,7 @@ typedef struct {
 #define USE_BOX_FILTER BOX_FILTER
 #define USE_SOBOL SOBOL
 #define USE_ENV_MAP HAS_ENV_MAP
+#define USE_SUN HAS_SUN
 #endif
 /* Multiple importance sampling: at MAT_PBR vertices, and at diffuse ones
  * under an environment map (integrator.rs, World::diffuse_mis). */

@@ -371,6 +371,8 @@ fn every_feature_combination_builds() {
                         // An environment map where there are no meshes and
                         // there is a light (with and without MAT_PBR).
                         env_map: !shapes.2 && lights & 2 != 0,
+                        // A sky's sun with half the maps.
+                        sun: !shapes.2 && lights & 2 != 0 && materials % 2 == 1,
                         // A thin lens in half the combinations.
                         lens: materials % 2 == 0,
                         // Each projection (perspective most often).

@@ -192,3 +192,24 @@ fn a_window_keeps_the_sky_in_proportion_and_an_open_scene_is_unchanged() {
     let i = plain.lights.environment().expect("sky");
     assert_eq!(job.world.lights.pick_pmf(i), plain.lights.pick_pmf(i));
 }
+
+#[test]
+fn a_sun_behind_walls_gets_almost_no_shadow_rays_either() {
+    // A computed sky's sun carries far more power than its sky: without
+    // the probe it would take most shadow rays in the closed room.
+    let closed = room(None, json!({"sky": {"sun_elevation_deg": 50}}));
+    let job = RenderJob::new(&closed, W, H, &quality(1));
+    let lights = &job.world.lights;
+    let (sun, sky) = (
+        lights.sun().expect("a sun"),
+        lights.environment().expect("a sky"),
+    );
+    for (what, i) in [("sun", sun), ("sky", sky)] {
+        let pmf = lights.pick_pmf(i);
+        assert!(f64::from(pmf) <= 2.0 * HIDDEN_SKY_SHARE, "{what}: {pmf}");
+    }
+    // Power alone (no probe) gives the sun most picks.
+    let open = World::new(&closed, closed.camera.position);
+    let pmf = open.lights.pick_pmf(open.lights.sun().expect("a sun"));
+    assert!(pmf > 0.5, "without the probe: {pmf}");
+}

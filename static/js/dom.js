@@ -36,6 +36,8 @@ export const el = {
   eIntensity: $("e-intensity"),
   eRotation: $("e-rotation"),
   eVisible: $("e-visible"),
+  eSunElevation: $("e-sun-elevation"),
+  eSunAzimuth: $("e-sun-azimuth"),
   eName: $("e-name"),
 };
 export const ctx = el.view.getContext("2d");

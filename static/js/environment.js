@@ -1,6 +1,7 @@
 // The environment panel: the light from outside the scene, a uniform
-// colour or an HDR map (the server's built-in maps, the maps uploaded to
-// it, or an .hdr/.exr file opened or dropped here and uploaded), with its
+// colour, an HDR map (the server's built-in maps, the maps uploaded to
+// it, or an .hdr/.exr file opened or dropped here and uploaded) or a
+// computed sun & sky (with the sun's elevation and azimuth), with its
 // intensity, rotation and visibility. Each change is one
 // PUT /api/sessions/{id}/environment; the server names a refused value and
 // its own settings come back. The HUD names the map.
@@ -15,6 +16,9 @@ import { uploadAsset } from "./upload.js";
 export const MAP_FILE = /\.(hdr|exr)$/i;
 const picker = $("env-file");
 const OPEN = "open";
+/** The menu's entry for a computed sky (no map id looks like it). */
+const SKY = "sun & sky";
+const DEFAULT_SKY = { sun_elevation_deg: 45, sun_azimuth_deg: 135 };
 
 const hex = (v) => Math.round(Math.max(0, Math.min(1, v)) * 255).toString(16).padStart(2, "0");
 const fmt = (n) => String(+n.toPrecision(4));
@@ -26,15 +30,18 @@ function current() {
     const top = Math.max(...e);
     return { map: null, color: top > 0 ? e.map((c) => c / top) : [0, 0, 0], intensity: top, rotation_deg: 0, visible: true };
   }
+  if (e && e.sky) {
+    return { map: SKY, sky: e.sky, color: [0, 0, 0], intensity: e.intensity ?? 1, rotation_deg: e.rotation_deg ?? 0, visible: e.visible ?? true, background: e.background };
+  }
   if (e && e.map) {
     return { map: e.map, color: [0, 0, 0], intensity: e.intensity ?? 1, rotation_deg: e.rotation_deg ?? 0, visible: e.visible ?? true, background: e.background };
   }
   return null;
 }
 
-/** Fills the map menu: none, the built-in maps, the uploaded ones. */
+/** Fills the map menu: none, sun & sky, the built-in maps, the uploaded ones. */
 async function listMaps() {
-  const options = [["", "none (colour)"]];
+  const options = [["", "none (colour)"], [SKY, "sun & sky"]];
   try {
     const builtin = await api("GET", "/environments");
     for (const m of builtin.maps || []) options.push([m.id, m.name]);
@@ -52,11 +59,16 @@ async function listMaps() {
 
 function fillEnvironment() {
   const e = current();
-  for (const input of [el.eMap, el.eColor, el.eIntensity, el.eRotation, el.eVisible]) input.disabled = !e;
+  const sunInputs = [el.eSunElevation, el.eSunAzimuth];
+  for (const input of [el.eMap, el.eColor, el.eIntensity, el.eRotation, el.eVisible, ...sunInputs]) input.disabled = !e;
   if (!e) return;
   const withMap = e.map != null;
   el.eColor.disabled = withMap;
   el.eRotation.disabled = el.eVisible.disabled = !withMap;
+  for (const input of sunInputs) input.disabled = !e.sky;
+  const sunAngle = (v) => (v == null ? "" : fmt(v));
+  if (document.activeElement !== el.eSunElevation) el.eSunElevation.value = sunAngle(e.sky?.sun_elevation_deg);
+  if (document.activeElement !== el.eSunAzimuth) el.eSunAzimuth.value = sunAngle(e.sky?.sun_azimuth_deg);
   const focused = document.activeElement;
   if (focused !== el.eMap && [...el.eMap.options].some((o) => o.value === (e.map ?? ""))) el.eMap.value = e.map ?? "";
   if (focused !== el.eColor) el.eColor.value = `#${e.color.map(hex).join("")}`;
@@ -92,7 +104,8 @@ async function setEnvironment(environment) {
 function withChanges(changes) {
   const e = { ...current(), ...changes };
   if (e.map == null) return e.color.map((c) => c * e.intensity);
-  const out = { map: e.map, intensity: e.intensity, rotation_deg: e.rotation_deg, visible: e.visible };
+  const out = e.map === SKY ? { sky: e.sky } : { map: e.map };
+  Object.assign(out, { intensity: e.intensity, rotation_deg: e.rotation_deg, visible: e.visible });
   if (e.background) out.background = e.background;
   return out;
 }
@@ -123,6 +136,7 @@ el.eMap.addEventListener("change", () => {
     picker.click();
     return;
   }
+  if (v === SKY) return edit(() => setEnvironment(withChanges({ map: SKY, sky: { ...DEFAULT_SKY }, intensity: 1 })));
   edit(() => setEnvironment(v === "" ? withChanges({ map: null, intensity: 1, color: [1, 1, 1] }) : withChanges({ map: v, intensity: 1 })));
 });
 picker.addEventListener("change", () => {
@@ -155,6 +169,18 @@ el.eVisible.addEventListener("change", () => {
   const visible = el.eVisible.checked;
   edit(() => setEnvironment(withChanges({ visible })));
 });
+/** The sun placed by its angles (any other way of placing it dropped). */
+function moveSun(input, field) {
+  const n = Number(input.value);
+  if (!(input.value.trim() !== "" && Number.isFinite(n))) {
+    showMessage(`environment.sky.${field}: enter an angle in degrees`);
+    return fillEnvironment();
+  }
+  const { sun_direction, time, latitude_deg, longitude_deg, ...sky } = current()?.sky ?? {};
+  edit(() => setEnvironment(withChanges({ sky: { ...DEFAULT_SKY, ...sky, [field]: n } })));
+}
+el.eSunElevation.addEventListener("change", () => moveSun(el.eSunElevation, "sun_elevation_deg"));
+el.eSunAzimuth.addEventListener("change", () => moveSun(el.eSunAzimuth, "sun_azimuth_deg"));
 $("env").addEventListener("submit", (e) => e.preventDefault());
 
 on("settings", fillEnvironment);

@@ -161,6 +161,30 @@ describe("model files in the browser", { timeout: 300000 }, () => {
     await page.selectOption("#e-map", "");
     await waitFor("a uniform colour again", async () => Array.isArray((await session(server.base, sid)).environment));
     assert.deepEqual((await session(server.base, sid)).environment, [1, 1, 1]);
-    assert.equal(await page.isHidden("#hud-env-row"), true);
+    // The page learns of the change from the status stream, a moment after the server.
+    await waitFor("the HUD's map row hidden", async () => page.isHidden("#hud-env-row"));
+  });
+
+  it("sun & sky from the environment menu; the sun's elevation and azimuth move it", T, async () => {
+    const sid = await id();
+    await page.selectOption("#e-map", "sun & sky");
+    await waitFor("a sky", async () => (await session(server.base, sid)).environment?.sky != null);
+    assert.equal((await session(server.base, sid)).environment_name, "sky");
+    await waitFor("the HUD names it", async () => (await page.textContent("#hud-env")) === "sky");
+    assert.equal(await page.isDisabled("#e-sun-elevation"), false);
+    await page.fill("#e-sun-elevation", "10");
+    await page.press("#e-sun-elevation", "Tab");
+    await waitFor("the sun at 10 degrees", async () => (await session(server.base, sid)).environment.sky.sun_elevation_deg === 10);
+    await page.fill("#e-sun-azimuth", "270");
+    await page.press("#e-sun-azimuth", "Tab");
+    await waitFor("the sun in the west", async () => (await session(server.base, sid)).environment.sky.sun_azimuth_deg === 270);
+    assert.equal((await session(server.base, sid)).environment.sky.sun_elevation_deg, 10, "the elevation stays");
+    await page.fill("#e-sun-elevation", "120");
+    await page.press("#e-sun-elevation", "Tab");
+    await waitFor("the refusal", async () => /environment\.sky\.sun_elevation_deg/.test(await page.textContent("#message-text")));
+    assert.equal((await session(server.base, sid)).environment.sky.sun_elevation_deg, 10, "a refused value changes nothing");
+    await page.selectOption("#e-map", "");
+    await waitFor("a uniform colour again", async () => Array.isArray((await session(server.base, sid)).environment));
+    assert.equal(await page.isDisabled("#e-sun-elevation"), true);
   });
 });

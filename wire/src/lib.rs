@@ -21,6 +21,7 @@ pub mod error;
 pub mod error_estimate;
 pub mod health;
 pub mod pfm;
+pub mod sky;
 pub mod status;
 pub mod stream;
 pub mod tonemap;
@@ -28,6 +29,7 @@ pub mod tonemap;
 pub use asset::{is_environment_name, Asset, AssetList, Uploaded};
 pub use error::ErrorBody;
 pub use health::{BackendInfo, Devices, Health, OpenClDevice, Scenes, WorkerLoad};
+pub use sky::Sky;
 pub use status::{
     Camera, DeviceShare, Environment, EnvironmentMap, Light, Pick, Projection, Quality,
     SessionList, SessionStatus, SppSpread,

@@ -168,6 +168,7 @@ impl Projection {
 /// The light from outside the scene: a uniform colour, or an HDR map.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
+#[allow(clippy::large_enum_variant)] // one per session or request
 pub enum Environment {
     /// Uniform radiance.
     Color([f64; 3]),
@@ -179,8 +180,12 @@ pub enum Environment {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentMap {
-    /// An uploaded asset's id (or a file, in a scene file).
+    /// An uploaded asset's id (or a file, in a scene file); empty with `sky`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub map: String,
+    /// A clear sky and sun computed in place of a map.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<crate::Sky>,
     /// Scales the map's radiance.
     #[serde(default = "one")]
     pub intensity: f64,

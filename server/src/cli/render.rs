@@ -140,22 +140,40 @@ pub struct RenderArgs {
     /// An equirectangular HDR environment map (.hdr or .exr; its top row
     /// is up, its centre faces -z) lighting the scene in place of the
     /// scene's own environment.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", group = "env_source")]
     environment: Option<PathBuf>,
-    /// Scales the --environment map's radiance.
+    /// A clear sky and sun computed in place of the scene's environment
+    /// (the sun 45 degrees up in the south-east unless --sun-elevation and
+    /// --sun-azimuth say otherwise).
+    #[arg(long, group = "env_source")]
+    sky: bool,
+    /// The --sky's sun height above the horizon, degrees.
     #[arg(
         long,
-        value_name = "S",
-        default_value_t = 1.0,
-        requires = "environment"
+        value_name = "DEG",
+        requires = "sky",
+        allow_negative_numbers = true
     )]
+    sun_elevation: Option<f64>,
+    /// The --sky's sun compass direction, degrees clockwise from north
+    /// (-z); 90 is east (+x).
+    #[arg(
+        long,
+        value_name = "DEG",
+        requires = "sky",
+        allow_negative_numbers = true
+    )]
+    sun_azimuth: Option<f64>,
+    /// Scales the --environment map's (or --sky's) radiance.
+    #[arg(long, value_name = "S", default_value_t = 1.0, requires = "env_source")]
     env_intensity: f64,
-    /// Turns the --environment map about +y, in degrees (right-handed).
+    /// Turns the --environment map (or --sky) about +y, in degrees (right-handed).
     #[arg(
         long,
         value_name = "DEG",
         default_value_t = 0.0,
-        requires = "environment"
+        requires = "env_source",
+        allow_negative_numbers = true
     )]
     env_rotation: f64,
     /// Exposure in stops applied before tone mapping (PNG only).
@@ -231,6 +249,15 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             args.env_rotation,
         )
         .map_err(|e| usage(format!("--environment: {e}")))?;
+    }
+    if args.sky {
+        let sky = pathstream::render::scene::SkyJson {
+            sun_elevation_deg: args.sun_elevation,
+            sun_azimuth_deg: args.sun_azimuth,
+            ..Default::default()
+        };
+        scene = pathstream::resolve::with_sky(&scene, sky, args.env_intensity, args.env_rotation)
+            .map_err(|e| usage(format!("--sky: {e}")))?;
     }
     for w in &scene.warnings {
         eprintln!("warning: {w}");

@@ -27,8 +27,13 @@ pub const HIDDEN_SKY_SHARE: f64 = 1.0 / 1024.0;
 /// or None where it does not matter or says nothing: no sky, the sky the
 /// only emitter, or no probed surface that gathers light.
 pub fn sky_visibility(world: &World, camera: &CameraRays) -> Option<f64> {
+    visibility(world, camera, world.lights.environment()?)
+}
+
+/// [`sky_visibility`] for distant emitter `i` (the sky or the sun).
+pub fn visibility(world: &World, camera: &CameraRays, i: usize) -> Option<f64> {
     let lights = &world.lights;
-    let sky = &lights.emitters[lights.environment()?];
+    let sky = &lights.emitters[i];
     if lights.emitters.len() < 2 {
         return None;
     }
@@ -75,20 +80,25 @@ pub fn sky_visibility(world: &World, camera: &CameraRays) -> Option<f64> {
     (tried > 0).then(|| f64::from(seen) / f64::from(tried))
 }
 
-/// Weighs `world`'s sky in light selection by the fraction of it the
-/// probe sees from `camera`; a sky it never saw keeps a
-/// [`HIDDEN_SKY_SHARE`] chance of a pick. Returns the fraction (1 where
-/// nothing changed).
+/// Weighs `world`'s sky (and a computed sky's sun, each on its own) in
+/// light selection by the fraction of it the probe sees from `camera`; one
+/// it never saw keeps a [`HIDDEN_SKY_SHARE`] chance of a pick. Returns the
+/// sky's fraction (1 where nothing changed).
 pub fn weigh_sky(world: &mut World, camera: &CameraRays) -> f64 {
-    let (Some(v), Some(i)) = (sky_visibility(world, camera), world.lights.environment()) else {
-        return 1.0;
-    };
-    if v >= 1.0 {
-        return 1.0;
+    let distant: Vec<usize> = world.lights.distant().collect();
+    // Every fraction first: each is measured with the table as it was.
+    let seen: Vec<(usize, f64)> = (distant.iter())
+        .filter_map(|&i| Some((i, visibility(world, camera, i)?)))
+        .collect();
+    for &(i, v) in &seen {
+        match v {
+            v if v >= 1.0 => {}
+            v if v > 0.0 => world.lights.scale_power(i, v),
+            _ => world.lights.set_share(i, HIDDEN_SKY_SHARE),
+        }
     }
-    match v > 0.0 {
-        true => world.lights.scale_power(i, v),
-        false => world.lights.set_share(i, HIDDEN_SKY_SHARE),
-    }
-    v
+    let sky = world.lights.environment();
+    (seen.iter())
+        .find(|(i, _)| Some(*i) == sky)
+        .map_or(1.0, |&(_, v)| v.min(1.0))
 }

@@ -88,6 +88,26 @@ pub fn with_environment(
 ) -> Result<Scene, SceneError> {
     let environment = EnvironmentJson::Map(EnvMapJson {
         map: map.to_string_lossy().into_owned(),
+        sky: None,
+        intensity,
+        rotation_deg,
+        visible: true,
+        background: None,
+    });
+    scene.with_environment(environment, &FileResolver::new(Path::new(".")))
+}
+
+/// `scene` under the clear sky `sky`, `intensity` times as bright and
+/// turned by `rotation_deg` about +y: the command line's `--sky`.
+pub fn with_sky(
+    scene: &Scene,
+    sky: crate::render::scene::SkyJson,
+    intensity: f64,
+    rotation_deg: f64,
+) -> Result<Scene, SceneError> {
+    let environment = EnvironmentJson::Map(EnvMapJson {
+        map: String::new(),
+        sky: Some(sky),
         intensity,
         rotation_deg,
         visible: true,

@@ -137,6 +137,18 @@ impl Change {
             EnvironmentJson::from_value(value).map_err(|e| ApiError::BadRequest(e.to_string()))?;
         let map = match &json {
             EnvironmentJson::Color(_) => None,
+            // A computed sky: made now (and cached), not under the session's
+            // lock when the change applies; its settings' errors named.
+            EnvironmentJson::Map(m) if m.map.is_empty() && m.sky.is_some() => {
+                let sky = m.sky.as_ref().map(crate::render::scene::sky::setup);
+                if let Some(setup) = sky
+                    .transpose()
+                    .map_err(|e| ApiError::BadRequest(e.to_string()))?
+                {
+                    crate::render::scene::sky::sky_map(&setup);
+                }
+                None
+            }
             EnvironmentJson::Map(m) => Some(
                 (rules.resolver.environment(ModelSource::of_map(&m.map)))
                     .map_err(|e| ApiError::BadRequest(format!("environment.map: {e}")))?,

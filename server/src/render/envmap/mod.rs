@@ -23,6 +23,9 @@
 //! (`tests/envmap.rs`).
 
 pub mod distribution;
+pub mod sky_model;
+pub mod spectrum;
+pub mod sun_position;
 
 pub use distribution::Distribution2D;
 

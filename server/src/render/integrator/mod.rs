@@ -129,6 +129,10 @@ impl Path {
                     let le = world.sky(self.ray.dir);
                     let sky = || world.lights.environment();
                     self.l += self.emission(world, settings, le, sky, Vec3A::ZERO);
+                    if let Some((_, le)) = world.sun.filter(|(s, _)| s.covers(self.ray.dir)) {
+                        let emitter = || world.lights.sun();
+                        self.l += self.emission(world, settings, le, emitter, Vec3A::ZERO);
+                    }
                 }
             }
             return false;

@@ -112,7 +112,7 @@ fn one<I: Isa>(
         entering: dir.dot(s.ng) < 0.0,
     };
     let hit = world.intersect(isa, &world.spawn(s, dir), from);
-    let visible = if e.shape.is_environment() {
+    let visible = if e.shape.is_distant() {
         hit.is_none()
     } else {
         hit.is_some_and(|h| h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim))

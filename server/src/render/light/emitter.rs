@@ -8,7 +8,8 @@
 //!   furnace), uniformly by area, since every point is then visible;
 //! - quads and triangles: uniformly by area;
 //! - a uniform environment: cosine-weighted about the shading normal;
-//! - an environment map: in proportion to its brightness (`envmap`).
+//! - an environment map: in proportion to its brightness (`envmap`);
+//! - a computed sky's sun: uniformly in the cone of its disc.
 //!
 //! Every emitter is two-sided (emission leaves both sides of a surface).
 //!
@@ -51,6 +52,55 @@ pub enum EmitterShape {
     Environment,
     /// An environment map.
     Map(std::sync::Arc<EnvLight>),
+    /// A computed sky's sun: a disc infinitely far away.
+    Sun(SunLight),
+}
+
+/// The sun as an emitter: the directions within its angular radius of
+/// `dir`, each with the emitter's `emission`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SunLight {
+    /// Unit direction towards the disc's centre (world).
+    pub dir: Vec3A,
+    /// 1 - cos(angular radius), computed without cancellation (a 0.27
+    /// degree disc has 1.1e-5).
+    pub one_minus_cos: f32,
+}
+
+impl SunLight {
+    /// The sun of angular radius `radius` (radians) towards unit `dir`.
+    pub fn new(dir: Vec3A, radius: f64) -> Self {
+        Self {
+            dir,
+            one_minus_cos: (2.0 * (radius / 2.0).sin().powi(2)) as f32,
+        }
+    }
+
+    /// Whether unit direction `d` looks into the disc: 1 - cos of its
+    /// angle to the centre (|d - dir|^2 / 2, no cancellation) at most the
+    /// disc's.
+    #[inline(always)]
+    pub fn covers(&self, d: Vec3A) -> bool {
+        0.5 * (d - self.dir).length_squared() <= self.one_minus_cos
+    }
+
+    /// The disc's solid angle.
+    #[inline(always)]
+    pub fn solid_angle(&self) -> f32 {
+        TAU * self.one_minus_cos
+    }
+
+    /// A direction uniformly in the disc's cone, and 1/pdf (its solid angle).
+    #[inline(always)]
+    pub fn sample(&self, u1: f32, u2: f32) -> (Vec3A, f32) {
+        let a = u1 * self.one_minus_cos;
+        let cos_t = 1.0 - a;
+        let sin_t = (a * (2.0 - a)).max(0.0).sqrt();
+        let (sin, cos) = sincos_turns(u2);
+        let (t, b) = basis(self.dir);
+        let dir = t * (sin_t * cos) + b * (sin_t * sin) + self.dir * cos_t;
+        (dir, self.solid_angle())
+    }
 }
 
 /// The point a shadow ray leaves from, as light sampling sees it.
@@ -151,6 +201,21 @@ impl Lights {
         self.emitters[last].shape.is_environment().then_some(last)
     }
 
+    /// The sun's emitter (just before the environment's, or the last).
+    #[inline(always)]
+    pub fn sun(&self) -> Option<usize> {
+        let n = self.emitters.len();
+        (n.saturating_sub(2)..n).find(|&i| matches!(self.emitters[i].shape, EmitterShape::Sun(_)))
+    }
+
+    /// The emitters infinitely far away (the sun, the environment), which
+    /// a shadow ray sees by leaving the scene.
+    pub fn distant(&self) -> impl Iterator<Item = usize> + '_ {
+        (self.emitters.iter().enumerate())
+            .filter(|(_, e)| e.shape.is_distant())
+            .map(|(i, _)| i)
+    }
+
     /// The probability that one power-proportional pick chooses emitter
     /// `i`: 1 for the only one, 0 where nothing is picked (no table).
     #[inline(always)]
@@ -169,6 +234,15 @@ impl EmitterShape {
     #[inline(always)]
     pub fn is_environment(&self) -> bool {
         matches!(self, EmitterShape::Environment | EmitterShape::Map(_))
+    }
+
+    /// Whether a shadow ray sees this emitter by leaving the scene.
+    #[inline(always)]
+    pub fn is_distant(&self) -> bool {
+        matches!(
+            self,
+            EmitterShape::Environment | EmitterShape::Map(_) | EmitterShape::Sun(_)
+        )
     }
 }
 
@@ -199,6 +273,7 @@ impl Emitter {
             EmitterShape::Map(m) => {
                 m.mean_brightness() * 4.0 * std::f64::consts::PI * radius * radius
             }
+            EmitterShape::Sun(sun) => b * f64::from(sun.solid_angle()) * radius * radius,
         }
     }
 
@@ -230,6 +305,7 @@ impl Emitter {
                 (cos > 0.0).then(|| (dir, PI / cos))
             }
             EmitterShape::Map(m) => m.sample(u1, u2),
+            EmitterShape::Sun(sun) => Some(sun.sample(u1, u2)),
         }
     }
 }
@@ -273,6 +349,10 @@ impl Emitter {
                 PI / cos
             }
             EmitterShape::Map(m) => return m.pdf(dir),
+            EmitterShape::Sun(sun) => match sun.covers(dir) {
+                true => sun.solid_angle(),
+                false => 0.0,
+            },
         };
         if weight > 0.0 {
             1.0 / weight

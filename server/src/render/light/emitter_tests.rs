@@ -68,11 +68,17 @@ fn the_density_of_every_sampled_direction_is_one_over_its_weight() {
         emitter(1, u32::MAX, EmitterShape::Quad(quad)),
         emitter(2, 5, EmitterShape::Triangle(tri)),
         emitter(u32::MAX, u32::MAX, EmitterShape::Environment),
+        emitter(
+            u32::MAX,
+            u32::MAX - 1,
+            EmitterShape::Sun(SunLight::new(unit(99, 1), 0.05)),
+        ),
     ];
-    let mut checked = [0usize; 5];
-    for i in 0..20_000u64 {
-        let which = (i % 5) as usize;
-        let e = &emitters[which.min(3)];
+    let mut checked = [0usize; 6];
+    for i in 0..24_000u64 {
+        let which = if i < 20_000 { (i % 5) as usize } else { 5 };
+        // 4: the environment again (from a point on the sphere); 5: the sun.
+        let e = &emitters[[0, 1, 2, 3, 3, 4][which]];
         let n = unit(i, 1);
         let mut r = Receiver {
             p: Vec3A::new(u(i, 3), u(i, 4), u(i, 5)) * 8.0 - 4.0,
@@ -94,7 +100,7 @@ fn the_density_of_every_sampled_direction_is_one_over_its_weight() {
             EmitterShape::Sphere(s) => sphere_hit(r.p, dir, s),
             EmitterShape::Quad(q) => plane_hit(r.p, dir, q.corner, q.normal),
             EmitterShape::Triangle(t) => plane_hit(r.p, dir, t.p0, t.n),
-            EmitterShape::Environment | EmitterShape::Map(_) => Vec3A::ZERO,
+            EmitterShape::Environment | EmitterShape::Map(_) | EmitterShape::Sun(_) => Vec3A::ZERO,
         };
         let pdf = e.pdf_direction(&r, dir, q);
         let product = pdf * weight;
@@ -112,6 +118,38 @@ fn the_density_of_every_sampled_direction_is_one_over_its_weight() {
         checked.iter().all(|&c| c > 1000),
         "each kind sampled: {checked:?}"
     );
+}
+
+#[test]
+fn the_sun_samples_its_cone_uniformly_and_its_disc_test_agrees() {
+    // 1 - cos over the disc's, and the azimuth about its centre, are
+    // uniform: chi-square over 10 x 8 cells, and every sample is in the
+    // disc (at 0.27 degrees, where cos(radius) is 1 - 1.1e-5).
+    for radius in [0.00476f64, 0.2] {
+        let sun = SunLight::new(unit(7, 3), radius);
+        let (t, b) = basis(sun.dir);
+        let n = 80_000u64;
+        let mut cells = [0u32; 80];
+        for i in 0..n {
+            let (d, w) = sun.sample(u(i, 11), u(i, 12));
+            assert!(sun.covers(d), "{d:?} outside the disc");
+            assert_eq!(w, sun.solid_angle());
+            let a = (0.5 * (d - sun.dir).length_squared() / sun.one_minus_cos).min(0.999_999);
+            let phi = (d.dot(b).atan2(d.dot(t)) / TAU)
+                .rem_euclid(1.0)
+                .min(0.999_999);
+            cells[(a * 10.0) as usize * 8 + (phi * 8.0) as usize] += 1;
+        }
+        let expected = n as f64 / 80.0;
+        let chi2: f64 = cells
+            .iter()
+            .map(|&c| (f64::from(c) - expected).powi(2) / expected)
+            .sum();
+        // 79 degrees of freedom: p = 1e-6 at ~140.
+        assert!(chi2 < 140.0, "radius {radius}: chi-square {chi2:.1}");
+        let outside = sun.dir + t * (2.0 * radius as f32);
+        assert!(!sun.covers(outside.normalize()));
+    }
 }
 
 #[test]
@@ -170,17 +208,24 @@ fn emitters_are_found_by_object_and_triangle() {
             tri(0),
             tri(4),
             tri(7),
+            emitter(
+                u32::MAX,
+                u32::MAX - 1,
+                EmitterShape::Sun(SunLight::new(Vec3A::Y, 0.01)),
+            ),
             emitter(u32::MAX, u32::MAX, EmitterShape::Environment),
         ],
         10.0,
     );
+    assert_eq!(lights.sun(), Some(4));
+    assert_eq!(lights.distant().collect::<Vec<_>>(), [4, 5]);
     assert_eq!(lights.index_of(1, u32::MAX), Some(0));
     assert_eq!(lights.index_of(3, 4), Some(2));
     assert_eq!(lights.index_of(3, 7), Some(3));
     assert_eq!(lights.index_of(3, 5), None);
     assert_eq!(lights.index_of(2, u32::MAX), None);
-    assert_eq!(lights.environment(), Some(4));
-    let total: f32 = (0..5).map(|i| lights.pick_pmf(i)).sum();
+    assert_eq!(lights.environment(), Some(5));
+    let total: f32 = (0..6).map(|i| lights.pick_pmf(i)).sum();
     assert!((total - 1.0).abs() < 1e-6, "pmfs sum to {total}");
     let one = Lights::new(vec![tri(0)], 1.0);
     assert_eq!((one.pick_pmf(0), one.environment()), (1.0, None));

@@ -10,5 +10,5 @@ mod emitter;
 pub mod sky;
 
 pub use alias::AliasTable;
-pub use emitter::{Emitter, EmitterShape, LightTri, Lights, Receiver};
+pub use emitter::{Emitter, EmitterShape, LightTri, Lights, Receiver, SunLight};
 pub use sky::EnvLight;

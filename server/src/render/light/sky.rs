@@ -51,7 +51,7 @@ impl EnvLight {
 
     /// Map direction `m` in the world.
     #[inline(always)]
-    fn map_to_world(&self, m: Vec3A) -> Vec3A {
+    pub fn map_to_world(&self, m: Vec3A) -> Vec3A {
         let (c, s) = (self.cos_rot, self.sin_rot);
         Vec3A::new(c * m.x + s * m.z, m.y, c * m.z - s * m.x)
     }

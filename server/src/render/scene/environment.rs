@@ -6,6 +6,7 @@ use super::json::{EnvMapJson, EnvironmentJson};
 use super::resolve::{ModelSource, Resolver};
 use super::values::vec3;
 use super::{Scene, SceneError, MAX_EMISSION};
+use crate::render::envmap::sky_model::SunDisc;
 use crate::render::envmap::EnvMap;
 use crate::render::math::DVec3;
 use std::sync::Arc;
@@ -15,6 +16,8 @@ use std::sync::Arc;
 pub struct EnvironmentMap {
     pub json: EnvMapJson,
     pub map: Arc<EnvMap>,
+    /// A computed sky's sun (map frame, before `intensity` and rotation).
+    pub sun: Option<SunDisc>,
 }
 
 impl PartialEq for EnvironmentMap {
@@ -61,20 +64,33 @@ pub(super) fn environment(
     if let Some(b) = j.background {
         radiance("environment.background", b)?;
     }
-    if j.map.is_empty() {
-        return Err(SceneError::new(
-            "environment.map",
-            "must name an .hdr or .exr file or an uploaded asset",
-        ));
-    }
-    let map = resolver
-        .environment(ModelSource::of_map(&j.map))
-        .map_err(|e| SceneError::new("environment.map", e))?;
+    let (map, sun) = match (&j.sky, j.map.is_empty()) {
+        (Some(_), false) => {
+            return Err(SceneError::new(
+                "environment",
+                "give a map or a sky, not both",
+            ))
+        }
+        (Some(sky), true) => super::sky::sky_map(&super::sky::setup(sky)?),
+        (None, true) => {
+            return Err(SceneError::new(
+                "environment.map",
+                "must name an .hdr or .exr file or an uploaded asset (or give a sky)",
+            ))
+        }
+        (None, false) => {
+            let map = resolver
+                .environment(ModelSource::of_map(&j.map))
+                .map_err(|e| SceneError::new("environment.map", e))?;
+            (map, None)
+        }
+    };
     Ok((
         DVec3::ZERO,
         Some(EnvironmentMap {
             json: j.clone(),
             map,
+            sun,
         }),
     ))
 }

@@ -59,20 +59,30 @@ pub struct SceneJson {
     pub environment: Option<EnvironmentJson>,
 }
 
-/// `environment`: `[r, g, b]`, or `{"map": FILE|ASSET, ...}`.
+/// A clear sky's settings: the API's own type (`pathstream_wire::Sky`).
+pub use pathstream_wire::Sky as SkyJson;
+
+/// `environment`: `[r, g, b]`, `{"map": FILE|ASSET, ...}` or `{"sky": {...}, ...}`.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
+#[allow(clippy::large_enum_variant)] // one per scene
 pub enum EnvironmentJson {
     Color([f64; 3]),
     Map(EnvMapJson),
 }
 
-/// An equirectangular HDR environment map (`.hdr` or `.exr`).
+/// An equirectangular HDR environment map (`.hdr` or `.exr`), or a clear
+/// sky computed as one (`sky`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct EnvMapJson {
-    /// A file (relative to the scene file) or an uploaded asset's id.
+    /// A file (relative to the scene file) or an uploaded asset's id;
+    /// empty with `sky`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub map: String,
+    /// A clear sky and sun (`render::envmap::sky_model`) in place of a map.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<SkyJson>,
     /// Scales the map's radiance.
     #[serde(default = "one")]
     pub intensity: f64,
@@ -391,7 +401,7 @@ fn environment(value: Value) -> Result<EnvironmentJson, SceneError> {
         Value::Array(_) => Ok(EnvironmentJson::Color(at("environment", value)?)),
         _ => Err(SceneError::new(
             "environment",
-            "expected a colour [r, g, b] or a map {\"map\": \"studio.hdr\", ...}",
+            "expected a colour [r, g, b], a map {\"map\": \"studio.hdr\", ...} or a sky {\"sky\": {...}}",
         )),
     }
 }

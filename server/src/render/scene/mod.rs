@@ -42,6 +42,7 @@ mod json;
 mod materials;
 mod placement;
 mod resolve;
+pub mod sky;
 mod transform;
 mod validate;
 mod values;
@@ -53,7 +54,7 @@ pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
     CameraJson, EnvMapJson, EnvironmentJson, FresnelJson, GlassJson, ImportJson, MaterialJson,
     MeshDataJson, ObjectJson, PbrJson, ProjectionJson, QuadJson, RotateJson, ScaleJson, SceneJson,
-    SphereJson, SurfaceJson, TransformJson,
+    SkyJson, SphereJson, SurfaceJson, TransformJson,
 };
 pub use resolve::{LoadedModel, ModelSource, NoFiles, Resolver};
 pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};

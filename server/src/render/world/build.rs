@@ -11,7 +11,7 @@
 use super::emitters::Sky;
 use super::{Accel, Geometry, Instance, World, WorldObject};
 use crate::render::bvh::{Aabb, Bvh};
-use crate::render::light::EnvLight;
+use crate::render::light::{EnvLight, SunLight};
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::{DAffine3, DVec3, Vec3A};
 use crate::render::scene::{Scene, Shape};
@@ -127,7 +127,16 @@ impl World {
             Some(m) => Sky::Map(m.clone()),
             None => Sky::Uniform(environment),
         };
-        let lights = super::emitters::lights(&objects, &instances, &materials, sky, radius);
+        // A computed sky's sun, turned with its map and scaled by its intensity.
+        let sun = scene.environment_map.as_ref().zip(env_map.as_ref());
+        let sun = sun.and_then(|(m, light)| {
+            let disc = m.sun?;
+            let dir = light.map_to_world(Vec3A::from(disc.dir.as_vec3()));
+            let radiance =
+                Vec3A::from(DVec3::from_array(disc.radiance).as_vec3()) * light.intensity;
+            Some((SunLight::new(dir.normalize(), disc.radius), radiance))
+        });
+        let lights = super::emitters::lights(&objects, &instances, &materials, (sun, sky), radius);
         let scan = instances.is_empty()
             && match choice {
                 AccelChoice::Auto => {
@@ -174,6 +183,7 @@ impl World {
             lights,
             environment,
             env_map,
+            sun,
             accel,
             accel_choice: choice,
         }

@@ -2,15 +2,20 @@
 //! spheres and quads, each emissive triangle of a mesh instance, and the
 //! environment when it is not black.
 //!
-//! The list is in (object, triangle) order, the environment last:
+//! The list is in (object, triangle) order, a computed sky's sun (object
+//! `NO_OBJECT`, prim [`SUN_PRIM`]) and the environment last:
 //! `Lights::index_of` (and the kernel's `light_index`) find the emitter a
 //! BSDF sample hit by binary search on it.
 
-use super::{Geometry, Instance, WorldObject, NO_PRIM};
-use crate::render::light::{Emitter, EmitterShape, EnvLight, LightTri, Lights};
+use super::{Geometry, Instance, WorldObject, NO_OBJECT, NO_PRIM};
+use crate::render::light::{Emitter, EmitterShape, EnvLight, LightTri, Lights, SunLight};
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::Vec3A;
 use std::sync::Arc;
+
+/// The sun's place in the emitter list: after every object's, before
+/// the environment's (`NO_OBJECT`, `NO_PRIM`).
+pub const SUN_PRIM: u32 = NO_PRIM - 1;
 
 /// What lights the scene from outside.
 pub(super) enum Sky {
@@ -18,13 +23,13 @@ pub(super) enum Sky {
     Map(Arc<EnvLight>),
 }
 
-/// The emitters of these objects; the sky (if not black) as seen
-/// from everywhere within `radius` of the origin.
+/// The emitters of these objects; the sun (radiance and disc) and the
+/// sky (if not black) as seen from everywhere within `radius` of the origin.
 pub(super) fn lights(
     objects: &[WorldObject],
     instances: &[Instance],
     materials: &[SurfaceMaterial],
-    sky: Sky,
+    (sun, sky): (Option<(SunLight, Vec3A)>, Sky),
     radius: f64,
 ) -> Lights {
     let mut emitters = Vec::new();
@@ -52,9 +57,17 @@ pub(super) fn lights(
         Sky::Uniform(_) => None,
         Sky::Map(m) => (m.mean_brightness() > 0.0).then_some((Vec3A::ZERO, EmitterShape::Map(m))),
     };
+    if let Some((sun, emission)) = sun.filter(|(_, e)| e.max_element() > 0.0) {
+        emitters.push(Emitter {
+            object: NO_OBJECT,
+            prim: SUN_PRIM,
+            emission,
+            shape: EmitterShape::Sun(sun),
+        });
+    }
     if let Some((emission, shape)) = sky {
         emitters.push(Emitter {
-            object: u32::MAX,
+            object: NO_OBJECT,
             prim: NO_PRIM,
             emission,
             shape,

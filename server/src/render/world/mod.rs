@@ -177,6 +177,8 @@ pub struct World {
     /// light and BSDF samples by multiple importance sampling, as `pbr`
     /// ones always do.
     pub env_map: Option<std::sync::Arc<EnvLight>>,
+    /// A computed sky's sun and its radiance (its emitter is `lights.sun()`).
+    pub sun: Option<(crate::render::light::SunLight, Vec3A)>,
     accel: Accel,
     /// What the world was asked for: `Auto` lets each backend choose by
     /// its own measurement; `Bvh` and `Scan` hold for every backend.

@@ -86,6 +86,7 @@ fn environment(e: EnvironmentJson) -> wire::Environment {
         EnvironmentJson::Color(c) => wire::Environment::Color(c),
         EnvironmentJson::Map(m) => wire::Environment::Map(wire::EnvironmentMap {
             map: m.map,
+            sky: m.sky,
             intensity: m.intensity,
             rotation_deg: m.rotation_deg,
             visible: m.visible,
@@ -173,10 +174,32 @@ mod tests {
             EnvironmentJson::Color([0.1, 0.2, 0.3]),
             EnvironmentJson::Map(EnvMapJson {
                 map: "a".repeat(64),
+                sky: None,
                 intensity: 2.0,
                 rotation_deg: 30.0,
                 visible: false,
                 background: Some([0.5, 0.5, 0.5]),
+            }),
+            EnvironmentJson::Map(EnvMapJson {
+                map: String::new(),
+                sky: Some(crate::render::scene::SkyJson {
+                    sun_elevation_deg: Some(10.0),
+                    sun_azimuth_deg: Some(20.0),
+                    sun_direction: Some([1.0, 2.0, 3.0]),
+                    time: Some("2026-06-21T12:00:00Z".into()),
+                    latitude_deg: Some(1.0),
+                    longitude_deg: Some(2.0),
+                    sun_size_deg: Some(3.0),
+                    sun_intensity: Some(4.0),
+                    air: Some(5.0),
+                    dust: Some(6.0),
+                    ozone: Some(7.0),
+                    altitude_m: Some(8.0),
+                }),
+                intensity: 1.0,
+                rotation_deg: 0.0,
+                visible: true,
+                background: None,
             }),
         ] {
             assert_eq!(json_of(&environment(e.clone())), json_of(&e));

@@ -294,6 +294,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         tri_lights: true,
         environment: true,
         env_map: true,
+        sun: true,
         lens: true,
         projection: 0,
         inject_nan_every: Some(1),

@@ -38,6 +38,8 @@ pub const LIGHT_TRIANGLE: u32 = 1;
 pub const LIGHT_ENVIRONMENT: u32 = 2;
 /// An environment map (`HAS_ENV_MAP`; the map's tables are scene arrays).
 pub const LIGHT_ENV_MAP: u32 = 3;
+/// A computed sky's sun (`HAS_SUN`; its disc is `Params::sun`).
+pub const LIGHT_SUN: u32 = 4;
 pub const MAT_DIFFUSE: u32 = 0;
 pub const MAT_MIRROR: u32 = 1;
 pub const MAT_GLASS: u32 = 2;
@@ -50,7 +52,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 30] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 31] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -58,6 +60,7 @@ pub const SHARED_CONSTANTS: [(&str, u32); 30] = [
     ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
     ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
     ("LIGHT_ENV_MAP", LIGHT_ENV_MAP),
+    ("LIGHT_SUN", LIGHT_SUN),
     ("NO_NORMALS", super::meshes::NO_NORMALS),
     ("NO_PRIM", crate::render::world::NO_PRIM),
     ("MAT_DIFFUSE", MAT_DIFFUSE),
@@ -177,6 +180,11 @@ pub struct Params {
     pub env_size: [u32; 4],
     /// x: the camera's projection (`RayProjection`, `PROJ_*`).
     pub camera: [u32; 4],
+    /// A computed sky's sun: the unit direction towards it, w: 1 - cos of
+    /// its angular radius (`SunLight`).
+    pub sun: [f32; 4],
+    /// Its radiance (w: 1 where there is a sun, else all 0).
+    pub sun_radiance: [f32; 4],
 }
 
 /// An emitter for next-event estimation and its column of the power alias
@@ -207,7 +215,7 @@ pub struct Light {
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
 const _: () = assert!(std::mem::size_of::<Material>() == 64);
-const _: () = assert!(std::mem::size_of::<Params>() == 176);
+const _: () = assert!(std::mem::size_of::<Params>() == 208);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
@@ -281,6 +289,7 @@ pub fn kernel_lights(w: &World) -> Vec<Light> {
                 }
                 EmitterShape::Environment => l.kind = LIGHT_ENVIRONMENT,
                 EmitterShape::Map(_) => l.kind = LIGHT_ENV_MAP,
+                EmitterShape::Sun(_) => l.kind = LIGHT_SUN,
             }
             l
         })
@@ -421,6 +430,8 @@ pub fn pack(job: &RenderJob) -> Packed {
             .as_ref()
             .map_or([0; 4], |m| [m.map.width, m.map.height, 0, 0]),
         camera: [c.projection as u32, 0, 0, 0],
+        sun: w.sun.map_or([0.0; 4], |(s, _)| v4(s.dir, s.one_minus_cos)),
+        sun_radiance: w.sun.map_or([0.0; 4], |(_, le)| v4(le, 1.0)),
     };
     let mut packed = Packed {
         params,

@@ -68,6 +68,9 @@ pub struct Features {
     /// An environment map (its lookups, sampling and MIS at diffuse
     /// surfaces).
     pub env_map: bool,
+    /// A computed sky's sun (its disc met by rays that leave the scene,
+    /// and its emitter).
+    pub sun: bool,
     /// A thin-lens camera (aperture > 0).
     pub lens: bool,
     /// The camera's projection (`PROJ_*`).
@@ -118,9 +121,10 @@ impl Features {
             emitters.iter().any(|e| match e.shape {
                 EmitterShape::Sphere(_) => k == KIND_SPHERE,
                 EmitterShape::Quad(_) => k == KIND_QUAD,
-                EmitterShape::Triangle(_) | EmitterShape::Environment | EmitterShape::Map(_) => {
-                    false
-                }
+                EmitterShape::Triangle(_)
+                | EmitterShape::Environment
+                | EmitterShape::Map(_)
+                | EmitterShape::Sun(_) => false,
             })
         };
         Self {
@@ -161,6 +165,7 @@ impl Features {
                     .any(|e| matches!(e.shape, EmitterShape::Triangle(_))),
             environment: w.environment.max_element() > 0.0,
             env_map: w.env_map.is_some(),
+            sun: w.sun.is_some(),
             lens: job.camera.has_lens(),
             projection: job.camera.projection as u32,
             inject_nan_every: None,
@@ -174,7 +179,7 @@ impl Features {
             "-D SPECIALISED -D HAS_SPHERES={} -D HAS_QUADS={} -D HAS_DIFFUSE={} -D HAS_MIRROR={} \
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
-             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_LENS={} \
+             -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
              -D PROJECTION={}u",
             b(self.spheres),
             b(self.quads),
@@ -199,6 +204,7 @@ impl Features {
             b(self.tri_lights),
             b(self.environment),
             b(self.env_map),
+            b(self.sun),
             b(self.lens),
             self.projection,
         );
