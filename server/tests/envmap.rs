@@ -322,3 +322,45 @@ fn the_kernel_looks_up_samples_and_weighs_the_map_as_the_cpu_does() {
     let (m, _) = map_direction(0.25, 0.5);
     assert!((map_uv(m).0 - 0.25).abs() < 1e-6);
 }
+
+/// The device keeps a map between jobs: a new job of the same map (a camera
+/// move, an edit) uploads its other arrays but not the map, and renders
+/// the same samples as before; a job of another map uploads that one.
+#[test]
+fn a_map_is_uploaded_once_for_the_jobs_that_share_it() {
+    let Some(mut d) = common::opencl_device() else {
+        return;
+    };
+    let real = Arc::new(
+        pathstream::resolve::env_map_file(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/sunset-64.hdr"
+        )))
+        .expect("reads"),
+    );
+    let flat = map(16, 8, |_, _| [0.5, 0.5, 0.5]);
+    let bytes = |m: &EnvMap| (m.texels.len() * 12 + m.dist.data.len() * 4) as u64;
+    let maps = Maps(vec![
+        ("sunset.hdr", real.clone()),
+        ("flat.hdr", flat.clone()),
+    ]);
+    let sunset = scene(balls(serde_json::json!({"map": "sunset.hdr"})), &maps);
+    let mut render = |s: &Scene| {
+        let before = d.scene_bytes_uploaded;
+        let job = RenderJob::new(s, 16, 16, &quality(true, 1));
+        let mut film = Film::new(16, 16);
+        d.render(&job, &mut film, 4).expect("render");
+        (film, d.scene_bytes_uploaded - before)
+    };
+    let (first, uploaded) = render(&sunset);
+    assert!(uploaded >= bytes(&real), "first job: {uploaded} bytes");
+    let (again, uploaded) = render(&sunset);
+    assert!(
+        uploaded < bytes(&real),
+        "the same map again: {uploaded} bytes"
+    );
+    let same = first.mean() == again.mean();
+    assert!(same, "the shared map renders the same samples");
+    let (_, uploaded) = render(&scene(balls(serde_json::json!({"map": "flat.hdr"})), &maps));
+    assert!(uploaded >= bytes(&flat), "another map: {uploaded} bytes");
+}

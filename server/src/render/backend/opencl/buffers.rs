@@ -21,11 +21,13 @@ use super::layout::{self, Packed};
 use super::meshes;
 use super::{call, Access, OpenClBackend, OpenClError};
 use crate::render::bvh::BvhNode;
+use crate::render::envmap::EnvMap;
 use crate::render::shape::TriVerts;
 use opencl3::kernel::Kernel;
 use opencl3::memory::{Buffer, ClMem};
 use opencl3::types::{cl_mem, cl_uint, cl_ulong};
 use std::mem::size_of;
+use std::sync::Arc;
 
 /// One array of the scene as the kernel reads it.
 pub(super) struct SceneArray {
@@ -106,8 +108,18 @@ pub(super) const LAUNCH_PARAMS: [(&str, &str); 8] = [
 ];
 
 /// The job's scene on the device: one buffer per entry of [`SCENE_ARRAYS`],
-/// in its order.
-pub(super) struct SceneBuffers(Vec<Buffer<u8>>);
+/// in its order (an environment map's shared with other jobs of it).
+pub(super) struct SceneBuffers(Vec<Arc<Buffer<u8>>>);
+
+/// The environment map last uploaded and its two buffers: the jobs of one
+/// map (every camera move, edit or quality change under it) share them
+/// instead of uploading its texels and tables again (100 MB for a 4k map).
+/// Held by the map's `Arc`, so that its address cannot be another map's.
+pub(super) struct MapBuffers {
+    map: Arc<EnvMap>,
+    texels: Arc<Buffer<u8>>,
+    dist: Arc<Buffer<u8>>,
+}
 
 /// Where one launch adds its samples.
 pub(super) struct LaunchArgs<'a> {
@@ -193,14 +205,48 @@ pub(super) fn check_fits(bytes: &[(&str, usize)], limits: MemoryLimits) -> Resul
 }
 
 impl SceneBuffers {
-    pub(super) fn upload(cl: &OpenClBackend, p: &Packed) -> Result<Self, OpenClError> {
+    /// `p`'s arrays on the device, an environment map's taken from `maps`
+    /// where it holds that map (else uploaded, and `maps` then holds it);
+    /// and the bytes uploaded.
+    pub(super) fn upload(
+        cl: &OpenClBackend,
+        p: &Packed,
+        maps: &mut Option<MapBuffers>,
+    ) -> Result<(Self, usize), OpenClError> {
         let read = Access::ReadOnly;
-        let buffers = SCENE_ARRAYS.iter().map(|a| match (a.bytes)(p) {
-            // One element the kernel never reads (the counts say none).
-            [] => cl.buffer(read, a.elem_bytes),
-            bytes => cl.upload(read, bytes),
-        });
-        Ok(Self(buffers.collect::<Result<_, _>>()?))
+        let held = match (&p.env_map, maps.as_ref()) {
+            (Some(m), Some(held)) if Arc::ptr_eq(m, &held.map) => Some(held),
+            _ => None,
+        };
+        let mut uploaded = 0;
+        let mut buffers = Vec::with_capacity(SCENE_ARRAYS.len());
+        for a in &SCENE_ARRAYS {
+            let shared = match (a.name, held) {
+                ("env_texels", Some(h)) => Some(h.texels.clone()),
+                ("env_dist", Some(h)) => Some(h.dist.clone()),
+                _ => None,
+            };
+            buffers.push(match (shared, (a.bytes)(p)) {
+                (Some(b), _) => b,
+                // One element the kernel never reads (the counts say none).
+                (None, []) => Arc::new(cl.buffer(read, a.elem_bytes)?),
+                (None, bytes) => {
+                    uploaded += bytes.len();
+                    Arc::new(cl.upload(read, bytes)?)
+                }
+            });
+        }
+        if let (None, Some(map)) = (held, &p.env_map) {
+            let at = |name: &str| SCENE_ARRAYS.iter().position(|a| a.name == name);
+            if let (Some(t), Some(d)) = (at("env_texels"), at("env_dist")) {
+                *maps = Some(MapBuffers {
+                    map: map.clone(),
+                    texels: buffers[t].clone(),
+                    dist: buffers[d].clone(),
+                });
+            }
+        }
+        Ok((Self(buffers), uploaded))
     }
 
     /// Sets every argument of `kernel`: the scene's arrays, then `a`.

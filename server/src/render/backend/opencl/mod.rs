@@ -191,6 +191,11 @@ pub struct OpenClBackend {
     /// How long the last upload of a job's scene and film took, and the
     /// device memory they take.
     pub last_upload: Option<(Duration, usize)>,
+    /// Bytes of scene arrays uploaded so far (a map shared across jobs
+    /// counts once).
+    pub scene_bytes_uploaded: u64,
+    /// The environment map on the device, for the next job of it.
+    maps: Option<buffers::MapBuffers>,
     /// What the device can hold (from its info; lower it to test).
     pub memory_limits: MemoryLimits,
     /// How adaptive work reaches the kernel.
@@ -279,6 +284,8 @@ impl OpenClBackend {
                 LAUNCH_TARGET
             },
             last_upload: None,
+            scene_bytes_uploaded: 0,
+            maps: None,
             memory_limits,
             tile_dispatch: TileDispatch::default(),
             launch_pixels: env_usize("PATHSTREAM_OPENCL_LAUNCH_PIXELS").unwrap_or(if info_is_gpu {
@@ -499,10 +506,14 @@ impl OpenClBackend {
         } else {
             self.upload(Access::ReadWrite, &host_film(film))?
         };
+        let mut maps = self.maps.take();
+        let (scene, uploaded) = buffers::SceneBuffers::upload(self, &packed, &mut maps)?;
+        self.maps = maps;
+        self.scene_bytes_uploaded += uploaded as u64;
         let state = JobState {
             job_id: job.id,
             key: key.clone(),
-            scene: buffers::SceneBuffers::upload(self, &packed)?,
+            scene,
             film: device_film,
             rejected: self.upload(Access::ReadWrite, &[0u32])?,
             pixels: film.pixels().len(),
