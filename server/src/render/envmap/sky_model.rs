@@ -100,6 +100,20 @@ pub struct SunDisc {
     pub radiance: [f64; 3],
 }
 
+impl SunDisc {
+    /// The disc of angular radius `radius` towards unit `dir` that gives
+    /// RGB irradiance `irradiance` times `strength`: None where that is black.
+    pub fn new(dir: DVec3, irradiance: [f64; 3], radius: f64, strength: f64) -> Option<Self> {
+        let solid_angle = 2.0 * PI * (1.0 - radius.cos());
+        let radiance = irradiance.map(|c| c * strength / solid_angle);
+        (radiance.iter().any(|&c| c > 0.0)).then_some(Self {
+            dir,
+            radius,
+            radiance,
+        })
+    }
+}
+
 /// Distance along unit `d` from `p` inside the sphere of radius `r` to it.
 fn exit_distance(p: DVec3, d: DVec3, r: f64) -> f64 {
     let b = p.dot(d);
@@ -285,16 +299,16 @@ impl SkyModel {
     /// The sun as a disc of angular radius `radius`, its radiance scaled by
     /// `strength`: None below the horizon or with no strength.
     pub fn sun_disc(&self, radius: f64, strength: f64) -> Option<SunDisc> {
+        SunDisc::new(self.sun, self.sun_irradiance()?, radius, strength)
+    }
+
+    /// The sunlight reaching the viewer, as RGB irradiance on a surface
+    /// facing the sun (the sky's units), or None below the horizon.
+    pub fn sun_irradiance(&self) -> Option<[f64; 3]> {
         let t = self.sun_transmittance()?;
-        let solid_angle = 2.0 * PI * (1.0 - radius.cos());
         let solar = spectrum::solar_irradiance();
-        let s: Spectrum = std::array::from_fn(|i| solar[i] * t[i] * strength / solid_angle);
-        let radiance = self.rgb(&s).map(|c| c.max(0.0));
-        (radiance.iter().any(|&c| c > 0.0)).then_some(SunDisc {
-            dir: self.sun,
-            radius,
-            radiance,
-        })
+        let s: Spectrum = std::array::from_fn(|i| solar[i] * t[i]);
+        Some(self.rgb(&s).map(|c| c.max(0.0)))
     }
 
     /// The sky (without the sun's disc) as a `width` x `height`

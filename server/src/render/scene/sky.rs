@@ -129,40 +129,33 @@ pub fn setup(j: &SkyJson) -> Result<SkySetup, SceneError> {
     })
 }
 
-/// The map of the sky `s` describes (from the cache where it was made
-/// before) and its sun disc (None below the horizon or at strength 0).
+/// The map of the sky `s` describes and its sun disc (None below the
+/// horizon or at strength 0). Both come from a cache of the last skies
+/// (the map and the sunlight's irradiance, by atmosphere and sun), so that
+/// revalidating a scene under the same sky computes nothing.
 pub fn sky_map(s: &SkySetup) -> (Arc<EnvMap>, Option<SunDisc>) {
-    /// Maps by atmosphere and sun direction (as bits), oldest first.
-    type Cache = Vec<((Atmosphere, [u64; 3]), Arc<EnvMap>)>;
+    /// Maps and sunlight by atmosphere and sun direction (as bits), oldest first.
+    type Cache = Vec<((Atmosphere, [u64; 3]), Arc<EnvMap>, Option<[f64; 3]>)>;
     static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
     let key = (s.atmosphere, s.sun.to_array().map(f64::to_bits));
-    let make = || SkyModel::new(&s.atmosphere, s.sun);
     let cached = {
         let cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-        cache
-            .iter()
-            .find(|(k, _)| *k == key)
-            .map(|(_, m)| m.clone())
+        (cache.iter())
+            .find(|(k, _, _)| *k == key)
+            .map(|(_, m, sun)| (m.clone(), *sun))
     };
-    let (map, model) = match cached {
-        Some(m) => (m, None),
-        None => {
-            let model = make();
-            let texels = model.image(SKY_MAP_WIDTH, SKY_MAP_HEIGHT);
-            let map = Arc::new(EnvMap::new("sky", SKY_MAP_WIDTH, SKY_MAP_HEIGHT, texels));
-            let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-            if cache.len() >= CACHED_SKIES {
-                cache.remove(0);
-            }
-            cache.push((key, map.clone()));
-            (map, Some(model))
+    let (map, sunlight) = cached.unwrap_or_else(|| {
+        let model = SkyModel::new(&s.atmosphere, s.sun);
+        let texels = model.image(SKY_MAP_WIDTH, SKY_MAP_HEIGHT);
+        let map = Arc::new(EnvMap::new("sky", SKY_MAP_WIDTH, SKY_MAP_HEIGHT, texels));
+        let sunlight = model.sun_irradiance();
+        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if cache.len() >= CACHED_SKIES {
+            cache.remove(0);
         }
-    };
-    let disc = match s.sun_strength > 0.0 {
-        true => model
-            .unwrap_or_else(make)
-            .sun_disc(s.sun_radius, s.sun_strength),
-        false => None,
-    };
+        cache.push((key, map.clone(), sunlight));
+        (map, sunlight)
+    });
+    let disc = sunlight.and_then(|e| SunDisc::new(s.sun, e, s.sun_radius, s.sun_strength));
     (map, disc)
 }
