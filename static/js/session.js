@@ -273,9 +273,16 @@ export function edit(fn) {
 
 // ---------------------------------------------------------------- status
 
+/** What a status says of the session's settings (the rest is progress). */
+const SETTINGS = ["scene", "camera", "light", "quality", "environment", "environment_name"];
+
 export function applyStatus(s, fromStream = false) {
   if (s.id && state.sessionId && s.id !== state.sessionId) return; // an old session's
-  state.status = s;
+  // A status sent before the server saw this page's last change keeps the
+  // settings the change's answer brought (else a later edit would send
+  // them back: an environment's intensity reverting to the old one).
+  const stale = state.status && s.generation < state.adoptFrom;
+  state.status = stale ? { ...s, ...Object.fromEntries(SETTINGS.map((k) => [k, state.status[k]])) } : s;
   state.maxGeneration = Math.max(state.maxGeneration, s.generation);
   el.body.dataset.generation = String(s.generation);
   el.body.dataset.spp = String(s.spp);
