@@ -109,8 +109,16 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, float
 }
 #endif
 
-/* One path (integrator.rs, Path::advance until it ends). */
-static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
+/* A path's guide for the denoiser (features.rs, Guide): the albedo and
+ * normal of its first hit that is not a mirror or glass, tinted by those;
+ * what it sees of light where it meets an emitter or leaves the scene. */
+typedef struct {
+    float3 albedo, normal;
+} Guide;
+
+/* One path (integrator.rs, Path::advance until it ends); built with
+ * FEATURES, its guide in *g. */
+static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, Guide *g) {
     __global const Params *P = sc->P;
     __global const Material *materials = sc->materials;
     __global const Light *lights = sc->lights;
@@ -128,6 +136,12 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
 #if HAS_MIS
     BsdfVertex last;
     last.pdf = 0.0f;
+#endif
+    g->albedo = (float3)(0.0f);
+    g->normal = (float3)(0.0f);
+#if FEATURES
+    float3 tint = (float3)(1.0f);
+    int guided = 0;
 #endif
     for (;;) {
         Hit hit;
@@ -153,6 +167,11 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
             }
 #endif
             l += hidden ? le : emit * le * w;
+#if FEATURES
+            if (!guided) {
+                g->albedo = tint * clamp(le, 0.0f, 1.0f);
+            }
+#endif
 #if HAS_SUN
             if (!hidden && USE_SUN && sun_covers(P, d)) {
                 float ws = 1.0f;
@@ -179,13 +198,24 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s) {
 #endif
             l += emit * m->emission.xyz * w;
         }
-        if (MAX_DEPTH != 0u && bounces >= MAX_DEPTH) {
-            break;
-        }
         /* Geometric and shading normals on the side the ray came from. */
         int arriving = dot3(d, sf.ng) < 0.0f;
         float3 nl = arriving ? sf.ng : -sf.ng;
         float3 ns = !sf.smooth ? nl : (dot3(sf.ns, nl) < 0.0f ? -sf.ns : sf.ns);
+#if FEATURES
+        if (!guided) {
+            if (m->kind == MAT_MIRROR || m->kind == MAT_GLASS) {
+                tint *= m->albedo.xyz;
+            } else {
+                g->albedo = tint * (m->emissive ? clamp(m->emission.xyz, 0.0f, 1.0f) : m->albedo.xyz);
+                g->normal = ns;
+                guided = 1;
+            }
+        }
+#endif
+        if (MAX_DEPTH != 0u && bounces >= MAX_DEPTH) {
+            break;
+        }
         int gathered = 0;
 #if HAS_DIFFUSE || HAS_GGX
         NeeSurface ne;

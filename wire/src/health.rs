@@ -69,6 +69,43 @@ pub struct Devices {
     pub opencl_devices: Option<Vec<OpenClDevice>>,
     /// Why listing the OpenCL devices failed.
     pub opencl_error: Option<String>,
+    /// The denoiser (absent on servers before it).
+    #[serde(default)]
+    pub denoiser: Option<Denoiser>,
+}
+
+/// Open Image Denoise, as the server found it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Denoiser {
+    /// Whether sessions can denoise.
+    pub available: bool,
+    /// Why not, and what to install, when not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// The library file loaded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub library: Option<String>,
+    /// Its version (`2.5.1`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub version: Option<String>,
+    /// The device it denoises on (an index into `devices`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device: Option<usize>,
+    /// The devices the library can denoise on.
+    #[serde(default)]
+    pub devices: Vec<DenoiserDevice>,
+}
+
+/// One device Open Image Denoise lists (`PATHSTREAM_OIDN_DEVICE` picks one
+/// by `index` or by `kind`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DenoiserDevice {
+    /// Its number in the library's list.
+    pub index: usize,
+    /// `cpu`, `cuda`, `hip`, `sycl` or `metal`.
+    pub kind: String,
+    /// The device's name.
+    pub name: String,
 }
 
 /// One OpenCL device (`--device N` picks it by `index`).

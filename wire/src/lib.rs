@@ -28,10 +28,12 @@ pub mod tonemap;
 
 pub use asset::{is_environment_name, Asset, AssetList, Uploaded};
 pub use error::ErrorBody;
-pub use health::{BackendInfo, Devices, Health, OpenClDevice, Scenes, WorkerLoad};
+pub use health::{
+    BackendInfo, Denoiser, DenoiserDevice, Devices, Health, OpenClDevice, Scenes, WorkerLoad,
+};
 pub use sky::Sky;
 pub use status::{
-    Camera, DeviceShare, Environment, EnvironmentMap, Light, Pick, Projection, Quality,
+    Camera, Denoise, DeviceShare, Environment, EnvironmentMap, Light, Pick, Projection, Quality,
     SessionList, SessionStatus, SppSpread,
 };
 pub use stream::{Stats, StreamError, StreamFormat, StreamMessage, StreamRequest, StreamSettings};

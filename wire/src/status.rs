@@ -260,6 +260,45 @@ pub struct Quality {
     pub time_ms: Option<u64>,
     /// Halt when the estimated relative RMS error falls below this.
     pub target_error: Option<f64>,
+    /// Which frames show a denoised image (`off` on servers before it).
+    #[serde(default)]
+    pub denoise: Denoise,
+}
+
+/// Which frames a session denoises (with Open Image Denoise, guided by the
+/// first hit's albedo and normal). The raw image, its error estimate and
+/// every halt condition are the same whichever it is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Denoise {
+    /// No frame (the film keeps no feature buffers).
+    #[default]
+    Off,
+    /// The frames streamed while the render runs; the halted frame is raw.
+    Stream,
+    /// Those, and the halted frame too.
+    Final,
+}
+
+impl Denoise {
+    /// The setting's name on the wire.
+    pub fn name(self) -> &'static str {
+        match self {
+            Denoise::Off => "off",
+            Denoise::Stream => "stream",
+            Denoise::Final => "final",
+        }
+    }
+
+    /// Whether a frame shows a denoised image under this setting (`halted`:
+    /// the frame is the render's last).
+    pub fn shows(self, halted: bool) -> bool {
+        match self {
+            Denoise::Off => false,
+            Denoise::Stream => !halted,
+            Denoise::Final => true,
+        }
+    }
 }
 
 fn random() -> String {

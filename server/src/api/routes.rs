@@ -131,11 +131,14 @@ async fn health(State(state): State<Arc<AppState>>) -> Json<Health> {
 /// and the OpenCL devices this machine lists.
 async fn devices(State(state): State<Arc<AppState>>) -> Json<Devices> {
     let listed = crate::render::backend::opencl::list_devices();
+    // The first call loads the library (off the async threads).
+    let denoiser = tokio::task::spawn_blocking(crate::render::denoise::status).await;
     Json(Devices {
         backends: state.backends(),
         default: state.default_backend().backend,
         opencl_devices: (listed.as_ref().ok()).map(|l| l.iter().map(opencl_device).collect()),
         opencl_error: listed.err(),
+        denoiser: denoiser.ok(),
     })
 }
 

@@ -3,12 +3,14 @@
 
 use super::{CliError, Switch};
 use indicatif::{ProgressBar, ProgressStyle};
+use pathstream::render::denoise::{self, FilterQuality};
 use pathstream::render::job::check_size;
 use pathstream::render::output::{write_image, ImageFormat};
 use pathstream::render::progressive::{self, DEFAULT_SPP};
 use pathstream::render::sampler::SamplerKind;
 use pathstream::render::split::{render_split, DeviceShare};
 use pathstream::render::tonemap::Tonemap;
+use pathstream::render::quality::Denoise;
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Preset, Quality, RenderJob};
 use std::path::PathBuf;
 
@@ -179,6 +181,14 @@ pub struct RenderArgs {
     /// Exposure in stops applied before tone mapping (PNG only).
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
+    /// Denoise the image with Open Image Denoise, guided by the first hit's
+    /// albedo and normal (needs libOpenImageDenoise.so.2: see the README).
+    /// The error estimate printed is the raw image's.
+    #[arg(long)]
+    denoise: bool,
+    /// With --denoise: also write the raw (not denoised) image here.
+    #[arg(long, value_name = "FILE", requires = "denoise")]
+    raw_out: Option<PathBuf>,
     /// Output file: .png (tone-mapped sRGB) or .pfm (linear float).
     #[arg(long, value_name = "FILE")]
     out: PathBuf,
@@ -208,6 +218,10 @@ impl RenderArgs {
             }),
             clamp: self.clamp.unwrap_or(q.clamp),
             adaptive: self.adaptive.map_or(q.adaptive, |a| a == Switch::On),
+            denoise: match self.denoise {
+                true => Denoise::Final,
+                false => Denoise::Off,
+            },
             ..q
         }
     }
@@ -216,6 +230,13 @@ impl RenderArgs {
 pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let usage = |e: String| CliError::Usage(e);
     ImageFormat::from_path(&args.out).map_err(|e| usage(format!("--out: {e}")))?;
+    if let Some(raw) = &args.raw_out {
+        ImageFormat::from_path(raw).map_err(|e| usage(format!("--raw-out: {e}")))?;
+    }
+    if args.denoise {
+        // Before rendering: a missing library is a usage error, found now.
+        denoise::available().map_err(|e| usage(format!("--denoise: {e}")))?;
+    }
     check_size(args.width, args.height).map_err(|e| usage(format!("--{e}")))?;
     if !args.exposure.is_finite() {
         return Err(usage("--exposure: must be a finite number".into()));
@@ -308,14 +329,30 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let tonemap = Tonemap {
         exposure: args.exposure,
     };
-    write_image(
-        &args.out,
-        film.width(),
-        film.height(),
-        &film.mean(),
-        &tonemap,
-    )
-    .map_err(|e| CliError::Failed(e.to_string()))?;
+    let write = |path: &PathBuf, pixels: &[[f32; 3]]| {
+        write_image(path, film.width(), film.height(), pixels, &tonemap)
+            .map_err(|e| CliError::Failed(e.to_string()))
+    };
+    let raw = film.mean();
+    if args.denoise {
+        let started = std::time::Instant::now();
+        let features = film.feature_means();
+        let clean = denoise::denoise(
+            film.width(),
+            film.height(),
+            &raw,
+            features.as_ref(),
+            FilterQuality::High,
+        )
+        .map_err(|e| CliError::Failed(e.to_string()))?;
+        tracing::info!(ms = started.elapsed().as_secs_f64() * 1e3, "denoised");
+        write(&args.out, &clean)?;
+        if let Some(path) = &args.raw_out {
+            write(path, &raw)?;
+        }
+    } else {
+        write(&args.out, &raw)?;
+    }
 
     let rejected = if done.rejected > 0 {
         format!(", {} samples rejected (NaN/Inf)", done.rejected)
@@ -338,7 +375,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         all => format!("backend all ({} devices)", all.len()),
     };
     println!(
-        "{} {}x{}: {spp} in {:.2} s, {:.2} M paths/s, error estimate {}, {backend}{} -> {}",
+        "{} {}x{}: {spp} in {:.2} s, {:.2} M paths/s, error estimate {}, {backend}{} -> {}{}",
         args.scene,
         args.width,
         args.height,
@@ -346,7 +383,8 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         done.samples_per_sec / 1e6,
         percent(done.error_estimate),
         rejected,
-        args.out.display()
+        args.out.display(),
+        if args.denoise { " (denoised)" } else { "" }
     );
     if shares.len() > 1 {
         for s in &shares {

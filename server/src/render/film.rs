@@ -21,6 +21,7 @@
 //! against a reference.
 
 use crate::render::adaptive::{self, Goal, TileError, TileState, TileWork, Tiles};
+use crate::render::features::{FeatureSums, Features};
 use crate::render::math::{is_finite3, Vec3A};
 use pathstream_wire::error_estimate::relative;
 use rayon::prelude::*;
@@ -82,6 +83,9 @@ pub struct Film {
     /// The index of the film's first sample: 0, except for a block of
     /// samples rendered on one of several devices ([`Film::block`]).
     first: u64,
+    /// Feature sums beside `pixels` for a denoiser (empty: none kept;
+    /// see [`Film::parts_mut`]).
+    features: Vec<FeatureSums>,
 }
 
 impl Film {
@@ -108,6 +112,7 @@ impl Film {
             tiles: Tiles::new(width, height),
             adaptive: TileState::default(),
             first,
+            features: Vec::new(),
         }
     }
 
@@ -144,6 +149,7 @@ impl Film {
         for (p, b) in self.pixels.iter_mut().zip(&block.pixels) {
             p.absorb(b);
         }
+        self.absorb_features(&block.features);
         self.spp += block.spp;
         self.rejected += block.rejected;
         true
@@ -159,6 +165,8 @@ impl Film {
             p.absorb(b);
             *b = PixelSums::default();
         }
+        self.absorb_features(&block.features);
+        block.features.fill(FeatureSums::default());
         self.spp += block.spp;
         self.rejected += block.rejected;
         block.spp = 0;
@@ -170,10 +178,25 @@ impl Film {
     pub fn reuse_block(&mut self, first: u64) {
         debug_assert_eq!(self.spp, 0, "an emptied block");
         let pixels = std::mem::take(&mut self.pixels);
+        let features = std::mem::take(&mut self.features);
         *self = Self {
             pixels,
+            features,
             ..Self::empty(self.width, self.height, first)
         };
+    }
+
+    /// Adds a block's feature sums (keeping some from then on if it does).
+    fn absorb_features(&mut self, block: &[FeatureSums]) {
+        if block.is_empty() {
+            return;
+        }
+        if self.features.is_empty() {
+            self.features = bytemuck::zeroed_vec(self.pixels.len());
+        }
+        for (f, b) in self.features.iter_mut().zip(block) {
+            f.absorb(b);
+        }
     }
 
     /// Whether `block` holds whole samples that continue this film.
@@ -404,6 +427,57 @@ impl Film {
     /// All sums, row-major, for a backend to add to.
     pub fn pixels_mut(&mut self) -> &mut [PixelSums] {
         &mut self.pixels
+    }
+
+    /// The radiance sums and, where `features` asks for them, the feature
+    /// sums beside them (allocated, zero, the first time: a film keeps
+    /// features from the first sample of a job that wants them, as the
+    /// service starts a new film for every change of quality). Empty
+    /// feature sums when `features` is false.
+    pub fn parts_mut(&mut self, features: bool) -> (&mut [PixelSums], &mut [FeatureSums]) {
+        if features && self.features.is_empty() {
+            self.features = bytemuck::zeroed_vec(self.pixels.len());
+        }
+        let kept = if features { &mut self.features[..] } else { &mut [] };
+        (&mut self.pixels, kept)
+    }
+
+    /// The feature sums (empty where the film keeps none).
+    pub fn feature_sums(&self) -> &[FeatureSums] {
+        &self.features
+    }
+
+    /// The mean albedo and normal of each pixel's samples, where the film
+    /// keeps features (None otherwise).
+    pub fn feature_means(&self) -> Option<Features> {
+        if self.features.is_empty() {
+            return None;
+        }
+        let n = self.pixels.len();
+        let (mut albedo, mut normal) = (vec![[0f32; 3]; n], vec![[0f32; 3]; n]);
+        let w = self.width as usize;
+        (albedo.par_chunks_mut(w).zip(normal.par_chunks_mut(w)))
+            .zip(self.features.par_chunks(w))
+            .enumerate()
+            .for_each(|(y, ((a, nr), row))| {
+                let start = y * w;
+                let mut cached = Factors::of(0);
+                for (x, f) in row.iter().enumerate() {
+                    let k = self.pixel_spp(start + x);
+                    if k != cached.n {
+                        cached = Factors::of(k);
+                    }
+                    let inv = cached.inv_n as f32;
+                    a[x] = f.albedo.map(|v| v * inv);
+                    nr[x] = f.normal.map(|v| v * inv);
+                }
+            });
+        Some(Features {
+            width: self.width,
+            height: self.height,
+            albedo,
+            normal,
+        })
     }
 
     /// Records that every pixel received `count` more samples, of which

@@ -7,7 +7,9 @@
 //! - `material`, `fresnel`, `ggx`, `light`: how surfaces scatter, what emits
 //! - `integrator`: the path tracer, next-event estimation included
 //! - `adaptive`: where an adaptive render's samples go
-//! - `film`, `tonemap`, `output`: accumulation, error estimate, image files
+//! - `film`, `features`, `tonemap`, `output`: accumulation, error estimate,
+//!   what a denoiser is guided by, image files
+//! - `denoise`: Open Image Denoise, loaded at run time
 //! - `quality`, `preset`, `job`, `pass`, `progressive`, `backend`: what to
 //!   render, in which passes, and where
 //! - `split`: one render on several devices at once
@@ -17,7 +19,9 @@ pub mod adaptive;
 pub mod backend;
 pub mod bvh;
 pub mod camera;
+pub mod denoise;
 pub mod envmap;
+pub mod features;
 pub mod film;
 pub mod filter;
 pub mod fresnel;

@@ -3,13 +3,14 @@
 //! ```json
 //! {"max_depth": 6, "rr_depth": 5, "nee": true, "filter": "tent2x2",
 //!  "sampler": "sobol", "clamp": 0, "seed": 0, "adaptive": false,
-//!  "spp": 256, "time_ms": null, "target_error": 0.02}
+//!  "spp": 256, "time_ms": null, "target_error": 0.02, "denoise": "off"}
 //! ```
 //! Every field is optional (defaults below); unknown fields are refused.
 
 use crate::render::filter::Filter;
 use crate::render::integrator::PathSettings;
 use crate::render::sampler::SamplerKind;
+pub use pathstream_wire::Denoise;
 use serde::{Deserialize, Serialize};
 
 /// Highest explicit `max_depth` / `rr_depth`.
@@ -39,6 +40,9 @@ pub struct Quality {
     pub time_ms: Option<u64>,
     /// Halt when the estimated relative RMS error falls below this.
     pub target_error: Option<f64>,
+    /// Which frames show a denoised image (`off`, `stream`, `final`); the
+    /// film keeps the denoiser's feature buffers only when not `off`.
+    pub denoise: Denoise,
 }
 
 impl Default for Quality {
@@ -55,6 +59,7 @@ impl Default for Quality {
             spp: None,
             time_ms: None,
             target_error: None,
+            denoise: Denoise::Off,
         }
     }
 }
@@ -124,6 +129,7 @@ impl Quality {
             clamp: self.clamp,
             light_sampling: crate::render::integrator::LightSampling::Power,
             combine: crate::render::integrator::Combine::Mis,
+            features: self.denoise != Denoise::Off,
         }
     }
 }

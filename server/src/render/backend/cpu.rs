@@ -6,6 +6,7 @@
 //! image, bit for bit. Two samples of a pixel are traced side by side.
 
 use crate::render::adaptive::{TileWork, TILE_SIZE};
+use crate::render::features::{self, FeatureSums};
 use crate::render::film::{Film, PixelSums};
 #[cfg(target_arch = "x86_64")]
 use crate::render::isa::Avx2;
@@ -102,14 +103,17 @@ impl CpuBackend {
         let width = film.width() as usize;
         let wide = if self.portable_only { None } else { wide_isa() };
         let work = |film: &mut Film| -> Option<u64> {
-            film.pixels_mut()
-                .par_chunks_mut(width)
+            let (pixels, feats) = film.parts_mut(job.settings.features);
+            let n = pixels.len();
+            (pixels.par_chunks_mut(width))
+                .zip(features::chunks(feats, width, n))
                 .enumerate()
-                .map(|(y, row)| {
+                .map(|(y, (row, f))| {
                     if cancelled() {
                         return None;
                     }
-                    Some(render_span(wide, job, y * width, row, first..first + count))
+                    let span = Span::new(row, f);
+                    Some(render_span(wide, job, y * width, span, first..first + count))
                 })
                 .sum()
         };
@@ -131,20 +135,23 @@ impl CpuBackend {
     ) -> bool {
         let (start, sample) = (film.slice_start(), film.next_sample());
         let wide = if self.portable_only { None } else { wide_isa() };
-        let work = |pixels: &mut [PixelSums]| -> Option<u64> {
-            pixels[start..end]
-                .par_chunks_mut(SLICE_CHUNK)
+        let work = |film: &mut Film| -> Option<u64> {
+            let (pixels, feats) = film.parts_mut(job.settings.features);
+            let feats = if feats.is_empty() { feats } else { &mut feats[start..end] };
+            (pixels[start..end].par_chunks_mut(SLICE_CHUNK))
+                .zip(features::chunks(feats, SLICE_CHUNK, end - start))
                 .enumerate()
-                .map(|(k, chunk)| {
+                .map(|(k, (chunk, f))| {
                     if cancelled() {
                         return None;
                     }
                     let first = start + k * SLICE_CHUNK;
-                    Some(render_span(wide, job, first, chunk, sample..sample + 1))
+                    let span = Span::new(chunk, f);
+                    Some(render_span(wide, job, first, span, sample..sample + 1))
                 })
                 .sum()
         };
-        let rejected = self.in_pool(|| work(film.pixels_mut()));
+        let rejected = self.in_pool(|| work(film));
         rejected.map(|r| film.commit_slice(end, r)).is_some()
     }
 }
@@ -176,11 +183,14 @@ impl CpuBackend {
             ((row_of(last) + 1) * TILE_SIZE).min(tiles.height) as usize,
         );
         let wide = if self.portable_only { None } else { wide_isa() };
-        let rows = |pixels: &mut [PixelSums]| -> Option<u64> {
-            pixels[y0 * width..y1 * width]
-                .par_chunks_mut(width)
+        let rows = |film: &mut Film| -> Option<u64> {
+            let (pixels, feats) = film.parts_mut(job.settings.features);
+            let (from, to) = (y0 * width, y1 * width);
+            let feats = if feats.is_empty() { feats } else { &mut feats[from..to] };
+            (pixels[from..to].par_chunks_mut(width))
+                .zip(features::chunks(feats, width, to - from))
                 .enumerate()
-                .map(|(k, row)| {
+                .map(|(k, (row, mut f))| {
                     if cancelled() {
                         return None;
                     }
@@ -193,14 +203,40 @@ impl CpuBackend {
                         let (xs, _) = tiles.rect(w.tile as usize);
                         let (a, b) = (xs.start as usize, xs.end as usize);
                         let samples = *at..at + u64::from(w.count);
-                        rejected += render_span(wide, job, y * width + a, &mut row[a..b], samples);
+                        let f = f.as_deref_mut().map(|f| &mut f[a..b]);
+                        let span = Span::new(&mut row[a..b], f);
+                        rejected += render_span(wide, job, y * width + a, span, samples);
                     }
                     Some(rejected)
                 })
                 .sum()
         };
-        let rejected = self.in_pool(|| rows(film.pixels_mut()));
+        let rejected = self.in_pool(|| rows(film));
         rejected.map(|r| film.commit_tiles(work, r)).is_some()
+    }
+}
+
+/// A run of pixels' radiance sums, and their feature sums where the film
+/// keeps them (as long).
+struct Span<'a> {
+    sums: &'a mut [PixelSums],
+    features: Option<&'a mut [FeatureSums]>,
+}
+
+impl<'a> Span<'a> {
+    fn new(sums: &'a mut [PixelSums], features: Option<&'a mut [FeatureSums]>) -> Self {
+        debug_assert!(features.as_ref().is_none_or(|f| f.len() == sums.len()));
+        Self { sums, features }
+    }
+
+    /// Adds sample `sample` of pixel `i` (the path `p` traced); false
+    /// where its radiance was rejected.
+    #[inline(always)]
+    fn add(&mut self, i: usize, sample: u64, p: &crate::render::integrator::Path, settings: &crate::render::integrator::PathSettings) -> bool {
+        if let Some(f) = &mut self.features {
+            f[i].add(p.guide());
+        }
+        self.sums[i].add(sample, p.radiance(settings))
     }
 }
 
@@ -266,7 +302,7 @@ fn render_span(
     wide: Option<Avx2>,
     job: &RenderJob,
     first: usize,
-    span: &mut [PixelSums],
+    span: Span<'_>,
     samples: Range<u64>,
 ) -> u64 {
     let one = samples.end - samples.start == 1;
@@ -287,7 +323,7 @@ fn render_span(
     _: Option<Portable>,
     job: &RenderJob,
     first: usize,
-    span: &mut [PixelSums],
+    mut span: Span<'_>,
     samples: Range<u64>,
 ) -> u64 {
     match samples.end - samples.start == 1 {
@@ -303,7 +339,7 @@ fn span_avx2(
     isa: Avx2,
     job: &RenderJob,
     first: usize,
-    span: &mut [PixelSums],
+    span: Span<'_>,
     samples: Range<u64>,
 ) -> u64 {
     span_with(isa, job, first, span, samples)
@@ -316,7 +352,7 @@ fn pairs_avx2(
     isa: Avx2,
     job: &RenderJob,
     first: usize,
-    span: &mut [PixelSums],
+    span: Span<'_>,
     sample: u64,
 ) -> u64 {
     pairs_with(isa, job, first, span, sample)
@@ -357,13 +393,13 @@ fn span_with<I: Isa>(
     isa: I,
     job: &RenderJob,
     first: usize,
-    span: &mut [PixelSums],
+    mut span: Span<'_>,
     samples: Range<u64>,
 ) -> u64 {
     let settings = &job.settings;
     let width = job.width() as usize;
     let mut rejected = 0u64;
-    for (i, px) in span.iter_mut().enumerate() {
+    for i in 0..span.sums.len() {
         let (x, y) = ((first + i) % width, (first + i) / width);
         let (x, y) = (x as u32, y as u32);
         let mut s = samples.start;
@@ -376,9 +412,9 @@ fn span_with<I: Isa>(
                 a
             };
             trace_two!(isa, job, a, b, pair);
-            rejected += u64::from(!px.add(s, a.radiance(settings)));
+            rejected += u64::from(!span.add(i, s, &a, settings));
             if pair {
-                rejected += u64::from(!px.add(s + 1, b.radiance(settings)));
+                rejected += u64::from(!span.add(i, s + 1, &b, settings));
             }
             s += 2;
         }
@@ -394,23 +430,24 @@ fn pairs_with<I: Isa>(
     isa: I,
     job: &RenderJob,
     first: usize,
-    span: &mut [PixelSums],
+    mut span: Span<'_>,
     sample: u64,
 ) -> u64 {
     let settings = &job.settings;
     let width = job.width() as usize;
     let at = |i: usize| (((first + i) % width) as u32, ((first + i) / width) as u32);
     let mut rejected = 0u64;
-    for (k, two) in span.chunks_mut(2).enumerate() {
-        let pair = two.len() == 2;
+    let n = span.sums.len();
+    for k in 0..n.div_ceil(2) {
+        let pair = 2 * k + 1 < n;
         let (xa, ya) = at(2 * k);
         let (xb, yb) = at(2 * k + usize::from(pair));
         let mut a = job.camera_path(xa, ya, sample);
         let mut b = job.camera_path(xb, yb, sample);
         trace_two!(isa, job, a, b, pair);
-        rejected += u64::from(!two[0].add(sample, a.radiance(settings)));
+        rejected += u64::from(!span.add(2 * k, sample, &a, settings));
         if pair {
-            rejected += u64::from(!two[1].add(sample, b.radiance(settings)));
+            rejected += u64::from(!span.add(2 * k + 1, sample, &b, settings));
         }
     }
     rejected

@@ -18,10 +18,11 @@ pub use mis::Combine;
 pub use nee::LightSampling;
 
 use crate::render::camera::CameraRays;
+use crate::render::features::{self, Guide};
 use crate::render::filter::Filter;
 use crate::render::ggx;
 use crate::render::isa::Isa;
-use crate::render::material::{scatter, Bsdf};
+use crate::render::material::{scatter, Bsdf, SurfaceMaterial};
 use crate::render::math::{basis, max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
@@ -49,6 +50,8 @@ pub struct PathSettings {
     /// How a `pbr` vertex weighs its light and BSDF samples (`Mis` always,
     /// except where tests compare the strategies).
     pub combine: Combine,
+    /// Find each path's guide for a denoiser (`render::features`).
+    pub features: bool,
 }
 
 /// A path between bounces: everything the path loop carries, so that the
@@ -68,6 +71,11 @@ pub struct Path {
     /// density, for the emission's MIS weight.
     last: BsdfVertex,
     bounces: u32,
+    /// The denoiser's guide, once found (`guided`), and the tint of the
+    /// mirrors and glass met before it.
+    guide: Guide,
+    tint: Vec3A,
+    guided: bool,
 }
 
 impl Path {
@@ -84,7 +92,38 @@ impl Path {
             emit: Vec3A::ONE,
             last: BsdfVertex::NONE,
             bounces: 0,
+            guide: Guide::default(),
+            tint: Vec3A::ONE,
+            guided: false,
         }
+    }
+
+    /// The denoiser's guide this path found (zero where it ended before a
+    /// surface that is not specular, or when its settings ask for none).
+    #[inline(always)]
+    pub fn guide(&self) -> &Guide {
+        &self.guide
+    }
+
+    /// Records the guide at a hit with material `m`, normal `ns` on the
+    /// ray's side, unless `m` is a perfect mirror or smooth glass (then the
+    /// guide is further on, tinted by it).
+    #[inline(always)]
+    fn find_guide(&mut self, m: &SurfaceMaterial, ns: Vec3A) {
+        if matches!(m.bsdf, Bsdf::Mirror | Bsdf::Glass { .. }) {
+            self.tint *= m.albedo;
+            return;
+        }
+        let albedo = if m.emissive {
+            features::light_albedo(m.emission)
+        } else {
+            m.albedo
+        };
+        self.guide = Guide {
+            albedo: self.tint * albedo,
+            normal: ns,
+        };
+        self.guided = true;
     }
 
     /// What emission `le` found by the last sample along `self.ray` at `q`
@@ -123,6 +162,14 @@ impl Path {
         let Some(hit) = hit else {
             // Left the scene: the environment, counted as an emitter's hit
             // (what a camera ray sees of a map it may not see is no light).
+            if settings.features && !self.guided {
+                let seen = match &world.env_map {
+                    Some(m) if self.bounces == 0 && !m.visible => m.background,
+                    _ => world.sky(self.ray.dir),
+                };
+                self.guide.albedo = self.tint * features::light_albedo(seen);
+                self.guided = true;
+            }
             match &world.env_map {
                 Some(m) if self.bounces == 0 && !m.visible => self.l += m.background,
                 _ => {
@@ -145,9 +192,6 @@ impl Path {
             let emitter = || world.lights.index_of(s.object, s.prim);
             self.l += self.emission(world, settings, m.emission, emitter, s.p);
         }
-        if settings.max_depth != 0 && self.bounces >= settings.max_depth {
-            return false;
-        }
         // Geometric and shading normals on the side the ray came from.
         let entering = ray.dir.dot(s.ng) < 0.0;
         let nl = if entering { s.ng } else { -s.ng };
@@ -158,6 +202,13 @@ impl Path {
         } else {
             s.ns
         };
+        if settings.features && !self.guided {
+            self.find_guide(m, ns);
+        }
+        if settings.max_depth != 0 && self.bounces >= settings.max_depth {
+            return false;
+        }
+        let ray = &self.ray;
         let gathered = settings.nee && m.bsdf.gathers_light();
         if gathered {
             let sampling = settings.light_sampling;

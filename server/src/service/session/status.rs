@@ -118,6 +118,7 @@ fn quality(q: &Quality) -> wire::Quality {
         spp: q.spp,
         time_ms: q.time_ms,
         target_error: q.target_error,
+        denoise: q.denoise,
     }
 }
 

@@ -96,8 +96,9 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 15] = [
 
 /// The `render` kernel's parameters after the scene's arrays, in order:
 /// (C type, name) as kernels/render.cl declares them.
-pub(super) const LAUNCH_PARAMS: [(&str, &str); 8] = [
+pub(super) const LAUNCH_PARAMS: [(&str, &str); 9] = [
     ("__global float *", "film"),
+    ("__global float *", "guides"),
     ("__global uint *", "rejected"),
     ("ulong", "first"),
     ("uint", "count"),
@@ -124,6 +125,8 @@ pub(super) struct MapBuffers {
 /// Where one launch adds its samples.
 pub(super) struct LaunchArgs<'a> {
     pub film: &'a Buffer<f32>,
+    /// Feature sums (unread unless the program is built with FEATURES).
+    pub guides: &'a Buffer<f32>,
     pub rejected: &'a Buffer<u32>,
     pub first: cl_ulong,
     pub count: cl_uint,
@@ -146,6 +149,7 @@ impl LaunchArgs<'_> {
     fn values(&self) -> [Arg; LAUNCH_PARAMS.len()] {
         [
             Arg::Mem(self.film.get()),
+            Arg::Mem(self.guides.get()),
             Arg::Mem(self.rejected.get()),
             Arg::U64(self.first),
             Arg::U32(self.count),

@@ -146,6 +146,7 @@ impl OpenClBackend {
             .1;
         let args = buffers::LaunchArgs {
             film: &state.film,
+            guides: &state.guides,
             rejected: &state.rejected,
             first: state.first + state.spp,
             count: n as cl_uint,

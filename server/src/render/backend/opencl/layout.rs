@@ -52,7 +52,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 31] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 32] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -87,6 +87,7 @@ pub const SHARED_CONSTANTS: [(&str, u32); 31] = [
     // to the scene's trees, `program::bvh_stack`).
     ("MAX_BVH_STACK", crate::render::bvh::STACK as u32),
     ("FILM_FLOATS", super::FILM_FLOATS as u32),
+    ("GUIDE_FLOATS", super::guides::GUIDE_FLOATS as u32),
     (
         "ONE_BELOW_BITS",
         crate::render::envmap::distribution::ONE_BELOW.to_bits(),

@@ -20,6 +20,7 @@ mod check;
 #[cfg(test)]
 mod contract_tests;
 mod devices;
+mod guides;
 mod launch;
 mod layout;
 mod meshes;
@@ -147,6 +148,10 @@ struct JobState {
     key: ProgramKey,
     scene: buffers::SceneBuffers,
     film: Buffer<f32>,
+    /// The denoiser's feature sums, GUIDE_FLOATS per pixel (one float
+    /// where the job keeps none: see `guides.rs`).
+    guides: Buffer<f32>,
+    guided: bool,
     rejected: Buffer<u32>,
     pixels: usize,
     /// The index of the device film's first sample (see [`Film::block`]).
@@ -310,6 +315,7 @@ impl OpenClBackend {
         if self.generic {
             ProgramKey::Generic {
                 inject_nan_every: self.inject_nan_every,
+                features: job.settings.features,
             }
         } else {
             let mut f = Features::of(job);
@@ -466,6 +472,7 @@ impl OpenClBackend {
                 )
             }
             .map_err(call("film clear"))?;
+            self.clear_guides(&mut s)?;
             (s.first, s.spp, s.next, s.samples) = (film.first_sample(), 0, 0, 0);
             self.states.push(s);
             return Ok(());
@@ -480,7 +487,9 @@ impl OpenClBackend {
         let upload_start = Instant::now();
         let packed = layout::pack(job);
         // Fits the device? (Other jobs' states make room if they must.)
-        let needed = buffers::job_bytes(&packed, film.pixels().len() * FILM_FLOATS * 4);
+        let guided = job.settings.features;
+        let per_pixel = FILM_FLOATS + if guided { guides::GUIDE_FLOATS } else { 0 };
+        let needed = buffers::job_bytes(&packed, film.pixels().len() * per_pixel * 4);
         buffers::check_fits(&needed, self.memory_limits).map_err(OpenClError::Unsupported)?;
         let bytes: usize = needed.iter().map(|(_, b)| b).sum();
         while !self.states.is_empty()
@@ -515,6 +524,8 @@ impl OpenClBackend {
             key: key.clone(),
             scene,
             film: device_film,
+            guides: self.guide_buffer(film, guided)?,
+            guided,
             rejected: self.upload(Access::ReadWrite, &[0u32])?,
             pixels: film.pixels().len(),
             first: film.first_sample(),

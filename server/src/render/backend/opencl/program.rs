@@ -75,6 +75,8 @@ pub struct Features {
     pub lens: bool,
     /// The camera's projection (`PROJ_*`).
     pub projection: u32,
+    /// The denoiser's feature sums beside the film (`render::features`).
+    pub features: bool,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
     pub inject_nan_every: Option<u64>,
 }
@@ -168,6 +170,7 @@ impl Features {
             sun: w.sun.is_some(),
             lens: job.camera.has_lens(),
             projection: job.camera.projection as u32,
+            features: job.settings.features,
             inject_nan_every: None,
         }
     }
@@ -180,7 +183,7 @@ impl Features {
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
-             -D PROJECTION={}u",
+             -D PROJECTION={}u -D FEATURES={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -207,6 +210,7 @@ impl Features {
             b(self.sun),
             b(self.lens),
             self.projection,
+            b(self.features),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));
@@ -220,7 +224,10 @@ impl Features {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum ProgramKey {
     Specialised(Features),
-    Generic { inject_nan_every: Option<u64> },
+    Generic {
+        inject_nan_every: Option<u64>,
+        features: bool,
+    },
 }
 
 /// Stack entries a traversal of a BVH `depth` levels deep needs: a node
@@ -250,11 +257,15 @@ impl ProgramKey {
         match self {
             ProgramKey::Specialised(f) => format!("{common} {}", f.build_options()),
             ProgramKey::Generic {
-                inject_nan_every: Some(n),
-            } => format!("{common} -D INJECT_NAN_EVERY={n}UL"),
-            ProgramKey::Generic {
-                inject_nan_every: None,
-            } => common.to_owned(),
+                inject_nan_every,
+                features,
+            } => {
+                let mut o = format!("{common} -D FEATURES={}", u8::from(*features));
+                if let Some(n) = inject_nan_every {
+                    o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));
+                }
+                o
+            }
         }
     }
 }

@@ -82,7 +82,7 @@ impl OpenClBackend {
                 .map_err(call("film read"))?;
         }
         let odd = FILM_FLOATS / 2;
-        film.pixels_mut()[range]
+        film.pixels_mut()[range.clone()]
             .par_iter_mut()
             .zip(sums.par_chunks_exact(FILM_FLOATS))
             .with_min_len(4096)
@@ -96,6 +96,7 @@ impl OpenClBackend {
         let total = u64::from(rejected[0]);
         let new = total - state.rejected_reported.min(total);
         state.rejected_reported = total;
+        self.read_guides(film, range)?;
         Ok(new)
     }
 }
