@@ -17,6 +17,11 @@ export PATHSTREAM_BIN="${PATHSTREAM_BIN:-$PWD/target/release/pathstream}"
 . scripts/node-env.sh
 ensure_node
 
+# Open Image Denoise for the servers the denoising test starts (see
+# oidn-env.sh; test.sh has already exported it).
+. scripts/oidn-env.sh
+ensure_oidn
+
 if [ ! -x "$CHROMIUM" ]; then
     echo "browser-tests.sh: installing chromium (apt-get)" >&2
     sudo=""

@@ -31,9 +31,9 @@ pub use pathstream_wire as wire;
 pub use pathstream_wire::tonemap::srgb8;
 /// What the server answers: the contract's types, shared with the server.
 pub use pathstream_wire::{
-    Asset, AssetList, BackendInfo, Camera, DeviceShare, Devices, Environment, EnvironmentMap,
-    Health, Light, OpenClDevice, Pick, Projection, Quality, Scenes, SessionList, SessionStatus,
-    SppSpread, Uploaded, WorkerLoad,
+    Asset, AssetList, BackendInfo, Camera, Denoise, Denoiser, DenoiserDevice, DeviceShare, Devices,
+    Environment, EnvironmentMap, Health, Light, OpenClDevice, Pick, Projection, Quality, Scenes,
+    SessionList, SessionStatus, SppSpread, Uploaded, WorkerLoad,
 };
 pub use stream::FrameStream;
 pub use types::*;
@@ -204,6 +204,19 @@ impl Client {
         min_spp: Option<u64>,
         timeout: Option<Duration>,
     ) -> Result<Response> {
+        self.frame_response_as(id, kind, (min_spp, timeout), None)
+            .await
+    }
+
+    /// The frame route's response; `denoise` asks for the denoised (true)
+    /// or the raw (false) image, None for what the session shows.
+    async fn frame_response_as(
+        &self,
+        id: &str,
+        kind: &str,
+        (min_spp, timeout): (Option<u64>, Option<Duration>),
+        denoise: Option<bool>,
+    ) -> Result<Response> {
         let wait = timeout.unwrap_or(Duration::from_secs(30));
         let mut path = format!(
             "/api/sessions/{id}/frame.{kind}?timeout_ms={}",
@@ -211,6 +224,9 @@ impl Client {
         );
         if let Some(n) = min_spp {
             path.push_str(&format!("&min_spp={n}"));
+        }
+        if let Some(d) = denoise {
+            path.push_str(if d { "&denoise=1" } else { "&denoise=0" });
         }
         let r = self
             .request(Method::GET, &path)
@@ -242,6 +258,21 @@ impl Client {
         timeout: Option<Duration>,
     ) -> Result<Vec<u8>> {
         self.frame(id, "png", min_spp, timeout).await
+    }
+
+    /// A frame as `kind` (`png` or `pfm`), denoised (`Some(true)`; a 400
+    /// where the server has no denoiser), raw (`Some(false)`) or as the
+    /// session's `quality.denoise` says (None).
+    pub async fn frame_as(
+        &self,
+        id: &str,
+        kind: &str,
+        min_spp: Option<u64>,
+        denoise: Option<bool>,
+    ) -> Result<Vec<u8>> {
+        let response = (self.frame_response_as(id, kind, (min_spp, None), denoise)).await?;
+        let bytes = response.bytes().await.map_err(ClientError::from_reqwest)?;
+        Ok(bytes.to_vec())
     }
 
     /// The same as linear PFM.

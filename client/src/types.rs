@@ -36,6 +36,9 @@ pub struct QualityPatch {
     pub time_ms: Option<Option<u64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_error: Option<Option<f64>>,
+    /// Which frames the server denoises.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub denoise: Option<pathstream_wire::Denoise>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

@@ -46,7 +46,14 @@ fn view(objects: serde_json::Value, materials: serde_json::Value) -> Scene {
 #[test]
 fn a_render_that_is_not_denoised_keeps_no_features() {
     for (name, mut backend) in backends() {
-        let film = render_on(&mut backend, &scene("cornell"), 16, 12, &Quality::default(), 2);
+        let film = render_on(
+            &mut backend,
+            &scene("cornell"),
+            16,
+            12,
+            &Quality::default(),
+            2,
+        );
         assert!(film.feature_sums().is_empty(), "{name}");
         assert!(film.feature_means().is_none(), "{name}");
     }
@@ -62,9 +69,15 @@ fn a_walls_albedo_is_its_albedo_and_its_normal_faces_the_camera() {
         let film = render_on(&mut backend, &wall, 24, 16, &guided(), 5);
         let f = features(&film, name);
         for (i, (a, n)) in f.albedo.iter().zip(&f.normal).enumerate() {
-            assert!(near(*a, [0.3, 0.5, 0.7], 1e-5), "{name}: pixel {i}'s albedo {a:?}");
+            assert!(
+                near(*a, [0.3, 0.5, 0.7], 1e-5),
+                "{name}: pixel {i}'s albedo {a:?}"
+            );
             // The quad's normal on the camera's side is +z.
-            assert!(near(*n, [0.0, 0.0, 1.0], 1e-5), "{name}: pixel {i}'s normal {n:?}");
+            assert!(
+                near(*n, [0.0, 0.0, 1.0], 1e-5),
+                "{name}: pixel {i}'s normal {n:?}"
+            );
         }
     }
 }
@@ -83,15 +96,24 @@ fn normals_are_unit_and_face_the_camera_in_the_cornell_box() {
             let len = n.iter().map(|v| v * v).sum::<f32>().sqrt();
             // A mean of unit vectors: at most 1, exactly 1 where every
             // sample met the same flat wall.
-            assert!(len <= 1.0 + 1e-5, "{name}: pixel {i}'s normal {n:?} is longer than 1");
+            assert!(
+                len <= 1.0 + 1e-5,
+                "{name}: pixel {i}'s normal {n:?} is longer than 1"
+            );
             unit += usize::from(len > 0.999);
             // Facing the camera: towards the eye from what the pixel shows.
             let (x, y) = ((i % w as usize) as f32 + 0.5, (i / w as usize) as f32 + 0.5);
             let d = job.camera.ray(x, y).dir;
             let facing = -(n[0] * d.x + n[1] * d.y + n[2] * d.z);
-            assert!(facing >= -1e-4, "{name}: pixel {i}'s normal {n:?} faces away ({eye:?})");
+            assert!(
+                facing >= -1e-4,
+                "{name}: pixel {i}'s normal {n:?} faces away ({eye:?})"
+            );
         }
-        assert!(unit > f.normal.len() / 2, "{name}: only {unit} unit normals");
+        assert!(
+            unit > f.normal.len() / 2,
+            "{name}: only {unit} unit normals"
+        );
     }
 }
 
@@ -113,9 +135,15 @@ fn through_a_mirror_the_albedo_is_the_mirrored_surfaces() {
         let film = render_on(&mut backend, &mirrored, 16, 12, &guided(), 3);
         let f = features(&film, name);
         for (i, (a, n)) in f.albedo.iter().zip(&f.normal).enumerate() {
-            assert!(near(*a, expected, 1e-5), "{name}: pixel {i}'s albedo {a:?}, not {expected:?}");
+            assert!(
+                near(*a, expected, 1e-5),
+                "{name}: pixel {i}'s albedo {a:?}, not {expected:?}"
+            );
             // The wall seen from the mirror's side: its normal is -z.
-            assert!(near(*n, [0.0, 0.0, -1.0], 1e-5), "{name}: pixel {i}'s normal {n:?}");
+            assert!(
+                near(*n, [0.0, 0.0, -1.0], 1e-5),
+                "{name}: pixel {i}'s normal {n:?}"
+            );
         }
     }
 }
@@ -139,7 +167,10 @@ fn both_backends_find_the_same_features() {
         .filter(|(a, b)| !near(**a, **b, 1e-3))
         .count();
     let all = cpu.albedo.len() * 2;
-    assert!(differ * 100 <= all, "{differ} of {all} feature pixels differ by more than 1e-3");
+    assert!(
+        differ * 100 <= all,
+        "{differ} of {all} feature pixels differ by more than 1e-3"
+    );
 }
 
 /// OIDN where it is installed (under CI, its absence fails the test).
@@ -187,11 +218,14 @@ fn errors(scene: &Scene, (w, h): (u32, u32), spps: &[u64], ref_spp: u64) -> Vec<
             let film = render(scene, w, h, &q, spp);
             let raw = film.mean();
             let f = film.feature_means();
-            let clean = denoise::denoise(w, h, &raw, f.as_ref(), FilterQuality::High)
-                .expect("denoised");
+            let clean =
+                denoise::denoise(w, h, &raw, f.as_ref(), FilterQuality::High).expect("denoised");
             let e_raw = relative_rms_error(&displayed(&raw), &truth);
             let e_clean = relative_rms_error(&displayed(&clean), &truth);
-            eprintln!("{spp} spp: raw {e_raw:.4}, denoised {e_clean:.4}, ratio {:.2}", e_raw / e_clean);
+            eprintln!(
+                "{spp} spp: raw {e_raw:.4}, denoised {e_clean:.4}, ratio {:.2}",
+                e_raw / e_clean
+            );
             (spp, e_raw, e_clean)
         })
         .collect()

@@ -377,6 +377,8 @@ fn every_feature_combination_builds() {
                         lens: materials % 2 == 0,
                         // Each projection (perspective most often).
                         projection: u32::from(materials % 3 == 1) * (1 + u32::from(lights) % 2),
+                        // The denoiser's features with a third.
+                        features: materials % 3 == 2,
                         inject_nan_every: None,
                     }));
                 }
@@ -385,6 +387,7 @@ fn every_feature_combination_builds() {
     }
     keys.push(ProgramKey::Generic {
         inject_nan_every: None,
+        features: true,
     });
     assert_eq!(keys.len(), 3 * 15 * 4 + 2 * 4 * 4 + 1);
     // Two threads, each with its own context: the compiler is the slow part.

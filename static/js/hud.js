@@ -4,7 +4,9 @@
 // a pixel) and, with an error target, the tiles that reached it. The stream
 // row (from the socket's stats): format and size of the last frame, frames
 // delivered per second, the link's rate and the last frame's delivery time
-// (the last two once the page's acknowledgements reach the server).
+// (the last two once the page's acknowledgements reach the server). Where
+// the session denoises, the image row says whether the frame shown is
+// denoised or raw (V switches).
 
 import { $ } from "./dom.js";
 import { fmtRate, fmtTime } from "./format.js";
@@ -29,7 +31,19 @@ function showStatus(s) {
   setHud("hud-elapsed", fmtTime(s.elapsed_ms), s.elapsed_ms);
   setHud("hud-res", `${s.width} × ${s.height}`);
   showDevice(s);
-  if (s.type === "stats") showStream(s);
+  if (s.type === "stats") {
+    showStream(s);
+    showDenoised(s);
+  }
+}
+
+/** Whether the frame shown is denoised, where the session denoises. */
+function showDenoised(s) {
+  const mode = s.quality && s.quality.denoise;
+  const row = $("hud-denoise-row");
+  row.hidden = !mode || mode === "off";
+  if (row.hidden) return;
+  setHud("hud-denoise", s.denoised ? "denoised (V: raw)" : "raw (V: denoised)", s.denoised ? "denoised" : "raw");
 }
 
 /** Where the session renders; a session on every device (`backend: all`)

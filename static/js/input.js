@@ -5,6 +5,7 @@ import {
   look, moveCamera, moveLight, randomLightColor, resetCamera, scaleLight,
 } from "./camera.js";
 import { showMessage } from "./messages.js";
+import { toggleRawView } from "./panels.js";
 import { edit, setScene } from "./session.js";
 import { THESIS_SCENES } from "./state.js";
 
@@ -32,6 +33,7 @@ function keyAction(code, shift = false) {
   switch (code) {
     case "KeyX": togglePointerLock(); break;
     case "KeyH": toggleHelp(); break;
+    case "KeyV": toggleRawView(); break;
     case "Digit1":
     case "Digit2":
       setScene(THESIS_SCENES[code]);

@@ -77,6 +77,8 @@ function fillQuality(q) {
   set("q-sampler", q.sampler || "random");
   $("q-sampler").disabled = !("sampler" in q); // a server before Sobol sampling
   set("q-clamp", q.clamp);
+  set("q-denoise", q.denoise || "off");
+  $("q-denoise").disabled = !("denoise" in q); // a server without a denoiser's setting
   set("q-spp", q.spp);
   set("q-time", q.time_ms == null ? null : +(q.time_ms / 1000).toPrecision(6));
   set("q-target", q.target_error == null ? null : +(q.target_error * 100).toPrecision(6));
@@ -132,7 +134,15 @@ function setStreamFormat(format) {
   st.lastSwitch = performance.now();
   el.body.dataset.streamFormat = format;
   // With the socket down, the next one opens with it (session.js).
-  send({ stream: streamSettings(format) });
+  send({ stream: streamSettings(format, st.raw) });
+}
+
+/** Switches the stream between the denoised and the raw image (V): only
+ *  how this page's frames are made, not the session. */
+export function toggleRawView() {
+  const st = state.stream;
+  st.raw = !st.raw;
+  send({ stream: streamSettings(st.format, st.raw) });
 }
 
 $("stream-format").addEventListener("change", () => {

@@ -115,7 +115,7 @@ export function openSocket() {
   const proto = location.protocol === "https:" ? "wss" : "ws";
   // Progressive: the first frames after a change come small (sooner), and
   // the format the page streams now (streamfmt.js) survives a reconnect.
-  let q = streamQuery(state.stream.format);
+  let q = streamQuery(state.stream.format, state.stream.raw);
   if (state.token) q += `&token=${encodeURIComponent(state.token)}`;
   const ws = new WebSocket(`${proto}://${location.host}/api/sessions/${state.sessionId}/ws?${q}`);
   ws.binaryType = "blob";

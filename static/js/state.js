@@ -61,7 +61,7 @@ export const state = {
   chart: [], // [{generation, points: [[ms, err]]}]
   /** The stream's format: chosen in the panel ("auto", "png", "jpeg"), the
    *  one streamed now, when it last switched, the last whole PNG's bytes. */
-  stream: { choice: "auto", format: "png", lastSwitch: 0, pngBytes: null },
+  stream: { choice: "auto", format: "png", lastSwitch: 0, pngBytes: null, raw: false },
   narrowFrames: 0, // frames narrower than the session (progressive)
 };
 

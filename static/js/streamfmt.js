@@ -40,13 +40,15 @@ export function chooseFormat({ current, linkMbps, frameBytes, pngBytes, sinceSwi
 
 /** The `stream` settings of a format, "png", "jpeg" or "webp" (pinned in
  * the panel only: smaller than JPEG, slower to encode); progressive always on. */
-export function streamSettings(format) {
-  return format === "jpeg" || format === "webp"
+export function streamSettings(format, raw = false) {
+  const settings = format === "jpeg" || format === "webp"
     ? { format, quality: JPEG_QUALITY, progressive: true }
     : { format: "png", progressive: true };
+  // The raw image where the session denoises (V); said only when asked.
+  return raw ? { ...settings, raw: true } : settings;
 }
 
 /** The same settings as stream URL parameters. */
-export function streamQuery(format) {
-  return new URLSearchParams(Object.entries(streamSettings(format)).map(([k, v]) => [k, String(v)])).toString();
+export function streamQuery(format, raw = false) {
+  return new URLSearchParams(Object.entries(streamSettings(format, raw)).map(([k, v]) => [k, String(v)])).toString();
 }

@@ -4,10 +4,11 @@
 //! A stream asks for a format (PNG, exact and the default; JPEG at a
 //! quality, several times smaller on a noisy image and the cheapest to
 //! encode; or lossy WebP, smaller again) and a width to scale frames down
-//! to (the client's canvas), without changing the session's film; on the
+//! to (the client's canvas), without changing the session's film, and
+//! whether to show the raw image where the session denoises; on the
 //! stream's URL (`?format=jpeg&quality=85&width=640&progressive=true`) or
 //! by message (`{"stream": {"format": "jpeg", "quality": 85, "width": 640,
-//! "progressive": true}}`).
+//! "progressive": true, "raw": false}}`).
 //!
 //! Each binary frame is followed by its stats, the session's status with
 //! the frame's own figures and how it went out:
@@ -66,6 +67,8 @@ pub struct StreamSettings {
     /// After a change, send the first frame at a quarter of the width and
     /// the second at half (smaller, so sooner over a slow link).
     pub progressive: bool,
+    /// The raw image even where the session denoises its frames.
+    pub raw: bool,
 }
 
 /// A stream request as the URL's query or a `stream` message gives it;
@@ -85,6 +88,9 @@ pub struct StreamRequest {
     /// Narrower first frames after a change.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub progressive: Option<bool>,
+    /// The raw image even where the session denoises (default false).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raw: Option<bool>,
     /// The bearer token, on the URL (browsers cannot set headers on a
     /// WebSocket); the server's auth layer reads it, the settings do not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -133,6 +139,7 @@ impl StreamRequest {
             format,
             width: self.width,
             progressive: self.progressive.unwrap_or(false),
+            raw: self.raw.unwrap_or(false),
         })
     }
 }
@@ -180,6 +187,11 @@ pub struct Stats {
     /// k when the image shows the 1/k-resolution preview (spp 0).
     #[serde(default)]
     pub preview: Option<u32>,
+    /// Whether the frame shows the denoised image (the session denoises,
+    /// the stream did not ask for the raw one, and the denoiser did not
+    /// fail). The status's error estimate is the raw image's either way.
+    #[serde(default)]
+    pub denoised: bool,
     /// Frames that arrived in the second before this one was sent.
     #[serde(default)]
     pub delivered_fps: u64,

@@ -8,6 +8,7 @@ fn requests_are_checked_by_field() {
         quality: q,
         width: w,
         progressive: None,
+        raw: None,
         token: None,
     };
     assert_eq!(
@@ -27,6 +28,7 @@ fn requests_are_checked_by_field() {
             format: StreamFormat::Jpeg { quality: 85 },
             width: Some(64),
             progressive: false,
+            raw: false,
         }
     );
     for (req, needle) in [
@@ -95,6 +97,7 @@ fn stats_carry_the_status_at_the_top_level_and_round_trip() {
         frame_height: 1,
         progressive: true,
         preview: Some(4),
+        denoised: true,
         delivered_fps: 3,
         link_mbps: None,
         delivery_ms: Some(1.5),

@@ -55,6 +55,9 @@ impl Running {
 /// Binds `config.addr` (port 0 picks one) and serves in the background.
 pub async fn start(config: ServeConfig) -> Result<Running, String> {
     let listener = bind(&config).await?;
+    // Loads the denoiser now, so the log says at start whether there is
+    // one (and why not); the server runs either way.
+    let _ = tokio::task::spawn_blocking(crate::render::denoise::status).await;
     serve(listener, AppState::new(config)?)
 }
 

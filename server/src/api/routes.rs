@@ -340,6 +340,9 @@ struct FrameQuery {
     min_spp: Option<u64>,
     /// ... but no longer than this (default 30 s, at most 10 min).
     timeout_ms: Option<u64>,
+    /// `1`: the denoised image, `0`: the raw one (default: as the
+    /// session's `quality.denoise` says for this frame).
+    denoise: Option<String>,
     /// Accepted here so that `?token=` works on every route.
     #[allow(dead_code)]
     token: Option<String>,
@@ -368,14 +371,34 @@ async fn wait_frame(
     state: &AppState,
     id: &str,
     query: Result<Query<FrameQuery>, QueryRejection>,
-) -> AppResult<Arc<Frame>> {
-    let (min_spp, timeout) = FrameQuery::parse(query)?.wait();
+) -> AppResult<(Arc<Frame>, bool)> {
+    let query = FrameQuery::parse(query)?;
+    let asked = match query.denoise.as_deref() {
+        None => None,
+        Some("1" | "true") => Some(true),
+        Some("0" | "false") => Some(false),
+        Some(other) => {
+            return Err(ApiError::BadRequest(format!(
+                "denoise: must be 1 or 0 (got '{other}')"
+            )))
+        }
+    };
+    if asked == Some(true) {
+        tokio::task::spawn_blocking(crate::render::denoise::available)
+            .await
+            .map_err(|e| ApiError::Internal(e.to_string()))?
+            .map_err(|e| ApiError::BadRequest(format!("denoise: {e}")))?;
+    }
+    let (min_spp, timeout) = query.wait();
     let session = state.session(id)?;
-    session.frame_with(min_spp, timeout).await
+    let frame = session.frame_with(min_spp, timeout).await?;
+    let denoised = asked.unwrap_or_else(|| frame.shows_denoised());
+    Ok((frame, denoised))
 }
 
-fn frame_headers(f: &Frame) -> [(&'static str, String); 3] {
+fn frame_headers(f: &Frame, denoised: bool) -> [(&'static str, String); 4] {
     [
+        ("x-pathstream-denoised", denoised.to_string()),
         ("x-pathstream-spp", f.spp.to_string()),
         (
             "x-pathstream-error-estimate",
@@ -390,15 +413,15 @@ async fn frame_png(
     Path(id): Path<String>,
     query: Result<Query<FrameQuery>, QueryRejection>,
 ) -> AppResult<Response> {
-    let frame = wait_frame(&state, &id, query).await?;
+    let (frame, denoised) = wait_frame(&state, &id, query).await?;
     let f = frame.clone();
-    let png = tokio::task::spawn_blocking(move || f.png().map(|png| png.to_vec()))
+    let png = tokio::task::spawn_blocking(move || f.png(denoised))
         .await
         .map_err(|e| ApiError::Internal(e.to_string()))??;
     Ok((
         [(header::CONTENT_TYPE.as_str(), "image/png".to_owned())],
-        frame_headers(&frame),
-        png,
+        frame_headers(&frame, png.denoised),
+        png.bytes.to_vec(),
     )
         .into_response())
 }
@@ -408,17 +431,19 @@ async fn frame_pfm(
     Path(id): Path<String>,
     query: Result<Query<FrameQuery>, QueryRejection>,
 ) -> AppResult<Response> {
-    let frame = wait_frame(&state, &id, query).await?;
+    let (frame, denoised) = wait_frame(&state, &id, query).await?;
+    let denoised = denoised && frame.can_denoise();
     let f = frame.clone();
-    let pfm = tokio::task::spawn_blocking(move || f.pfm())
+    let pfm = tokio::task::spawn_blocking(move || f.pfm(denoised))
         .await
+        .map_err(|e| ApiError::Internal(e.to_string()))?
         .map_err(|e| ApiError::Internal(e.to_string()))?;
     Ok((
         [(
             header::CONTENT_TYPE.as_str(),
             "image/x-portable-floatmap".to_owned(),
         )],
-        frame_headers(&frame),
+        frame_headers(&frame, denoised),
         pfm,
     )
         .into_response())
@@ -433,7 +458,7 @@ async fn samples_png(
     Path(id): Path<String>,
     query: Result<Query<FrameQuery>, QueryRejection>,
 ) -> AppResult<Response> {
-    let frame = wait_frame(&state, &id, query).await?;
+    let (frame, _) = wait_frame(&state, &id, query).await?;
     // Before the first pass: every tile at 0 samples.
     let density = frame.density.clone().unwrap_or_else(|| {
         Arc::new(crate::service::density::Density::empty(
@@ -447,7 +472,7 @@ async fn samples_png(
         .map_err(|e| ApiError::Internal(e.to_string()))?;
     Ok((
         [(header::CONTENT_TYPE.as_str(), "image/png".to_owned())],
-        frame_headers(&frame),
+        frame_headers(&frame, false),
         png,
     )
         .into_response())

@@ -7,10 +7,10 @@ use pathstream::render::denoise::{self, FilterQuality};
 use pathstream::render::job::check_size;
 use pathstream::render::output::{write_image, ImageFormat};
 use pathstream::render::progressive::{self, DEFAULT_SPP};
+use pathstream::render::quality::Denoise;
 use pathstream::render::sampler::SamplerKind;
 use pathstream::render::split::{render_split, DeviceShare};
 use pathstream::render::tonemap::Tonemap;
-use pathstream::render::quality::Denoise;
 use pathstream::render::{Backend, BackendChoice, Film, Filter, Preset, Quality, RenderJob};
 use std::path::PathBuf;
 

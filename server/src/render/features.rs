@@ -73,7 +73,11 @@ pub struct Features {
 /// `sums` split into chunks of `chunk` pixels, one entry per chunk of a
 /// film of `pixels` pixels: `None` for each where the film keeps no
 /// features (so that the backends zip them with the radiance's chunks).
-pub fn chunks(sums: &mut [FeatureSums], chunk: usize, pixels: usize) -> Vec<Option<&mut [FeatureSums]>> {
+pub fn chunks(
+    sums: &mut [FeatureSums],
+    chunk: usize,
+    pixels: usize,
+) -> Vec<Option<&mut [FeatureSums]>> {
     if sums.is_empty() {
         (0..pixels.div_ceil(chunk.max(1))).map(|_| None).collect()
     } else {

@@ -438,7 +438,11 @@ impl Film {
         if features && self.features.is_empty() {
             self.features = bytemuck::zeroed_vec(self.pixels.len());
         }
-        let kept = if features { &mut self.features[..] } else { &mut [] };
+        let kept = if features {
+            &mut self.features[..]
+        } else {
+            &mut []
+        };
         (&mut self.pixels, kept)
     }
 

@@ -18,6 +18,7 @@
 
 use super::error::{parse_field, parse_json, ApiError};
 use crate::render::envmap::EnvMap;
+use crate::render::quality::Denoise;
 use crate::render::scene::{
     builtin, CameraEdit, EnvironmentJson, LightEdit, LoadedModel, ModelSource, NoFiles, Resolver,
     SceneJson, BUILTIN_NAMES,
@@ -229,6 +230,10 @@ pub fn patch_quality(current: &Quality, patch: &Value) -> Result<Quality, ApiErr
     let q: Quality = parse_field("quality", merged)?;
     q.validate()
         .map_err(|e| ApiError::BadRequest(e.to_string()))?;
+    if q.denoise != Denoise::Off {
+        crate::render::denoise::available()
+            .map_err(|e| ApiError::BadRequest(format!("quality.denoise: {e}")))?;
+    }
     Ok(q)
 }
 

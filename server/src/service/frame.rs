@@ -6,19 +6,23 @@
 use super::density::Density;
 use super::error::ApiError;
 use super::scaled::{downscale, Preview};
+use crate::render::denoise::{self, DenoiseError, FilterQuality};
+use crate::render::features::Features;
 use crate::render::film::SppSpread;
 use crate::render::output::{encode_jpeg, encode_pfm, encode_png, encode_webp, WEBP_MAX_SIDE};
+use crate::render::quality::Denoise;
 use crate::render::tonemap::Tonemap;
 pub use pathstream_wire::stream::StreamFormat;
 use std::borrow::Cow;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// How to encode a frame: the format, and a width to scale it down to
-/// (None: the film's).
+/// How to encode a frame: the format, a width to scale it down to (None:
+/// the film's), and whether to denoise it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Encoding {
     pub format: StreamFormat,
     pub width: Option<u32>,
+    pub denoised: bool,
 }
 
 /// An encoded frame and its size.
@@ -27,6 +31,9 @@ pub struct Encoded {
     pub bytes: Arc<[u8]>,
     pub width: u32,
     pub height: u32,
+    /// Whether it shows the denoised image (asked for, and the denoiser
+    /// did not fail).
+    pub denoised: bool,
 }
 
 /// One encoding of a frame, made once.
@@ -61,6 +68,10 @@ pub struct Frame {
     pub preview_image: Option<Arc<Preview>>,
     /// Mean radiance, row-major, top row first (empty before the first pass).
     pub pixels: Vec<[f32; 3]>,
+    /// The session's `quality.denoise` when the frame was made.
+    pub denoise: Denoise,
+    /// The denoiser's guides (where the session denoises).
+    pub features: Option<Arc<Features>>,
     /// Encodings, by what was asked: each made once however many sockets
     /// want it (a second asker waits for the first's).
     encodings: Mutex<Vec<(Encoding, Arc<EncodedOnce>)>>,
@@ -93,8 +104,22 @@ impl Frame {
             preview: None,
             preview_image: None,
             pixels: Vec::new(),
+            denoise: Denoise::Off,
+            features: None,
             encodings: Mutex::new(Vec::new()),
         }
+    }
+
+    /// Whether the frame shows a denoised image unless asked otherwise:
+    /// as the session's `quality.denoise` says for a frame that is (or is
+    /// not) its last, and never for a preview or an empty frame.
+    pub fn shows_denoised(&self) -> bool {
+        self.denoise.shows(self.halted) && self.can_denoise()
+    }
+
+    /// Whether the frame has an image a denoiser can take.
+    pub fn can_denoise(&self) -> bool {
+        !self.pixels.is_empty() && self.preview_image.is_none()
     }
 
     fn pixels_or_black(&self) -> Cow<'_, [[f32; 3]]> {
@@ -105,11 +130,14 @@ impl Frame {
         }
     }
 
-    /// The frame as PNG at its own size, encoded once however many clients
-    /// want it (the frame endpoints; a stream's default). Call off the
-    /// async runtime (it takes milliseconds).
-    pub fn png(&self) -> Result<Arc<[u8]>, ApiError> {
-        self.encoded(Encoding::default()).map(|e| e.bytes)
+    /// The frame as PNG at its own size, denoised or not, encoded once
+    /// however many clients want it (the frame endpoints). Call off the
+    /// async runtime (it takes milliseconds; denoised, up to seconds).
+    pub fn png(&self, denoised: bool) -> Result<Encoded, ApiError> {
+        self.encoded(Encoding {
+            denoised,
+            ..Encoding::default()
+        })
     }
 
     /// The frame encoded as `settings` say, each encoding made once. Call
@@ -119,6 +147,7 @@ impl Frame {
         // the frame's.
         let settings = Encoding {
             width: settings.width.filter(|&w| w < self.width),
+            denoised: settings.denoised && self.can_denoise(),
             ..settings
         };
         let cell = {
@@ -147,7 +176,7 @@ impl Frame {
                 (u64::from(WEBP_MAX_SIDE) * u64::from(self.width) / u64::from(self.height)) as u32;
             width = width.min(WEBP_MAX_SIDE).min(tall.max(1));
         }
-        let (w, h, pixels) = match (&self.preview_image, width < self.width) {
+        let (w, h, mut pixels) = match (&self.preview_image, width < self.width) {
             (Some(preview), _) => {
                 let (w, h, p) = preview.resized(width);
                 (w, h, Cow::Owned(p))
@@ -158,6 +187,13 @@ impl Frame {
             }
             (None, false) => (self.width, self.height, pixels),
         };
+        let mut denoised = false;
+        if settings.denoised {
+            match self.denoise(w, &pixels) {
+                Ok(clean) => (pixels, denoised) = (Cow::Owned(clean), true),
+                Err(e) => warn_once(&e),
+            }
+        }
         let t = Tonemap::default();
         let bytes = match settings.format {
             StreamFormat::Png => encode_png(w, h, &pixels, &t),
@@ -169,10 +205,60 @@ impl Frame {
             bytes: bytes.into(),
             width: w,
             height: h,
+            denoised,
         })
     }
 
-    pub fn pfm(&self) -> Vec<u8> {
-        encode_pfm(self.width, self.height, &self.pixels_or_black())
+    /// `pixels` (the frame's image at `width`) denoised, guided by the
+    /// frame's features scaled the same way: a stream sized to a small
+    /// canvas denoises that many pixels, not the film's. A frame that a
+    /// newer one will replace is denoised by the faster filter.
+    fn denoise(&self, width: u32, pixels: &[[f32; 3]]) -> Result<Vec<[f32; 3]>, DenoiseError> {
+        let scaled = |image: &[[f32; 3]]| downscale(image, self.width, self.height, width);
+        let features = self.features.as_deref().map(|f| match width < self.width {
+            true => {
+                let (w, h, albedo) = scaled(&f.albedo);
+                let (_, _, normal) = scaled(&f.normal);
+                Cow::Owned(Features {
+                    width: w,
+                    height: h,
+                    albedo,
+                    normal,
+                })
+            }
+            false => Cow::Borrowed(f),
+        });
+        let height = (pixels.len() / width.max(1) as usize) as u32;
+        let quality = match self.halted {
+            true => FilterQuality::High,
+            false => FilterQuality::Fast,
+        };
+        denoise::denoise(width, height, pixels, features.as_deref(), quality)
+    }
+
+    /// The frame as PFM (linear float), denoised (by the best filter) or
+    /// not. Call off the async runtime.
+    pub fn pfm(&self, denoised: bool) -> Result<Vec<u8>, DenoiseError> {
+        let pixels = self.pixels_or_black();
+        if denoised && self.can_denoise() {
+            let features = self.features.as_deref();
+            let clean = denoise::denoise(
+                self.width,
+                self.height,
+                &pixels,
+                features,
+                FilterQuality::High,
+            )?;
+            return Ok(encode_pfm(self.width, self.height, &clean));
+        }
+        Ok(encode_pfm(self.width, self.height, &pixels))
+    }
+}
+
+/// Logs a denoiser's failure once (the frames go out raw meanwhile).
+fn warn_once(e: &DenoiseError) {
+    static SAID: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    if !SAID.swap(true, std::sync::atomic::Ordering::Relaxed) {
+        tracing::warn!(error = %e, "denoising failed; frames go out as rendered");
     }
 }

@@ -78,6 +78,12 @@ enum Command {
         /// Wait until the image has this many samples per pixel.
         #[arg(long)]
         min_spp: Option<u64>,
+        /// The denoised image (whatever the session's quality says).
+        #[arg(long, conflicts_with = "raw")]
+        denoise: bool,
+        /// The raw image (where the session denoises its frames).
+        #[arg(long)]
+        raw: bool,
         #[arg(short, long)]
         out: PathBuf,
     },
@@ -544,12 +550,16 @@ async fn run(cli: Cli) -> Result<(), Failure> {
         Command::Quality { id, quality } => {
             print_status(&client.set_quality(&id, &quality.patch()).await?)
         }
-        Command::Frame { id, min_spp, out } => {
-            let bytes = match extension(&out)? {
-                "png" => client.frame_png(&id, min_spp, None).await?,
-                _ => client.frame_pfm(&id, min_spp, None).await?,
-            };
-            write(&out, &bytes)
+        Command::Frame {
+            id,
+            min_spp,
+            denoise,
+            raw,
+            out,
+        } => {
+            let asked = (denoise || raw).then_some(denoise);
+            let kind = extension(&out)?;
+            write(&out, &client.frame_as(&id, kind, min_spp, asked).await?)
         }
         Command::Delete { id } => Ok(client.delete_session(&id).await?),
         Command::Upload { file } => {

@@ -2,7 +2,7 @@
 //! ...) as a quality patch, and samples per pixel as `render` reports them.
 
 use clap::{Args, ValueEnum};
-use pathstream_client::{QualityPatch, SessionStatus};
+use pathstream_client::{Denoise, QualityPatch, SessionStatus};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum Switch {
@@ -49,6 +49,20 @@ pub struct QualityArgs {
     clamp: Option<f32>,
     #[arg(long)]
     seed: Option<u64>,
+    /// Denoise frames with Open Image Denoise on the server: `stream` (the
+    /// frames while rendering), `final` (those and the last; the default
+    /// for a bare --denoise) or `off`. The error estimate stays the raw
+    /// image's.
+    #[arg(long, value_enum, value_name = "WHEN", num_args = 0..=1, default_missing_value = "final")]
+    denoise: Option<DenoiseArg>,
+}
+
+/// `--denoise`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum DenoiseArg {
+    Off,
+    Stream,
+    Final,
 }
 
 impl QualityArgs {
@@ -66,6 +80,11 @@ impl QualityArgs {
             spp: self.spp.map(Some),
             time_ms: self.time_ms.map(Some),
             target_error: self.target_error.map(Some),
+            denoise: self.denoise.map(|d| match d {
+                DenoiseArg::Off => Denoise::Off,
+                DenoiseArg::Stream => Denoise::Stream,
+                DenoiseArg::Final => Denoise::Final,
+            }),
         }
     }
 

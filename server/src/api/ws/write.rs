@@ -53,7 +53,7 @@ pub(super) async fn write<K: Sink<Message> + Unpin>(
                     let busy = encoding_ahead.clone();
                     busy.store(true, Ordering::Release);
                     tokio::task::spawn_blocking(move || {
-                        let _ = frame.encoded(encoding(wanted));
+                        let _ = frame.encoded(encoding(wanted, &frame));
                         busy.store(false, Ordering::Release);
                     });
                 }
@@ -78,7 +78,7 @@ pub(super) async fn write<K: Sink<Message> + Unpin>(
                 nth += 1;
                 let f = frame.clone();
                 let encode = Instant::now();
-                let image = match tokio::task::spawn_blocking(move || f.encoded(encoding(wanted))).await {
+                let image = match tokio::task::spawn_blocking(move || f.encoded(encoding(wanted, &f))).await {
                     Ok(Ok(image)) => image,
                     _ => break,
                 };
@@ -189,6 +189,7 @@ fn stats(
         frame_height: image.height,
         progressive: settings.progressive,
         preview: frame.preview,
+        denoised: image.denoised,
         delivered_fps: link.fps(now) as u64,
         link_mbps: link.mbps(),
         delivery_ms: link.last_delivery().map(|d| d.as_secs_f64() * 1e3),

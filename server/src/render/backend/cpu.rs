@@ -113,7 +113,13 @@ impl CpuBackend {
                         return None;
                     }
                     let span = Span::new(row, f);
-                    Some(render_span(wide, job, y * width, span, first..first + count))
+                    Some(render_span(
+                        wide,
+                        job,
+                        y * width,
+                        span,
+                        first..first + count,
+                    ))
                 })
                 .sum()
         };
@@ -137,7 +143,11 @@ impl CpuBackend {
         let wide = if self.portable_only { None } else { wide_isa() };
         let work = |film: &mut Film| -> Option<u64> {
             let (pixels, feats) = film.parts_mut(job.settings.features);
-            let feats = if feats.is_empty() { feats } else { &mut feats[start..end] };
+            let feats = if feats.is_empty() {
+                feats
+            } else {
+                &mut feats[start..end]
+            };
             (pixels[start..end].par_chunks_mut(SLICE_CHUNK))
                 .zip(features::chunks(feats, SLICE_CHUNK, end - start))
                 .enumerate()
@@ -186,7 +196,11 @@ impl CpuBackend {
         let rows = |film: &mut Film| -> Option<u64> {
             let (pixels, feats) = film.parts_mut(job.settings.features);
             let (from, to) = (y0 * width, y1 * width);
-            let feats = if feats.is_empty() { feats } else { &mut feats[from..to] };
+            let feats = if feats.is_empty() {
+                feats
+            } else {
+                &mut feats[from..to]
+            };
             (pixels[from..to].par_chunks_mut(width))
                 .zip(features::chunks(feats, width, to - from))
                 .enumerate()
@@ -232,7 +246,13 @@ impl<'a> Span<'a> {
     /// Adds sample `sample` of pixel `i` (the path `p` traced); false
     /// where its radiance was rejected.
     #[inline(always)]
-    fn add(&mut self, i: usize, sample: u64, p: &crate::render::integrator::Path, settings: &crate::render::integrator::PathSettings) -> bool {
+    fn add(
+        &mut self,
+        i: usize,
+        sample: u64,
+        p: &crate::render::integrator::Path,
+        settings: &crate::render::integrator::PathSettings,
+    ) -> bool {
         if let Some(f) = &mut self.features {
             f[i].add(p.guide());
         }
@@ -335,26 +355,14 @@ fn render_span(
 /// `span_with` compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn span_avx2(
-    isa: Avx2,
-    job: &RenderJob,
-    first: usize,
-    span: Span<'_>,
-    samples: Range<u64>,
-) -> u64 {
+fn span_avx2(isa: Avx2, job: &RenderJob, first: usize, span: Span<'_>, samples: Range<u64>) -> u64 {
     span_with(isa, job, first, span, samples)
 }
 
 /// `pairs_with` compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn pairs_avx2(
-    isa: Avx2,
-    job: &RenderJob,
-    first: usize,
-    span: Span<'_>,
-    sample: u64,
-) -> u64 {
+fn pairs_avx2(isa: Avx2, job: &RenderJob, first: usize, span: Span<'_>, sample: u64) -> u64 {
     pairs_with(isa, job, first, span, sample)
 }
 

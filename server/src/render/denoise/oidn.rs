@@ -14,6 +14,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 type Handle = *mut c_void;
+/// A denoiser's guides: the albedo and the normal image.
+pub type Guides<'a> = (&'a [[f32; 3]], &'a [[f32; 3]]);
 
 /// `OIDN_FORMAT_FLOAT3`.
 const FORMAT_FLOAT3: c_int = 3;
@@ -56,8 +58,17 @@ struct Api {
     read_buffer: unsafe extern "C" fn(Handle, usize, usize, *mut c_void),
     release_buffer: unsafe extern "C" fn(Handle),
     new_filter: unsafe extern "C" fn(Handle, *const c_char) -> Handle,
-    set_filter_image:
-        unsafe extern "C" fn(Handle, *const c_char, Handle, c_int, usize, usize, usize, usize, usize),
+    set_filter_image: unsafe extern "C" fn(
+        Handle,
+        *const c_char,
+        Handle,
+        c_int,
+        usize,
+        usize,
+        usize,
+        usize,
+        usize,
+    ),
     set_filter_bool: unsafe extern "C" fn(Handle, *const c_char, bool),
     set_filter_int: unsafe extern "C" fn(Handle, *const c_char, c_int),
     commit_filter: unsafe extern "C" fn(Handle),
@@ -105,10 +116,13 @@ impl Library {
         let lib = unsafe { libloading::Library::new(path) }.map_err(|e| {
             // libloading's message is "dlopen failed"; the loader's own is
             // its source.
-            let why = std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
+            let why =
+                std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
             format!("cannot load {}: {why}", path.display())
         })?;
-        let api = symbols!(lib, path,
+        let api = symbols!(
+            lib,
+            path,
             num_physical_devices = "oidnGetNumPhysicalDevices",
             physical_device_int = "oidnGetPhysicalDeviceInt",
             physical_device_string = "oidnGetPhysicalDeviceString",
@@ -150,7 +164,10 @@ impl Library {
                 let name = unsafe { text((self.api.physical_device_string)(i, c"name".as_ptr())) };
                 PhysicalDevice {
                     index: i as usize,
-                    kind: KINDS.get((kind - 1).max(0) as usize).copied().unwrap_or("other"),
+                    kind: KINDS
+                        .get((kind - 1).max(0) as usize)
+                        .copied()
+                        .unwrap_or("other"),
                     name: name.unwrap_or_default(),
                 }
             })
@@ -163,7 +180,9 @@ impl Library {
         // an error).
         let handle = unsafe { (self.api.new_device_by_id)(index as c_int) };
         if handle.is_null() {
-            return Err(self.error(std::ptr::null_mut()).unwrap_or("no device".into()));
+            return Err(self
+                .error(std::ptr::null_mut())
+                .unwrap_or("no device".into()));
         }
         let device = Device {
             lib: self.clone(),
@@ -337,7 +356,7 @@ impl Filter {
     pub fn run(
         &self,
         color: &[[f32; 3]],
-        guides: Option<(&[[f32; 3]], &[[f32; 3]])>,
+        guides: Option<Guides<'_>>,
         out: &mut [[f32; 3]],
     ) -> Result<(), String> {
         let api = &self.lib.api;
@@ -360,7 +379,12 @@ impl Filter {
         check(&self.lib, self.device)?;
         // SAFETY: a live buffer of `bytes` bytes; `out` is as long.
         unsafe {
-            (api.read_buffer)(self.buffers[1].handle, 0, self.bytes, out.as_mut_ptr().cast())
+            (api.read_buffer)(
+                self.buffers[1].handle,
+                0,
+                self.bytes,
+                out.as_mut_ptr().cast(),
+            )
         };
         check(&self.lib, self.device)
     }

@@ -15,6 +15,7 @@ pub use super::frame::Frame;
 use super::metrics::Metrics;
 use super::placement::BackendInfo;
 use super::scaled::Preview;
+use crate::render::features::Features;
 use crate::render::pass::{Measured, Pass, Planner};
 use crate::render::progressive::{self, Progress};
 use crate::render::split::DeviceShare;
@@ -98,11 +99,14 @@ struct Image {
     whole: bool,
     /// The preview factor, where the image shows the preview.
     preview: Option<u32>,
+    /// The denoiser's guides, where the film keeps them.
+    features: Option<Arc<Features>>,
 }
 
 impl Image {
     fn of(film: &Film) -> Self {
         Self {
+            features: film.feature_means().map(Arc::new),
             pixels: film.mean(),
             estimate: film.error_estimate(),
             density: Arc::new(super::density::Density::of(film)),
@@ -125,6 +129,7 @@ impl Image {
             density: Arc::new(super::density::Density::of(film)),
             whole: false,
             preview: preview.map(|p| p.factor),
+            features: film.feature_means().map(Arc::new),
         }
     }
 }
@@ -527,6 +532,8 @@ impl Session {
         frame.halted = st.halted;
         frame.preview = image.preview;
         frame.pixels = image.pixels;
+        frame.features = image.features;
+        frame.denoise = st.quality.denoise;
         frame
     }
 
@@ -548,6 +555,8 @@ impl Session {
         frame.pixels = previous.pixels.clone();
         frame.preview = previous.preview;
         frame.preview_image = previous.preview_image.clone();
+        frame.features = previous.features.clone();
+        frame.denoise = previous.denoise;
         self.frames.send_replace(Arc::new(frame));
     }
 

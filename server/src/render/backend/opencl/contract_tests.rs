@@ -297,6 +297,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         sun: true,
         lens: true,
         projection: 0,
+        features: true,
         inject_nan_every: Some(1),
     };
     let mut known: BTreeSet<String> =

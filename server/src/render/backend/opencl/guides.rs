@@ -17,7 +17,11 @@ pub(super) const GUIDE_FLOATS: usize = 6;
 impl OpenClBackend {
     /// The feature buffer of a new state for `film`: zero for a fresh
     /// film, else the host's sums; one float where `guided` is false.
-    pub(super) fn guide_buffer(&self, film: &Film, guided: bool) -> Result<Buffer<f32>, OpenClError> {
+    pub(super) fn guide_buffer(
+        &self,
+        film: &Film,
+        guided: bool,
+    ) -> Result<Buffer<f32>, OpenClError> {
         if !guided {
             return self.buffer::<f32>(Access::ReadWrite, 1);
         }
@@ -41,7 +45,11 @@ impl OpenClBackend {
 
     /// Copies the device's feature sums of pixels `range` into `film`
     /// (nothing for a job without features).
-    pub(super) fn read_guides(&mut self, film: &mut Film, range: Range<usize>) -> Result<(), OpenClError> {
+    pub(super) fn read_guides(
+        &mut self,
+        film: &mut Film,
+        range: Range<usize>,
+    ) -> Result<(), OpenClError> {
         let Some(state) = self.states.last().filter(|s| s.guided) else {
             return Ok(());
         };
