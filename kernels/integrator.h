@@ -137,10 +137,12 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
     BsdfVertex last;
     last.pdf = 0.0f;
 #endif
-    g->albedo = (float3)(0.0f);
-    g->normal = (float3)(0.0f);
 #if FEATURES
+    /* Kept in registers, *g written once at the end: `tint` is the mirrors'
+     * and glass's product until the guide is found, then its albedo (one
+     * float3 fewer live across the loop). */
     float3 tint = (float3)(1.0f);
+    float3 g_normal = (float3)(0.0f);
     int guided = 0;
 #endif
     for (;;) {
@@ -169,7 +171,8 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             l += hidden ? le : emit * le * w;
 #if FEATURES
             if (!guided) {
-                g->albedo = tint * clamp(le, 0.0f, 1.0f);
+                tint *= clamp(le, 0.0f, 1.0f);
+                guided = 1;
             }
 #endif
 #if HAS_SUN
@@ -207,8 +210,8 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             if (m->kind == MAT_MIRROR || m->kind == MAT_GLASS) {
                 tint *= m->albedo.xyz;
             } else {
-                g->albedo = tint * (m->emissive ? clamp(m->emission.xyz, 0.0f, 1.0f) : m->albedo.xyz);
-                g->normal = ns;
+                tint *= m->emissive ? clamp(m->emission.xyz, 0.0f, 1.0f) : m->albedo.xyz;
+                g_normal = ns;
                 guided = 1;
             }
         }
@@ -308,5 +311,12 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             l *= P->clamp / peak;
         }
     }
+#if FEATURES
+    /* A path that ended before finding its guide has none. */
+    g->albedo = guided ? tint : (float3)(0.0f);
+    g->normal = g_normal;
+#else
+    (void)g;
+#endif
     return l;
 }

@@ -68,6 +68,11 @@ __kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global fl
     uint x = gid % P->width;
     uint y = gid / P->width;
     __global float *px = film + (size_t)gid * FILM_FLOATS;
+#if FEATURES
+    /* The launch's guides summed privately, added to the buffer once. */
+    float3 albedo_sum = (float3)(0.0f);
+    float3 normal_sum = (float3)(0.0f);
+#endif
     for (uint k = 0; k < count; ++k) {
         ulong sample = first + (ulong)k;
         Sampler s = sampler_of_kind(USE_SOBOL, P->seed, (ulong)gid, sample);
@@ -76,16 +81,14 @@ __kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global fl
         camera_ray(P, (float)x + off.x, (float)y + off.y, &s, &o, &d);
         Guide g;
         float3 l = radiance(&sc, o, d, &s, &g);
+#if !FEATURES
+        (void)g;
+#endif
 #if FEATURES
-        /* The denoiser's guides (features.rs): plain sums, each sample's
-         * whether or not its radiance is rejected below. */
-        __global float *gp = guides + (size_t)gid * GUIDE_FLOATS;
-        gp[0] += g.albedo.x;
-        gp[1] += g.albedo.y;
-        gp[2] += g.albedo.z;
-        gp[3] += g.normal.x;
-        gp[4] += g.normal.y;
-        gp[5] += g.normal.z;
+        /* The denoiser's guides (features.rs): each sample's, whether or
+         * not its radiance is rejected below. */
+        albedo_sum += g.albedo;
+        normal_sum += g.normal;
 #endif
 #ifdef INJECT_NAN_EVERY
         if (sample % INJECT_NAN_EVERY == 0UL) {
@@ -101,6 +104,15 @@ __kernel void render(SCENE_ARRAYS(SCENE_PARAM) __global float *film, __global fl
         add_compensated(sums + 1, sums + 4, l.y);
         add_compensated(sums + 2, sums + 5, l.z);
     }
+#if FEATURES
+    __global float *gp = guides + (size_t)gid * GUIDE_FLOATS;
+    gp[0] += albedo_sum.x;
+    gp[1] += albedo_sum.y;
+    gp[2] += albedo_sum.z;
+    gp[3] += normal_sum.x;
+    gp[4] += normal_sum.y;
+    gp[5] += normal_sum.z;
+#endif
 }
 #undef SCENE_PARAM
 #undef SCENE_NAME

@@ -11,8 +11,8 @@ mod common;
 use common::{backends, bunny, mesh_object, render, render_on, scene, scene_json};
 use pathstream::render::denoise::{self, FilterQuality};
 use pathstream::render::features::Features;
-use pathstream::render::film::relative_rms_error;
 use pathstream::render::quality::Denoise;
+use pathstream::render::tonemap::displayed_error;
 use pathstream::render::{Film, Quality, Scene};
 use serde_json::json;
 
@@ -187,28 +187,12 @@ fn oidn() -> bool {
     }
 }
 
-/// An image as the stream shows it: each channel clipped to [0, 1] and
-/// sRGB-encoded (`render::tonemap`, before its 8-bit rounding).
-fn displayed(image: &[[f32; 3]]) -> Vec<[f32; 3]> {
-    let srgb = |v: f32| {
-        let v = v.clamp(0.0, 1.0);
-        if v <= 0.003_130_8 {
-            12.92 * v
-        } else {
-            1.055 * v.powf(1.0 / 2.4) - 0.055
-        }
-    };
-    image.iter().map(|p| p.map(srgb)).collect()
-}
-
-/// The relative RMS error, as displayed, of the raw and the denoised image
-/// of `scene` at each of `spps`, against a reference of `ref_spp`. (The
-/// error of radiance itself is dominated by the light's few pixels, tens
-/// of times brighter than the rest; what a denoiser is for is the image
-/// people see.)
+/// The relative RMS error, as displayed (`tonemap::displayed_error`), of
+/// the raw and the denoised image of `scene` at each of `spps`, against a
+/// reference of `ref_spp`.
 fn errors(scene: &Scene, (w, h): (u32, u32), spps: &[u64], ref_spp: u64) -> Vec<(u64, f64, f64)> {
     let reference = render(scene, w, h, &Quality::default(), ref_spp);
-    let truth = displayed(&reference.mean());
+    let truth = reference.mean();
     spps.iter()
         .map(|&spp| {
             let q = Quality {
@@ -220,8 +204,8 @@ fn errors(scene: &Scene, (w, h): (u32, u32), spps: &[u64], ref_spp: u64) -> Vec<
             let f = film.feature_means();
             let clean =
                 denoise::denoise(w, h, &raw, f.as_ref(), FilterQuality::High).expect("denoised");
-            let e_raw = relative_rms_error(&displayed(&raw), &truth);
-            let e_clean = relative_rms_error(&displayed(&clean), &truth);
+            let e_raw = displayed_error(&raw, &truth);
+            let e_clean = displayed_error(&clean, &truth);
             eprintln!(
                 "{spp} spp: raw {e_raw:.4}, denoised {e_clean:.4}, ratio {:.2}",
                 e_raw / e_clean

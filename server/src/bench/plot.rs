@@ -199,6 +199,53 @@ pub fn trade(path: &Path, title: &str, curves: &[&TradeCurve]) -> Result<(), Plo
     })
 }
 
+/// Error against samples per pixel (log-log), one line per `(label,
+/// points)`; `y_desc` names the error.
+pub fn error_vs_spp(
+    path: &Path,
+    title: &str,
+    y_desc: &str,
+    lines: &[(String, Vec<(f64, f64)>)],
+) -> Result<(), PlotError> {
+    let points = || lines.iter().flat_map(|(_, p)| p.iter());
+    let x = log_range(points().map(|p| p.0));
+    let y = log_range(points().map(|p| p.1));
+    png(path, |root| {
+        let e = |e: DrawingAreaErrorKind<_>| e.to_string();
+        let (root, side) = root.split_horizontally(SIZE.0 - LEGEND_WIDTH);
+        let entries: Vec<(String, RGBColor)> = (lines.iter().enumerate())
+            .map(|(i, (label, _))| (label.clone(), COLOURS[i % COLOURS.len()]))
+            .collect();
+        legend(&side, &entries)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 24))
+            .margin(16)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x.clone().log_scale(), y.clone().log_scale())
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc("samples per pixel")
+            .y_desc(y_desc)
+            .y_label_formatter(&percent_label)
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(e)?;
+        for (i, (_, p)) in lines.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            let line = p.iter().copied().filter(|p| p.1 > 0.0);
+            chart
+                .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))
+                .map_err(e)?;
+            chart
+                .draw_series(line.map(|p| Circle::new(p, 4, colour.filled())))
+                .map_err(e)?;
+        }
+        Ok(())
+    })
+}
+
 /// Estimated / true error against rendering time, one line per scene and
 /// backend (the points the calibration table uses), with the ideal ratio 1
 /// marked.

@@ -45,9 +45,43 @@ impl Tonemap {
     }
 }
 
+/// The sRGB transfer curve of a linear value clipped to [0, 1], before
+/// any rounding (what `Tonemap` rounds to 8 bits at exposure 0).
+#[inline]
+pub fn srgb(v: f32) -> f32 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The relative RMS error of `image` against `reference` as a viewer sees
+/// both ([`srgb`] of each channel): the measure of a denoiser, whose work
+/// is the picture, and which the radiance's own error (dominated by a
+/// light's few pixels, tens of times brighter than the rest) hides.
+pub fn displayed_error(image: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
+    let shown = |px: &[[f32; 3]]| px.iter().map(|p| p.map(srgb)).collect::<Vec<_>>();
+    crate::render::film::relative_rms_error(&shown(image), &shown(reference))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_float_curve_rounds_to_the_bytes() {
+        for v in [0.0f32, 0.002, 0.2159, 0.5, 0.99, 3.0] {
+            let byte = (srgb(v) * 255.0 + 0.5) as u8;
+            assert_eq!(byte, pathstream_wire::tonemap::srgb8(v), "{v}");
+        }
+        let a = [[0.5f32; 3]; 4];
+        assert_eq!(displayed_error(&a, &a), 0.0);
+        let b = [[9.0f32; 3]; 4];
+        // Both clip to white: no error as displayed.
+        assert_eq!(displayed_error(&b, &[[1.0f32; 3]; 4]), 0.0);
+    }
 
     #[test]
     fn srgb_endpoints_and_midpoint() {

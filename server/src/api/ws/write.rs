@@ -39,15 +39,20 @@ pub(super) async fn write<K: Sink<Message> + Unpin>(
     let mut link = Link::default();
     // Frames sent of the current generation (progressive resolution).
     let (mut generation, mut nth) = (u64::MAX, 0u64);
+    // After a denoised frame, the next waits its turn (`denoise::next_turn`),
+    // unless it is the last of its render.
+    let mut paced: Option<Instant> = None;
     loop {
         let ack_wait = link.ack_deadline();
+        let turn = paced.is_none() || frames.borrow().halted;
         tokio::select! {
             changed = ahead.changed(), if !link.ready() && !encoding_ahead.load(Ordering::Acquire) => {
                 if changed.is_err() {
                     break;
                 }
                 let frame = ahead.borrow_and_update().clone();
-                if !frame.pixels.is_empty() {
+                if !frame.pixels.is_empty() && !encoding(settings, &frame).denoised {
+                    // (A denoised frame is made when it is its turn, not ahead.)
                     let n = if frame.generation == generation { nth } else { 0 };
                     let wanted = wanted(settings, &frame, n);
                     let busy = encoding_ahead.clone();
@@ -58,7 +63,8 @@ pub(super) async fn write<K: Sink<Message> + Unpin>(
                     });
                 }
             }
-            changed = frames.changed(), if link.ready() => {
+            () = sleep_until(paced), if paced.is_some() => paced = None,
+            changed = frames.changed(), if link.ready() && turn => {
                 if changed.is_err() {
                     break;
                 }
@@ -90,6 +96,9 @@ pub(super) async fn write<K: Sink<Message> + Unpin>(
                     encode_ms = (start - encode).as_secs_f64() * 1e3,
                     "frame out"
                 );
+                if image.denoised {
+                    paced = crate::render::denoise::next_turn();
+                }
                 link.sending(frame.seq, image.bytes.len(), start);
                 let stats = text(&stats(session.status(), &frame, settings, &image, &link, start));
                 let send = async {

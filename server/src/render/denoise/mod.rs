@@ -21,6 +21,11 @@ use crate::render::features::Features;
 use pathstream_wire::{Denoiser as DenoiserInfo, DenoiserDevice};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
+use std::time::Instant;
+
+/// The share of the time that streamed frames' denoising may take (see
+/// [`next_turn`]): on a CPU denoiser, what it takes the renderer loses.
+pub const STREAM_SHARE: f64 = 0.25;
 
 /// The library's file name on Linux (OIDN 2.x).
 pub const LIBRARY: &str = "libOpenImageDenoise.so.2";
@@ -225,10 +230,30 @@ pub fn denoise(
     let filter = &d.filters[d.filters.len() - 1].1;
     let mut out = vec![[0f32; 3]; pixels];
     let guides = features.map(|f| (&f.albedo[..], &f.normal[..]));
-    filter
-        .run(color, guides, &mut out)
-        .map_err(DenoiseError::Failed)?;
+    let started = Instant::now();
+    let ran = filter.run(color, guides, &mut out);
+    *last_run().lock().unwrap_or_else(|e| e.into_inner()) = Some((started, Instant::now()));
+    ran.map_err(DenoiseError::Failed)?;
     Ok(out)
+}
+
+/// When the last image was denoised (start, end).
+fn last_run() -> &'static Mutex<Option<(Instant, Instant)>> {
+    static LAST: Mutex<Option<(Instant, Instant)>> = Mutex::new(None);
+    &LAST
+}
+
+/// The earliest time the next streamed frame should be denoised, so that
+/// denoising takes at most [`STREAM_SHARE`] of the time: the last run's
+/// end plus its duration times (1 - share) / share (None: now). Streams
+/// wait for it rather than denoise every frame back to back, which on a
+/// 2-core machine left rendering a seventh of its rate (measured); the
+/// frame endpoints, asked, denoise at once.
+pub fn next_turn() -> Option<Instant> {
+    let last = *last_run().lock().unwrap_or_else(|e| e.into_inner());
+    let (start, end) = last?;
+    let rest = (end - start).mul_f64((1.0 - STREAM_SHARE) / STREAM_SHARE);
+    Some(end + rest).filter(|&t| t > Instant::now())
 }
 
 #[cfg(test)]
