@@ -5,6 +5,18 @@
 # target/node-env: the package registries are reachable where nodejs.org
 # may not be. Needs python3 with venv, installed with apt-get when missing.
 
+# python3 with venv (what fetches wheels from PyPI here and in
+# oidn-env.sh), installed with apt-get when missing.
+ensure_python_venv() {
+    if ! python3 -c 'import venv, ensurepip' >/dev/null 2>&1; then
+        local sudo=""
+        if [ "$(id -u)" != 0 ]; then sudo="sudo"; fi
+        export DEBIAN_FRONTEND=noninteractive
+        $sudo apt-get update -qq
+        $sudo apt-get install -y -qq python3 python3-venv >/dev/null
+    fi
+}
+
 node_ok() {
     command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1 &&
         [ "$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)" -ge 20 ]
@@ -21,13 +33,7 @@ ensure_node() {
         node_ok && return
     fi
     echo "node-env.sh: no Node 20+ here: installing it from PyPI into target/node-env" >&2
-    if ! python3 -c 'import venv, ensurepip' >/dev/null 2>&1; then
-        local sudo=""
-        if [ "$(id -u)" != 0 ]; then sudo="sudo"; fi
-        export DEBIAN_FRONTEND=noninteractive
-        $sudo apt-get update -qq
-        $sudo apt-get install -y -qq python3 python3-venv >/dev/null
-    fi
+    ensure_python_venv
     rm -rf "$env"
     mkdir -p "$(dirname "$env")"
     python3 -m venv "$env"

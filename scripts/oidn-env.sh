@@ -3,6 +3,7 @@
 # does not package OIDN; PyPI's `pyoidn` wheel carries its shared libraries
 # (and TBB), so a machine without it gets them from there, into target/oidn
 # (the CPU and CUDA devices only: the SYCL and HIP ones are left out).
+# Needs node-env.sh sourced first (ensure_python_venv).
 
 oidn_dir="$PWD/target/oidn/lib"
 
@@ -18,13 +19,7 @@ ensure_oidn() {
         return
     fi
     echo "oidn-env.sh: no Open Image Denoise here: fetching PyPI's pyoidn wheel into target/oidn" >&2
-    if ! python3 -c 'import venv, ensurepip' >/dev/null 2>&1; then
-        local sudo=""
-        if [ "$(id -u)" != 0 ]; then sudo="sudo"; fi
-        export DEBIAN_FRONTEND=noninteractive
-        $sudo apt-get update -qq
-        $sudo apt-get install -y -qq python3 python3-venv >/dev/null
-    fi
+    ensure_python_venv
     local env="$PWD/target/oidn/venv" wheels="$PWD/target/oidn/wheel"
     rm -rf "$env" "$wheels" "$oidn_dir"
     python3 -m venv "$env"

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{backends, bunny, mesh_object, render, render_on, scene, scene_json};
+use common::{backends, bunny, mesh_object, oidn, render, render_on, scene, scene_json};
 use pathstream::render::denoise::{self, FilterQuality};
 use pathstream::render::features::Features;
 use pathstream::render::quality::Denoise;
@@ -171,20 +171,6 @@ fn both_backends_find_the_same_features() {
         differ * 100 <= all,
         "{differ} of {all} feature pixels differ by more than 1e-3"
     );
-}
-
-/// OIDN where it is installed (under CI, its absence fails the test).
-fn oidn() -> bool {
-    match denoise::available() {
-        Ok(()) => true,
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but {e} (scripts/test.sh installs it)")
-        }
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            false
-        }
-    }
 }
 
 /// The relative RMS error, as displayed (`tonemap::displayed_error`), of

@@ -6,25 +6,13 @@
 //! `/api/devices`, and refuses a denoise request with a 400 naming the
 //! library, as `pathstream render --denoise` exits 2.
 
+mod common;
 mod http;
 
+use common::oidn;
 use http::{create, halted, next_frame, patch, server, ws_connect_with, ws_send};
 use serde_json::{json, Value};
 use std::process::{Command, Stdio};
-
-/// OIDN where it is installed (under CI, its absence fails the test).
-fn oidn() -> bool {
-    match pathstream::render::denoise::available() {
-        Ok(()) => true,
-        Err(e) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set but {e} (scripts/test.sh installs it)")
-        }
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            false
-        }
-    }
-}
 
 async fn get(url: impl reqwest::IntoUrl) -> reqwest::Response {
     reqwest::get(url).await.expect("request")

@@ -390,3 +390,18 @@ pub fn assert_same_samples(a: &[[f32; 3]], b: &[[f32; 3]], what: &str) {
         a.len()
     );
 }
+
+/// Whether Open Image Denoise is installed (where `CI` is set, its absence
+/// fails the test: scripts/test.sh installs it).
+pub fn oidn() -> bool {
+    match pathstream::render::denoise::available() {
+        Ok(()) => true,
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("CI is set but {e} (scripts/test.sh installs it)")
+        }
+        Err(e) => {
+            eprintln!("skipping: {e}");
+            false
+        }
+    }
+}
