@@ -70,18 +70,20 @@ pub struct Features {
     pub normal: Vec<[f32; 3]>,
 }
 
-/// `sums` split into chunks of `chunk` pixels, one entry per chunk of a
-/// film of `pixels` pixels: `None` for each where the film keeps no
-/// features (so that the backends zip them with the radiance's chunks).
+/// Pixels `range` of a film's feature sums split into chunks of `chunk`
+/// pixels: one entry per chunk of the radiance's `range`, `None` for each
+/// where the film keeps no features (`sums` empty), so that the backends
+/// zip them with the radiance's chunks.
 pub fn chunks(
     sums: &mut [FeatureSums],
+    range: std::ops::Range<usize>,
     chunk: usize,
-    pixels: usize,
 ) -> Vec<Option<&mut [FeatureSums]>> {
+    let chunk = chunk.max(1);
     if sums.is_empty() {
-        (0..pixels.div_ceil(chunk.max(1))).map(|_| None).collect()
+        (0..range.len().div_ceil(chunk)).map(|_| None).collect()
     } else {
-        sums.chunks_mut(chunk.max(1)).map(Some).collect()
+        sums[range].chunks_mut(chunk).map(Some).collect()
     }
 }
 
@@ -108,11 +110,19 @@ mod tests {
     #[test]
     fn chunks_match_the_radiance_chunks() {
         let mut none: Vec<FeatureSums> = Vec::new();
-        assert_eq!(chunks(&mut none, 4, 10).len(), 3);
+        assert_eq!(chunks(&mut none, 0..10, 4).len(), 3);
+        assert_eq!(chunks(&mut none, 3..10, 4).len(), 2);
         let mut some = vec![FeatureSums::default(); 10];
-        let c = chunks(&mut some, 4, 10);
+        let c = chunks(&mut some, 0..10, 4);
         assert_eq!(c.len(), 3);
         assert_eq!(c[2].as_ref().map(|s| s.len()), Some(2));
+        let c = chunks(&mut some, 3..10, 4);
+        assert_eq!(
+            c.iter()
+                .map(|c| c.as_ref().map_or(0, |s| s.len()))
+                .collect::<Vec<_>>(),
+            [4, 3]
+        );
     }
 
     #[test]

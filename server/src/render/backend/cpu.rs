@@ -106,7 +106,7 @@ impl CpuBackend {
             let (pixels, feats) = film.parts_mut(job.settings.features);
             let n = pixels.len();
             (pixels.par_chunks_mut(width))
-                .zip(features::chunks(feats, width, n))
+                .zip(features::chunks(feats, 0..n, width))
                 .enumerate()
                 .map(|(y, (row, f))| {
                     if cancelled() {
@@ -143,13 +143,8 @@ impl CpuBackend {
         let wide = if self.portable_only { None } else { wide_isa() };
         let work = |film: &mut Film| -> Option<u64> {
             let (pixels, feats) = film.parts_mut(job.settings.features);
-            let feats = if feats.is_empty() {
-                feats
-            } else {
-                &mut feats[start..end]
-            };
             (pixels[start..end].par_chunks_mut(SLICE_CHUNK))
-                .zip(features::chunks(feats, SLICE_CHUNK, end - start))
+                .zip(features::chunks(feats, start..end, SLICE_CHUNK))
                 .enumerate()
                 .map(|(k, (chunk, f))| {
                     if cancelled() {
@@ -196,13 +191,8 @@ impl CpuBackend {
         let rows = |film: &mut Film| -> Option<u64> {
             let (pixels, feats) = film.parts_mut(job.settings.features);
             let (from, to) = (y0 * width, y1 * width);
-            let feats = if feats.is_empty() {
-                feats
-            } else {
-                &mut feats[from..to]
-            };
             (pixels[from..to].par_chunks_mut(width))
-                .zip(features::chunks(feats, width, to - from))
+                .zip(features::chunks(feats, from..to, width))
                 .enumerate()
                 .map(|(k, (row, mut f))| {
                     if cancelled() {
