@@ -111,7 +111,8 @@ __kernel void check_scatter(__global float *out, uint n, __global const float4 *
     Sampler s = sampler_new(0UL, (ulong)i, 0UL);
     float3 weight;
     int specular;
-    float3 dir = scatter_outward(&materials[material], ggx, in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
+    Material mat = materials[material]; /* MatRef: private in the generic build */
+    float3 dir = scatter_outward(&mat, ggx, in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
     __global float *r = out + (size_t)i * 8u;
     r[0] = dir.x;
     r[1] = dir.y;

@@ -45,7 +45,7 @@ static inline float hit_weight(const Scene *sc, const BsdfVertex *v, int e, floa
 typedef struct {
     int pbr;
 #if HAS_GGX
-    __global const Material *m;
+    MatRef m;
     float3 t, b, n, wo;
     GgxLobes lobes;
 #endif
@@ -191,7 +191,15 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
         }
         at_vertex(s, bounces);
         Surf sf = surface_at(sc, &hit, o, d);
-        __global const Material *m = &materials[sf.material];
+#if HAS_TEXTURES
+        Material shaded = materials[sf.material];
+        if (shaded.maps != NO_MAPS) {
+            apply_maps(sc, &hit, &sf, &shaded);
+        }
+        MatRef m = &shaded;
+#else
+        MatRef m = &materials[sf.material];
+#endif
         if (m->emissive) {
             float w = 1.0f;
 #if HAS_MIS

@@ -45,7 +45,7 @@ static inline float3 reflect_dir(float3 d, float3 n) {
  * *specular whether it was a delta lobe, *transmitted whether it went
  * through, *pdf the density of a MAT_PBR direction for MIS, else 0
  * (Scattered::pdf). */
-static inline float3 scatter(__global const Material *m, __global const float *ggx, float3 d, int entering, float3 nl,
+static inline float3 scatter(MatRef m, __global const float *ggx, float3 d, int entering, float3 nl,
                       Sampler *s, float3 *weight, int *specular, int *transmitted, float *pdf) {
     *weight = m->albedo.xyz;
     *pdf = 0.0f;
@@ -105,7 +105,7 @@ static inline float3 scatter(__global const Material *m, __global const float *g
 }
 
 /* scatter() off a surface of outward normal n (the routine checks). */
-static inline float3 scatter_outward(__global const Material *m, __global const float *ggx, float3 d, float3 n, Sampler *s,
+static inline float3 scatter_outward(MatRef m, __global const float *ggx, float3 d, float3 n, Sampler *s,
                               float3 *weight, int *specular) {
     int entering = dot3(d, n) < 0.0f;
     int transmitted;

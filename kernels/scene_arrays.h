@@ -27,4 +27,10 @@
     X(uint, slots)         /* world material of each instance slot */        \
     X(float, ggx)          /* metallic-roughness albedo tables (ggx.h) */  \
     X(float, env_texels)   /* environment map, RGB per texel (envmap.h) */ \
-    X(float, env_dist)     /* its sampling tables (envmap.h) */
+    X(float, env_dist)     /* its sampling tables (envmap.h) */          \
+    X(float4, uvs)         /* texture coordinates per triangle slot */  \
+    X(float4, tangents)    /* tangents per triangle slot */              \
+    X(MaterialMaps, maps)  /* material texture maps (maps.h) */          \
+    X(TexImage, tex_images) /* each texture's place in texels */        \
+    X(uint, texels)        /* RGBA8 texels of every texture */           \
+    X(float, srgb)         /* sRGB byte -> linear table */

@@ -16,12 +16,6 @@ static inline float3 xf_point(__global const float4 *m, float3 p) {
     return xf_vector(m, p) + m[3].xyz;
 }
 
-/* glam's normalize_or_zero: v * (1 / |v|) when that is finite and > 0. */
-static inline float3 normalize_or_zero(float3 v) {
-    float rcp = 1.0f / sqrt(dot3(v, v));
-    return (isfinite(rcp) && rcp > 0.0f) ? v * rcp : (float3)(0.0f);
-}
-
 static inline float3 unit_axis(int k) {
     return (float3)(k == 0 ? 1.0f : 0.0f, k == 1 ? 1.0f : 0.0f, k == 2 ? 1.0f : 0.0f);
 }

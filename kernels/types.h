@@ -29,6 +29,12 @@ static inline float3 normalize3(float3 v) {
     return v * (1.0f / sqrt(dot3(v, v)));
 }
 
+/* glam's normalize_or_zero: v * (1 / |v|) when that is finite and > 0. */
+static inline float3 normalize_or_zero(float3 v) {
+    float rcp = 1.0f / sqrt(dot3(v, v));
+    return (isfinite(rcp) && rcp > 0.0f) ? v * rcp : (float3)(0.0f);
+}
+
 typedef struct {
     float4 p0;  /* sphere: centre.xyz, radius  | quad: corner.xyz, area */
     float4 p1;  /* sphere: k = |c|^2 - r^2, 1/r | quad: edge_u.xyz       */
@@ -47,9 +53,36 @@ typedef struct {
     uint kind;
     uint schlick;
     uint emissive;
-    uint pad0;
+    uint maps;       /* its MaterialMaps, or NO_MAPS */
     float4 pbr;      /* MAT_PBR: metallic, alpha, roughness, f0 (ggx.h) */
 } Material;
+
+/* A material's texture slot (opencl/textures.rs, MapSlot): its UV
+ * transform's rows (u' = xf_u.x u + xf_u.y v + xf_u.z, v' likewise), then
+ * texture (NO_TEXTURE: unused), UV set, wrap along u and along v (Wrap). */
+typedef struct {
+    float4 xf_u;
+    float4 xf_v;
+    uint4 info;
+} MapSlot;
+
+/* A material's maps (maps.rs, WorldMaps); factors: metallic, roughness,
+ * normal scale, 1 where metallic and roughness share one lookup. */
+typedef struct {
+    MapSlot base_color;
+    MapSlot metallic;
+    MapSlot roughness;
+    MapSlot normal;
+    float4 factors;
+} MaterialMaps;
+
+/* Where a texture's RGBA8 texels start in `texels`, and its size. */
+typedef struct {
+    uint offset;
+    uint width;
+    uint height;
+    uint pad0;
+} TexImage;
 
 typedef struct {
     float4 forward;  /* w: near_clip */
@@ -130,8 +163,8 @@ typedef struct {
     uint tri_base;
     uint slot_base;    /* this instance's material of each mesh slot */
     uint normal_base;  /* 3 vertex normals per triangle from here, or NO_NORMALS */
-    uint pad0;
-    uint pad1;
+    uint uv_base;      /* 3 corners' (u0, v0, u1, v1) per triangle, or NO_NORMALS */
+    uint tangent_base; /* 3 corners' tangents (w: sign) per triangle, or NO_NORMALS */
 } Instance;
 
 /* The nearest hit: object, triangle (NO_PRIM for spheres and quads), the
@@ -181,6 +214,7 @@ typedef struct {
 #define HAS_ENV_MAP 1
 #define HAS_SUN 1
 #define HAS_LENS 1
+#define HAS_TEXTURES 1
 #define USE_BVH (P->use_bvh != 0u)
 #define OBJECT_COUNT (P->num_objects)
 #define LIGHT_COUNT (P->num_lights)
@@ -204,6 +238,13 @@ typedef struct {
 #define USE_SOBOL SOBOL
 #define USE_ENV_MAP HAS_ENV_MAP
 #define USE_SUN HAS_SUN
+#endif
+/* A hit's material: a private copy where textures can change it per hit
+ * (maps.h), else the scene's own. */
+#if HAS_TEXTURES
+typedef const Material *MatRef;
+#else
+typedef __global const Material *MatRef;
 #endif
 /* Multiple importance sampling: at MAT_PBR vertices, and at diffuse ones
  * under an environment map (integrator.rs, World::diffuse_mis). */

@@ -53,6 +53,7 @@ fn soup(n: usize, seed: u64) -> MeshData {
         normals: None,
         triangles,
         materials: vec![0; n],
+        ..Default::default()
     }
 }
 

@@ -379,6 +379,8 @@ fn every_feature_combination_builds() {
                         projection: u32::from(materials % 3 == 1) * (1 + u32::from(lights) % 2),
                         // The denoiser's features with a third.
                         features: materials % 3 == 2,
+                        // Texture maps with a quarter (every material kind).
+                        textures: lights == 1 || (lights == 2 && materials == 3),
                         inject_nan_every: None,
                     }));
                 }

@@ -3,7 +3,7 @@
 //! [`finish`], which turns a loader's [`Parts`] into a [`Model`] that keeps
 //! the guarantees of the module doc.
 
-use super::Material;
+use super::{Image, Maps, Material};
 use super::{Instance, Limits, MeshData, Model, ModelCamera, ModelError};
 use std::collections::HashSet;
 
@@ -26,6 +26,8 @@ pub(super) struct Ctx {
     pub limits: Limits,
     warnings: Vec<String>,
     seen: HashSet<String>,
+    /// Texels of the images decoded so far.
+    texels: u64,
 }
 
 impl Ctx {
@@ -35,7 +37,23 @@ impl Ctx {
             limits: *limits,
             warnings: Vec::new(),
             seen: HashSet::new(),
+            texels: 0,
         }
+    }
+
+    /// Counts `n` more texels; an error if the images then exceed the limit.
+    pub fn charge_texels(&mut self, n: u64, location: &str) -> Result<(), ModelError> {
+        self.texels = self.texels.saturating_add(n);
+        if self.texels > self.limits.max_texels {
+            return Err(self.err_at(
+                location,
+                format!(
+                    "images of {} texels in all, more than the limit of {}",
+                    self.texels, self.limits.max_texels
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// Records a warning once (later duplicates are dropped).
@@ -108,6 +126,7 @@ impl Ctx {
 pub(super) struct Mat {
     pub name: String,
     pub json: Material,
+    pub maps: Maps,
     /// What the file asks of this material that is not modelled, each a
     /// clause; [`finish`] prefixes the material's (final) name. Only the
     /// notes of materials that some triangle uses become warnings.
@@ -123,6 +142,7 @@ impl Mat {
                 albedo: [DEFAULT_ALBEDO; 3],
                 emission: None,
             },
+            maps: Maps::default(),
             notes: Vec::new(),
         }
     }
@@ -135,6 +155,13 @@ pub(super) struct Parts {
     pub materials: Vec<Mat>,
     pub instances: Vec<Instance>,
     pub camera: Option<ModelCamera>,
+    pub images: Vec<Image>,
+}
+
+/// An f32 as the f64 of its shortest decimal form (a file's 0.1 reads as
+/// 0.1).
+pub(super) fn widen(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
 }
 
 /// An albedo in [0, 1]: components outside (or not numbers) are clamped
@@ -312,6 +339,7 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
         materials,
         instances,
         camera,
+        images,
     } = parts;
 
     let total: u64 = meshes.iter().map(|m| m.triangles.len() as u64).sum();
@@ -361,6 +389,21 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
                 )));
             }
         }
+        let n = mesh.positions.len();
+        let uvs_ok = mesh
+            .uvs
+            .iter()
+            .flatten()
+            .all(|u| u.len() == n && u.iter().flatten().all(|x| x.is_finite()));
+        let tangents_ok = mesh
+            .tangents
+            .as_ref()
+            .is_none_or(|t| t.len() == n && t.iter().flatten().all(|x| x.is_finite()));
+        if !uvs_ok || !tangents_ok {
+            return Err(ctx.err(format!(
+                "mesh {name:?}: texture coordinates or tangents do not match its vertices (a loader bug)"
+            )));
+        }
         let degenerate = degenerate_count(&mesh);
         if degenerate > 0 {
             ctx.warn(format!(
@@ -370,6 +413,21 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
         }
         mesh_map[i] = Some(kept.len());
         kept.push(mesh);
+    }
+
+    let image_count = images.len();
+    let bad_image = materials.iter().any(|m| {
+        [
+            &m.maps.base_color,
+            &m.maps.metallic_roughness,
+            &m.maps.normal,
+        ]
+        .into_iter()
+        .flatten()
+        .any(|r| r.image >= image_count || r.uv > 1)
+    });
+    if bad_image {
+        return Err(ctx.err("a material refers to an image the model does not have (a loader bug)"));
     }
 
     // Materials: keep the used ones, in the loader's order; unique names.
@@ -389,7 +447,7 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
             ctx.warn(format!("material {name:?}: {note}"));
         }
         mat_map[i] = out_materials.len() as u32;
-        out_materials.push((name, mat.json));
+        out_materials.push((name, mat.json, mat.maps));
     }
     for mesh in &mut kept {
         for m in &mut mesh.materials {
@@ -419,6 +477,7 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
         materials: out_materials,
         instances: out_instances,
         camera,
+        images,
         warnings: ctx.warnings,
     })
 }

@@ -72,6 +72,7 @@ pub fn icosphere(levels: u32) -> MeshData {
         materials: vec![0; triangles.len()],
         positions,
         triangles,
+        ..MeshData::default()
     }
 }
 
@@ -120,6 +121,7 @@ pub fn bumpy_sphere(triangles: usize) -> MeshData {
         normals: None,
         materials: vec![0; tris.len()],
         triangles: tris,
+        ..MeshData::default()
     }
 }
 

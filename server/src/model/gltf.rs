@@ -25,12 +25,12 @@
 //! f32 factors are widened to f64 by their shortest decimal form, so a
 //! file's 0.1 reads as 0.1.
 
-use super::common::{self, Ctx, Mat, Parts};
+use super::common::{self, widen, Ctx, Parts};
 use super::gltf_data::{self as data, Buffers};
-use super::Material;
+use super::gltf_maps::Images;
+use super::gltf_material::Materials;
 use super::{Instance, MeshData, ModelCamera, ModelError};
 use ::gltf::camera::Projection;
-use ::gltf::material::AlphaMode;
 use ::gltf::mesh::{Mode, Semantic};
 use ::gltf::scene::Transform;
 use ::gltf::{Document, Node};
@@ -53,11 +53,6 @@ const SUPPORTED: [&str; 4] = [
 ];
 /// Required extensions without which the geometry cannot be read.
 const GEOMETRY: [&str; 2] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression"];
-
-/// An f32 as the f64 of its shortest decimal form.
-fn widen(x: f32) -> f64 {
-    x.to_string().parse().unwrap_or(f64::from(x))
-}
 
 /// Reads a `.gltf` (JSON) or `.glb` (binary). `dir` is the file's directory
 /// (`None` for an upload, which cannot refer to external buffers).
@@ -101,6 +96,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         of: vec![None; doc.materials().len()],
         default: None,
         list: Vec::new(),
+        images: Images::new(&doc),
     };
     let mut meshes = Vec::with_capacity(ids.len());
     let mut totals = (0u64, 0u64);
@@ -112,6 +108,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         mesh_of[id] = meshes.len();
         meshes.push(read_mesh(ctx, &mut bufs, &mesh, &mut table, &mut totals)?);
     }
+    let images = table.images.decode(ctx, &doc, &mut bufs)?;
     let instances = placed
         .into_iter()
         .map(|(id, m)| Instance {
@@ -124,6 +121,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         materials: table.list,
         instances,
         camera,
+        images,
     })
 }
 
@@ -301,137 +299,6 @@ fn view(world: &M4, yfov: f64, ortho_height: Option<f64>) -> Result<ModelCamera,
     })
 }
 
-/// glTF materials converted when first used, in that order.
-struct Materials {
-    of: Vec<Option<u32>>,
-    default: Option<u32>,
-    list: Vec<Mat>,
-}
-
-impl Materials {
-    fn index(&mut self, ctx: &mut Ctx, m: &::gltf::Material) -> u32 {
-        let next = self.list.len() as u32;
-        match m.index() {
-            Some(i) => match self.of.get(i).copied().flatten() {
-                Some(k) => k,
-                None => {
-                    self.list.push(material(m, i));
-                    if let Some(slot) = self.of.get_mut(i) {
-                        *slot = Some(next);
-                    }
-                    next
-                }
-            },
-            None => *self.default.get_or_insert_with(|| {
-                ctx.warn("primitives without a material use the glTF default material: white diffuse (albedo 1)");
-                self.list.push(Mat {
-                    name: "default".to_owned(),
-                    json: Material::Diffuse {
-                        albedo: [1.0; 3],
-                        emission: None,
-                    },
-                    notes: Vec::new(),
-                });
-                next
-            }),
-        }
-    }
-}
-
-/// The scene material for a glTF material (rules in the module doc).
-fn material(m: &::gltf::Material, index: usize) -> Mat {
-    let name = m
-        .name()
-        .map(str::to_owned)
-        .unwrap_or_else(|| format!("material{index}"));
-    let (mut notes, mut ignored) = (Vec::new(), Vec::new());
-    let pbr = m.pbr_metallic_roughness();
-    let base = pbr.base_color_factor();
-    let rgb = [base[0], base[1], base[2]].map(widen);
-    let strength = m.emissive_strength().map_or(1.0, widen);
-    let emission = common::emission(
-        "emission",
-        m.emissive_factor().map(|e| widen(e) * strength),
-        &mut notes,
-    );
-    let (metallic, roughness) = (widen(pbr.metallic_factor()), widen(pbr.roughness_factor()));
-    let transmission = m.transmission();
-    let t = transmission
-        .as_ref()
-        .map_or(0.0, |t| widen(t.transmission_factor()));
-
-    let textures = [
-        (pbr.base_color_texture().is_some(), "base colour texture"),
-        (
-            pbr.metallic_roughness_texture().is_some(),
-            "metallic-roughness texture",
-        ),
-        (m.normal_texture().is_some(), "normal map"),
-        (m.occlusion_texture().is_some(), "occlusion map"),
-        (m.emissive_texture().is_some(), "emissive texture"),
-        (
-            transmission
-                .as_ref()
-                .is_some_and(|t| t.transmission_texture().is_some()),
-            "transmission texture",
-        ),
-    ];
-    ignored.extend(textures.iter().filter(|t| t.0).map(|t| t.1.to_owned()));
-    match m.alpha_mode() {
-        AlphaMode::Opaque => {}
-        AlphaMode::Mask => ignored.push(format!(
-            "alpha mode MASK (cutoff {})",
-            m.alpha_cutoff().map_or(0.5, widen)
-        )),
-        AlphaMode::Blend => ignored.push("alpha mode BLEND".to_owned()),
-    }
-
-    let json = if t > 0.0 {
-        if t < 1.0 {
-            notes.push(format!(
-                "transmission {t} is rendered as fully transmissive glass"
-            ));
-        }
-        if roughness != 0.0 {
-            ignored.push(format!("roughness {roughness} (the glass is smooth)"));
-        }
-        let ior = match m.ior() {
-            None => common::DEFAULT_IOR,
-            Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
-        };
-        Material::Glass {
-            ior,
-            albedo: Some(common::albedo("base colour", rgb, &mut notes)),
-            emission,
-        }
-    } else if metallic == 1.0 && roughness == 0.0 {
-        Material::Mirror {
-            albedo: common::albedo("base colour", rgb, &mut notes),
-            emission,
-        }
-    } else if metallic == 0.0 && roughness == 1.0 {
-        Material::Diffuse {
-            albedo: common::albedo("base colour", rgb, &mut notes),
-            emission,
-        }
-    } else {
-        Material::Pbr {
-            base_color: common::albedo("base colour", rgb, &mut notes),
-            metallic: metallic.clamp(0.0, 1.0),
-            roughness: roughness.clamp(0.0, 1.0),
-            ior: match m.ior() {
-                None => common::DEFAULT_IOR,
-                Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
-            },
-            emission,
-        }
-    };
-    if !ignored.is_empty() {
-        notes.push(format!("not modelled, ignored: {}", ignored.join(", ")));
-    }
-    Mat { name, json, notes }
-}
-
 /// Triangles of one primitive's vertex list; the count of indices left over.
 fn triangles(mode: Mode, idx: &[u32], out: &mut Vec<[u32; 3]>) -> usize {
     match mode {
@@ -473,6 +340,12 @@ fn read_mesh(
         ..Default::default()
     };
     let (mut normals, mut with_normals, mut without_normals) = (Vec::new(), 0, 0);
+    let mut uvs: [Vec<[f32; 2]>; 2] = [Vec::new(), Vec::new()];
+    let mut with_uvs = [0usize; 2];
+    let (mut tangents, mut with_tangents) = (Vec::new(), 0usize);
+    let mut primitives = 0usize;
+    // The UV set of the first normal map that the mesh's materials use.
+    let mut normal_uv = None;
     for prim in mesh.primitives() {
         let path = format!("meshes[{mi}].primitives[{}]", prim.index());
         let mode = prim.mode();
@@ -553,7 +426,28 @@ fn read_mesh(
             }
             _ => without_normals += 1,
         }
+        for (set, (uv, with)) in uvs.iter_mut().zip(&mut with_uvs).enumerate() {
+            match prim.get(&Semantic::TexCoords(set as u32)) {
+                Some(acc) if acc.count() == n => {
+                    let at = format!("{path}.attributes.TEXCOORD_{set}");
+                    uv.resize(out.positions.len(), [0.0; 2]);
+                    uv.extend(data::read_vec2(ctx, bufs, &acc, &at)?);
+                    *with += 1;
+                }
+                _ => {}
+            }
+        }
+        if let Some(acc) = prim.get(&Semantic::Tangents).filter(|a| a.count() == n) {
+            let at = format!("{path}.attributes.TANGENT");
+            tangents.resize(out.positions.len(), [0.0; 4]);
+            tangents.extend(data::read_vec4(ctx, bufs, &acc, &at)?);
+            with_tangents += 1;
+        }
+        primitives += 1;
         let material = table.index(ctx, &prim.material());
+        if let Some(r) = &table.list[material as usize].maps.normal {
+            normal_uv.get_or_insert(r.uv as usize);
+        }
         let offset = out.positions.len() as u32;
         u32::try_from(out.positions.len() + n)
             .map_err(|_| ctx.err_at(&path, "too many vertices"))?;
@@ -562,6 +456,28 @@ fn read_mesh(
             .extend(tris.iter().map(|t| t.map(|i| i + offset)));
         out.materials.resize(out.triangles.len(), material);
         *totals = (totals.0 + n as u64, totals.1 + tris.len() as u64);
+    }
+    let vertices = out.positions.len();
+    for (set, (mut uv, with)) in uvs.into_iter().zip(with_uvs).enumerate() {
+        if with > 0 {
+            // Primitives without this set read texel (0, 0).
+            uv.resize(vertices, [0.0; 2]);
+            if let Some(i) = uv.iter().position(|v| !v.iter().all(|x| x.is_finite())) {
+                return Err(ctx.err_at(
+                    format!("meshes[{mi}]"),
+                    format!("TEXCOORD_{set} of vertex {i} is not finite"),
+                ));
+            }
+            out.uvs[set] = Some(uv);
+        }
+    }
+    let tangents_ok = tangents.iter().all(|t| t.iter().all(|x| x.is_finite()));
+    if with_tangents == primitives && primitives > 0 && tangents_ok {
+        out.tangents = Some(tangents);
+    } else if with_tangents > 0 {
+        ctx.warn(format!(
+            "mesh {name:?}: TANGENT missing on some primitives or not finite: tangents generated (MikkTSpace)"
+        ));
     }
     out.normals = match (with_normals, without_normals) {
         (0, _) => None,
@@ -573,5 +489,12 @@ fn read_mesh(
             None
         }
     };
+    if let (None, Some(set)) = (&out.tangents, normal_uv) {
+        if !super::tangents::generate(&mut out, set) {
+            ctx.warn(format!(
+                "mesh {name:?}: a normal map without TEXCOORD_{set} to orient it: the map is not applied"
+            ));
+        }
+    }
     Ok(out)
 }

@@ -6,6 +6,7 @@
 //! (KHR_mesh_quantization) and sparse accessors work.
 
 use super::common::Ctx;
+use super::uri::fetch_uri;
 use super::ModelError;
 use ::gltf::accessor::{sparse::IndexType, Accessor, DataType, Dimensions};
 use ::gltf::buffer::{Source, View};
@@ -188,26 +189,7 @@ impl<'a> Buffers<'a> {
                     "has no uri (only buffer 0 of a GLB may use the BIN chunk)",
                 ))
             }
-            Some(uri) if uri.starts_with("data:") => {
-                data_uri(uri).map_err(|r| ctx.err_at(&path, r))?
-            }
-            Some(uri) => {
-                let Some(dir) = self.dir else {
-                    return Err(ctx.err_at(
-                        &path,
-                        format!("refers to the external file {uri:?}, which an upload cannot include: upload a .glb instead (or embed the buffer as a data: URI)"),
-                    ));
-                };
-                let name = String::from_utf8_lossy(&percent_decode(uri)).into_owned();
-                if name.contains("://") || Path::new(&name).is_absolute() {
-                    return Err(ctx.err_at(
-                        &path,
-                        format!("{uri:?}: only files relative to the glTF file are read"),
-                    ));
-                }
-                std::fs::read(dir.join(&name))
-                    .map_err(|e| ctx.err_at(&path, format!("cannot read {name:?}: {e}")))?
-            }
+            Some(uri) => fetch_uri(ctx, self.dir, uri, &path, "buffer")?,
         };
         if data.len() < *length {
             return Err(ctx.err_at(
@@ -222,54 +204,31 @@ impl<'a> Buffers<'a> {
         Ok(())
     }
 
+    /// The bytes of buffer view `view` (an image's).
+    pub fn view(&mut self, ctx: &Ctx, view: &View) -> Result<&[u8], ModelError> {
+        let (buffer, start, _) = place(
+            ctx,
+            self,
+            view,
+            0,
+            view.length(),
+            1,
+            true,
+            &format!("bufferViews[{}]", view.index()),
+        )?;
+        Ok(&self.bytes(buffer)[start..start + view.length()])
+    }
+
+    /// The directory external files are read from (none for an upload).
+    pub fn dir(&self) -> Option<&'a Path> {
+        self.dir
+    }
+
     fn bytes(&self, index: usize) -> &[u8] {
         self.loaded
             .get(index)
             .and_then(Option::as_deref)
             .unwrap_or_default()
-    }
-}
-
-fn percent_decode(s: &str) -> Vec<u8> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        let hex = b
-            .get(i + 1..i + 3)
-            .and_then(|h| std::str::from_utf8(h).ok())
-            .and_then(|h| u8::from_str_radix(h, 16).ok());
-        match (b[i], hex) {
-            (b'%', Some(v)) => {
-                out.push(v);
-                i += 3;
-            }
-            (c, _) => {
-                out.push(c);
-                i += 1;
-            }
-        }
-    }
-    out
-}
-
-/// The bytes of a `data:[<type>][;base64],<data>` URI.
-fn data_uri(uri: &str) -> Result<Vec<u8>, String> {
-    use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
-    use base64::Engine;
-    let (meta, payload) = uri["data:".len()..]
-        .split_once(',')
-        .ok_or("a data: URI without a comma")?;
-    if meta.ends_with(";base64") {
-        let engine = GeneralPurpose::new(
-            &base64::alphabet::STANDARD,
-            GeneralPurposeConfig::new().with_decode_padding_mode(DecodePaddingMode::Indifferent),
-        );
-        engine
-            .decode(payload.trim())
-            .map_err(|e| format!("the data: URI is not valid base64 ({e})"))
-    } else {
-        Ok(percent_decode(payload))
     }
 }
 
@@ -460,6 +419,54 @@ pub(super) fn read_vec3(
     read(ctx, bufs, acc, path, |x| [c(x), c(&x[s..]), c(&x[2 * s..])])
 }
 
+/// A VEC2 attribute (TEXCOORD_n).
+pub(super) fn read_vec2(
+    ctx: &Ctx,
+    bufs: &mut Buffers,
+    acc: &Accessor,
+    path: &str,
+) -> Result<Vec<[f32; 2]>, ModelError> {
+    let (c, s) = float_components(ctx, acc, Dimensions::Vec2, path)?;
+    read(ctx, bufs, acc, path, |x| [c(x), c(&x[s..])])
+}
+
+/// A VEC4 attribute (TANGENT).
+pub(super) fn read_vec4(
+    ctx: &Ctx,
+    bufs: &mut Buffers,
+    acc: &Accessor,
+    path: &str,
+) -> Result<Vec<[f32; 4]>, ModelError> {
+    let (c, s) = float_components(ctx, acc, Dimensions::Vec4, path)?;
+    read(ctx, bufs, acc, path, |x| {
+        [c(x), c(&x[s..]), c(&x[2 * s..]), c(&x[3 * s..])]
+    })
+}
+
+/// Reads one component of an element as f32.
+type Decode = fn(&[u8]) -> f32;
+
+/// The component decoder and size of an accessor that must have `dims`.
+fn float_components(
+    ctx: &Ctx,
+    acc: &Accessor,
+    dims: Dimensions,
+    path: &str,
+) -> Result<(Decode, usize), ModelError> {
+    let ty = acc.data_type();
+    match (acc.dimensions() == dims, component(ty, acc.normalized())) {
+        (true, Some(c)) => Ok((c, ty.size())),
+        _ => Err(ctx.err_at(
+            path,
+            format!(
+                "accessors[{}] is {:?} of {ty:?}, not a {dims:?} of floats or small integers",
+                acc.index(),
+                acc.dimensions()
+            ),
+        )),
+    }
+}
+
 /// Triangle indices: SCALAR unsigned bytes, shorts or ints.
 pub(super) fn read_indices(
     ctx: &Ctx,
@@ -488,26 +495,6 @@ pub(super) fn read_indices(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn data_uris_and_percent_encoding() {
-        assert_eq!(
-            data_uri("data:application/octet-stream;base64,AAEC/w=="),
-            Ok(vec![0, 1, 2, 255])
-        );
-        assert_eq!(
-            data_uri("data:application/gltf-buffer;base64,AAEC/w"),
-            Ok(vec![0, 1, 2, 255])
-        );
-        assert_eq!(data_uri("data:,a%20b"), Ok(b"a b".to_vec()));
-        assert!(data_uri("data:;base64,@@@")
-            .is_err_and(|e| e.starts_with("the data: URI is not valid base64")));
-        assert_eq!(
-            data_uri("data:nothing"),
-            Err("a data: URI without a comma".to_owned())
-        );
-        assert_eq!(percent_decode("a%2"), b"a%2".to_vec());
-    }
 
     #[test]
     fn glb_chunks_are_checked() {

@@ -31,12 +31,18 @@ use std::path::Path;
 mod common;
 mod gltf;
 mod gltf_data;
+mod gltf_maps;
+mod gltf_material;
+mod image;
 mod mtl;
 mod obj;
 mod ply;
+mod tangents;
 #[cfg(test)]
 mod tests;
+mod uri;
 pub mod write;
+pub mod write_glb;
 
 pub mod generate;
 pub mod hdr;
@@ -47,8 +53,10 @@ pub struct Model {
     /// Triangle meshes in their own (object) space.
     pub meshes: Vec<MeshData>,
     /// Materials the meshes' triangles refer to, by index, with the names the
-    /// file gives them (unique within the model).
-    pub materials: Vec<(String, Material)>,
+    /// file gives them (unique within the model) and their texture maps.
+    pub materials: Vec<(String, Material, Maps)>,
+    /// The images the materials' maps read (`TextureRef::image`).
+    pub images: Vec<Image>,
     /// Placements of meshes: one per mesh for OBJ and PLY (identity), one per
     /// glTF node that holds a mesh (its world transform, hierarchy applied).
     pub instances: Vec<Instance>,
@@ -88,6 +96,81 @@ pub enum Material {
     },
 }
 
+/// A material's texture maps (each format's module says which it reads).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Maps {
+    /// Multiplies the base colour (sRGB RGB; alpha unused for now).
+    pub base_color: Option<TextureRef>,
+    /// glTF's metallic-roughness texture: roughness in green, metal in blue.
+    pub metallic_roughness: Option<TextureRef>,
+    /// A tangent-space normal map and its x/y scale.
+    pub normal: Option<TextureRef>,
+    pub normal_scale: f64,
+}
+
+impl Default for Maps {
+    fn default() -> Self {
+        Self {
+            base_color: None,
+            metallic_roughness: None,
+            normal: None,
+            normal_scale: 1.0,
+        }
+    }
+}
+
+impl Maps {
+    pub fn is_empty(&self) -> bool {
+        self.base_color.is_none() && self.metallic_roughness.is_none() && self.normal.is_none()
+    }
+}
+
+/// How a material reads one of [`Model::images`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    pub image: usize,
+    /// The UV set (0 or 1).
+    pub uv: u32,
+    /// Along u, along v.
+    pub wrap: [Wrap; 2],
+    /// `KHR_texture_transform`: offset, rotation (radians), scale.
+    pub offset: [f64; 2],
+    pub rotation: f64,
+    pub scale: [f64; 2],
+}
+
+impl TextureRef {
+    /// Image `image`, UV set 0, repeating, untransformed.
+    pub fn plain(image: usize) -> Self {
+        Self {
+            image,
+            uv: 0,
+            wrap: [Wrap::Repeat; 2],
+            offset: [0.0; 2],
+            rotation: 0.0,
+            scale: [1.0; 2],
+        }
+    }
+}
+
+/// A sampler's wrap mode along one axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    Clamp,
+    Mirror,
+}
+
+/// An image decoded to 8-bit RGBA, rows from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Where it came from (`model.glb: images[2]`, `wood.png`).
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
 /// An indexed triangle mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshData {
@@ -95,6 +178,10 @@ pub struct MeshData {
     pub positions: Vec<[f32; 3]>,
     /// Per-vertex unit shading normals (same length as `positions`), if any.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Per-vertex texture coordinates, sets 0 and 1 (UV origin top left).
+    pub uvs: [Option<Vec<[f32; 2]>>; 2],
+    /// Per-vertex tangents (w: the bitangent's sign), given or generated.
+    pub tangents: Option<Vec<[f32; 4]>>,
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle: index into [`Model::materials`].
     pub materials: Vec<u32>,
@@ -121,11 +208,16 @@ pub struct ModelCamera {
     pub ortho_height: Option<f64>,
 }
 
+/// Largest width or height of a texture image (the renderer's own limit).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
 /// Limits checked while reading, before anything large is allocated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {
     pub max_triangles: u64,
     pub max_vertices: u64,
+    /// Texels over all of a model's images.
+    pub max_texels: u64,
 }
 
 impl Default for Limits {
@@ -133,6 +225,7 @@ impl Default for Limits {
         Self {
             max_triangles: 16_000_000,
             max_vertices: 16_000_000,
+            max_texels: 128 << 20,
         }
     }
 }

@@ -240,6 +240,7 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     Mat {
         name: m.name.clone(),
         json,
+        maps: super::Maps::default(),
         notes,
     }
 }

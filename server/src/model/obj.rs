@@ -315,6 +315,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
             transform: common::IDENTITY,
         }],
         camera: None,
+        images: Vec::new(),
     })
 }
 
@@ -538,7 +539,8 @@ mod tests {
                 Material::Diffuse {
                     albedo: [0.8; 3],
                     emission: None
-                }
+                },
+                crate::model::Maps::default()
             )]
         );
         assert_eq!(
@@ -556,6 +558,7 @@ mod tests {
         let limits = Limits {
             max_vertices: 2,
             max_triangles: 10,
+            ..Limits::default()
         };
         let e = load_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj", &limits)
             .expect_err("over the limit");

@@ -459,5 +459,6 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
             transform: common::IDENTITY,
         }],
         camera: None,
+        images: Vec::new(),
     })
 }

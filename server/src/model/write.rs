@@ -91,6 +91,7 @@ mod tests {
             normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             materials: vec![0, 0],
+            ..MeshData::default()
         }
     }
 

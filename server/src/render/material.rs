@@ -7,6 +7,9 @@ use crate::render::math::{basis, sincos_turns, DVec3, Vec3A};
 use crate::render::sampler::Sampler;
 use crate::render::scene::{Fresnel, Material, MaterialKind};
 
+/// `SurfaceMaterial::maps` of a material without texture maps.
+pub const NO_MAPS: u32 = u32::MAX;
+
 /// How a material scatters, in the hot path's form.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
@@ -31,6 +34,8 @@ pub struct SurfaceMaterial {
     pub albedo: Vec3A,
     pub emission: Vec3A,
     pub emissive: bool,
+    /// Its texture maps in `World::maps`, or [`NO_MAPS`].
+    pub maps: u32,
 }
 
 fn f32x3(v: DVec3) -> Vec3A {
@@ -57,6 +62,7 @@ impl SurfaceMaterial {
             albedo: f32x3(m.albedo),
             emission: f32x3(m.emission),
             emissive: m.is_emissive(),
+            maps: NO_MAPS,
         }
     }
 }
@@ -205,6 +211,7 @@ mod tests {
             albedo: Vec3A::ONE,
             emission: Vec3A::ZERO,
             emissive: false,
+            maps: NO_MAPS,
         };
         let d = Vec3A::new(0.6, -0.8, 0.0);
         let n = Vec3A::Y;

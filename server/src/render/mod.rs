@@ -5,6 +5,7 @@
 //! - `world`, `shape`, `bvh`, `ray`: the scene as the hot path sees it
 //! - `camera`, `filter`, `sampler`: where camera samples go and their randomness
 //! - `material`, `fresnel`, `ggx`, `light`: how surfaces scatter, what emits
+//! - `texture`, `maps`: image textures and the material maps that read them
 //! - `integrator`: the path tracer, next-event estimation included
 //! - `adaptive`: where an adaptive render's samples go
 //! - `film`, `features`, `tonemap`, `output`: accumulation, error estimate,
@@ -31,6 +32,7 @@ pub mod isa;
 pub mod job;
 pub mod jpeg_strips;
 pub mod light;
+pub mod maps;
 pub mod material;
 pub mod math;
 pub mod output;
@@ -46,6 +48,7 @@ pub mod scene;
 pub mod shape;
 pub mod sky_probe;
 pub mod split;
+pub mod texture;
 pub mod tonemap;
 pub mod world;
 

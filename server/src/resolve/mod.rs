@@ -18,9 +18,11 @@ use crate::render::scene::{
     builtin, CameraJson, EnvMapJson, EnvironmentJson, GlassJson, ImportJson, LoadedModel,
     MaterialJson, ObjectJson, PbrJson, ProjectionJson, SceneJson, SurfaceJson, BUILTIN_NAMES,
 };
-use crate::render::scene::{FresnelJson, Scene, SceneError};
+use crate::render::scene::{FresnelJson, MapSlot, Maps, Scene, SceneError};
 use crate::render::shape::MeshData;
+use crate::render::texture::{Sampling, Texture, UvTransform, Wrap};
 use std::path::Path;
+use std::sync::Arc;
 
 pub use builtin_maps::{builtin_map, builtin_maps, BuiltinMap};
 
@@ -156,12 +158,18 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
             name: m.name,
             positions: m.positions,
             normals: m.normals,
+            uvs: m.uvs,
+            tangents: m.tangents,
             triangles: m.triangles,
             materials: m.materials,
         })
         .collect();
+    let textures = (model.images.into_iter())
+        .map(|i| Texture::new(&i.name, i.width, i.height, &i.rgba).map(Arc::new))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| format!("{name}: {e}"))?;
     let materials = (model.materials.into_iter())
-        .map(|(name, m)| (name, material_json(m)))
+        .map(|(name, m, maps)| (name, material_json(m), render_maps(&maps, &textures)))
         .collect();
     let instances = (model.instances.iter())
         .map(|i| (i.mesh, world_from_object(i.transform)))
@@ -179,6 +187,33 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
         ..CameraJson::default()
     });
     LoadedModel::new(name, meshes, materials, instances, camera, model.warnings)
+}
+
+/// A loader's texture maps on the renderer's textures (`textures[i]` is
+/// the model's image `i`); glTF's metallic-roughness texture feeds both
+/// the metallic (blue) and the roughness (green) slot.
+fn render_maps(maps: &model::Maps, textures: &[Arc<Texture>]) -> Maps {
+    let slot = |r: &Option<model::TextureRef>| {
+        r.as_ref().map(|r| MapSlot {
+            texture: textures[r.image].clone(),
+            sampling: Sampling {
+                uv: r.uv,
+                transform: UvTransform::new(r.offset, r.rotation, r.scale),
+                wrap: r.wrap.map(|w| match w {
+                    model::Wrap::Repeat => Wrap::Repeat,
+                    model::Wrap::Clamp => Wrap::Clamp,
+                    model::Wrap::Mirror => Wrap::Mirror,
+                }),
+            },
+        })
+    };
+    Maps {
+        base_color: slot(&maps.base_color),
+        metallic: slot(&maps.metallic_roughness),
+        roughness: slot(&maps.metallic_roughness),
+        normal: slot(&maps.normal),
+        normal_scale: maps.normal_scale,
+    }
 }
 
 /// A loader's material as scene JSON (glass from files is always exact

@@ -85,7 +85,7 @@ impl Asset {
                 info.triangles = m.triangles();
                 info.meshes = m.meshes.len() as u64;
                 info.instances = m.instances.len() as u64;
-                info.materials = m.materials.iter().map(|(n, _)| n.clone()).collect();
+                info.materials = m.materials.iter().map(|(n, _, _)| n.clone()).collect();
                 info.has_camera = m.camera.is_some();
                 info.warnings = m.warnings.clone();
             }
@@ -175,6 +175,7 @@ impl AssetStore {
             let limits = Limits {
                 max_triangles: self.limits.max_triangles,
                 max_vertices: self.limits.max_triangles,
+                ..Limits::default()
             };
             let read = model::load_bytes(bytes, name, &limits)
                 .map_err(|e| AssetError::Invalid(e.to_string()))?;

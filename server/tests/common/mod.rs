@@ -345,6 +345,7 @@ pub fn bunny() -> Option<pathstream::model::MeshData> {
         positions,
         normals: None,
         triangles,
+        ..Default::default()
     })
 }
 

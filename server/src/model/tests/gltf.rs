@@ -2,7 +2,7 @@
 //! by two nodes, cameras, every material rule) written three ways; then
 //! malformed variants of a one-triangle document.
 
-use super::{assert_guarantees, cube};
+use super::{assert_guarantees, cube, untextured};
 use crate::model::Material;
 use crate::model::{load_bytes, load_file, Instance, Limits, MeshData, Model, ModelCamera};
 use base64::Engine;
@@ -189,11 +189,28 @@ fn scene() -> (Value, Vec<u8>) {
             {"name": "unused", "emissiveTexture": {"index": 0}}
         ],
         "textures": [{"source": 0}],
-        "images": [{"uri": "never-read.png"}],
+        "images": [{"uri": grey_png_uri()}],
         "accessors": b.accessors,
         "bufferViews": b.views,
     });
     (doc, b.data)
+}
+
+/// A 1x1 grey PNG as a `data:` URI.
+fn grey_png_uri() -> String {
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &[128, 128, 255, 255],
+        1,
+        1,
+        image::ExtendedColorType::Rgba8,
+    )
+    .expect("png");
+    format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(png)
+    )
 }
 
 fn with_buffer(mut doc: Value, len: usize, uri: Option<String>) -> Value {
@@ -241,6 +258,7 @@ fn expected() -> Model {
         normals: Some(g.normals[..16].to_vec()),
         triangles: side,
         materials: vec![0; 8],
+        ..MeshData::default()
     };
     cube_mesh
         .positions
@@ -265,6 +283,7 @@ fn expected() -> Model {
             [5, 8, 9],
         ],
         materials: vec![2; 6],
+        ..MeshData::default()
     };
     let tri = MeshData {
         name: "mesh2".into(),
@@ -272,6 +291,7 @@ fn expected() -> Model {
         normals: None,
         triangles: (0..4).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
         materials: vec![3, 4, 5, 6],
+        ..MeshData::default()
     };
     let glass = |ior, albedo| Material::Glass {
         ior,
@@ -280,17 +300,23 @@ fn expected() -> Model {
     };
     let r = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]];
     let rt = |t: [f64; 3]| [0, 1, 2].map(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
-    Model {
+    let mut model = Model {
         meshes: vec![cube_mesh, strips, tri],
-        materials: vec![
-            ("paint".into(), diffuse([0.8, 0.2, 0.1], None)),
-            ("glass".into(), glass(1.4, [1.0; 3])),
-            ("default".into(), diffuse([1.0; 3], None)),
-            ("chrome".into(), Material::Mirror { albedo: [0.9; 3], emission: None }),
-            ("lamp".into(), diffuse([0.0; 3], Some([4.0, 2.0, 1.0]))),
-            ("paint-2".into(), pbr([0.5; 3], 0.5, 0.5)),
-            ("partial".into(), glass(1.5, [1.0, 0.5, 0.5])),
-        ],
+        materials: untextured([
+            ("paint", diffuse([0.8, 0.2, 0.1], None)),
+            ("glass", glass(1.4, [1.0; 3])),
+            ("default", diffuse([1.0; 3], None)),
+            ("chrome", Material::Mirror { albedo: [0.9; 3], emission: None }),
+            ("lamp", diffuse([0.0; 3], Some([4.0, 2.0, 1.0]))),
+            ("paint-2", pbr([0.5; 3], 0.5, 0.5)),
+            ("partial", glass(1.5, [1.0, 0.5, 0.5])),
+        ]),
+        images: vec![crate::model::Image {
+            name: "images[0]".into(),
+            width: 1,
+            height: 1,
+            rgba: vec![128, 128, 255, 255],
+        }],
         instances: vec![
             Instance {
                 mesh: 0,
@@ -324,13 +350,23 @@ fn expected() -> Model {
             "primitives without a material use the glTF default material: white diffuse (albedo 1)",
             "meshes[1].primitives[2] (mesh \"strips\"): POINTS primitive skipped (only triangles are rendered)",
             "meshes[1].primitives[3] (mesh \"strips\"): LINES primitive skipped (only triangles are rendered)",
-            "material \"paint-2\": not modelled, ignored: base colour texture, normal map, alpha mode BLEND",
+            "mesh \"mesh2\": a normal map without TEXCOORD_0 to orient it: the map is not applied",
+            "material \"paint-2\": not modelled, ignored: alpha mode BLEND",
             "material \"partial\": transmission 0.5 is rendered as fully transmissive glass",
             "material \"partial\": base colour [2, 0.5, 0.5] is outside [0, 1]: clamped to [1, 0.5, 0.5]",
         ]
         .map(str::to_owned)
         .to_vec(),
-    }
+    };
+    // paint-2's base colour and normal maps read the one image (mesh2 has no
+    // UVs to orient the normal map: no tangents, as the warning says).
+    let plain = Some(crate::model::TextureRef::plain(0));
+    model.materials[5].2 = crate::model::Maps {
+        base_color: plain,
+        normal: plain,
+        ..Default::default()
+    };
+    model
 }
 
 /// Compares exactly, except transforms and the camera (rotations from a
@@ -582,8 +618,7 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
         prim["attributes"]["COLOR_0"] = json!(1);
         prim["material"] = json!(0);
         d["materials"] = json!([{"occlusionTexture": {"index": 0}, "emissiveTexture": {"index": 0},
-            "alphaMode": "MASK", "alphaCutoff": 0.25,
-            "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}}]);
+            "alphaMode": "MASK", "alphaCutoff": 0.25}]);
         d["textures"] = json!([{"source": 0}]);
         d["images"] = json!([{"uri": "x.png"}]);
     })
@@ -591,7 +626,7 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
     assert_guarantees(&m);
     assert_eq!(
         m.materials,
-        vec![("material0".to_owned(), pbr([1.0; 3], 1.0, 1.0))]
+        untextured([("material0", pbr([1.0; 3], 1.0, 1.0))])
     );
     assert_eq!(
         m.warnings,
@@ -600,7 +635,8 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
             "skins ignored (skinned meshes are placed by their node's transform)",
             "mesh \"mesh0\": morph targets ignored (the base shape is used)",
             "vertex colours ignored",
-            "material \"material0\": not modelled, ignored: metallic-roughness texture, occlusion map, emissive texture, alpha mode MASK (cutoff 0.25)",
+            "occlusion maps are not used: a path tracer finds the occlusion itself",
+            "material \"material0\": not modelled, ignored: emissive texture, alpha mode MASK (cutoff 0.25)",
         ]
     );
 }

@@ -8,8 +8,18 @@ mod gltf;
 mod obj;
 mod ply;
 mod robust;
+mod textures;
 
-use super::{detect, Format, MeshData, Model};
+use super::{detect, Format, Maps, Material, MeshData, Model};
+
+/// Named materials without maps, as a model lists them.
+pub(super) fn untextured<const N: usize>(
+    m: [(&str, Material); N],
+) -> Vec<(String, Material, Maps)> {
+    m.into_iter()
+        .map(|(n, m)| (n.to_owned(), m, Maps::default()))
+        .collect()
+}
 
 /// A generated polygon mesh: positions, normals, faces with a material.
 pub(super) struct Gen {
@@ -72,6 +82,7 @@ impl Gen {
             normals: Some(self.normals.clone()),
             triangles,
             materials: mats.iter().map(|&m| materials[m as usize]).collect(),
+            ..MeshData::default()
         }
     }
 }
@@ -108,7 +119,7 @@ pub(super) fn assert_guarantees(m: &Model) {
         assert!(i.mesh < m.meshes.len());
         assert!(i.transform.iter().flatten().all(|x| x.is_finite()));
     }
-    let names: std::collections::HashSet<_> = m.materials.iter().map(|(n, _)| n).collect();
+    let names: std::collections::HashSet<_> = m.materials.iter().map(|(n, _, _)| n).collect();
     assert_eq!(names.len(), m.materials.len(), "material names are unique");
     let warnings: std::collections::HashSet<_> = m.warnings.iter().collect();
     assert_eq!(

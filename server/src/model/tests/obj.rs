@@ -1,6 +1,6 @@
 //! OBJ + MTL.
 
-use super::{assert_guarantees, cube, Gen};
+use super::{assert_guarantees, cube, untextured, Gen};
 use crate::model::Material;
 use crate::model::{load_bytes, load_file, Instance, Limits, Model};
 use std::fmt::Write as _;
@@ -90,10 +90,11 @@ fn cube_with_two_mtl_files_loads_exactly() {
         m,
         Model {
             meshes: vec![g.mesh("cube", &[0, 1])],
-            materials: vec![
-                ("paint".into(), diffuse([0.8, 0.2, 0.1], None)),
-                ("chrome".into(), mirror([0.9; 3])),
-            ],
+            materials: untextured([
+                ("paint", diffuse([0.8, 0.2, 0.1], None)),
+                ("chrome", mirror([0.9; 3])),
+            ]),
+            images: Vec::new(),
             instances: vec![Instance {
                 mesh: 0,
                 transform: [
@@ -216,7 +217,7 @@ fn mtl_rules_map_every_material() {
     std::fs::write(&path, obj).expect("write");
     let m = load_file(&path, &Limits::default()).expect("loads");
     assert_guarantees(&m);
-    let names: Vec<&str> = m.materials.iter().map(|(n, _)| n.as_str()).collect();
+    let names: Vec<&str> = m.materials.iter().map(|(n, _, _)| n.as_str()).collect();
     assert_eq!(
         names,
         [
@@ -232,7 +233,7 @@ fn mtl_rules_map_every_material() {
             "default"
         ]
     );
-    let json: Vec<&Material> = m.materials.iter().map(|(_, j)| j).collect();
+    let json: Vec<&Material> = m.materials.iter().map(|(_, j, _)| j).collect();
     assert_eq!(
         json,
         [
@@ -295,9 +296,9 @@ fn mtl_pbr_keys_make_the_metallic_roughness_model() {
     assert_guarantees(&m);
     assert_eq!(
         m.materials,
-        vec![
+        untextured([
             (
-                "brushed".to_owned(),
+                "brushed",
                 Material::Pbr {
                     base_color: [0.9, 0.6, 0.3],
                     metallic: 1.0,
@@ -306,8 +307,8 @@ fn mtl_pbr_keys_make_the_metallic_roughness_model() {
                     emission: None,
                 }
             ),
-            ("mirror_wins".to_owned(), mirror([0.5; 3])),
-        ]
+            ("mirror_wins", mirror([0.5; 3])),
+        ])
     );
     assert_eq!(
         m.warnings,
@@ -328,7 +329,7 @@ fn uploads_cannot_follow_mtllib() {
     assert_eq!(m.meshes, vec![g.mesh("cube", &[0, 0])]);
     assert_eq!(
         m.materials,
-        vec![("default".to_owned(), diffuse([0.8; 3], None))]
+        untextured([("default", diffuse([0.8; 3], None))])
     );
     assert_eq!(
         m.warnings,
@@ -362,7 +363,7 @@ fn mtl_problems() {
 
     std::fs::write(dir.path().join("bad.mtl"), "newmtl a\nKd 0.5\n").expect("write");
     let m = load_file(&path, &Limits::default()).expect("Kd with one number");
-    assert_eq!(m.materials, vec![("a".to_owned(), diffuse([0.5; 3], None))]);
+    assert_eq!(m.materials, untextured([("a", diffuse([0.5; 3], None))]));
 
     std::fs::remove_file(dir.path().join("bad.mtl")).expect("rm");
     let m = load_file(&path, &Limits::default()).expect("loads without the mtl");

@@ -128,7 +128,9 @@ fn expected(g: &Gen, warnings: &[&str]) -> Model {
                 albedo: [0.8; 3],
                 emission: None,
             },
+            Default::default(),
         )],
+        images: Vec::new(),
         instances: vec![Instance {
             mesh: 0,
             transform: [
@@ -340,6 +342,7 @@ fn header_problems() {
     let limits = Limits {
         max_vertices: 100,
         max_triangles: 2,
+        ..Limits::default()
     };
     let quad = format!(
         "ply\nformat ascii 1.0\nelement vertex 4\n{xyz}{face}end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n5 0 1 2 3 0\n"

@@ -16,6 +16,7 @@ fn samples() -> Vec<(&'static str, Vec<u8>)> {
         normals: Some(g.normals.clone()),
         triangles,
         materials,
+        ..MeshData::default()
     };
     let mut ply = Vec::new();
     write_ply_binary(&mesh, &mut ply).expect("write");
@@ -135,6 +136,7 @@ fn mutated_files_never_panic() {
     let limits = Limits {
         max_triangles: 100_000,
         max_vertices: 100_000,
+        ..Limits::default()
     };
     // MODEL_FUZZ_ROUNDS=100000 (and MODEL_FUZZ_SEED) for a longer run.
     let rounds = std::env::var("MODEL_FUZZ_ROUNDS")

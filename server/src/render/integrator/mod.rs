@@ -22,7 +22,7 @@ use crate::render::features::{self, Guide};
 use crate::render::filter::Filter;
 use crate::render::ggx;
 use crate::render::isa::Isa;
-use crate::render::material::{scatter, Bsdf, SurfaceMaterial};
+use crate::render::material::{scatter, Bsdf, SurfaceMaterial, NO_MAPS};
 use crate::render::math::{basis, max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
@@ -186,8 +186,15 @@ impl Path {
         };
         let ray = &self.ray;
         self.sampler.at_vertex(self.bounces);
-        let s = world.surface(&hit, ray);
-        let m = world.material(s.material);
+        let mut s = world.surface(&hit, ray);
+        let untextured = world.material(s.material);
+        let textured;
+        let m = if untextured.maps == NO_MAPS {
+            untextured
+        } else {
+            textured = world.shade(untextured, &hit, &mut s);
+            &textured
+        };
         if m.emissive {
             let emitter = || world.lights.index_of(s.object, s.prim);
             self.l += self.emission(world, settings, m.emission, emitter, s.p);

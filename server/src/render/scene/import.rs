@@ -188,7 +188,7 @@ impl Importer<'_> {
             return Ok(map.clone());
         }
         let mut map = Vec::with_capacity(model.materials.len());
-        for (name, m) in &model.materials {
+        for (name, m, maps) in &model.materials {
             let mut full = format!("{}/{name}", model.name);
             let mut n = 2;
             while self.index_of.contains_key(&full) {
@@ -198,6 +198,7 @@ impl Importer<'_> {
             let mut material = materials::material(&full, m)
                 .map_err(|e| SceneError::new(path, format!("{}: {e}", model.name)))?;
             material.imported = true;
+            material.maps = maps.clone();
             self.index_of.insert(full, self.materials.len());
             map.push(self.materials.len() as u32);
             self.materials.push(material);
@@ -275,6 +276,7 @@ fn inline(data: &MeshDataJson) -> std::result::Result<Arc<LoadedModel>, String> 
         normals,
         triangles: data.triangles.clone(),
         materials: Vec::new(),
+        ..MeshData::default()
     };
     let loaded = Arc::new(
         LoadedModel::new(

@@ -88,6 +88,7 @@ pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
         kind,
         albedo,
         emission,
+        maps: Default::default(),
         imported: false,
     })
 }

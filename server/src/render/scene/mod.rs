@@ -39,6 +39,7 @@ mod environment;
 mod frame;
 mod import;
 mod json;
+mod maps;
 mod materials;
 mod placement;
 mod resolve;
@@ -56,6 +57,7 @@ pub use json::{
     MeshDataJson, ObjectJson, PbrJson, ProjectionJson, QuadJson, RotateJson, ScaleJson, SceneJson,
     SkyJson, SphereJson, SurfaceJson, TransformJson,
 };
+pub use maps::{MapSlot, Maps};
 pub use resolve::{LoadedModel, ModelSource, NoFiles, Resolver};
 pub use validate::{DEFAULT_ENVIRONMENT, MAX_PLACED};
 
@@ -187,6 +189,8 @@ pub struct Material {
     pub albedo: DVec3,
     /// Emitted radiance, from both sides of the surface.
     pub emission: DVec3,
+    /// Texture maps (`render::maps`): none for most materials.
+    pub maps: Maps,
     /// Came from a model file (named `file/material`); not written back
     /// to scene JSON, where the file brings it again.
     pub imported: bool,

@@ -8,6 +8,7 @@
 //! - [`NoFiles`]: reads nothing (the library's default);
 //! - `Reuse`: the models of an existing scene (edits), else another resolver.
 
+use super::Maps;
 use super::{CameraJson, ImportJson, MaterialJson, Scene};
 use crate::render::envmap::EnvMap;
 use crate::render::math::DAffine3;
@@ -62,8 +63,10 @@ pub struct LoadedModel {
     /// The file's name (or the asset's), for material names and messages.
     pub name: String,
     pub meshes: Vec<Arc<Mesh>>,
-    /// Materials, indexed by the meshes' material slots.
-    pub materials: Vec<(String, MaterialJson)>,
+    /// Materials, indexed by the meshes' material slots, with their
+    /// texture maps (which scene JSON cannot name: a file's materials are
+    /// not written back).
+    pub materials: Vec<(String, MaterialJson, Maps)>,
     /// (mesh, world_from_object) per placement.
     pub instances: Vec<(usize, DAffine3)>,
     /// The file's camera in its world space, if it has one.
@@ -77,7 +80,7 @@ impl LoadedModel {
     pub fn new(
         name: &str,
         meshes: Vec<MeshData>,
-        materials: Vec<(String, MaterialJson)>,
+        materials: Vec<(String, MaterialJson, Maps)>,
         instances: Vec<(usize, DAffine3)>,
         camera: Option<CameraJson>,
         warnings: Vec<String>,
@@ -106,9 +109,15 @@ impl LoadedModel {
         self.meshes.iter().map(|m| m.triangles.len() as u64).sum()
     }
 
-    /// Bytes the meshes hold.
+    /// Bytes the meshes and textures hold (each texture once).
     pub fn memory_bytes(&self) -> usize {
-        self.meshes.iter().map(|m| m.memory_bytes()).sum()
+        let mut seen = std::collections::HashSet::new();
+        let textures: usize = (self.materials.iter())
+            .flat_map(|m| m.2.slots().map(|(_, s)| s.texture.clone()))
+            .filter(|t| seen.insert(Arc::as_ptr(t)))
+            .map(|t| t.memory_bytes())
+            .sum();
+        self.meshes.iter().map(|m| m.memory_bytes()).sum::<usize>() + textures
     }
 }
 

@@ -20,6 +20,10 @@ pub struct MeshData {
     pub positions: Vec<[f32; 3]>,
     /// Per-vertex unit shading normals (same length as `positions`), if any.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Per-vertex texture coordinates, sets 0 and 1 (glTF's TEXCOORD_n).
+    pub uvs: [Option<Vec<[f32; 2]>>; 2],
+    /// Per-vertex tangents, w the bitangent's sign (glTF's TANGENT).
+    pub tangents: Option<Vec<[f32; 4]>>,
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle: the mesh's material slot (empty: slot 0 everywhere).
     pub materials: Vec<u32>,
@@ -31,6 +35,10 @@ pub struct Mesh {
     pub positions: Vec<[f32; 3]>,
     /// Unit shading normals per vertex, if the mesh has them.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Texture coordinates per vertex, sets 0 and 1, where it has them.
+    pub uvs: [Option<Vec<[f32; 2]>>; 2],
+    /// Tangents per vertex (w: the bitangent's sign), where it has them.
+    pub tangents: Option<Vec<[f32; 4]>>,
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle: the mesh's own material slot (an instance maps slots
     /// to scene materials).
@@ -57,6 +65,14 @@ pub enum MeshError {
     Normal(usize),
     #[error("{0} normals for {1} vertices")]
     NormalCount(usize, usize),
+    #[error("{what} of vertex {index} is not finite")]
+    Attribute { what: &'static str, index: usize },
+    #[error("{count} {what} for {vertices} vertices")]
+    AttributeCount {
+        what: &'static str,
+        count: usize,
+        vertices: usize,
+    },
     #[error("triangle {0}: vertex index {1} is out of range ({2} vertices)")]
     Index(usize, u32, usize),
     #[error("{0} material indices for {1} triangles")]
@@ -72,6 +88,8 @@ impl Mesh {
             name,
             positions,
             normals,
+            uvs,
+            tangents,
             triangles,
             materials,
         } = data;
@@ -91,6 +109,15 @@ impl Mesh {
             if let Some(i) = n.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
                 return Err(MeshError::Normal(i));
             }
+        }
+        let n = positions.len();
+        for (what, set) in ["TEXCOORD_0", "TEXCOORD_1"].into_iter().zip(&uvs) {
+            if let Some(v) = set {
+                attribute(what, v, n)?;
+            }
+        }
+        if let Some(t) = &tangents {
+            attribute("TANGENT", t, n)?;
         }
         for (i, t) in triangles.iter().enumerate() {
             if let Some(&bad) = t.iter().find(|&&v| v as usize >= positions.len()) {
@@ -127,6 +154,8 @@ impl Mesh {
             name,
             positions,
             normals,
+            uvs,
+            tangents,
             triangles,
             materials,
             material_slots,
@@ -151,6 +180,32 @@ impl Mesh {
         Some(a * b[0] + c * b[1] + d * b[2])
     }
 
+    /// UV set `set` at barycentrics `b` of triangle `i` ((0, 0) where the
+    /// mesh has no such set).
+    #[inline(always)]
+    pub fn uv(&self, set: usize, i: u32, b: [f32; 3]) -> [f32; 2] {
+        let Some(uvs) = &self.uvs[set] else {
+            return [0.0; 2];
+        };
+        let [p, q, r] = self.triangles[i as usize].map(|v| uvs[v as usize]);
+        [
+            p[0] * b[0] + q[0] * b[1] + r[0] * b[2],
+            p[1] * b[0] + q[1] * b[1] + r[1] * b[2],
+        ]
+    }
+
+    /// The interpolated tangent (object space, not normalised) and the sign
+    /// of the first vertex's bitangent, if the mesh has tangents.
+    #[inline(always)]
+    pub fn tangent(&self, i: u32, b: [f32; 3]) -> Option<(Vec3A, f32)> {
+        let tangents = self.tangents.as_ref()?;
+        let [p, q, r] = self.triangles[i as usize].map(|v| tangents[v as usize]);
+        let t = Vec3A::new(p[0], p[1], p[2]) * b[0]
+            + Vec3A::new(q[0], q[1], q[2]) * b[1]
+            + Vec3A::new(r[0], r[1], r[2]) * b[2];
+        Some((t, if p[3] < 0.0 { -1.0 } else { 1.0 }))
+    }
+
     pub fn bounds(&self) -> Aabb {
         self.bvh.bounds
     }
@@ -160,10 +215,36 @@ impl Mesh {
     pub fn memory_bytes(&self) -> usize {
         self.positions.len() * 12
             + self.normals.as_ref().map_or(0, |n| n.len() * 12)
+            + self
+                .uvs
+                .iter()
+                .flatten()
+                .map(|u| u.len() * 8)
+                .sum::<usize>()
+            + self.tangents.as_ref().map_or(0, |t| t.len() * 16)
             + self.triangles.len() * 16
             + self.bvh.memory_bytes()
             + self.tris.len() * std::mem::size_of::<TriVerts>()
             + self.packs.len() * std::mem::size_of::<TriPack>()
+    }
+}
+
+/// A per-vertex attribute: one finite value per vertex.
+fn attribute<const N: usize>(
+    what: &'static str,
+    values: &[[f32; N]],
+    vertices: usize,
+) -> Result<(), MeshError> {
+    if values.len() != vertices {
+        return Err(MeshError::AttributeCount {
+            what,
+            count: values.len(),
+            vertices,
+        });
+    }
+    match values.iter().position(|v| !v.iter().all(|x| x.is_finite())) {
+        Some(index) => Err(MeshError::Attribute { what, index }),
+        None => Ok(()),
     }
 }
 

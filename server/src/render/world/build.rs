@@ -49,8 +49,9 @@ impl World {
     }
 
     pub fn with_accel(scene: &Scene, origin: DVec3, choice: AccelChoice) -> Self {
-        let materials: Vec<SurfaceMaterial> =
+        let mut materials: Vec<SurfaceMaterial> =
             scene.materials.iter().map(SurfaceMaterial::new).collect();
+        let (textures, maps) = super::textures::world_maps(scene, &mut materials);
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut instances = Vec::new();
         let mut boxes = Vec::with_capacity(scene.objects.len());
@@ -180,6 +181,8 @@ impl World {
             objects,
             instances,
             materials,
+            textures,
+            maps,
             lights,
             environment,
             env_map,

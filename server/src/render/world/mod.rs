@@ -18,6 +18,7 @@ mod build;
 mod emitters;
 mod instance;
 mod scan;
+mod textures;
 
 pub use build::{scan_cost, AccelChoice, SCAN_MAX_COST};
 pub use instance::Instance;
@@ -169,6 +170,10 @@ pub struct World {
     pub objects: Vec<WorldObject>,
     pub instances: Vec<Instance>,
     pub materials: Vec<SurfaceMaterial>,
+    /// The textures the materials' maps read (each once).
+    pub textures: Vec<std::sync::Arc<crate::render::texture::Texture>>,
+    /// Texture maps, by `SurfaceMaterial::maps`.
+    pub maps: Vec<crate::render::maps::WorldMaps>,
     pub lights: Lights,
     /// Radiance of rays that leave the scene, where there is no map.
     pub environment: Vec3A,
@@ -358,5 +363,20 @@ impl World {
     #[inline(always)]
     pub fn material(&self, index: u32) -> &SurfaceMaterial {
         &self.materials[index as usize]
+    }
+
+    /// Material `m` (which has maps) as it is at `hit` on surface `s`:
+    /// its maps read, and `s`'s shading normal turned by its normal map.
+    #[inline(always)]
+    pub fn shade(&self, m: &SurfaceMaterial, hit: &Hit, s: &mut Surface) -> SurfaceMaterial {
+        let maps = &self.maps[m.maps as usize];
+        let tc = self.texcoords(hit, s);
+        let mut ns = s.ns;
+        let out = crate::render::maps::shade(&self.textures, maps, m, &tc, &mut ns);
+        if ns != s.ns {
+            s.ns = ns;
+            s.smooth = true;
+        }
+        out
     }
 }

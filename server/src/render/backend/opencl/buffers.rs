@@ -19,6 +19,7 @@
 
 use super::layout::{self, Packed};
 use super::meshes;
+use super::textures;
 use super::{call, Access, OpenClBackend, OpenClError};
 use crate::render::bvh::BvhNode;
 use crate::render::envmap::EnvMap;
@@ -66,7 +67,7 @@ macro_rules! scene_array {
 
 /// The scene's arrays in the order of `kernels/scene_arrays.h`: the
 /// `render` kernel's first parameters.
-pub(super) const SCENE_ARRAYS: [SceneArray; 15] = [
+pub(super) const SCENE_ARRAYS: [SceneArray; 21] = [
     scene_array!("P": "Params", "params", [layout::Params], |p| {
         std::slice::from_ref(&p.params)
     }),
@@ -92,6 +93,16 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 15] = [
     scene_array!("env_dist": "float", "environment map tables", [f32], |p| {
         p.env_dist()
     }),
+    scene_array!("uvs": "float4", "texture coordinates", [[f32; 4]], |p| &p.meshes.uvs),
+    scene_array!("tangents": "float4", "tangents", [[f32; 4]], |p| &p.meshes.tangents),
+    scene_array!("maps": "MaterialMaps", "material maps", [textures::MaterialMaps], |p| {
+        &p.textures.maps
+    }),
+    scene_array!("tex_images": "TexImage", "texture sizes", [textures::TexImage], |p| {
+        &p.textures.images
+    }),
+    scene_array!("texels": "uint", "textures", [u32], |p| &p.textures.texels),
+    scene_array!("srgb": "float", "sRGB table", [f32], |p| &p.textures.srgb),
 ];
 
 /// The `render` kernel's parameters after the scene's arrays, in order:

@@ -298,6 +298,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         lens: true,
         projection: 0,
         features: true,
+        textures: true,
         inject_nan_every: Some(1),
     };
     let mut known: BTreeSet<String> =

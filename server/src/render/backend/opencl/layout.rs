@@ -52,7 +52,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 32] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 35] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -96,6 +96,9 @@ pub const SHARED_CONSTANTS: [(&str, u32); 32] = [
     ("PROJ_PERSPECTIVE", RayProjection::Perspective as u32),
     ("PROJ_ORTHOGRAPHIC", RayProjection::Orthographic as u32),
     ("PROJ_PANORAMA", RayProjection::Panorama as u32),
+    ("NO_MAPS", crate::render::material::NO_MAPS),
+    ("NO_TEXTURE", crate::render::maps::NO_TEXTURE),
+    ("ALPHA_MIN_BITS", crate::render::ggx::ALPHA_MIN.to_bits()),
 ];
 
 /// How a launch finds its pixels and samples (the kernel's `mode`): every
@@ -140,7 +143,8 @@ pub struct Material {
     pub kind: u32,
     pub schlick: u32,
     pub emissive: u32,
-    pub pad0: u32,
+    /// Its maps in the `maps` array, or `NO_MAPS`.
+    pub maps: u32,
     /// pbr: metallic, alpha, roughness, f0 (`ggx::Pbr`).
     pub pbr: [f32; 4],
 }
@@ -319,6 +323,8 @@ pub struct Packed {
     pub prims: Vec<u32>,
     pub big: Vec<u32>,
     pub meshes: super::meshes::PackedMeshes,
+    /// Texture maps and their texels, where a material has maps.
+    pub textures: super::textures::PackedTextures,
     /// The metallic-roughness BSDF's albedo tables (`ggx::Tables`), where
     /// a material uses it.
     pub ggx: Vec<f32>,
@@ -392,7 +398,7 @@ pub fn pack(job: &RenderJob) -> Packed {
                 kind,
                 schlick: u32::from(schlick),
                 emissive: u32::from(m.emissive),
-                pad0: 0,
+                maps: m.maps,
                 pbr,
             }
         })
@@ -443,6 +449,7 @@ pub fn pack(job: &RenderJob) -> Packed {
         prims: Vec::new(),
         big: Vec::new(),
         meshes: super::meshes::pack(w),
+        textures: super::textures::pack(w),
         env_map: w.env_map.as_ref().map(|m| m.map.clone()),
         ggx: if w.materials.iter().any(|m| matches!(m.bsdf, Bsdf::Pbr(_))) {
             crate::render::ggx::tables().data.to_vec()

@@ -35,8 +35,12 @@ pub struct Instance {
     /// Where the mesh's per-slot vertex normals start (3 per triangle), or
     /// [`NO_NORMALS`].
     pub normal_base: u32,
-    pub pad0: u32,
-    pub pad1: u32,
+    /// Where its per-slot texture coordinates start (3 per triangle: u0,
+    /// v0, u1, v1 of each corner), or [`NO_NORMALS`].
+    pub uv_base: u32,
+    /// Where its per-slot tangents start (3 per triangle, w the sign), or
+    /// [`NO_NORMALS`].
+    pub tangent_base: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<Instance>() == 208);
@@ -52,6 +56,11 @@ pub struct PackedMeshes {
     /// Three unit vertex normals per triangle slot (w unused), for meshes
     /// that have them.
     pub normals: Vec<[f32; 4]>,
+    /// Texture coordinates (both sets) of each triangle slot's corners,
+    /// for meshes that have them and are placed where a material has maps.
+    pub uvs: Vec<[f32; 4]>,
+    /// Tangents likewise (w: the bitangent's sign).
+    pub tangents: Vec<[f32; 4]>,
     /// World material of each instance's mesh slots.
     pub slots: Vec<u32>,
     /// Deepest mesh BVH.
@@ -70,11 +79,14 @@ fn affine(a: &crate::render::math::Affine3A) -> [[f32; 4]; 4] {
 
 pub fn pack(w: &World) -> PackedMeshes {
     let mut out = PackedMeshes::default();
-    // (node_base, tri_base, normal_base) of each distinct mesh.
-    let mut placed: HashMap<*const crate::render::shape::Mesh, (u32, u32, u32)> = HashMap::new();
+    // Texture coordinates and tangents only where some material reads maps.
+    let textured = !w.maps.is_empty();
+    // (node_base, tri_base, normal_base, uv_base, tangent_base) of each
+    // distinct mesh.
+    let mut placed: HashMap<*const crate::render::shape::Mesh, [u32; 5]> = HashMap::new();
     for inst in &w.instances {
         let mesh = &*inst.mesh;
-        let (node_base, tri_base, normal_base) =
+        let [node_base, tri_base, normal_base, uv_base, tangent_base] =
             *placed.entry(Arc::as_ptr(&inst.mesh)).or_insert_with(|| {
                 let bases = (out.nodes.len() as u32, out.tris.len() as u32);
                 out.nodes.extend_from_slice(&mesh.bvh.nodes);
@@ -97,7 +109,35 @@ pub fn pack(w: &World) -> PackedMeshes {
                     }
                     None => NO_NORMALS,
                 };
-                (bases.0, bases.1, normal_base)
+                let has_uvs = mesh.uvs.iter().any(Option::is_some);
+                let uv_base = if textured && has_uvs {
+                    let base = (out.uvs.len() / 3) as u32;
+                    let zero = |_: usize| [0.0f32; 2];
+                    for t in &mesh.tris {
+                        for v in mesh.triangles[t.index() as usize] {
+                            let v = v as usize;
+                            let [a, b] = mesh.uvs[0].as_ref().map_or_else(|| zero(v), |u| u[v]);
+                            let [c, d] = mesh.uvs[1].as_ref().map_or_else(|| zero(v), |u| u[v]);
+                            out.uvs.push([a, b, c, d]);
+                        }
+                    }
+                    base
+                } else {
+                    NO_NORMALS
+                };
+                let tangent_base = match (&mesh.tangents, textured) {
+                    (Some(tangents), true) => {
+                        let base = (out.tangents.len() / 3) as u32;
+                        for t in &mesh.tris {
+                            for v in mesh.triangles[t.index() as usize] {
+                                out.tangents.push(tangents[v as usize]);
+                            }
+                        }
+                        base
+                    }
+                    _ => NO_NORMALS,
+                };
+                [bases.0, bases.1, normal_base, uv_base, tangent_base]
             });
         let slot_base = out.slots.len() as u32;
         out.slots.extend_from_slice(&inst.materials);
@@ -111,8 +151,8 @@ pub fn pack(w: &World) -> PackedMeshes {
             tri_base,
             slot_base,
             normal_base,
-            pad0: 0,
-            pad1: 0,
+            uv_base,
+            tangent_base,
         });
     }
     out

@@ -27,6 +27,7 @@ mod meshes;
 mod program;
 mod slice;
 mod staging;
+mod textures;
 mod tiles;
 
 pub use tiles::TileDispatch;

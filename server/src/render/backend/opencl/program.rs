@@ -9,7 +9,7 @@ use super::layout::{
 };
 use crate::render::job::RenderJob;
 use crate::render::light::EmitterShape;
-use crate::render::material::Bsdf;
+use crate::render::material::{Bsdf, NO_MAPS};
 use crate::render::sampler::SamplerKind;
 use crate::render::world::Geometry;
 use crate::render::Filter;
@@ -17,7 +17,7 @@ use opencl3::context::Context;
 use opencl3::program::Program;
 
 /// The kernel's sources in dependency order (`kernels/`, built into the binary).
-pub const SOURCES: [&str; 14] = [
+pub const SOURCES: [&str; 15] = [
     include_str!("../../../../../kernels/scene_arrays.h"),
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
@@ -26,6 +26,7 @@ pub const SOURCES: [&str; 14] = [
     include_str!("../../../../../kernels/triangles.h"),
     include_str!("../../../../../kernels/world.h"),
     include_str!("../../../../../kernels/ggx.h"),
+    include_str!("../../../../../kernels/maps.h"),
     include_str!("../../../../../kernels/materials.h"),
     include_str!("../../../../../kernels/envmap.h"),
     include_str!("../../../../../kernels/camera.h"),
@@ -77,6 +78,8 @@ pub struct Features {
     pub projection: u32,
     /// The denoiser's feature sums beside the film (`render::features`).
     pub features: bool,
+    /// Texture maps on some material (`kernels/maps.h`).
+    pub textures: bool,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
     pub inject_nan_every: Option<u64>,
 }
@@ -171,6 +174,7 @@ impl Features {
             lens: job.camera.has_lens(),
             projection: job.camera.projection as u32,
             features: job.settings.features,
+            textures: used.iter().any(|m| m.maps != NO_MAPS),
             inject_nan_every: None,
         }
     }
@@ -183,7 +187,7 @@ impl Features {
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
-             -D PROJECTION={}u -D FEATURES={}",
+             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -211,6 +215,7 @@ impl Features {
             b(self.lens),
             self.projection,
             b(self.features),
+            b(self.textures),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));

@@ -1,0 +1,143 @@
+//! glTF materials as the renderer's (the rules are in `gltf`'s module doc),
+//! each converted when a primitive first uses it, with its texture maps
+//! (`gltf_maps`).
+
+use super::common::{self, widen, Ctx, Mat};
+use super::gltf_maps::{self, Images};
+use super::{Maps, Material};
+use ::gltf::material::AlphaMode;
+
+/// glTF materials converted when first used, in that order.
+pub(super) struct Materials {
+    pub of: Vec<Option<u32>>,
+    pub default: Option<u32>,
+    pub list: Vec<Mat>,
+    pub images: Images,
+}
+
+impl Materials {
+    pub fn index(&mut self, ctx: &mut Ctx, m: &::gltf::Material) -> u32 {
+        let next = self.list.len() as u32;
+        match m.index() {
+            Some(i) => match self.of.get(i).copied().flatten() {
+                Some(k) => k,
+                None => {
+                    if m.occlusion_texture().is_some() {
+                        ctx.warn("occlusion maps are not used: a path tracer finds the occlusion itself");
+                    }
+                    self.list.push(material(m, i, &mut self.images));
+                    if let Some(slot) = self.of.get_mut(i) {
+                        *slot = Some(next);
+                    }
+                    next
+                }
+            },
+            None => *self.default.get_or_insert_with(|| {
+                ctx.warn("primitives without a material use the glTF default material: white diffuse (albedo 1)");
+                self.list.push(Mat {
+                    name: "default".to_owned(),
+                    json: Material::Diffuse {
+                        albedo: [1.0; 3],
+                        emission: None,
+                    },
+                    maps: Maps::default(),
+                    notes: Vec::new(),
+                });
+                next
+            }),
+        }
+    }
+}
+
+/// The scene material for a glTF material (rules in the module doc).
+fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
+    let name = m
+        .name()
+        .map(str::to_owned)
+        .unwrap_or_else(|| format!("material{index}"));
+    let (mut notes, mut ignored) = (Vec::new(), Vec::new());
+    let pbr = m.pbr_metallic_roughness();
+    let base = pbr.base_color_factor();
+    let rgb = [base[0], base[1], base[2]].map(widen);
+    let strength = m.emissive_strength().map_or(1.0, widen);
+    let emission = common::emission(
+        "emission",
+        m.emissive_factor().map(|e| widen(e) * strength),
+        &mut notes,
+    );
+    let (metallic, roughness) = (widen(pbr.metallic_factor()), widen(pbr.roughness_factor()));
+    let transmission = m.transmission();
+    let t = transmission
+        .as_ref()
+        .map_or(0.0, |t| widen(t.transmission_factor()));
+
+    let maps = gltf_maps::maps(m, images, &mut notes);
+    let textures = [
+        (m.emissive_texture().is_some(), "emissive texture"),
+        (
+            transmission
+                .as_ref()
+                .is_some_and(|t| t.transmission_texture().is_some()),
+            "transmission texture",
+        ),
+    ];
+    ignored.extend(textures.iter().filter(|t| t.0).map(|t| t.1.to_owned()));
+    match m.alpha_mode() {
+        AlphaMode::Opaque => {}
+        AlphaMode::Mask => ignored.push(format!(
+            "alpha mode MASK (cutoff {})",
+            m.alpha_cutoff().map_or(0.5, widen)
+        )),
+        AlphaMode::Blend => ignored.push("alpha mode BLEND".to_owned()),
+    }
+
+    let json = if t > 0.0 {
+        if t < 1.0 {
+            notes.push(format!(
+                "transmission {t} is rendered as fully transmissive glass"
+            ));
+        }
+        if roughness != 0.0 {
+            ignored.push(format!("roughness {roughness} (the glass is smooth)"));
+        }
+        let ior = match m.ior() {
+            None => common::DEFAULT_IOR,
+            Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
+        };
+        Material::Glass {
+            ior,
+            albedo: Some(common::albedo("base colour", rgb, &mut notes)),
+            emission,
+        }
+    } else if metallic == 1.0 && roughness == 0.0 && maps.metallic_roughness.is_none() {
+        Material::Mirror {
+            albedo: common::albedo("base colour", rgb, &mut notes),
+            emission,
+        }
+    } else if metallic == 0.0 && roughness == 1.0 && maps.metallic_roughness.is_none() {
+        Material::Diffuse {
+            albedo: common::albedo("base colour", rgb, &mut notes),
+            emission,
+        }
+    } else {
+        Material::Pbr {
+            base_color: common::albedo("base colour", rgb, &mut notes),
+            metallic: metallic.clamp(0.0, 1.0),
+            roughness: roughness.clamp(0.0, 1.0),
+            ior: match m.ior() {
+                None => common::DEFAULT_IOR,
+                Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
+            },
+            emission,
+        }
+    };
+    if !ignored.is_empty() {
+        notes.push(format!("not modelled, ignored: {}", ignored.join(", ")));
+    }
+    Mat {
+        name,
+        json,
+        maps,
+        notes,
+    }
+}

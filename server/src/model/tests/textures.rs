@@ -1,0 +1,180 @@
+//! glTF texture maps: a generated `.glb` with base colour,
+//! metallic-roughness and normal textures read back exactly (images,
+//! samplers, UV sets, transforms, tangents given or generated); broken
+//! images and references fail with the element named.
+
+use crate::model::write_glb::{glb, GlbMaterial, GlbTexture};
+use crate::model::{load_bytes, Limits, MeshData, Wrap};
+
+/// A unit quad facing +z with UVs covering the image once.
+pub(crate) fn quad() -> MeshData {
+    MeshData {
+        name: "quad".into(),
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ],
+        normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+        uvs: [
+            Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
+            Some(vec![[0.5; 2]; 4]),
+        ],
+        tangents: None,
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        materials: vec![0, 0],
+    }
+}
+
+fn checker() -> GlbTexture {
+    let mut rgba = Vec::new();
+    for y in 0..4u8 {
+        for x in 0..4u8 {
+            rgba.extend([x * 60, y * 60, 255 - x * 60, 255]);
+        }
+    }
+    GlbTexture::new(4, 4, rgba)
+}
+
+#[test]
+fn maps_images_and_attributes_are_read() {
+    let mut base = checker();
+    base.wrap = [Wrap::Mirror, Wrap::Clamp];
+    base.transform = Some(([0.5, 0.25], 0.5, [2.0, 3.0]));
+    let mut mr = GlbTexture::new(1, 1, vec![0, 128, 255, 255]);
+    mr.tex_coord = 1;
+    let material = GlbMaterial {
+        metallic: 0.5,
+        roughness: 0.25,
+        base_color_texture: Some(base),
+        metallic_roughness_texture: Some(mr),
+        normal_texture: Some(GlbTexture::new(1, 1, vec![128, 128, 255, 255])),
+        normal_scale: 0.5,
+        ..GlbMaterial::default()
+    };
+    let bytes = glb(&quad(), &material);
+    let model = load_bytes(&bytes, "t.glb", &Limits::default()).expect("loads");
+    assert_eq!(model.images.len(), 3);
+    assert_eq!((model.images[0].width, model.images[0].height), (4, 4));
+    assert_eq!(model.images[0].rgba, checker().rgba);
+    assert_eq!(model.images[1].rgba, [0, 128, 255, 255]);
+    let (_, _, maps) = &model.materials[0];
+    let b = maps.base_color.expect("base colour");
+    assert_eq!((b.image, b.uv, b.wrap), (0, 0, [Wrap::Mirror, Wrap::Clamp]));
+    assert_eq!(
+        (b.offset, b.rotation, b.scale),
+        ([0.5, 0.25], 0.5, [2.0, 3.0])
+    );
+    let m = maps.metallic_roughness.expect("metallic-roughness");
+    assert_eq!((m.image, m.uv, m.wrap), (1, 1, [Wrap::Repeat; 2]));
+    assert_eq!(maps.normal.map(|n| n.image), Some(2));
+    assert_eq!(maps.normal_scale, 0.5);
+    let mesh = &model.meshes[0];
+    assert_eq!(mesh.uvs, quad().uvs);
+    // No TANGENT in the file: MikkTSpace's, along +x (u), for a normal map.
+    let t = mesh.tangents.as_ref().expect("generated tangents");
+    assert_eq!(t.len(), mesh.positions.len());
+    for v in t {
+        assert!((v[0] - 1.0).abs() < 1e-5 && v[3] == 1.0, "{v:?}");
+    }
+    // The material stays pbr with its factors (its map reads the rest).
+    assert!(matches!(
+        model.materials[0].1,
+        crate::model::Material::Pbr { metallic, roughness, .. } if metallic == 0.5 && roughness == 0.25
+    ));
+}
+
+#[test]
+fn given_tangents_are_kept_and_untextured_meshes_get_none() {
+    let mut mesh = quad();
+    mesh.tangents = Some(vec![[0.0, 1.0, 0.0, -1.0]; 4]);
+    let material = GlbMaterial {
+        normal_texture: Some(GlbTexture::new(1, 1, vec![128, 128, 255, 255])),
+        ..GlbMaterial::default()
+    };
+    let model = load_bytes(&glb(&mesh, &material), "t.glb", &Limits::default()).expect("loads");
+    assert_eq!(model.meshes[0].tangents, mesh.tangents);
+    let model = load_bytes(
+        &glb(&quad(), &GlbMaterial::default()),
+        "t.glb",
+        &Limits::default(),
+    )
+    .expect("loads");
+    assert!(model.meshes[0].tangents.is_none());
+    assert!(model.images.is_empty());
+}
+
+/// Loads `bytes`, which must fail; the error text.
+fn error(bytes: &[u8], limits: &Limits) -> String {
+    match load_bytes(bytes, "t.glb", limits) {
+        Ok(_) => panic!("loaded"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn broken_images_are_named() {
+    let material = GlbMaterial {
+        base_color_texture: Some(checker()),
+        ..GlbMaterial::default()
+    };
+    let bytes = glb(&quad(), &material);
+    // Truncate the PNG in the binary chunk: find its signature.
+    let sig = b"\x89PNG\r\n\x1a\n";
+    let at = bytes
+        .windows(8)
+        .position(|w| w == sig)
+        .expect("png in the glb");
+    let mut cut = bytes.clone();
+    // Overwrite the PNG's IHDR data and beyond with zeros.
+    for b in &mut cut[at + 20..at + 60] {
+        *b = 0;
+    }
+    let e = error(&cut, &Limits::default());
+    assert!(e.contains("images[0]"), "{e}");
+    // A 100000 x 100000 header: refused before decoding.
+    let mut huge = bytes.clone();
+    huge[at + 16..at + 20].copy_from_slice(&100_000u32.to_be_bytes());
+    huge[at + 20..at + 24].copy_from_slice(&100_000u32.to_be_bytes());
+    let crc = crc32fast::hash(&huge[at + 12..at + 29]);
+    huge[at + 29..at + 33].copy_from_slice(&crc.to_be_bytes());
+    let e = error(&huge, &Limits::default());
+    assert!(e.contains("images[0]") && e.contains("100000"), "{e}");
+    // The texel budget counts every image.
+    let limits = Limits {
+        max_texels: 15,
+        ..Limits::default()
+    };
+    let e = error(&bytes, &limits);
+    assert!(e.contains("16 texels") && e.contains("limit of 15"), "{e}");
+    // Not an image at all.
+    let mut junk = bytes.clone();
+    junk[at..at + 8].copy_from_slice(b"JUNKJUNK");
+    let e = error(&junk, &Limits::default());
+    assert!(
+        e.contains("images[0]") && e.contains("not a PNG or JPEG"),
+        "{e}"
+    );
+}
+
+#[test]
+fn texture_references_out_of_range_are_named() {
+    let material = GlbMaterial {
+        base_color_texture: Some(checker()),
+        ..GlbMaterial::default()
+    };
+    let bytes = glb(&quad(), &material);
+    // Point the material at texture 7 (the JSON chunk is plain text).
+    let text = String::from_utf8_lossy(&bytes).into_owned();
+    let needle = "\"baseColorTexture\":{\"index\":0";
+    assert!(text.contains(needle), "writer changed");
+    let at = bytes
+        .windows(needle.len())
+        .position(|w| w == needle.as_bytes())
+        .expect("needle");
+    let mut bad = bytes.clone();
+    bad[at + needle.len() - 1] = b'7';
+    let e = error(&bad, &Limits::default());
+    assert!(e.contains("textures") || e.contains("index"), "{e}");
+}

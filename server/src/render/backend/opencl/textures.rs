@@ -1,0 +1,107 @@
+//! Texture maps in the kernel's layout (`kernels/types.h`, `MapSlot`,
+//! `MaterialMaps`, `TexImage`; `kernels/maps.h` reads them): every
+//! material's maps, each texture's place in one texel buffer, and the sRGB
+//! table the CPU decodes with (`texture::srgb_table`), so that both
+//! backends decode the same bytes to the same floats. Bound only when a
+//! scene has maps (`HAS_TEXTURES`).
+
+use crate::render::maps::{Slot, WorldMaps};
+use crate::render::world::World;
+use bytemuck::{Pod, Zeroable};
+
+/// A material slot: its UV transform's two rows, then (texture, UV set,
+/// wrap along u, wrap along v); texture `NO_TEXTURE` when unused.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MapSlot {
+    pub xf_u: [f32; 4],
+    pub xf_v: [f32; 4],
+    pub info: [u32; 4],
+}
+
+/// A material's maps and factors (`maps::WorldMaps`).
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MaterialMaps {
+    pub base_color: MapSlot,
+    pub metallic: MapSlot,
+    pub roughness: MapSlot,
+    pub normal: MapSlot,
+    /// metallic factor, roughness factor, normal scale, 1 where metallic
+    /// and roughness share a lookup.
+    pub factors: [f32; 4],
+}
+
+/// Where a texture's texels start in `texels`, and its size.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct TexImage {
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    pub pad0: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<MapSlot>() == 48);
+const _: () = assert!(std::mem::size_of::<MaterialMaps>() == 208);
+const _: () = assert!(std::mem::size_of::<TexImage>() == 16);
+
+/// A world's maps and textures as the kernel reads them (all empty when
+/// no material has maps).
+#[derive(Debug, Default)]
+pub struct PackedTextures {
+    pub maps: Vec<MaterialMaps>,
+    pub images: Vec<TexImage>,
+    pub texels: Vec<u32>,
+    pub srgb: Vec<f32>,
+}
+
+fn slot(s: &Slot) -> MapSlot {
+    let m = &s.sampling.transform.m;
+    MapSlot {
+        xf_u: [m[0], m[1], m[2], 0.0],
+        xf_v: [m[3], m[4], m[5], 0.0],
+        info: [
+            s.texture,
+            s.sampling.uv,
+            s.sampling.wrap[0] as u32,
+            s.sampling.wrap[1] as u32,
+        ],
+    }
+}
+
+fn maps(m: &WorldMaps) -> MaterialMaps {
+    MaterialMaps {
+        base_color: slot(&m.base_color),
+        metallic: slot(&m.metallic),
+        roughness: slot(&m.roughness),
+        normal: slot(&m.normal),
+        factors: [
+            m.metallic_factor,
+            m.roughness_factor,
+            m.normal_scale,
+            if m.shared_mr { 1.0 } else { 0.0 },
+        ],
+    }
+}
+
+pub fn pack(w: &World) -> PackedTextures {
+    if w.maps.is_empty() {
+        return PackedTextures::default();
+    }
+    let mut out = PackedTextures {
+        maps: w.maps.iter().map(maps).collect(),
+        srgb: crate::render::texture::srgb_table().to_vec(),
+        ..PackedTextures::default()
+    };
+    for t in &w.textures {
+        out.images.push(TexImage {
+            offset: out.texels.len() as u32,
+            width: t.width,
+            height: t.height,
+            pad0: 0,
+        });
+        out.texels.extend_from_slice(&t.texels);
+    }
+    out
+}

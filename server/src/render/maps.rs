@@ -1,0 +1,229 @@
+//! A material's texture maps: which slots a material textures (base colour,
+//! metallic, roughness, normal), and how a hit's material and shading
+//! normal are made from them.
+//!
+//! - Base colour: the material's colour times the map's RGB (decoded from
+//!   sRGB), for every kind (diffuse albedo, mirror and glass tint, `pbr`
+//!   base colour).
+//! - Metallic and roughness (`pbr` only): the factor times the map's blue
+//!   and green channel (glTF's metallic-roughness texture); one lookup
+//!   where both slots read the same texture the same way.
+//! - Normal (any kind): tangent-space, `(2 rgb - 1)` with x and y times
+//!   `scale`, in the frame (T, B, N) of the surface's tangent, its sign's
+//!   bitangent `B = sign (N x T)` and the interpolated shading normal N
+//!   (glTF's convention: the map's green axis along B).
+//!
+//! `kernels/maps.h` mirrors [`shade`] operation for operation.
+
+use crate::render::ggx::{Pbr, ALPHA_MIN};
+use crate::render::material::{Bsdf, SurfaceMaterial};
+use crate::render::math::Vec3A;
+use crate::render::texture::{self, Sampling, Texture};
+use std::sync::Arc;
+
+/// A slot's `texture` where the slot is unused.
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// A slot in the hot path's form: the world's texture index.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Slot {
+    pub texture: u32,
+    pub sampling: Sampling,
+}
+
+impl Slot {
+    pub const NONE: Slot = Slot {
+        texture: NO_TEXTURE,
+        sampling: Sampling {
+            uv: 0,
+            transform: texture::UvTransform::IDENTITY,
+            wrap: [texture::Wrap::Repeat; 2],
+        },
+    };
+}
+
+/// A material's maps as the hot path reads them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldMaps {
+    pub base_color: Slot,
+    pub metallic: Slot,
+    pub roughness: Slot,
+    pub normal: Slot,
+    /// The material's own metallic and roughness factors (`pbr`).
+    pub metallic_factor: f32,
+    pub roughness_factor: f32,
+    pub normal_scale: f32,
+    /// Metallic and roughness read the same texture the same way.
+    pub shared_mr: bool,
+}
+
+/// Texture coordinates and the tangent frame at a hit, for its maps.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TexCoords {
+    /// UV sets 0 and 1 (a set the geometry lacks reads as (0, 0)).
+    pub uv: [[f32; 2]; 2],
+    /// The tangent (along +u), not necessarily unit or orthogonal to the
+    /// normal; zero where there is none.
+    pub tangent: Vec3A,
+    /// The bitangent's sign (glTF's `TANGENT.w`).
+    pub sign: f32,
+}
+
+#[inline(always)]
+fn read(textures: &[Arc<Texture>], slot: &Slot, tc: &TexCoords, srgb: bool) -> [f32; 4] {
+    let uv = tc.uv[slot.sampling.uv as usize & 1];
+    texture::lookup(&textures[slot.texture as usize], &slot.sampling, uv, srgb)
+}
+
+/// The material `m` (with maps `maps`) at a hit with coordinates `tc`, and
+/// the unit shading normal `ns` (turned by the normal map, if any; `ns` is
+/// the surface's interpolated shading normal, outward).
+#[inline(always)]
+pub fn shade(
+    textures: &[Arc<Texture>],
+    maps: &WorldMaps,
+    m: &SurfaceMaterial,
+    tc: &TexCoords,
+    ns: &mut Vec3A,
+) -> SurfaceMaterial {
+    let mut out = *m;
+    if maps.base_color.texture != NO_TEXTURE {
+        out.albedo = m.albedo * texture::rgb(read(textures, &maps.base_color, tc, true));
+    }
+    if let Bsdf::Pbr(p) = m.bsdf {
+        let mut metallic = maps.metallic_factor;
+        let mut roughness = maps.roughness_factor;
+        let mut mr = [0.0f32; 4];
+        if maps.metallic.texture != NO_TEXTURE {
+            mr = read(textures, &maps.metallic, tc, false);
+            metallic *= mr[2];
+        }
+        if maps.roughness.texture != NO_TEXTURE {
+            if !maps.shared_mr {
+                mr = read(textures, &maps.roughness, tc, false);
+            }
+            roughness *= mr[1];
+        }
+        out.bsdf = Bsdf::Pbr(Pbr {
+            metallic,
+            alpha: (roughness * roughness).max(ALPHA_MIN),
+            roughness,
+            f0: p.f0,
+        });
+    }
+    if maps.normal.texture != NO_TEXTURE {
+        let c = read(textures, &maps.normal, tc, false);
+        let x = (c[0] * 2.0 - 1.0) * maps.normal_scale;
+        let y = (c[1] * 2.0 - 1.0) * maps.normal_scale;
+        let z = c[2] * 2.0 - 1.0;
+        let n = *ns;
+        let t = (tc.tangent - n * n.dot(tc.tangent)).normalize_or_zero();
+        if t != Vec3A::ZERO {
+            let b = n.cross(t) * tc.sign;
+            if let Some(turned) = (t * x + b * y + n * z).try_normalize() {
+                *ns = turned;
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::texture::Texture;
+
+    fn one(rgba: [u8; 4]) -> Arc<Texture> {
+        Arc::new(Texture::new("t", 1, 1, &rgba).expect("valid"))
+    }
+
+    fn slot(texture: u32) -> Slot {
+        Slot {
+            texture,
+            ..Slot::NONE
+        }
+    }
+
+    fn maps() -> WorldMaps {
+        WorldMaps {
+            base_color: Slot::NONE,
+            metallic: Slot::NONE,
+            roughness: Slot::NONE,
+            normal: Slot::NONE,
+            metallic_factor: 1.0,
+            roughness_factor: 1.0,
+            normal_scale: 1.0,
+            shared_mr: false,
+        }
+    }
+
+    fn pbr() -> SurfaceMaterial {
+        SurfaceMaterial {
+            bsdf: Bsdf::Pbr(Pbr::new(0.5, 0.5, 1.5)),
+            albedo: Vec3A::new(0.5, 1.0, 1.0),
+            emission: Vec3A::ZERO,
+            emissive: false,
+            maps: 0,
+        }
+    }
+
+    #[test]
+    fn base_colour_multiplies_and_mr_reads_blue_and_green() {
+        let textures = [one([255, 128, 0, 255]), one([0, 51, 204, 255])];
+        let m = WorldMaps {
+            base_color: slot(0),
+            metallic: slot(1),
+            roughness: slot(1),
+            metallic_factor: 0.5,
+            roughness_factor: 1.0,
+            shared_mr: true,
+            ..maps()
+        };
+        let tc = TexCoords::default();
+        let mut ns = Vec3A::Z;
+        let out = shade(&textures, &m, &pbr(), &tc, &mut ns);
+        let t = texture::srgb_table();
+        assert_eq!(out.albedo, Vec3A::new(0.5, t[128], 0.0));
+        let Bsdf::Pbr(p) = out.bsdf else {
+            panic!("not pbr")
+        };
+        assert!((p.metallic - 0.5 * 0.8).abs() < 1e-6, "{p:?}");
+        assert!((p.roughness - 0.2).abs() < 1e-6, "{p:?}");
+        assert!((p.alpha - 0.04).abs() < 1e-6, "{p:?}");
+        assert_eq!(ns, Vec3A::Z);
+    }
+
+    #[test]
+    fn a_flat_normal_map_changes_nothing_and_a_tilted_one_tilts() {
+        // (128, 128, 255) is (0.0039, 0.0039, 1): flat to within a byte.
+        let textures = [one([128, 128, 255, 255]), one([255, 128, 128, 255])];
+        let tc = TexCoords {
+            uv: [[0.5; 2]; 2],
+            tangent: Vec3A::new(2.0, 0.0, 0.5),
+            sign: 1.0,
+        };
+        let m = WorldMaps {
+            normal: slot(0),
+            ..maps()
+        };
+        let mut ns = Vec3A::Z;
+        shade(&textures, &m, &pbr(), &tc, &mut ns);
+        assert!((ns - Vec3A::Z).length() < 0.01, "{ns}");
+        // Red full: tilted all the way towards the tangent.
+        let m = WorldMaps {
+            normal: slot(1),
+            ..maps()
+        };
+        let mut ns = Vec3A::Z;
+        shade(&textures, &m, &pbr(), &tc, &mut ns);
+        assert!(ns.x > 0.99 && (ns.length() - 1.0).abs() < 1e-6, "{ns}");
+        // No tangent: the normal stays.
+        let mut ns = Vec3A::Z;
+        let flat = TexCoords {
+            tangent: Vec3A::ZERO,
+            ..tc
+        };
+        shade(&textures, &m, &pbr(), &flat, &mut ns);
+        assert_eq!(ns, Vec3A::Z);
+    }
+}

@@ -1,0 +1,63 @@
+//! A scene material's texture maps, as validation and model files give
+//! them (`render::maps` has the hot path's form and how a hit reads them).
+
+use crate::render::texture::{Sampling, Texture};
+use std::sync::Arc;
+
+/// A texture as a material slot reads it.
+#[derive(Clone, Debug)]
+pub struct MapSlot {
+    pub texture: Arc<Texture>,
+    pub sampling: Sampling,
+}
+
+impl PartialEq for MapSlot {
+    fn eq(&self, o: &Self) -> bool {
+        (Arc::ptr_eq(&self.texture, &o.texture) || self.texture == o.texture)
+            && self.sampling == o.sampling
+    }
+}
+
+/// The maps of a scene material (all `None`: an untextured material).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Maps {
+    pub base_color: Option<MapSlot>,
+    pub metallic: Option<MapSlot>,
+    pub roughness: Option<MapSlot>,
+    pub normal: Option<MapSlot>,
+    /// The normal map's x and y scale (glTF `normalTexture.scale`).
+    pub normal_scale: f64,
+}
+
+impl Default for Maps {
+    fn default() -> Self {
+        Self {
+            base_color: None,
+            metallic: None,
+            roughness: None,
+            normal: None,
+            normal_scale: 1.0,
+        }
+    }
+}
+
+impl Maps {
+    pub fn is_empty(&self) -> bool {
+        self.base_color.is_none()
+            && self.metallic.is_none()
+            && self.roughness.is_none()
+            && self.normal.is_none()
+    }
+
+    /// The slots that are set, by name.
+    pub fn slots(&self) -> impl Iterator<Item = (&'static str, &MapSlot)> {
+        [
+            ("base_color", &self.base_color),
+            ("metallic", &self.metallic),
+            ("roughness", &self.roughness),
+            ("normal", &self.normal),
+        ]
+        .into_iter()
+        .filter_map(|(n, s)| s.as_ref().map(|s| (n, s)))
+    }
+}

@@ -1,0 +1,123 @@
+//! What texture maps need from the world: the scene's textures gathered
+//! once each, every material's maps in the hot path's form, and the
+//! texture coordinates and tangent at a hit.
+//!
+//! Coordinates of the shapes that carry none of their own:
+//! - a quad: u along `edge_u` from the corner (0 to 1), v = 1 - (the
+//!   fraction along `edge_v`), so that an image lies upright on a quad
+//!   whose `edge_v` points up; tangent `edge_u`;
+//! - a sphere: latitude-longitude, u = 0.5 + atan2(n.x, n.z) / 2 pi (u = 0.5
+//!   facing +z), v = acos(n.y) / pi (0 at the top); tangent towards +u,
+//!   around +y.
+//!
+//! Both sets read the same coordinates there. Meshes interpolate their
+//! vertices' sets and tangents (tangents mapped into camera space, the
+//! bitangent's sign flipped by a mirroring placement).
+
+use super::{Geometry, Hit, Surface, World};
+use crate::render::maps::{Slot, TexCoords, WorldMaps};
+use crate::render::material::{SurfaceMaterial, NO_MAPS};
+use crate::render::math::Vec3A;
+use crate::render::scene::{MapSlot, MaterialKind, Scene};
+use crate::render::texture::Texture;
+use std::f32::consts::{FRAC_1_PI, PI};
+use std::sync::Arc;
+
+/// The scene's textures (each once) and its materials' maps; sets each
+/// textured material's `maps` index.
+pub(super) fn world_maps(
+    scene: &Scene,
+    materials: &mut [SurfaceMaterial],
+) -> (Vec<Arc<Texture>>, Vec<WorldMaps>) {
+    let mut textures: Vec<Arc<Texture>> = Vec::new();
+    let mut maps = Vec::new();
+    let mut slot = |s: &Option<MapSlot>| -> Slot {
+        let Some(s) = s else {
+            return Slot::NONE;
+        };
+        let index = match textures.iter().position(|t| Arc::ptr_eq(t, &s.texture)) {
+            Some(i) => i,
+            None => {
+                textures.push(s.texture.clone());
+                textures.len() - 1
+            }
+        };
+        Slot {
+            texture: index as u32,
+            sampling: s.sampling,
+        }
+    };
+    for (m, out) in scene.materials.iter().zip(materials.iter_mut()) {
+        if m.maps.is_empty() {
+            continue;
+        }
+        let (metallic, roughness) = match m.kind {
+            MaterialKind::Pbr {
+                metallic,
+                roughness,
+                ..
+            } => (metallic as f32, roughness as f32),
+            _ => (0.0, 1.0),
+        };
+        let (metal, rough) = (slot(&m.maps.metallic), slot(&m.maps.roughness));
+        out.maps = maps.len() as u32;
+        maps.push(WorldMaps {
+            base_color: slot(&m.maps.base_color),
+            metallic: metal,
+            roughness: rough,
+            normal: slot(&m.maps.normal),
+            metallic_factor: metallic,
+            roughness_factor: roughness,
+            normal_scale: m.maps.normal_scale as f32,
+            shared_mr: metal == rough,
+        });
+    }
+    debug_assert!(materials
+        .iter()
+        .all(|m| m.maps == NO_MAPS || (m.maps as usize) < maps.len()));
+    (textures, maps)
+}
+
+impl World {
+    /// The texture coordinates and tangent at `hit` on its surface `s`.
+    #[inline(always)]
+    pub fn texcoords(&self, hit: &Hit, s: &Surface) -> TexCoords {
+        match &self.objects[hit.object as usize].geometry {
+            Geometry::Quad(q) => {
+                let d = s.p - q.corner;
+                let a = q.w.dot(d.cross(q.edge_v));
+                let b = q.w.dot(q.edge_u.cross(d));
+                let uv = [a, 1.0 - b];
+                TexCoords {
+                    uv: [uv; 2],
+                    tangent: q.edge_u,
+                    sign: 1.0,
+                }
+            }
+            Geometry::Sphere(_) => {
+                let n = s.ng;
+                let u = 0.5 + n.x.atan2(n.z) * (0.5 * FRAC_1_PI);
+                let v = n.y.clamp(-1.0, 1.0).acos() / PI;
+                TexCoords {
+                    uv: [[u, v]; 2],
+                    tangent: Vec3A::new(n.z, 0.0, -n.x),
+                    sign: 1.0,
+                }
+            }
+            Geometry::Instance(i) => {
+                let inst = &self.instances[*i as usize];
+                let mesh = &*inst.mesh;
+                let uv = [0, 1].map(|set| mesh.uv(set, hit.prim, hit.bary));
+                let (tangent, sign) = match mesh.tangent(hit.prim, hit.bary) {
+                    Some((t, sign)) => {
+                        let m = inst.cam_from_obj.matrix3;
+                        let flip = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
+                        (m * t, sign * flip)
+                    }
+                    None => (Vec3A::ZERO, 1.0),
+                };
+                TexCoords { uv, tangent, sign }
+            }
+        }
+    }
+}
