@@ -355,6 +355,41 @@ __kernel void check_camera_ray(__global float *out, uint n, __global const float
     r[5] = d.z;
 }
 
+#if HAS_TEXTURES
+/* maps.h's shade_maps for material which[i] at coordinates in[3i] (set 0
+ * in xy, set 1 in zw), shading normal in[3i + 1].xyz and tangent
+ * in[3i + 2] (w: the sign): albedo (3), pbr (4), normal (3), ten floats
+ * per item. */
+__kernel void check_maps(__global float *out, uint n, __global const float4 *in, __global const uint *which,
+                         __global const Material *materials, __global const MaterialMaps *maps,
+                         __global const TexImage *tex_images, __global const uint *texels, __global const float *srgb) {
+    uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    Scene sc = {.materials = materials, .maps = maps, .tex_images = tex_images, .texels = texels, .srgb = srgb};
+    TexCoords tc;
+    tc.uv[0] = in[3 * i].xy;
+    tc.uv[1] = in[3 * i].zw;
+    tc.tangent = in[3 * i + 2].xyz;
+    tc.sign = in[3 * i + 2].w;
+    Material m = materials[which[i]];
+    float3 ns = in[3 * i + 1].xyz;
+    shade_maps(&sc, &tc, &m, &ns);
+    __global float *o = out + 10 * i;
+    o[0] = m.albedo.x;
+    o[1] = m.albedo.y;
+    o[2] = m.albedo.z;
+    o[3] = m.pbr.x;
+    o[4] = m.pbr.y;
+    o[5] = m.pbr.z;
+    o[6] = m.pbr.w;
+    o[7] = ns.x;
+    o[8] = ns.y;
+    o[9] = ns.z;
+}
+#endif
+
 /* sizeof of every shared struct, for the host's layout check. */
 __kernel void check_layout_sizes(__global uint *out, uint n) {
     if (get_global_id(0) != 0) {

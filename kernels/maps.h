@@ -127,13 +127,12 @@ static inline float4 map_read(const Scene *sc, __global const MapSlot *s, const 
     return tex_lookup(sc, s, tc->uv[s->info.y & 1u], srgb);
 }
 
-/* World::shade: material *m (which has maps) as it is at h, and sf's
- * shading normal turned by its normal map. */
-static inline void apply_maps(const Scene *sc, const Hit *h, Surf *sf, Material *m) {
+/* maps::shade: material *m (which has maps) at coordinates tc, and the
+ * unit shading normal *ns turned by its normal map. */
+static inline void shade_maps(const Scene *sc, const TexCoords *tc, Material *m, float3 *ns) {
     __global const MaterialMaps *mm = &sc->maps[m->maps];
-    TexCoords tc = texcoords(sc, h, sf);
     if (mm->base_color.info.x != NO_TEXTURE) {
-        float4 c = map_read(sc, &mm->base_color, &tc, 1);
+        float4 c = map_read(sc, &mm->base_color, tc, 1);
         m->albedo.xyz = m->albedo.xyz * c.xyz;
     }
 #if HAS_GGX
@@ -142,12 +141,12 @@ static inline void apply_maps(const Scene *sc, const Hit *h, Surf *sf, Material 
         float roughness = mm->factors.y;
         float4 mr = (float4)(0.0f);
         if (mm->metallic.info.x != NO_TEXTURE) {
-            mr = map_read(sc, &mm->metallic, &tc, 0);
+            mr = map_read(sc, &mm->metallic, tc, 0);
             metallic *= mr.z;
         }
         if (mm->roughness.info.x != NO_TEXTURE) {
             if (mm->factors.w == 0.0f) {
-                mr = map_read(sc, &mm->roughness, &tc, 0);
+                mr = map_read(sc, &mm->roughness, tc, 0);
             }
             roughness *= mr.y;
         }
@@ -155,24 +154,32 @@ static inline void apply_maps(const Scene *sc, const Hit *h, Surf *sf, Material 
     }
 #endif
     if (mm->normal.info.x != NO_TEXTURE) {
-        float4 c = map_read(sc, &mm->normal, &tc, 0);
+        float4 c = map_read(sc, &mm->normal, tc, 0);
         float x = (c.x * 2.0f - 1.0f) * mm->factors.z;
         float y = (c.y * 2.0f - 1.0f) * mm->factors.z;
         float z = c.z * 2.0f - 1.0f;
-        float3 n = sf->ns;
-        float3 t = normalize_or_zero(tc.tangent - n * dot3(n, tc.tangent));
+        float3 n = *ns;
+        float3 t = normalize_or_zero(tc->tangent - n * dot3(n, tc->tangent));
         if (t.x != 0.0f || t.y != 0.0f || t.z != 0.0f) {
-            float3 b = cross3(n, t) * tc.sign;
+            float3 b = cross3(n, t) * tc->sign;
             float3 turned = t * x + b * y + n * z;
             float rcp = 1.0f / sqrt(dot3(turned, turned));
             if (isfinite(rcp) && rcp > 0.0f) {
-                float3 ns = turned * rcp;
-                if (ns.x != n.x || ns.y != n.y || ns.z != n.z) {
-                    sf->ns = ns;
-                    sf->smooth = 1;
-                }
+                *ns = turned * rcp;
             }
         }
+    }
+}
+
+/* World::shade: material *m (which has maps) as it is at h, and sf's
+ * shading normal turned by its normal map. */
+static inline void apply_maps(const Scene *sc, const Hit *h, Surf *sf, Material *m) {
+    TexCoords tc = texcoords(sc, h, sf);
+    float3 ns = sf->ns;
+    shade_maps(sc, &tc, m, &ns);
+    if (ns.x != sf->ns.x || ns.y != sf->ns.y || ns.z != sf->ns.z) {
+        sf->ns = ns;
+        sf->smooth = 1;
     }
 }
 #endif

@@ -11,12 +11,18 @@
 //!   the texel's values; a flat normal map as no map.
 //! - A normal map tilted towards a light brightens the quad, away from it
 //!   darkens it; given and generated (MikkTSpace) tangents agree.
+//! - The kernel's map routines (lookups, wraps, transforms, sRGB, the
+//!   metallic-roughness and normal maps) give the CPU's floats bit for bit.
 
 mod common;
+mod parity;
 
 use common::{assert_agree, backends, region, render_on};
 use pathstream::model::write_glb::{glb, GlbMaterial, GlbTexture};
 use pathstream::model::{MeshData, Wrap};
+use pathstream::render::backend::opencl::{pack, CheckArg};
+use pathstream::render::maps::{shade, TexCoords};
+use pathstream::render::material::Bsdf;
 use pathstream::render::texture::srgb_table;
 use pathstream::render::{Backend, Film, Quality, Scene};
 use serde_json::{json, Value};
@@ -289,5 +295,104 @@ fn maps_render_as_their_constant_twins() {
             1e-4,
             &format!("{name}: metallic-roughness map vs factors"),
         );
+    }
+}
+
+/// A texture of `w` x `h` texels of hashed bytes.
+fn noise(w: u32, h: u32, salt: u64) -> GlbTexture {
+    let rgba = (0..u64::from(w * h) * 4)
+        .map(|i| (parity::uniform(i, salt) * 256.0) as u8)
+        .collect();
+    GlbTexture::new(w, h, rgba)
+}
+
+#[test]
+fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
+    let Some(d) = common::opencl_device() else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut base = checkerboard();
+    base.wrap = [Wrap::Mirror, Wrap::Repeat];
+    base.transform = Some(([0.25, -0.5], 0.7, [1.5, -2.0]));
+    let mut mr = noise(5, 3, 1);
+    mr.tex_coord = 1;
+    mr.wrap = [Wrap::Clamp, Wrap::Mirror];
+    let material = GlbMaterial {
+        base_color: [0.9, 0.8, 0.7, 1.0],
+        metallic: 0.75,
+        roughness: 0.5,
+        base_color_texture: Some(base),
+        metallic_roughness_texture: Some(mr),
+        normal_texture: Some(noise(4, 4, 2)),
+        normal_scale: 0.8,
+    };
+    let scene = scene_with(&dir, &glb(&quad(0), &material), json!([1, 1, 1]), json!({}));
+    let job = pathstream::render::RenderJob::new(&scene, 8, 8, &quality());
+    let w = &job.world;
+    let which = (w.materials.iter())
+        .position(|m| m.maps != pathstream::render::material::NO_MAPS)
+        .expect("a material with maps") as u32;
+    let packed = pack(&job);
+    let n = 20_000u64;
+    let mut input = Vec::new();
+    let mut cpu = Vec::new();
+    for i in 0..n {
+        let uv = [0, 1, 2, 3].map(|k| parity::uniform(i, 10 + k) * 5.0 - 2.0);
+        let ns = parity::unit(i, 20);
+        let t = parity::unit(i, 30) * 2.0;
+        let sign = if i % 3 == 0 { -1.0 } else { 1.0 };
+        input.extend([uv, ns.extend(0.0).to_array(), t.extend(sign).to_array()]);
+        let tc = TexCoords {
+            uv: [[uv[0], uv[1]], [uv[2], uv[3]]],
+            tangent: t,
+            sign,
+        };
+        let m = &w.materials[which as usize];
+        let mut n_out = ns;
+        let out = shade(&w.textures, &w.maps[m.maps as usize], m, &tc, &mut n_out);
+        let Bsdf::Pbr(p) = out.bsdf else {
+            panic!("a pbr material")
+        };
+        let a = out.albedo;
+        cpu.push([
+            a.x,
+            a.y,
+            a.z,
+            p.metallic,
+            p.alpha,
+            p.roughness,
+            p.f0,
+            n_out.x,
+            n_out.y,
+            n_out.z,
+        ]);
+    }
+    let t = &packed.textures;
+    let out: Vec<f32> = parity::checks(&d)
+        .run(
+            "check_maps",
+            n as usize,
+            10,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&input)),
+                CheckArg::Buffer(bytemuck::cast_slice(&vec![which; n as usize])),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.materials)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.maps)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.images)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.texels)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.srgb)),
+            ],
+        )
+        .expect("run");
+    for (i, want) in cpu.iter().enumerate() {
+        let got = &out[10 * i..10 * i + 10];
+        for (k, (g, c)) in got.iter().zip(want).enumerate() {
+            assert_eq!(
+                g.to_bits(),
+                c.to_bits(),
+                "item {i} value {k}: device {g}, CPU {c}"
+            );
+        }
     }
 }

@@ -367,7 +367,9 @@ impl World {
 
     /// Material `m` (which has maps) as it is at `hit` on surface `s`:
     /// its maps read, and `s`'s shading normal turned by its normal map.
-    #[inline(always)]
+    /// Not inlined: its lookups would crowd the path loop of every scene,
+    /// textured or not (a call costs little next to four bilinear reads).
+    #[inline(never)]
     pub fn shade(&self, m: &SurfaceMaterial, hit: &Hit, s: &mut Surface) -> SurfaceMaterial {
         let maps = &self.maps[m.maps as usize];
         let tc = self.texcoords(hit, s);
