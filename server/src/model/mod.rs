@@ -36,6 +36,7 @@ mod gltf_material;
 mod image;
 mod mtl;
 mod obj;
+mod obj_maps;
 mod ply;
 mod tangents;
 #[cfg(test)]

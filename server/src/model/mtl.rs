@@ -12,8 +12,13 @@
 //!   when missing), each clamped to its range with a note;
 //! - `illum 0` to `2` (or none) -> diffuse; other `illum` values -> diffuse
 //!   with a note;
-//! - whatever else changes the look (textures `map_*`, `bump`, `disp`,
-//!   `decal`, `refl`, `norm`; `Ks`/`Ns` of non-mirrors; `Ka`; `d`/`Tr`
+//! - `map_Kd` -> a base colour texture (`-clamp on` clamps, else it
+//!   repeats; `-o` and `-s` offset and scale its coordinates); `norm`, `map_Bump` or `bump` -> a normal map (`-bm` its
+//!   scale) when the image is one, a height map (grey) is noted as not
+//!   rendered; both need `vt` coordinates (v flipped to glTF's top-left
+//!   origin);
+//! - whatever else changes the look (other textures `map_*`, `disp`,
+//!   `decal`, `refl`; `Ks`/`Ns` of non-mirrors; `Ka`; `d`/`Tr`
 //!   transparency; `Tf` of non-glass; the PBR keys other than `Pr` and `Pm`
 //!   and unknown statements) is listed in one note per material.
 
@@ -37,6 +42,12 @@ pub(super) struct MtlMaterial {
     pub pr: Option<f64>,
     pub pm: Option<f64>,
     pub illum: Option<i64>,
+    /// `map_Kd`'s file, whether `-clamp on` was given, and its `-o` offset
+    /// and `-s` scale (u and v).
+    pub map_kd: Option<(String, bool, [f64; 2], [f64; 2])>,
+    /// `norm`, `map_Bump` or `bump`'s file and its `-bm` scale (a normal
+    /// map, or a height map that the loader then notes as not rendered).
+    pub bump: Option<(String, f64)>,
     /// Statements not modelled, as keywords (`map_Kd`, `Kd spectral`, ...).
     pub ignored: Vec<String>,
 }
@@ -108,6 +119,38 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                     word.parse()
                         .map_err(|_| err(format!("illum: {word:?} is not an integer")))?,
                 );
+            }
+            "map_kd" | "norm" | "map_bump" | "bump" => {
+                let Some((&file, options)) = args.split_last() else {
+                    return Err(err(format!("{key}: a file name is missing")));
+                };
+                let option = |name: &str| {
+                    let i = options.iter().position(|o| o.eq_ignore_ascii_case(name))?;
+                    options.get(i + 1).copied()
+                };
+                if lower == "map_kd" {
+                    let pair = |name: &str, default: f64| -> Result<[f64; 2], MtlError> {
+                        let Some(i) = options.iter().position(|o| o.eq_ignore_ascii_case(name))
+                        else {
+                            return Ok([default; 2]);
+                        };
+                        let u = number(key, options.get(i + 1).copied()).map_err(err)?;
+                        let v = match options.get(i + 2).map(|w| w.parse::<f64>()) {
+                            Some(Ok(v)) => v,
+                            _ => default,
+                        };
+                        Ok([u, v])
+                    };
+                    let (offset, scale) = (pair("-o", 0.0)?, pair("-s", 1.0)?);
+                    let clamp = option("-clamp") == Some("on");
+                    m.map_kd = Some((file.to_owned(), clamp, offset, scale));
+                } else {
+                    let scale = match option("-bm") {
+                        Some(w) => number(key, Some(w)).map_err(err)?,
+                        None => 1.0,
+                    };
+                    m.bump = Some((file.to_owned(), scale));
+                }
             }
             _ => m.ignored.push(key.to_owned()),
         }
@@ -261,7 +304,8 @@ mod tests {
                 ks: Some([0.1, 0.2, 0.3]),
                 ni: Some(1.4),
                 illum: Some(7),
-                ignored: vec!["map_Kd".into(), "Ka spectral".into()],
+                map_kd: Some(("t.png".into(), false, [0.0; 2], [1.0; 2])),
+                ignored: vec!["Ka spectral".into()],
                 ..Default::default()
             }]
         );

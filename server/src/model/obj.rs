@@ -233,6 +233,8 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
     };
     let mut normals = Vec::new();
     let (mut with_normals, mut without_normals) = (0usize, 0usize);
+    // `vt` coordinates, v flipped to glTF's top-left origin.
+    let mut uvs: Vec<[f32; 2]> = Vec::new();
     let mut untyped = 0usize;
     for model in &models {
         let m = &model.mesh;
@@ -248,6 +250,10 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
             with_normals += 1;
         } else {
             without_normals += 1;
+        }
+        if !m.positions.is_empty() && m.texcoords.len() / 2 == m.positions.len() / 3 {
+            uvs.resize(mesh.positions.len() - m.positions.len() / 3, [0.0; 2]);
+            uvs.extend(m.texcoords.chunks_exact(2).map(|t| [t[0], 1.0 - t[1]]));
         }
         if !m.vertex_color.is_empty() {
             ctx.warn("vertex colours ignored");
@@ -307,6 +313,29 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
             None
         }
     };
+    // Maps of the materials some triangle uses (the others are dropped).
+    let mut used = vec![false; libs.len()];
+    for &m in &mesh.materials {
+        if let Some(u) = used.get_mut(m as usize) {
+            *u = true;
+        }
+    }
+    let images = super::obj_maps::read(ctx, &libs, &mut materials, dir, &used)?;
+    let textured = |m: &Mat| m.maps.base_color.is_some() || m.maps.normal.is_some();
+    if !uvs.is_empty() {
+        uvs.resize(mesh.positions.len(), [0.0; 2]);
+        if uvs.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(ctx.err("a vt texture coordinate is not finite"));
+        }
+        mesh.uvs[0] = Some(uvs);
+        if materials.iter().any(|m| m.maps.normal.is_some())
+            && !super::tangents::generate(&mut mesh, 0)
+        {
+            ctx.warn("normal maps without usable vt coordinates: not applied");
+        }
+    } else if materials.iter().any(textured) {
+        ctx.warn("texture maps without vt coordinates read one texel everywhere");
+    }
     Ok(Parts {
         meshes: vec![mesh],
         materials,
@@ -315,7 +344,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
             transform: common::IDENTITY,
         }],
         camera: None,
-        images: Vec::new(),
+        images,
     })
 }
 

@@ -273,12 +273,14 @@ fn mtl_rules_map_every_material() {
         [
             "usemtl \"nosuch\": no material of that name was loaded: default material",
             "2 triangles have no material: default diffuse (albedo 0.8)",
+            "map_Kd \"wood.png\": cannot be read (No such file or directory (os error 2)): not rendered",
+            "bump map \"wood_n.png\": cannot be read (No such file or directory (os error 2)): not rendered",
             "material \"polished\": not modelled, ignored: Ns (the mirror is perfect)",
             "material \"glass_no_ni\": no Ni: ior 1.5",
             "material \"glass_bad_ni\": Ni 0.5 is not an index of refraction in [1, 10]: ior 1.5",
             "material \"hot\": Ke [-1, 2, 2] is negative or not finite: those components are 0",
             "material \"hot\": Kd [1.5, 0.5, -0.25] is outside [0, 1]: clamped to [1, 0.5, 0]",
-            "material \"textured\": not modelled, ignored: map_Kd, bump, Ka (ambient), d 0.5 (transparency), Ks/Ns (Pr and Pm describe the highlight)",
+            "material \"textured\": not modelled, ignored: Ka (ambient), d 0.5 (transparency), Ks/Ns (Pr and Pm describe the highlight)",
         ]
     );
 }

@@ -178,3 +178,70 @@ fn texture_references_out_of_range_are_named() {
     let e = error(&bad, &Limits::default());
     assert!(e.contains("textures") || e.contains("index"), "{e}");
 }
+
+/// `rgba` (w x h) as PNG bytes.
+fn png(w: u32, h: u32, rgba: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut out),
+        rgba,
+        w,
+        h,
+        image::ExtendedColorType::Rgba8,
+    )
+    .expect("png");
+    out
+}
+
+#[test]
+fn obj_maps_and_vt_are_read() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = dir.path();
+    std::fs::write(
+        p.join("c.png"),
+        png(2, 1, &[255, 0, 0, 255, 0, 0, 255, 255]),
+    )
+    .expect("png");
+    std::fs::write(p.join("n.png"), png(1, 1, &[200, 128, 230, 255])).expect("png");
+    std::fs::write(p.join("h.png"), png(1, 1, &[90, 90, 90, 255])).expect("png");
+    std::fs::write(p.join("junk.png"), b"not an image").expect("junk");
+    let mtl =
+        "newmtl painted\nKd 1 1 1\nmap_Kd -clamp on -o 0.5 0.25 -s 2 3 c.png\nnorm -bm 0.5 n.png\n\
+               newmtl embossed\nKd 1 1 1\nbump h.png\n";
+    std::fs::write(p.join("m.mtl"), mtl).expect("mtl");
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n\
+               usemtl painted\nf 1/1/1 2/2/1 3/3/1\nusemtl embossed\nf 1/1/1 3/3/1 2/2/1\n";
+    std::fs::write(p.join("m.obj"), obj).expect("obj");
+    let m = crate::model::load_file(&p.join("m.obj"), &Limits::default()).expect("loads");
+    assert_eq!(m.images.len(), 3, "c, n and the height map");
+    let (_, _, painted) = &m.materials[0];
+    let b = painted.base_color.expect("map_Kd");
+    assert_eq!(
+        (b.wrap, b.offset, b.scale),
+        ([Wrap::Clamp; 2], [0.5, 0.25], [2.0, 3.0])
+    );
+    assert_eq!(m.images[b.image].rgba, [255, 0, 0, 255, 0, 0, 255, 255]);
+    let n = painted.normal.expect("norm");
+    assert_eq!(
+        (m.images[n.image].name.as_str(), painted.normal_scale),
+        ("n.png", 0.5)
+    );
+    // The grey bump map is a height map: noted, not used.
+    assert!(m.materials[1].2.normal.is_none());
+    assert!(
+        m.warnings
+            .iter()
+            .any(|w| w.contains("\"h.png\" is a height map")),
+        "{:?}",
+        m.warnings
+    );
+    // vt flipped to glTF's top-left origin; tangents for the normal map.
+    let mesh = &m.meshes[0];
+    let uvs = mesh.uvs[0].as_ref().expect("uvs");
+    assert!(uvs.contains(&[0.0, 1.0]) && uvs.contains(&[1.0, 1.0]) && uvs.contains(&[0.0, 0.0]));
+    assert!(mesh.tangents.is_some());
+    // A map that is not an image is an error naming it.
+    std::fs::write(p.join("m.mtl"), "newmtl painted\nmap_Kd junk.png\n").expect("mtl");
+    let e = crate::model::load_file(&p.join("m.obj"), &Limits::default()).expect_err("junk");
+    assert!(e.to_string().contains("junk.png"), "{e}");
+}
