@@ -60,15 +60,17 @@ impl GlbTexture {
     }
 }
 
+/// A GLB's binary chunk and the buffer views and accessors into it.
 #[derive(Default)]
-struct Bin {
-    data: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+pub(crate) struct Bin {
+    pub data: Vec<u8>,
+    pub views: Vec<Value>,
+    pub accessors: Vec<Value>,
 }
 
 impl Bin {
-    fn view(&mut self, bytes: &[u8]) -> usize {
+    /// Appends `bytes` (4-byte aligned) as a buffer view; its index.
+    pub fn view(&mut self, bytes: &[u8]) -> usize {
         while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
@@ -192,7 +194,8 @@ pub fn glb(mesh: &MeshData, material: &GlbMaterial) -> Vec<u8> {
     pack(&doc, &b.data)
 }
 
-fn pack(doc: &Value, bin: &[u8]) -> Vec<u8> {
+/// The GLB container of `doc` and `bin` (no BIN chunk when `bin` is empty).
+pub(crate) fn pack(doc: &Value, bin: &[u8]) -> Vec<u8> {
     let mut json = serde_json::to_vec(doc).unwrap_or_default();
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
@@ -201,15 +204,17 @@ fn pack(doc: &Value, bin: &[u8]) -> Vec<u8> {
     while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
     let mut out = b"glTF".to_vec();
     out.extend(2u32.to_le_bytes());
     out.extend((total as u32).to_le_bytes());
     out.extend((json.len() as u32).to_le_bytes());
     out.extend(b"JSON");
     out.extend(json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
+    if !bin.is_empty() {
+        out.extend((bin.len() as u32).to_le_bytes());
+        out.extend(b"BIN\0");
+        out.extend(bin);
+    }
     out
 }

@@ -3,30 +3,14 @@
 //! malformed variants of a one-triangle document.
 
 use super::{assert_guarantees, cube, untextured};
+use crate::model::write_glb::{pack as glb, Bin};
 use crate::model::Material;
 use crate::model::{load_bytes, load_file, Instance, Limits, MeshData, Model, ModelCamera};
 use base64::Engine;
 use serde_json::{json, Value};
 use std::f32::consts::FRAC_1_SQRT_2;
 
-/// The binary buffer and the views and accessors into it.
-#[derive(Default)]
-struct Bin {
-    data: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
-}
-
 impl Bin {
-    fn view(&mut self, bytes: &[u8]) -> usize {
-        while !self.data.len().is_multiple_of(4) {
-            self.data.push(0);
-        }
-        self.views
-            .push(json!({"buffer": 0, "byteOffset": self.data.len(), "byteLength": bytes.len()}));
-        self.data.extend(bytes);
-        self.views.len() - 1
-    }
     fn accessor(&mut self, a: Value) -> usize {
         self.accessors.push(a);
         self.accessors.len() - 1
@@ -47,30 +31,6 @@ impl Bin {
         let view = self.view(&bytes);
         self.accessor(json!({"bufferView": view, "componentType": component, "count": idx.len(), "type": "SCALAR"}))
     }
-}
-
-fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut json = serde_json::to_vec(doc).expect("json");
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((json.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(json);
-    if !bin.is_empty() {
-        out.extend((bin.len() as u32).to_le_bytes());
-        out.extend(b"BIN\0");
-        out.extend(bin);
-    }
-    out
 }
 
 const STRIP: [[f32; 3]; 5] = [
