@@ -137,7 +137,7 @@ export function openSocket() {
         // The stats describe the frame sent just before them.
         const f = state.lastReceived;
         if (f && !f.stats) {
-          f.stats = { spp: m.spp, generation: m.generation, frame: m.frame, format: m.format, preview: m.preview };
+          f.stats = { spp: m.spp, generation: m.generation, frame: m.frame, format: m.format, preview: m.preview, denoised: Boolean(m.denoised) };
           if (state.displayed === f) markDisplayed(f);
           // The image is here and handed to drawing: the server may send
           // the next (it then keeps one frame in flight and measures the

@@ -45,14 +45,15 @@ export async function drawFrames() {
   }
 }
 
-/** The spp, generation, format and preview factor (empty: none) of the
- *  image on the canvas, for tests and scripts. */
+/** The spp, generation, format, preview factor (empty: none) and whether
+ *  it is denoised, of the image on the canvas, for tests and scripts. */
 export function markDisplayed(frame) {
   if (!frame.stats) return;
   el.body.dataset.frameSpp = String(frame.stats.spp);
   el.body.dataset.frameGeneration = String(frame.stats.generation);
   el.body.dataset.frameFormat = String(frame.stats.format);
   el.body.dataset.framePreview = frame.stats.preview == null ? "" : String(frame.stats.preview);
+  el.body.dataset.frameDenoised = String(Boolean(frame.stats.denoised));
 }
 
 /** Shows the image as large as fits: whole device pixels per image pixel
