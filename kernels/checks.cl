@@ -376,7 +376,7 @@ __kernel void check_maps(__global float *out, uint n, __global const float4 *in,
     Material m = materials[which[i]];
     float3 ns = in[3 * i + 1].xyz;
     shade_maps(&sc, &tc, &m, &ns);
-    __global float *o = out + 10 * i;
+    __global float *o = out + 13 * i;
     o[0] = m.albedo.x;
     o[1] = m.albedo.y;
     o[2] = m.albedo.z;
@@ -387,6 +387,9 @@ __kernel void check_maps(__global float *out, uint n, __global const float4 *in,
     o[7] = ns.x;
     o[8] = ns.y;
     o[9] = ns.z;
+    o[10] = m.emission.x;
+    o[11] = m.emission.y;
+    o[12] = m.emission.z;
 }
 #endif
 

@@ -71,7 +71,8 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, float
         return (float3)(0.0f);
     }
     Hit h;
-    nearest(sc, spawn(sc, sf, dir), dir, sf->object, sf->prim, dot3(dir, sf->ng) < 0.0f, &h);
+    float3 from = spawn(sc, sf, dir);
+    nearest(sc, from, dir, sf->object, sf->prim, dot3(dir, sf->ng) < 0.0f, &h);
     int visible = h.object == L->object;
 #if HAS_TRI_LIGHTS
     visible = visible && (L->prim == NO_PRIM || h.prim == L->prim);
@@ -94,6 +95,13 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, float
     }
 #endif
     float3 le = L->emission.xyz;
+#if HAS_TEXTURES
+    if (L->maps != NO_MAPS) {
+        le = emitted(sc, L, &h, from, dir);
+    }
+#else
+    (void)from;
+#endif
 #if HAS_ENV_MAP
     __global const Params *P = sc->P; /* USE_ENV_MAP in the generic program */
     (void)P;

@@ -131,6 +131,9 @@ static inline float4 map_read(const Scene *sc, __global const MapSlot *s, const 
  * unit shading normal *ns turned by its normal map. */
 static inline void shade_maps(const Scene *sc, const TexCoords *tc, Material *m, float3 *ns) {
     __global const MaterialMaps *mm = &sc->maps[m->maps];
+    if (mm->emission.info.x != NO_TEXTURE) {
+        m->emission.xyz = m->emission.xyz * map_read(sc, &mm->emission, tc, 1).xyz;
+    }
     if (mm->base_color.info.x != NO_TEXTURE) {
         float4 c = map_read(sc, &mm->base_color, tc, 1);
         m->albedo.xyz = m->albedo.xyz * c.xyz;
@@ -181,5 +184,13 @@ static inline void apply_maps(const Scene *sc, const Hit *h, Surf *sf, Material 
         sf->ns = ns;
         sf->smooth = 1;
     }
+}
+
+/* World::emitted: the radiance of emitter L (which has an emission map)
+ * at h, where the shadow ray from o along d met it. */
+static inline float3 emitted(const Scene *sc, __global const Light *L, const Hit *h, float3 o, float3 d) {
+    Surf sf = surface_at(sc, h, o, d);
+    TexCoords tc = texcoords(sc, h, &sf);
+    return L->emission.xyz * map_read(sc, &sc->maps[L->maps].emission, &tc, 1).xyz;
 }
 #endif

@@ -73,6 +73,7 @@ typedef struct {
     MapSlot metallic;
     MapSlot roughness;
     MapSlot normal;
+    MapSlot emission;
     float4 factors;
 } MaterialMaps;
 
@@ -134,7 +135,7 @@ typedef struct {
     uint alias;
     float pmf;
     uint kind;       /* LIGHT_OBJECT (its Object), LIGHT_TRIANGLE, LIGHT_ENVIRONMENT, LIGHT_ENV_MAP, LIGHT_SUN */
-    uint pad0;
+    uint maps;       /* its material's maps where they have an emission map, else NO_MAPS */
     uint pad1;
     float4 emission;
     float4 p0;       /* a triangle in camera space: p0 + e1 b1 + e2 b2 */

@@ -11,8 +11,12 @@
 //!   the texel's values; a flat normal map as no map.
 //! - A normal map tilted towards a light brightens the quad, away from it
 //!   darkens it; given and generated (MikkTSpace) tangents agree.
+//! - An emission map glows as its texels (noise-free, black sky and base),
+//!   and lights a floor as it glows: shadow rays read it (NEE on and off
+//!   agree; a uniform map equals the emission it scales).
 //! - The kernel's map routines (lookups, wraps, transforms, sRGB, the
-//!   metallic-roughness and normal maps) give the CPU's floats bit for bit.
+//!   metallic-roughness, normal and emission maps) give the CPU's floats
+//!   bit for bit.
 
 mod common;
 mod parity;
@@ -298,6 +302,96 @@ fn maps_render_as_their_constant_twins() {
     }
 }
 
+/// A black quad glowing with `emissive` times `texture`.
+fn glowing(emissive: f64, texture: GlbTexture) -> Vec<u8> {
+    let material = GlbMaterial {
+        base_color: [0.0, 0.0, 0.0, 1.0],
+        metallic: 0.0,
+        emissive: [emissive; 3],
+        emissive_texture: Some(texture),
+        ..GlbMaterial::default()
+    };
+    glb(&quad(0), &material)
+}
+
+#[test]
+fn an_emission_map_glows_as_its_texels() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = scene_with(
+        &dir,
+        &glowing(2.0, checkerboard()),
+        json!([0, 0, 0]),
+        json!({}),
+    );
+    for (name, mut backend) in backends() {
+        let film = render_on(&mut backend, &scene, 64, 64, &quality(), 4);
+        for j in 0..4u32 {
+            for i in 0..4u32 {
+                let (x, y) = (16 * i + 7, 16 * j + 7);
+                let want = linear(check(i as usize, j as usize)).map(|c| 2.0 * c);
+                let what = format!("{name}: glowing check ({i}, {j})");
+                assert_colour(&film, x..x + 2, y..y + 2, want, &what);
+            }
+        }
+    }
+}
+
+/// A white floor lit by `model` (a glowing quad) held face down above it,
+/// with a second, plain lamp off to the side (so that the pick between
+/// them weighs the map's mean), in a black sky.
+fn floor_under(dir: &tempfile::TempDir, model: &[u8], name: &str) -> Scene {
+    std::fs::write(dir.path().join(name), model).expect("glb");
+    let doc = json!({
+        "camera": {"position": [0, 3, 4], "look_at": [0, 0, 0], "vfov_deg": 50},
+        "materials": {
+            "white": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]},
+            "lamp": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [0.5, 0.5, 0.5]},
+        },
+        "objects": [
+            {"type": "quad", "corner": [-2, 0, -2], "edge_u": [0, 0, 4], "edge_v": [4, 0, 0], "material": "white"},
+            {"type": "model", "file": name,
+             "transform": {"translate": [0, 1.2, 0], "rotate": {"axis": [1, 0, 0], "deg": 90}}},
+            {"type": "sphere", "center": [-2.5, 1, -1], "radius": 0.3, "material": "lamp"},
+        ],
+    });
+    let file = dir.path().join(format!("{name}.json"));
+    std::fs::write(&file, doc.to_string()).expect("scene");
+    pathstream::resolve::load_scene(file.to_str().expect("utf-8")).expect("loads")
+}
+
+#[test]
+fn shadow_rays_read_the_emission_map() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let checks = floor_under(&dir, &glowing(4.0, checkerboard()), "checks.glb");
+    // A uniform map of grey g glows as the plain emission 4 g.
+    let g = 150u8;
+    let grey = floor_under(
+        &dir,
+        &glowing(4.0, GlbTexture::new(1, 1, vec![g, g, g, 255])),
+        "grey.glb",
+    );
+    let e = 4.0 * f64::from(srgb_table()[g as usize]);
+    let plain = GlbMaterial {
+        base_color: [0.0, 0.0, 0.0, 1.0],
+        metallic: 0.0,
+        emissive: [e; 3],
+        ..GlbMaterial::default()
+    };
+    let plain = floor_under(&dir, &glb(&quad(0), &plain), "plain.glb");
+    let nee_off = Quality {
+        nee: false,
+        ..quality()
+    };
+    for (name, mut backend) in backends() {
+        let on = render_on(&mut backend, &checks, 24, 24, &quality(), 256);
+        let off = render_on(&mut backend, &checks, 24, 24, &nee_off, 1024);
+        assert_agree(&on, &off, 6, 4.5, 1e-4, &format!("{name}: NEE on vs off"));
+        let a = render_on(&mut backend, &grey, 24, 24, &quality(), 64);
+        let b = render_on(&mut backend, &plain, 24, 24, &quality(), 64);
+        assert_agree(&a, &b, 6, 4.5, 1e-4, &format!("{name}: grey map vs plain"));
+    }
+}
+
 /// A texture of `w` x `h` texels of hashed bytes.
 fn noise(w: u32, h: u32, salt: u64) -> GlbTexture {
     let rgba = (0..u64::from(w * h) * 4)
@@ -326,6 +420,8 @@ fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
         metallic_roughness_texture: Some(mr),
         normal_texture: Some(noise(4, 4, 2)),
         normal_scale: 0.8,
+        emissive: [2.0, 1.5, 0.5],
+        emissive_texture: Some(noise(3, 2, 3)),
     };
     let scene = scene_with(&dir, &glb(&quad(0), &material), json!([1, 1, 1]), json!({}));
     let job = pathstream::render::RenderJob::new(&scene, 8, 8, &quality());
@@ -354,7 +450,7 @@ fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
         let Bsdf::Pbr(p) = out.bsdf else {
             panic!("a pbr material")
         };
-        let a = out.albedo;
+        let (a, e) = (out.albedo, out.emission);
         cpu.push([
             a.x,
             a.y,
@@ -366,6 +462,9 @@ fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
             n_out.x,
             n_out.y,
             n_out.z,
+            e.x,
+            e.y,
+            e.z,
         ]);
     }
     let t = &packed.textures;
@@ -373,7 +472,7 @@ fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
         .run(
             "check_maps",
             n as usize,
-            10,
+            13,
             &[
                 CheckArg::Buffer(bytemuck::cast_slice(&input)),
                 CheckArg::Buffer(bytemuck::cast_slice(&vec![which; n as usize])),
@@ -386,7 +485,7 @@ fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
         )
         .expect("run");
     for (i, want) in cpu.iter().enumerate() {
-        let got = &out[10 * i..10 * i + 10];
+        let got = &out[13 * i..13 * i + 13];
         for (k, (g, c)) in got.iter().zip(want).enumerate() {
             assert_eq!(
                 g.to_bits(),

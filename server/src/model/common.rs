@@ -416,16 +416,9 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
     }
 
     let image_count = images.len();
-    let bad_image = materials.iter().any(|m| {
-        [
-            &m.maps.base_color,
-            &m.maps.metallic_roughness,
-            &m.maps.normal,
-        ]
-        .into_iter()
-        .flatten()
-        .any(|r| r.image >= image_count || r.uv > 1)
-    });
+    let bad_image = (materials.iter())
+        .flat_map(|m| m.maps.refs())
+        .any(|r| r.image >= image_count || r.uv > 1);
     if bad_image {
         return Err(ctx.err("a material refers to an image the model does not have (a loader bug)"));
     }

@@ -15,8 +15,9 @@
 //!   0 -> mirror, metallic 0 and roughness 1 -> diffuse (the renderer's
 //!   exact corners); else the metallic-roughness model (`pbr`) with the
 //!   file's factors and ior. The albedo is the base colour factor's rgb; emission is the emissive factor
-//!   times KHR_materials_emissive_strength. Textures, normal and occlusion
-//!   maps, alpha modes other than OPAQUE: noted.
+//!   times KHR_materials_emissive_strength. Texture maps (`gltf_maps`):
+//!   base colour, metallic-roughness, normal and emissive; occlusion maps,
+//!   transmission textures and alpha modes other than OPAQUE: noted.
 //! - The first camera met in the walk (preorder), perspective or
 //!   orthographic (its view 2 ymag tall), becomes the model's camera, in
 //!   world space (it looks down -Z, +Y up, in its node's frame); the others
@@ -45,8 +46,9 @@ const ID4: M4 = [
 ];
 
 /// Extensions whose content is read.
-const SUPPORTED: [&str; 4] = [
+const SUPPORTED: [&str; 5] = [
     "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_mesh_quantization",

@@ -176,6 +176,17 @@ pub(super) fn maps(m: &::gltf::Material, images: &mut Images, notes: &mut Vec<St
         let scale = f64::from(n.scale());
         out.normal_scale = if scale.is_finite() { scale } else { 1.0 };
     }
+    if let Some(info) = m.emissive_texture() {
+        let t = info.extension_value(TRANSFORM);
+        out.emissive = reference(
+            "emissive texture",
+            info.texture(),
+            info.tex_coord(),
+            t,
+            images,
+            notes,
+        );
+    }
     out
 }
 

@@ -72,16 +72,12 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         .map_or(0.0, |t| widen(t.transmission_factor()));
 
     let maps = gltf_maps::maps(m, images, &mut notes);
-    let textures = [
-        (m.emissive_texture().is_some(), "emissive texture"),
-        (
-            transmission
-                .as_ref()
-                .is_some_and(|t| t.transmission_texture().is_some()),
-            "transmission texture",
-        ),
-    ];
-    ignored.extend(textures.iter().filter(|t| t.0).map(|t| t.1.to_owned()));
+    if transmission
+        .as_ref()
+        .is_some_and(|t| t.transmission_texture().is_some())
+    {
+        ignored.push("transmission texture".to_owned());
+    }
     match m.alpha_mode() {
         AlphaMode::Opaque => {}
         AlphaMode::Mask => ignored.push(format!(

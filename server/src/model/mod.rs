@@ -107,6 +107,8 @@ pub struct Maps {
     /// A tangent-space normal map and its x/y scale.
     pub normal: Option<TextureRef>,
     pub normal_scale: f64,
+    /// Multiplies the emission (sRGB RGB).
+    pub emissive: Option<TextureRef>,
 }
 
 impl Default for Maps {
@@ -116,13 +118,26 @@ impl Default for Maps {
             metallic_roughness: None,
             normal: None,
             normal_scale: 1.0,
+            emissive: None,
         }
     }
 }
 
 impl Maps {
     pub fn is_empty(&self) -> bool {
-        self.base_color.is_none() && self.metallic_roughness.is_none() && self.normal.is_none()
+        self.refs().next().is_none()
+    }
+
+    /// The texture references that are set.
+    pub fn refs(&self) -> impl Iterator<Item = &TextureRef> {
+        [
+            &self.base_color,
+            &self.metallic_roughness,
+            &self.normal,
+            &self.emissive,
+        ]
+        .into_iter()
+        .flatten()
     }
 }
 

@@ -13,7 +13,9 @@
 //! - `illum 0` to `2` (or none) -> diffuse; other `illum` values -> diffuse
 //!   with a note;
 //! - `map_Kd` -> a base colour texture (`-clamp on` clamps, else it
-//!   repeats; `-o` and `-s` offset and scale its coordinates); `norm`, `map_Bump` or `bump` -> a normal map (`-bm` its
+//!   repeats; `-o` and `-s` offset and scale its coordinates); `map_Ke` ->
+//!   an emission texture (the same options; it multiplies `Ke`, 1 where
+//!   `Ke` is missing); `norm`, `map_Bump` or `bump` -> a normal map (`-bm` its
 //!   scale) when the image is one, a height map (grey) is noted as not
 //!   rendered; both need `vt` coordinates (v flipped to glTF's top-left
 //!   origin);
@@ -24,6 +26,10 @@
 
 use super::common::{self, Mat};
 use super::Material;
+
+/// A colour texture's file, whether `-clamp on` was given, and its `-o`
+/// offset and `-s` scale (u and v).
+pub(super) type ColorMap = (String, bool, [f64; 2], [f64; 2]);
 
 /// One `newmtl` block, as written.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -44,7 +50,9 @@ pub(super) struct MtlMaterial {
     pub illum: Option<i64>,
     /// `map_Kd`'s file, whether `-clamp on` was given, and its `-o` offset
     /// and `-s` scale (u and v).
-    pub map_kd: Option<(String, bool, [f64; 2], [f64; 2])>,
+    pub map_kd: Option<ColorMap>,
+    /// `map_Ke`, as `map_Kd`.
+    pub map_ke: Option<ColorMap>,
     /// `norm`, `map_Bump` or `bump`'s file and its `-bm` scale (a normal
     /// map, or a height map that the loader then notes as not rendered).
     pub bump: Option<(String, f64)>,
@@ -120,7 +128,7 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                         .map_err(|_| err(format!("illum: {word:?} is not an integer")))?,
                 );
             }
-            "map_kd" | "norm" | "map_bump" | "bump" => {
+            "map_kd" | "map_ke" | "norm" | "map_bump" | "bump" => {
                 let Some((&file, options)) = args.split_last() else {
                     return Err(err(format!("{key}: a file name is missing")));
                 };
@@ -128,7 +136,7 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                     let i = options.iter().position(|o| o.eq_ignore_ascii_case(name))?;
                     options.get(i + 1).copied()
                 };
-                if lower == "map_kd" {
+                if lower == "map_kd" || lower == "map_ke" {
                     let pair = |name: &str, default: f64| -> Result<[f64; 2], MtlError> {
                         let Some(i) = options.iter().position(|o| o.eq_ignore_ascii_case(name))
                         else {
@@ -143,7 +151,11 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                     };
                     let (offset, scale) = (pair("-o", 0.0)?, pair("-s", 1.0)?);
                     let clamp = option("-clamp") == Some("on");
-                    m.map_kd = Some((file.to_owned(), clamp, offset, scale));
+                    let map = Some((file.to_owned(), clamp, offset, scale));
+                    match lower.as_str() {
+                        "map_kd" => m.map_kd = map,
+                        _ => m.map_ke = map,
+                    }
                 } else {
                     let scale = match option("-bm") {
                         Some(w) => number(key, Some(w)).map_err(err)?,
@@ -199,7 +211,12 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     let mirror = illum == 3;
     let glass = (4..=7).contains(&illum);
     let pbr = !mirror && !glass && (m.pr.is_some() || m.pm.is_some());
-    let emission = common::emission("Ke", m.ke.unwrap_or_default(), &mut notes);
+    // An emission map without `Ke` is the emission itself.
+    let ke = match (m.ke, &m.map_ke) {
+        (None, Some(_)) => [1.0; 3],
+        (ke, _) => ke.unwrap_or_default(),
+    };
+    let emission = common::emission("Ke", ke, &mut notes);
 
     if nonzero(m.ka) {
         ignored.push("Ka (ambient)".to_owned());

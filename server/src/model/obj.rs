@@ -321,7 +321,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8], dir: Option<&Path>) -> Result<Pa
         }
     }
     let images = super::obj_maps::read(ctx, &libs, &mut materials, dir, &used)?;
-    let textured = |m: &Mat| m.maps.base_color.is_some() || m.maps.normal.is_some();
+    let textured = |m: &Mat| !m.maps.is_empty();
     if !uvs.is_empty() {
         uvs.resize(mesh.positions.len(), [0.0; 2]);
         if uvs.iter().flatten().any(|x| !x.is_finite()) {

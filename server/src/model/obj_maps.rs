@@ -1,13 +1,16 @@
-//! MTL texture maps (`map_Kd`, and `norm`/`map_Bump`/`bump`) read for an
+//! MTL texture maps (`map_Kd`, `map_Ke` and `norm`/`map_Bump`/`bump`) read for an
 //! OBJ: each image file once, relative to the OBJ's directory. A file that
 //! cannot be found (or an upload, which has no directory) is a warning and
 //! the material renders without that map; a file that is found but is not a
 //! PNG or JPEG is an error naming it. A bump map whose image is grey is a
 //! height map, which is not rendered (noted); one in colour is a normal map.
+//! A material whose emission is its `map_Ke` alone (no `Ke`) does not glow
+//! where that map cannot be read.
 
 use super::common::{Ctx, Mat};
+use super::mtl::ColorMap;
 use super::mtl::MtlMaterial;
-use super::{Image, ModelError, TextureRef, Wrap};
+use super::{Image, Material, ModelError, TextureRef, Wrap};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -63,23 +66,30 @@ pub(super) fn read(
     let mut maps = Vec::with_capacity(libs.len());
     for (k, lib) in libs.iter().enumerate() {
         let used = |_: &_| used.get(k).copied().unwrap_or(false);
-        let mut base = None;
-        if let Some((file, clamp, offset, scale)) = lib.map_kd.as_ref().filter(|_| used(lib)) {
-            base = image(ctx, "map_Kd", file)?.map(|i| TextureRef {
+        let mut color = |key: &str, map: &Option<ColorMap>| match map.as_ref().filter(|_| used(lib))
+        {
+            None => Ok(None),
+            Some((file, clamp, offset, scale)) => Ok(image(ctx, key, file)?.map(|i| TextureRef {
                 wrap: [if *clamp { Wrap::Clamp } else { Wrap::Repeat }; 2],
                 offset: *offset,
                 scale: *scale,
                 ..TextureRef::plain(i)
-            });
+            })),
+        };
+        let base = color("map_Kd", &lib.map_kd)?;
+        let emissive = color("map_Ke", &lib.map_ke)?;
+        if emissive.is_none() && lib.map_ke.is_some() && lib.ke.is_none() {
+            dark(&mut materials[k].json);
         }
         let mut bump = None;
         if let Some((file, scale)) = lib.bump.as_ref().filter(|_| used(lib)) {
             bump = image(ctx, "bump map", file)?.map(|i| (i, *scale));
         }
-        maps.push((base, bump));
+        maps.push((base, emissive, bump));
     }
-    for ((base, bump), m) in maps.into_iter().zip(materials.iter_mut()) {
+    for ((base, emissive, bump), m) in maps.into_iter().zip(materials.iter_mut()) {
         m.maps.base_color = base;
+        m.maps.emissive = emissive;
         if let Some((i, scale)) = bump {
             let grey = images[i]
                 .rgba
@@ -97,4 +107,13 @@ pub(super) fn read(
         }
     }
     Ok(images)
+}
+
+/// Takes the emission off `m` (its emission map could not be read).
+fn dark(m: &mut Material) {
+    let (Material::Diffuse { emission, .. }
+    | Material::Mirror { emission, .. }
+    | Material::Glass { emission, .. }
+    | Material::Pbr { emission, .. }) = m;
+    *emission = None;
 }

@@ -1,7 +1,7 @@
 //! A mesh and one material saved as a `.glb` (for tests and benchmarks of
 //! textured models): positions, normals, both UV sets and tangents where the
-//! mesh has them, and the material's metallic-roughness factors and
-//! textures (PNG, embedded in the binary chunk) with their samplers and
+//! mesh has them, and the material's metallic-roughness factors, emission
+//! (`KHR_materials_emissive_strength` above 1) and textures (PNG, embedded in the binary chunk) with their samplers and
 //! `KHR_texture_transform`. [`super::load_bytes`] reads it back.
 
 use super::{MeshData, Wrap};
@@ -18,6 +18,9 @@ pub struct GlbMaterial {
     pub metallic_roughness_texture: Option<GlbTexture>,
     pub normal_texture: Option<GlbTexture>,
     pub normal_scale: f64,
+    /// The emissive factor (any size: written as factor and strength).
+    pub emissive: [f64; 3],
+    pub emissive_texture: Option<GlbTexture>,
 }
 
 impl Default for GlbMaterial {
@@ -30,6 +33,8 @@ impl Default for GlbMaterial {
             metallic_roughness_texture: None,
             normal_texture: None,
             normal_scale: 1.0,
+            emissive: [0.0; 3],
+            emissive_texture: None,
         }
     }
 }
@@ -176,9 +181,20 @@ pub fn glb(mesh: &MeshData, material: &GlbMaterial) -> Vec<u8> {
         v["scale"] = json!(m.normal_scale);
         mat["normalTexture"] = v;
     }
+    let strength = m.emissive.iter().fold(1.0f64, |a, &b| a.max(b));
+    if m.emissive.iter().any(|&e| e > 0.0) {
+        mat["emissiveFactor"] = json!(m.emissive.map(|e| e / strength));
+        if strength > 1.0 {
+            mat["extensions"] =
+                json!({"KHR_materials_emissive_strength": {"emissiveStrength": strength}});
+        }
+    }
+    if let Some(t) = &m.emissive_texture {
+        mat["emissiveTexture"] = info(t, &mut b);
+    }
     let doc = json!({
         "asset": {"version": "2.0", "generator": "pathstream"},
-        "extensionsUsed": ["KHR_texture_transform"],
+        "extensionsUsed": ["KHR_texture_transform", "KHR_materials_emissive_strength"],
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0}],

@@ -8,6 +8,9 @@
 //! - Metallic and roughness (`pbr` only): the factor times the map's blue
 //!   and green channel (glTF's metallic-roughness texture); one lookup
 //!   where both slots read the same texture the same way.
+//! - Emission (any kind): the material's emission times the map's RGB
+//!   (decoded from sRGB), where a camera or BSDF ray meets the surface and
+//!   where a shadow ray aimed at it does ([`emission`]).
 //! - Normal (any kind): tangent-space, `(2 rgb - 1)` with x and y times
 //!   `scale`, in the frame (T, B, N) of the surface's tangent, its sign's
 //!   bitangent `B = sign (N x T)` and the interpolated shading normal N
@@ -49,6 +52,7 @@ pub struct WorldMaps {
     pub metallic: Slot,
     pub roughness: Slot,
     pub normal: Slot,
+    pub emission: Slot,
     /// The material's own metallic and roughness factors (`pbr`).
     pub metallic_factor: f32,
     pub roughness_factor: f32,
@@ -75,6 +79,13 @@ fn read(textures: &[Arc<Texture>], slot: &Slot, tc: &TexCoords, srgb: bool) -> [
     texture::lookup(&textures[slot.texture as usize], &slot.sampling, uv, srgb)
 }
 
+/// Emission `le` times the emission map of `maps` (which must have one) at
+/// coordinates `tc`.
+#[inline(always)]
+pub fn emission(textures: &[Arc<Texture>], maps: &WorldMaps, le: Vec3A, tc: &TexCoords) -> Vec3A {
+    le * texture::rgb(read(textures, &maps.emission, tc, true))
+}
+
 /// The material `m` (with maps `maps`) at a hit with coordinates `tc`, and
 /// the unit shading normal `ns` (turned by the normal map, if any; `ns` is
 /// the surface's interpolated shading normal, outward).
@@ -87,6 +98,9 @@ pub fn shade(
     ns: &mut Vec3A,
 ) -> SurfaceMaterial {
     let mut out = *m;
+    if maps.emission.texture != NO_TEXTURE {
+        out.emission = emission(textures, maps, m.emission, tc);
+    }
     if maps.base_color.texture != NO_TEXTURE {
         out.albedo = m.albedo * texture::rgb(read(textures, &maps.base_color, tc, true));
     }
@@ -150,6 +164,7 @@ mod tests {
             metallic: Slot::NONE,
             roughness: Slot::NONE,
             normal: Slot::NONE,
+            emission: Slot::NONE,
             metallic_factor: 1.0,
             roughness_factor: 1.0,
             normal_scale: 1.0,

@@ -28,6 +28,9 @@ pub struct Texture {
     pub width: u32,
     pub height: u32,
     pub texels: Vec<u32>,
+    /// The mean of the texels' RGB decoded from sRGB: how bright an
+    /// emission map is on average (light selection weighs by it).
+    pub mean_srgb: [f32; 3],
 }
 
 impl Texture {
@@ -45,15 +48,23 @@ impl Texture {
                 rgba.len()
             ));
         }
-        let texels = rgba
+        let texels: Vec<u32> = rgba
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect();
+        let table = srgb_table();
+        let mut sum = [0.0f64; 3];
+        for c in rgba.chunks_exact(4) {
+            for (s, &b) in sum.iter_mut().zip(&c[..3]) {
+                *s += f64::from(table[b as usize]);
+            }
+        }
         Ok(Texture {
             name: name.to_owned(),
             width,
             height,
             texels,
+            mean_srgb: sum.map(|s| (s / count as f64) as f32),
         })
     }
 
@@ -245,6 +256,7 @@ mod tests {
         assert_eq!(lookup(&t, &s, [0.25, 0.75], true), [0.0, 0.0, 1.0, 1.0]);
         let w = lookup(&t, &s, [0.75, 0.75], true);
         assert_eq!(&w[..3], &[1.0; 3]);
+        assert_eq!(t.mean_srgb, [0.5; 3]);
         assert!((w[3] - 128.0 / 255.0).abs() < 1e-7);
     }
 

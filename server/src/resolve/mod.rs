@@ -212,6 +212,7 @@ fn render_maps(maps: &model::Maps, textures: &[Arc<Texture>]) -> Maps {
         metallic: slot(&maps.metallic_roughness),
         roughness: slot(&maps.metallic_roughness),
         normal: slot(&maps.normal),
+        emission: slot(&maps.emissive),
         normal_scale: maps.normal_scale,
     }
 }

@@ -51,11 +51,14 @@ fn maps_images_and_attributes_are_read() {
         metallic_roughness_texture: Some(mr),
         normal_texture: Some(GlbTexture::new(1, 1, vec![128, 128, 255, 255])),
         normal_scale: 0.5,
+        emissive: [4.0, 2.0, 1.0],
+        emissive_texture: Some(GlbTexture::new(1, 1, vec![10, 20, 30, 255])),
         ..GlbMaterial::default()
     };
     let bytes = glb(&quad(), &material);
     let model = load_bytes(&bytes, "t.glb", &Limits::default()).expect("loads");
-    assert_eq!(model.images.len(), 3);
+    assert_eq!(model.images.len(), 4);
+    assert_eq!(model.images[3].rgba, [10, 20, 30, 255]);
     assert_eq!((model.images[0].width, model.images[0].height), (4, 4));
     assert_eq!(model.images[0].rgba, checker().rgba);
     assert_eq!(model.images[1].rgba, [0, 128, 255, 255]);
@@ -70,6 +73,8 @@ fn maps_images_and_attributes_are_read() {
     assert_eq!((m.image, m.uv, m.wrap), (1, 1, [Wrap::Repeat; 2]));
     assert_eq!(maps.normal.map(|n| n.image), Some(2));
     assert_eq!(maps.normal_scale, 0.5);
+    assert_eq!(maps.emissive.map(|e| e.image), Some(3));
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
     let mesh = &model.meshes[0];
     assert_eq!(mesh.uvs, quad().uvs);
     // No TANGENT in the file: MikkTSpace's, along +x (u), for a normal map.
@@ -78,10 +83,12 @@ fn maps_images_and_attributes_are_read() {
     for v in t {
         assert!((v[0] - 1.0).abs() < 1e-5 && v[3] == 1.0, "{v:?}");
     }
-    // The material stays pbr with its factors (its map reads the rest).
+    // The material stays pbr with its factors (its map reads the rest),
+    // its emission the factor times KHR_materials_emissive_strength.
     assert!(matches!(
         model.materials[0].1,
-        crate::model::Material::Pbr { metallic, roughness, .. } if metallic == 0.5 && roughness == 0.25
+        crate::model::Material::Pbr { metallic, roughness, emission: Some([4.0, 2.0, 1.0]), .. }
+            if metallic == 0.5 && roughness == 0.25
     ));
 }
 
@@ -244,4 +251,35 @@ fn obj_maps_and_vt_are_read() {
     std::fs::write(p.join("m.mtl"), "newmtl painted\nmap_Kd junk.png\n").expect("mtl");
     let e = crate::model::load_file(&p.join("m.obj"), &Limits::default()).expect_err("junk");
     assert!(e.to_string().contains("junk.png"), "{e}");
+}
+
+#[test]
+fn obj_map_ke_multiplies_ke_or_is_the_emission() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = dir.path();
+    std::fs::write(p.join("e.png"), png(1, 1, &[255, 128, 0, 255])).expect("png");
+    let mtl = "newmtl both\nKd 0 0 0\nKe 2 2 2\nmap_Ke -s 2 2 e.png\n\
+               newmtl map\nKd 0 0 0\nmap_Ke e.png\n\
+               newmtl lost\nKd 0 0 0\nmap_Ke missing.png\n";
+    std::fs::write(p.join("m.mtl"), mtl).expect("mtl");
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+               usemtl both\nf 1/1 2/2 3/3\nusemtl map\nf 1/1 3/3 2/2\nusemtl lost\nf 2/2 1/1 3/3\n";
+    std::fs::write(p.join("m.obj"), obj).expect("obj");
+    let m = crate::model::load_file(&p.join("m.obj"), &Limits::default()).expect("loads");
+    let emission = |i: usize| match m.materials[i].1 {
+        crate::model::Material::Diffuse { emission, .. } => emission,
+        ref other => panic!("{other:?}"),
+    };
+    let both = m.materials[0].2.emissive.expect("map_Ke");
+    assert_eq!((emission(0), both.scale), (Some([2.0; 3]), [2.0, 2.0]));
+    assert_eq!(m.images[both.image].rgba, [255, 128, 0, 255]);
+    // No Ke: the map is the emission; a map that cannot be read, no glow.
+    assert_eq!(emission(1), Some([1.0; 3]));
+    assert!(m.materials[1].2.emissive.is_some());
+    assert_eq!((emission(2), m.materials[2].2.emissive), (None, None));
+    assert!(
+        m.warnings.iter().any(|w| w.contains("missing.png")),
+        "{:?}",
+        m.warnings
+    );
 }

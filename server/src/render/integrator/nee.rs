@@ -10,6 +10,7 @@
 
 use crate::render::isa::Isa;
 use crate::render::light::Emitter;
+use crate::render::material::NO_MAPS;
 use crate::render::math::Vec3A;
 use crate::render::sampler::Sampler;
 use crate::render::world::{Origin, Surface, World, NO_PRIM};
@@ -111,15 +112,17 @@ fn one<I: Isa>(
         prim: s.prim,
         entering: dir.dot(s.ng) < 0.0,
     };
-    let hit = world.intersect(isa, &world.spawn(s, dir), from);
-    let visible = if e.shape.is_distant() {
-        hit.is_none()
-    } else {
-        hit.is_some_and(|h| h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim))
+    let ray = world.spawn(s, dir);
+    let hit = world.intersect(isa, &ray, from);
+    let le = match hit {
+        None if e.shape.is_distant() => e.radiance(dir),
+        Some(h) if h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim) => {
+            match e.maps {
+                NO_MAPS => e.emission,
+                _ => world.emitted(e, &h, &ray),
+            }
+        }
+        _ => return Vec3A::ZERO,
     };
-    if visible {
-        e.radiance(dir) * (f(dir, pmf / weight) * weight)
-    } else {
-        Vec3A::ZERO
-    }
+    le * (f(dir, pmf / weight) * weight)
 }

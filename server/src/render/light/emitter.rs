@@ -123,8 +123,14 @@ pub struct Emitter {
     pub object: u32,
     /// The triangle of that object, or the world's `NO_PRIM`.
     pub prim: u32,
+    /// Its material's emission (before its emission map, if any).
     pub emission: Vec3A,
     pub shape: EmitterShape,
+    /// The material's maps (`World::maps`) where it has an emission map,
+    /// else `NO_MAPS`: a shadow ray that reaches it reads the map there.
+    pub maps: u32,
+    /// The emission map's mean colour (1 without one): the pick weighs by it.
+    pub mean: Vec3A,
 }
 
 /// Every emitter, and a table that picks one in proportion to its power.
@@ -261,7 +267,7 @@ impl Emitter {
     /// factor folded into the constants; only ratios matter): an
     /// environment as bright as a sphere of `radius` lit from everywhere.
     fn power(&self, radius: f64) -> f64 {
-        let b = brightness(self.emission);
+        let b = brightness(self.emission * self.mean);
         match &self.shape {
             EmitterShape::Sphere(s) => {
                 let r = f64::from(s.radius);

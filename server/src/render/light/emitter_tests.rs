@@ -39,6 +39,8 @@ fn emitter(object: u32, prim: u32, shape: EmitterShape) -> Emitter {
         prim,
         emission: Vec3A::ONE,
         shape,
+        maps: crate::render::material::NO_MAPS,
+        mean: Vec3A::ONE,
     }
 }
 

@@ -25,6 +25,8 @@ pub struct Maps {
     pub metallic: Option<MapSlot>,
     pub roughness: Option<MapSlot>,
     pub normal: Option<MapSlot>,
+    /// Multiplies the emission (sRGB RGB, glTF `emissiveTexture`).
+    pub emission: Option<MapSlot>,
     /// The normal map's x and y scale (glTF `normalTexture.scale`).
     pub normal_scale: f64,
 }
@@ -36,6 +38,7 @@ impl Default for Maps {
             metallic: None,
             roughness: None,
             normal: None,
+            emission: None,
             normal_scale: 1.0,
         }
     }
@@ -47,6 +50,7 @@ impl Maps {
             && self.metallic.is_none()
             && self.roughness.is_none()
             && self.normal.is_none()
+            && self.emission.is_none()
     }
 
     /// The slots that are set, by name.
@@ -56,6 +60,7 @@ impl Maps {
             ("metallic", &self.metallic),
             ("roughness", &self.roughness),
             ("normal", &self.normal),
+            ("emission", &self.emission),
         ]
         .into_iter()
         .filter_map(|(n, s)| s.as_ref().map(|s| (n, s)))

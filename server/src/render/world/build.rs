@@ -137,7 +137,12 @@ impl World {
                 Vec3A::from(DVec3::from_array(disc.radiance).as_vec3()) * light.intensity;
             Some((SunLight::new(dir.normalize(), disc.radius), radiance))
         });
-        let lights = super::emitters::lights(&objects, &instances, &materials, (sun, sky), radius);
+        let with_maps = super::emitters::Materials {
+            list: &materials,
+            maps: &maps,
+            textures: &textures,
+        };
+        let lights = super::emitters::lights(&objects, &instances, &with_maps, (sun, sky), radius);
         let scan = instances.is_empty()
             && match choice {
                 AccelChoice::Auto => {

@@ -9,9 +9,32 @@
 
 use super::{Geometry, Instance, WorldObject, NO_OBJECT, NO_PRIM};
 use crate::render::light::{Emitter, EmitterShape, EnvLight, LightTri, Lights, SunLight};
-use crate::render::material::SurfaceMaterial;
+use crate::render::maps::{WorldMaps, NO_TEXTURE};
+use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::Vec3A;
+use crate::render::texture::Texture;
 use std::sync::Arc;
+
+/// The scene's materials with their maps and textures.
+pub(super) struct Materials<'a> {
+    pub list: &'a [SurfaceMaterial],
+    pub maps: &'a [WorldMaps],
+    pub textures: &'a [Arc<Texture>],
+}
+
+impl Materials<'_> {
+    /// An emitter of material `m`: its maps where it has an emission map,
+    /// and that map's mean colour.
+    fn emission_map(&self, m: &SurfaceMaterial) -> (u32, Vec3A) {
+        let Some(maps) = self.maps.get(m.maps as usize) else {
+            return (NO_MAPS, Vec3A::ONE);
+        };
+        match maps.emission.texture {
+            NO_TEXTURE => (NO_MAPS, Vec3A::ONE),
+            t => (m.maps, Vec3A::from(self.textures[t as usize].mean_srgb)),
+        }
+    }
+}
 
 /// The sun's place in the emitter list: after every object's, before
 /// the environment's (`NO_OBJECT`, `NO_PRIM`).
@@ -28,7 +51,7 @@ pub(super) enum Sky {
 pub(super) fn lights(
     objects: &[WorldObject],
     instances: &[Instance],
-    materials: &[SurfaceMaterial],
+    materials: &Materials<'_>,
     (sun, sky): (Option<(SunLight, Vec3A)>, Sky),
     radius: f64,
 ) -> Lights {
@@ -36,12 +59,15 @@ pub(super) fn lights(
     for (id, o) in objects.iter().enumerate() {
         let id = id as u32;
         let flat = |shape: EmitterShape| {
-            let m = &materials[o.material as usize];
+            let m = &materials.list[o.material as usize];
+            let (maps, mean) = materials.emission_map(m);
             m.emissive.then_some(Emitter {
                 object: id,
                 prim: NO_PRIM,
                 emission: m.emission,
                 shape,
+                maps,
+                mean,
             })
         };
         match o.geometry {
@@ -63,6 +89,8 @@ pub(super) fn lights(
             prim: SUN_PRIM,
             emission,
             shape: EmitterShape::Sun(sun),
+            maps: NO_MAPS,
+            mean: Vec3A::ONE,
         });
     }
     if let Some((emission, shape)) = sky {
@@ -71,6 +99,8 @@ pub(super) fn lights(
             prim: NO_PRIM,
             emission,
             shape,
+            maps: NO_MAPS,
+            mean: Vec3A::ONE,
         });
     }
     Lights::new(emitters, radius)
@@ -78,13 +108,14 @@ pub(super) fn lights(
 
 /// Every emissive triangle of object `id`, instance `inst`, of non-zero
 /// area, in camera-relative space.
-fn triangles(id: u32, inst: &Instance, materials: &[SurfaceMaterial], out: &mut Vec<Emitter>) {
+fn triangles(id: u32, inst: &Instance, materials: &Materials<'_>, out: &mut Vec<Emitter>) {
     let mesh = &*inst.mesh;
     for (t, &slot) in mesh.materials.iter().enumerate() {
-        let m = &materials[inst.materials[slot as usize] as usize];
+        let m = &materials.list[inst.materials[slot as usize] as usize];
         if !m.emissive {
             continue;
         }
+        let (maps, mean) = materials.emission_map(m);
         let [a, b, c] = mesh
             .vertices(t as u32)
             .map(|v| inst.cam_from_obj.transform_point3a(v));
@@ -104,6 +135,8 @@ fn triangles(id: u32, inst: &Instance, materials: &[SurfaceMaterial], out: &mut 
                 n: cross.normalize(),
                 area,
             }),
+            maps,
+            mean,
         });
     }
 }

@@ -15,9 +15,11 @@
 //! bitangent's sign flipped by a mirroring placement).
 
 use super::{Geometry, Hit, Surface, World};
-use crate::render::maps::{Slot, TexCoords, WorldMaps};
+use crate::render::light::Emitter;
+use crate::render::maps::{self, Slot, TexCoords, WorldMaps};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::Vec3A;
+use crate::render::ray::Ray;
 use crate::render::scene::{MapSlot, MaterialKind, Scene};
 use crate::render::texture::Texture;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -66,6 +68,7 @@ pub(super) fn world_maps(
             metallic: metal,
             roughness: rough,
             normal: slot(&m.maps.normal),
+            emission: slot(&m.maps.emission),
             metallic_factor: metallic,
             roughness_factor: roughness,
             normal_scale: m.maps.normal_scale as f32,
@@ -79,6 +82,15 @@ pub(super) fn world_maps(
 }
 
 impl World {
+    /// The radiance emitter `e`, which has an emission map, sends from
+    /// `hit`, where `ray` (a shadow ray) met it.
+    #[inline(never)]
+    pub fn emitted(&self, e: &Emitter, hit: &Hit, ray: &Ray) -> Vec3A {
+        let s = self.surface(hit, ray);
+        let tc = self.texcoords(hit, &s);
+        maps::emission(&self.textures, &self.maps[e.maps as usize], e.emission, &tc)
+    }
+
     /// The texture coordinates and tangent at `hit` on its surface `s`.
     #[inline(always)]
     pub fn texcoords(&self, hit: &Hit, s: &Surface) -> TexCoords {

@@ -207,7 +207,8 @@ pub struct Light {
     /// `LIGHT_OBJECT` (a sphere or quad: its `Object`), `LIGHT_TRIANGLE`
     /// (below), `LIGHT_ENVIRONMENT`.
     pub kind: u32,
-    pub pad0: u32,
+    /// Its material's maps where they have an emission map, else `NO_MAPS`.
+    pub maps: u32,
     pub pad1: u32,
     pub emission: [f32; 4],
     /// A triangle in camera space: p0 + e1 b1 + e2 b2; n.w its area.
@@ -282,6 +283,7 @@ pub fn kernel_lights(w: &World) -> Vec<Light> {
                 alias,
                 pmf,
                 kind: LIGHT_OBJECT,
+                maps: e.maps,
                 emission: v4(e.emission, 0.0),
                 ..Light::default()
             };

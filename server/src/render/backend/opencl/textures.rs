@@ -27,6 +27,7 @@ pub struct MaterialMaps {
     pub metallic: MapSlot,
     pub roughness: MapSlot,
     pub normal: MapSlot,
+    pub emission: MapSlot,
     /// metallic factor, roughness factor, normal scale, 1 where metallic
     /// and roughness share a lookup.
     pub factors: [f32; 4],
@@ -43,7 +44,7 @@ pub struct TexImage {
 }
 
 const _: () = assert!(std::mem::size_of::<MapSlot>() == 48);
-const _: () = assert!(std::mem::size_of::<MaterialMaps>() == 208);
+const _: () = assert!(std::mem::size_of::<MaterialMaps>() == 256);
 const _: () = assert!(std::mem::size_of::<TexImage>() == 16);
 
 /// A world's maps and textures as the kernel reads them (all empty when
@@ -76,6 +77,7 @@ fn maps(m: &WorldMaps) -> MaterialMaps {
         metallic: slot(&m.metallic),
         roughness: slot(&m.roughness),
         normal: slot(&m.normal),
+        emission: slot(&m.emission),
         factors: [
             m.metallic_factor,
             m.roughness_factor,
