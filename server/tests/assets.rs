@@ -439,3 +439,112 @@ async fn the_environment_alone_changes_by_its_own_verb() {
     );
     running.shutdown().await.expect("shutdown");
 }
+
+/// `rgba` (`w` x `h`) as PNG bytes.
+fn png(w: u32, h: u32, rgba: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut out),
+        rgba,
+        w,
+        h,
+        image::ExtendedColorType::Rgba8,
+    )
+    .expect("png");
+    out
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn uploaded_images_texture_scene_materials() {
+    let (running, base) = server(config()).await;
+    // Red on the left, blue on the right.
+    let (status, a) = upload(
+        &base,
+        "rb.png",
+        png(2, 1, &[255, 0, 0, 255, 0, 0, 255, 255]),
+    )
+    .await;
+    assert_eq!(status, 201, "{a}");
+    assert_eq!(
+        (a["format"].as_str(), &a["image_size"]),
+        (Some("png"), &json!([2, 1])),
+        "{a}"
+    );
+    assert_eq!(a["memory_bytes"], json!(8));
+    let image = a["id"].as_str().expect("id").to_owned();
+    // A mirror tinted by it fills the view, in a white sky: noise-free.
+    let scene = |albedo: Value| {
+        json!({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40,
+                          "projection": "orthographic", "ortho_height": 2},
+               "environment": [1, 1, 1],
+               "materials": {"m": {"type": "mirror", "albedo": albedo}},
+               "objects": [{"type": "quad", "corner": [-1, -1, 0], "edge_u": [2, 0, 0],
+                            "edge_v": [0, 2, 0], "material": "m"}]})
+    };
+    let textured = scene(json!({"texture": image, "wrap": "clamp"}));
+    let s = create(
+        &base,
+        json!({"width": 16, "height": 16, "quality": {"spp": 2}, "scene": textured}),
+    )
+    .await;
+    let id = s["id"].as_str().expect("id").to_owned();
+    let halves = |img: &[[f32; 3]]| (img[8 * 16 + 3], img[8 * 16 + 12]);
+    assert_eq!(
+        halves(&pfm(&base, &id, 2).await),
+        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0])
+    );
+    // Another environment keeps the texture (the scene's own image, not read again).
+    let r = client()
+        .put(format!("{base}/api/sessions/{id}/environment"))
+        .json(&json!([0.5, 0.5, 0.5]))
+        .send()
+        .await
+        .expect("req");
+    assert_eq!(r.status(), 200);
+    let st = wait_status(&base, &id, |st| st["environment"] == json!([0.5, 0.5, 0.5])).await;
+    assert_eq!(st["environment"], json!([0.5, 0.5, 0.5]));
+    assert_eq!(
+        halves(&pfm(&base, &id, 2).await),
+        ([0.5, 0.0, 0.0], [0.0, 0.0, 0.5])
+    );
+
+    // An image is no model, a model no image, a file no asset; a broken
+    // image is no upload.
+    let (_, ply) = upload(&base, "ball.ply", ball_ply()).await;
+    for (scene, words) in [
+        (
+            json!({"objects": [{"type": "mesh", "asset": image, "material": "x"}]}),
+            "texture image",
+        ),
+        (
+            scene(json!({"texture": ply["id"]})),
+            "materials.m.albedo.texture: asset",
+        ),
+        (scene(json!({"texture": "rb.png"})), "POST /api/assets"),
+        (
+            scene(json!({"texture": image, "uv": 3})),
+            "materials.m.albedo.uv",
+        ),
+    ] {
+        let r = client()
+            .post(format!("{base}/api/sessions"))
+            .json(&json!({"scene": scene}))
+            .send()
+            .await
+            .expect("req");
+        assert_eq!(r.status(), 400);
+        let e: Value = r.json().await.expect("json");
+        assert!(
+            e["error"].as_str().is_some_and(|e| e.contains(words)),
+            "{words}: {e}"
+        );
+    }
+    let bytes = png(2, 1, &[255, 0, 0, 255, 0, 0, 255, 255]);
+    let (status, e) = upload(&base, "cut.png", bytes[..bytes.len() - 20].to_vec()).await;
+    assert_eq!(status, 400, "{e}");
+    assert!(
+        e["error"].as_str().is_some_and(|e| e.contains("cut.png")),
+        "{e}"
+    );
+    running.shutdown().await.expect("shutdown");
+}

@@ -183,6 +183,7 @@ fn nested_and_touching_spheres() {
             albedo: None,
             fresnel: Default::default(),
             emission: None,
+            normal: None,
         }),
     );
     json.materials.insert(
@@ -192,6 +193,7 @@ fn nested_and_touching_spheres() {
             albedo: None,
             fresnel: Default::default(),
             emission: None,
+            normal: None,
         }),
     );
     json.objects.push(ObjectJson::Sphere(SphereJson {
@@ -357,8 +359,9 @@ fn grazing_rays_tangent_to_a_sphere() {
     json.materials.insert(
         "ball".into(),
         MaterialJson::Diffuse(SurfaceJson {
-            albedo: [a; 3],
+            albedo: [a; 3].into(),
             emission: None,
+            normal: None,
         }),
     );
     json.objects.push(ObjectJson::Sphere(SphereJson {
@@ -542,6 +545,7 @@ fn extreme_glass() {
                 albedo: None,
                 fresnel: Default::default(),
                 emission: None,
+                normal: None,
             }),
         );
         json.objects.push(ObjectJson::Sphere(SphereJson {
@@ -790,8 +794,9 @@ fn out_of_range_is_refused() {
     json.materials.insert(
         "hot".into(),
         MaterialJson::Diffuse(SurfaceJson {
-            albedo: [0.5; 3],
-            emission: Some([1e21; 3]),
+            albedo: [0.5; 3].into(),
+            emission: Some([1e21; 3].into()),
+            normal: None,
         }),
     );
     assert!(Scene::from_json(&json).is_err());

@@ -82,6 +82,7 @@ fn an_albedo_one_glass_sphere_in_the_furnace_is_invisible() {
                 albedo: None,
                 fresnel,
                 emission: None,
+                normal: None,
             }),
         );
         json.objects.push(ObjectJson::Sphere(SphereJson {

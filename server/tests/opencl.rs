@@ -109,6 +109,7 @@ fn unbounded_furnace_and_invisible_glass() {
             albedo: None,
             fresnel: FresnelJson::Schlick,
             emission: None,
+            normal: None,
         }),
     );
     json.objects.push(ObjectJson::Sphere(SphereJson {

@@ -14,6 +14,10 @@
 //! - An emission map glows as its texels (noise-free, black sky and base),
 //!   and lights a floor as it glows: shadow rays read it (NEE on and off
 //!   agree; a uniform map equals the emission it scales).
+//! - A hand-written scene names PNG files in its materials' fields: a
+//!   checkerboard albedo shows as the `.glb`'s does, metallic and
+//!   roughness textures render as the constant twin, and the scene writes
+//!   the texture names back (and validates again to itself).
 //! - The kernel's map routines (lookups, wraps, transforms, sRGB, the
 //!   metallic-roughness, normal and emission maps) give the CPU's floats
 //!   bit for bit.
@@ -390,6 +394,84 @@ fn shadow_rays_read_the_emission_map() {
         let b = render_on(&mut backend, &plain, 24, 24, &quality(), 64);
         assert_agree(&a, &b, 6, 4.5, 1e-4, &format!("{name}: grey map vs plain"));
     }
+}
+
+/// `rgba` (`w` x `h`) written as a PNG file at `path`.
+fn write_png(path: &std::path::Path, w: u32, h: u32, rgba: &[u8]) {
+    image::save_buffer(path, rgba, w, h, image::ExtendedColorType::Rgba8).expect("png");
+}
+
+#[test]
+fn scene_json_materials_name_their_textures() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let board = checkerboard();
+    write_png(&dir.path().join("check.png"), 8, 8, &board.rgba);
+    write_png(&dir.path().join("mr.png"), 1, 1, &[255, 102, 204, 255]);
+    let quad = |material: &str| json!({"type": "quad", "corner": [-1, -1, 0], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": material});
+    let load = |doc: Value| {
+        let file = dir.path().join("scene.json");
+        std::fs::write(&file, doc.to_string()).expect("scene");
+        pathstream::resolve::load_scene(file.to_str().expect("utf-8")).expect("loads")
+    };
+    let camera = json!({"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40,
+        "projection": "orthographic", "ortho_height": 2});
+    let tiles = load(json!({
+        "camera": camera,
+        "environment": [1, 1, 1],
+        "materials": {"tiles": {"type": "mirror", "albedo": {"texture": "check.png"}}},
+        "objects": [quad("tiles")],
+    }));
+    for (name, mut backend) in backends() {
+        let film = render_on(&mut backend, &tiles, 64, 64, &quality(), 4);
+        for j in 0..4u32 {
+            for i in 0..4u32 {
+                let (x, y) = (16 * i + 7, 16 * j + 7);
+                let want = linear(check(i as usize, j as usize));
+                let what = format!("{name}: scene JSON check ({i}, {j})");
+                assert_colour(&film, x..x + 2, y..y + 2, want, &what);
+            }
+        }
+    }
+
+    // Metal from blue (0.8), roughness from green (0.4) times its factor.
+    let lit = |material: Value| {
+        load(json!({
+            "camera": camera,
+            "materials": {"m": material,
+                "lamp": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [8, 8, 8]}},
+            "objects": [quad("m"),
+                {"type": "quad", "corner": [3, -1, 1], "edge_u": [0, 2, 0], "edge_v": [-1, 0, 1], "material": "lamp"}],
+        }))
+    };
+    let textured = lit(json!({"type": "pbr", "base_color": [0.9, 0.7, 0.5],
+        "metallic": {"texture": "mr.png"},
+        "roughness": {"texture": "mr.png", "factor": 0.5},
+        "normal": {"texture": "check.png", "scale": 0}}));
+    let twin = lit(json!({"type": "pbr", "base_color": [0.9, 0.7, 0.5],
+        "metallic": 204.0 / 255.0, "roughness": 0.5 * 102.0 / 255.0}));
+    for (name, mut backend) in backends() {
+        let a = render_on(&mut backend, &textured, 24, 24, &quality(), 64);
+        let b = render_on(&mut backend, &twin, 24, 24, &quality(), 64);
+        let what = format!("{name}: scene JSON metallic-roughness texture vs factors");
+        assert_agree(&a, &b, 6, 4.5, 1e-4, &what);
+    }
+
+    // Written back by name, and valid again as the same scene.
+    let json = serde_json::to_value(textured.to_json()).expect("json");
+    assert_eq!(
+        json["materials"]["m"]["roughness"],
+        json!({"texture": "mr.png", "factor": 0.5}),
+        "{json}"
+    );
+    assert_eq!(
+        json["materials"]["m"]["normal"],
+        json!({"texture": "check.png", "scale": 0.0}),
+        "{json}"
+    );
+    let again = textured
+        .revalidate(&textured.to_json())
+        .expect("valid again");
+    assert_eq!(again, textured);
 }
 
 /// A texture of `w` x `h` texels of hashed bytes.

@@ -1,7 +1,8 @@
-//! Uploaded model files and environment maps: which file names are which,
-//! and what `POST /api/assets`, `GET /api/assets` and
+//! Uploaded model files, environment maps and texture images: which file
+//! names are which, and what `POST /api/assets`, `GET /api/assets` and
 //! `GET /api/assets/{id}` answer (a map: `"format": "hdr"` or `"exr"`, its
-//! `map_size`, no triangles).
+//! `map_size`, no triangles; an image: `"png"` or `"jpeg"`, its
+//! `image_size`).
 //!
 //! ```json
 //! {"id": "9f86d0…", "name": "bunny.obj", "format": "obj", "bytes": 3021416,
@@ -39,7 +40,7 @@ pub struct Asset {
     /// The name it was uploaded under.
     pub name: String,
     /// `obj`, `gltf`, `glb` or `ply`; `hdr` or `exr` for an environment
-    /// map.
+    /// map; `png` or `jpeg` for a texture image.
     pub format: String,
     /// Size of the uploaded file.
     pub bytes: u64,
@@ -61,6 +62,10 @@ pub struct Asset {
     /// as `"environment": {"map": ID}`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map_size: Option<[u32; 2]>,
+    /// A texture image's width and height in texels (a scene's material
+    /// uses it as `{"texture": ID}`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_size: Option<[u32; 2]>,
 }
 
 /// The answer to an upload: the asset, and whether the same bytes were

@@ -67,8 +67,9 @@ pub fn ray_set(triangles: usize) -> RaySet {
         materials: BTreeMap::from([(
             "clay".to_owned(),
             crate::render::scene::MaterialJson::Diffuse(SurfaceJson {
-                albedo: [0.7; 3],
+                albedo: [0.7; 3].into(),
                 emission: None,
+                normal: None,
             }),
         )]),
         objects: vec![ObjectJson::Mesh(ImportJson {

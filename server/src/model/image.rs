@@ -62,3 +62,28 @@ pub(super) fn decode(
         rgba: decoded.into_rgba8().into_raw(),
     })
 }
+
+/// An image file on its own (a scene material's texture), PNG or JPEG,
+/// named `name`; its texels within `limits.max_texels`.
+pub fn load_image(
+    bytes: &[u8],
+    name: &str,
+    limits: &super::Limits,
+) -> Result<Image, super::ModelError> {
+    let mut ctx = Ctx::new(name, limits);
+    decode(&mut ctx, bytes, name, name).map_err(|e| super::ModelError {
+        location: None,
+        ..e
+    })
+}
+
+/// "png" or "jpeg" where `bytes` start as those files do.
+pub fn image_format(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        Some("png")
+    } else if bytes.starts_with(b"\xFF\xD8\xFF") {
+        Some("jpeg")
+    } else {
+        None
+    }
+}

@@ -270,6 +270,8 @@ pub enum Format {
 /// `.glb`, `.ply`, any case): the contract's, which clients use too.
 pub use pathstream_wire::asset::is_model_name;
 
+pub use image::{image_format, load_image};
+
 /// Reads a model file; references to other files (OBJ's `mtllib`, a
 /// `.gltf`'s external buffers) resolve relative to its directory (absolute
 /// paths and URLs are not followed).

@@ -1,14 +1,15 @@
-//! Model files read from the file system, relative to a directory (the
-//! command line's scenes), cached process-wide by path, size and
+//! Model files, environment maps and texture images read from the file
+//! system, relative to a directory (the command line's scenes), cached process-wide by path, size and
 //! modification time for as long as any scene holds them, so that a scene
 //! edited and validated again does not read or rebuild anything.
 
 use crate::model::{self, Limits};
 use crate::render::envmap::EnvMap;
 use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
+use crate::render::texture::Texture;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex, Weak};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
 /// Reads model files relative to a directory.
 #[derive(Clone, Debug)]
@@ -18,13 +19,7 @@ pub struct FileResolver {
 }
 
 type FileKey = (PathBuf, u64, Option<std::time::SystemTime>);
-
-/// Environment maps read from files, for as long as something holds them.
-fn map_cache() -> &'static Mutex<HashMap<FileKey, Weak<EnvMap>>> {
-    static CACHE: std::sync::OnceLock<Mutex<HashMap<FileKey, Weak<EnvMap>>>> =
-        std::sync::OnceLock::new();
-    CACHE.get_or_init(Default::default)
-}
+type Cache<T> = Mutex<HashMap<FileKey, Weak<T>>>;
 
 /// The cache key of a file: where it is, its size and modification time.
 fn file_key(path: &Path) -> Result<FileKey, String> {
@@ -34,12 +29,33 @@ fn file_key(path: &Path) -> Result<FileKey, String> {
     Ok((canonical, meta.len(), meta.modified().ok()))
 }
 
-/// Models read from files, for as long as something holds them.
-fn file_cache() -> &'static Mutex<HashMap<FileKey, Weak<LoadedModel>>> {
-    static CACHE: std::sync::OnceLock<Mutex<HashMap<FileKey, Weak<LoadedModel>>>> =
-        std::sync::OnceLock::new();
-    CACHE.get_or_init(Default::default)
+/// What `cache` holds for the file at `path`, else `read` of it, kept in
+/// `cache` for as long as something holds it.
+fn cached<T>(
+    cache: &'static OnceLock<Cache<T>>,
+    path: &Path,
+    read: impl FnOnce() -> Result<T, String>,
+) -> Result<Arc<T>, String> {
+    let cache = cache.get_or_init(Default::default);
+    let key = file_key(path)?;
+    let hit = cache
+        .lock()
+        .ok()
+        .and_then(|c| c.get(&key).and_then(Weak::upgrade));
+    if let Some(hit) = hit {
+        return Ok(hit);
+    }
+    let value = Arc::new(read()?);
+    if let Ok(mut c) = cache.lock() {
+        c.retain(|_, w| w.strong_count() > 0);
+        c.insert(key, Arc::downgrade(&value));
+    }
+    Ok(value)
 }
+
+static MODELS: OnceLock<Cache<LoadedModel>> = OnceLock::new();
+static MAPS: OnceLock<Cache<EnvMap>> = OnceLock::new();
+static TEXTURES: OnceLock<Cache<Texture>> = OnceLock::new();
 
 impl FileResolver {
     pub fn new(base: &Path) -> Self {
@@ -60,24 +76,13 @@ impl Resolver for FileResolver {
             return NoFiles.resolve(source);
         };
         let path = self.base.join(name);
-        let key = file_key(&path)?;
-        if let Some(hit) = file_cache()
-            .lock()
-            .ok()
-            .and_then(|c| c.get(&key).and_then(Weak::upgrade))
-        {
-            return Ok(hit);
-        }
-        let model = model::load_file(&path, &self.limits).map_err(|e| e.to_string())?;
-        let display = path
-            .file_name()
-            .map_or_else(|| name.to_owned(), |f| f.to_string_lossy().into_owned());
-        let loaded = Arc::new(super::loaded_model(&display, model)?);
-        if let Ok(mut cache) = file_cache().lock() {
-            cache.retain(|_, w| w.strong_count() > 0);
-            cache.insert(key, Arc::downgrade(&loaded));
-        }
-        Ok(loaded)
+        cached(&MODELS, &path, || {
+            let model = model::load_file(&path, &self.limits).map_err(|e| e.to_string())?;
+            let display = path
+                .file_name()
+                .map_or_else(|| name.to_owned(), |f| f.to_string_lossy().into_owned());
+            super::loaded_model(&display, model)
+        })
     }
 
     fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
@@ -85,16 +90,18 @@ impl Resolver for FileResolver {
             return NoFiles.environment(source);
         };
         let path = self.base.join(name);
-        let key = file_key(&path)?;
-        let cached = map_cache().lock().ok();
-        if let Some(hit) = cached.and_then(|c| c.get(&key).and_then(Weak::upgrade)) {
-            return Ok(hit);
-        }
-        let map = Arc::new(super::env_map_file(&path)?);
-        if let Ok(mut cache) = map_cache().lock() {
-            cache.retain(|_, w| w.strong_count() > 0);
-            cache.insert(key, Arc::downgrade(&map));
-        }
-        Ok(map)
+        cached(&MAPS, &path, || super::env_map_file(&path))
+    }
+
+    fn texture(&self, source: ModelSource<'_>) -> Result<Arc<Texture>, String> {
+        let ModelSource::File(name) = source else {
+            return NoFiles.texture(source);
+        };
+        let path = self.base.join(name);
+        cached(&TEXTURES, &path, || {
+            let bytes = std::fs::read(&path)
+                .map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+            super::texture_bytes(&bytes, name, &self.limits)
+        })
     }
 }

@@ -148,6 +148,13 @@ pub fn env_map_bytes(bytes: &[u8], name: &str) -> Result<EnvMap, String> {
     Ok(map)
 }
 
+/// A texture from a PNG or JPEG file's bytes (`name` for messages), its
+/// texels within `limits.max_texels`.
+pub fn texture_bytes(bytes: &[u8], name: &str, limits: &model::Limits) -> Result<Texture, String> {
+    let image = model::load_image(bytes, name, limits).map_err(|e| e.to_string())?;
+    Texture::new(name, image.width, image.height, &image.rgba)
+}
+
 /// A model as the renderer takes it: its meshes built (BVHs in parallel),
 /// its materials as scene materials, its placements and camera in the
 /// renderer's types. `name` is the file's (or the upload's) name, for
@@ -195,6 +202,7 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
 fn render_maps(maps: &model::Maps, textures: &[Arc<Texture>]) -> Maps {
     let slot = |r: &Option<model::TextureRef>| {
         r.as_ref().map(|r| MapSlot {
+            source: None,
             texture: textures[r.image].clone(),
             sampling: Sampling {
                 uv: r.uv,
@@ -221,21 +229,26 @@ fn render_maps(maps: &model::Maps, textures: &[Arc<Texture>]) -> Maps {
 /// Fresnel).
 fn material_json(m: model::Material) -> MaterialJson {
     match m {
-        model::Material::Diffuse { albedo, emission } => {
-            MaterialJson::Diffuse(SurfaceJson { albedo, emission })
-        }
-        model::Material::Mirror { albedo, emission } => {
-            MaterialJson::Mirror(SurfaceJson { albedo, emission })
-        }
+        model::Material::Diffuse { albedo, emission } => MaterialJson::Diffuse(SurfaceJson {
+            albedo: albedo.into(),
+            emission: emission.map(Into::into),
+            normal: None,
+        }),
+        model::Material::Mirror { albedo, emission } => MaterialJson::Mirror(SurfaceJson {
+            albedo: albedo.into(),
+            emission: emission.map(Into::into),
+            normal: None,
+        }),
         model::Material::Glass {
             ior,
             albedo,
             emission,
         } => MaterialJson::Glass(GlassJson {
             ior,
-            albedo,
+            albedo: albedo.map(Into::into),
             fresnel: FresnelJson::Exact,
-            emission,
+            emission: emission.map(Into::into),
+            normal: None,
         }),
         model::Material::Pbr {
             base_color,
@@ -244,11 +257,12 @@ fn material_json(m: model::Material) -> MaterialJson {
             ior,
             emission,
         } => MaterialJson::Pbr(PbrJson {
-            base_color,
-            metallic,
-            roughness,
+            base_color: base_color.into(),
+            metallic: metallic.into(),
+            roughness: roughness.into(),
             ior,
-            emission,
+            emission: emission.map(Into::into),
+            normal: None,
         }),
     }
 }

@@ -1,9 +1,10 @@
-//! Uploaded model files and environment maps (`POST /api/assets`): read
-//! once, kept as built meshes or as a map with its sampling tables, named
-//! by the SHA-256 of their bytes (the same file uploaded twice is one
-//! asset). Scenes refer to them as `{"type": "mesh", "asset": ID}` or
-//! `"environment": {"map": ID}`; the store is the server's [`Resolver`],
-//! and it reads no files.
+//! Uploaded model files, environment maps and texture images (`POST
+//! /api/assets`): read once, kept as built meshes, a map with its sampling
+//! tables or decoded texels, named by the SHA-256 of their bytes (the same
+//! file uploaded twice is one asset). Scenes refer to them as `{"type":
+//! "mesh", "asset": ID}`, `"environment": {"map": ID}` or a material's
+//! `{"texture": ID}`; the store is the server's [`Resolver`], and it reads
+//! no files.
 //!
 //! Limits: the size of one upload (checked from `Content-Length` before the
 //! body is read, by the route), the triangles and vertices of one file, and
@@ -13,6 +14,7 @@
 use crate::model::{self, Limits};
 use crate::render::envmap::EnvMap;
 use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
+use crate::render::texture::Texture;
 use crate::resolve::builtin_map;
 use std::collections::HashMap;
 use std::sync::{Arc, RwLock};
@@ -59,6 +61,7 @@ pub struct Asset {
 pub enum AssetContent {
     Model(Arc<LoadedModel>),
     Environment(Arc<EnvMap>),
+    Image(Arc<Texture>),
 }
 
 /// An asset as the API reports it.
@@ -79,6 +82,7 @@ impl Asset {
             has_camera: false,
             warnings: Vec::new(),
             map_size: None,
+            image_size: None,
         };
         match &self.content {
             AssetContent::Model(m) => {
@@ -93,6 +97,7 @@ impl Asset {
                 info.map_size = Some([e.width, e.height]);
                 info.warnings.extend(e.warning.clone());
             }
+            AssetContent::Image(t) => info.image_size = Some([t.width, t.height]),
         }
         info
     }
@@ -101,7 +106,7 @@ impl Asset {
     pub fn triangles(&self) -> u64 {
         match &self.content {
             AssetContent::Model(m) => m.triangles(),
-            AssetContent::Environment(_) => 0,
+            AssetContent::Environment(_) | AssetContent::Image(_) => 0,
         }
     }
 }
@@ -158,6 +163,11 @@ impl AssetStore {
             let map = crate::resolve::env_map_bytes(bytes, name).map_err(AssetError::Invalid)?;
             let memory = map.memory_bytes();
             (format, AssetContent::Environment(Arc::new(map)), memory)
+        } else if let Some(format) = model::image_format(bytes) {
+            let texture = crate::resolve::texture_bytes(bytes, name, &Limits::default())
+                .map_err(AssetError::Invalid)?;
+            let memory = texture.memory_bytes();
+            (format, AssetContent::Image(Arc::new(texture)), memory)
         } else {
             let format = match model::detect(name, bytes) {
                 Some(model::Format::Obj) => "obj",
@@ -166,10 +176,10 @@ impl AssetStore {
                 Some(model::Format::Ply) => "ply",
                 None => {
                     return Err(AssetError::Invalid(format!(
-                    "{name}: not a model file (OBJ, glTF 2.0 .gltf/.glb, PLY) or an environment \
-                         map (.hdr, .exr) this server reads; name the upload with ?name=FILE.ext \
-                         if its content does not say"
-                )))
+                        "{name}: not a model file (OBJ, glTF 2.0 .gltf/.glb, PLY), an environment \
+                         map (.hdr, .exr) or a texture image (PNG, JPEG) this server reads; name \
+                         the upload with ?name=FILE.ext if its content does not say"
+                    )))
                 }
             };
             let limits = Limits {
@@ -256,6 +266,7 @@ impl Resolver for AssetStore {
                 Some(AssetContent::Environment(_)) => Err(format!(
                     "asset '{id}' is an environment map: use it as \"environment\": {{\"map\": ID}}"
                 )),
+                Some(AssetContent::Image(_)) => Err(image_misused(id)),
                 None => Err(missing(id)),
             },
             ModelSource::File(_) => NoFiles.resolve(source),
@@ -269,6 +280,7 @@ impl Resolver for AssetStore {
                 Some(AssetContent::Model(_)) => Err(format!(
                     "asset '{id}' is a model, not an environment map (.hdr or .exr)"
                 )),
+                Some(AssetContent::Image(_)) => Err(image_misused(id)),
                 // The maps built into the server answer to their ids too.
                 None => match builtin_map(id) {
                     Some(m) => m.map(),
@@ -282,6 +294,34 @@ impl Resolver for AssetStore {
             },
         }
     }
+
+    fn texture(&self, source: ModelSource<'_>) -> Result<Arc<Texture>, String> {
+        self.image(source)
+    }
+}
+
+impl AssetStore {
+    /// The texture image asset `id`.
+    fn image(&self, source: ModelSource<'_>) -> Result<Arc<Texture>, String> {
+        let ModelSource::Asset(id) = source else {
+            return NoFiles.texture(source);
+        };
+        match self.get(id).map(|a| a.content.clone()) {
+            Some(AssetContent::Image(t)) => Ok(t),
+            Some(AssetContent::Model(_)) => Err(format!(
+                "asset '{id}' is a model, not a texture image (PNG or JPEG)"
+            )),
+            Some(AssetContent::Environment(_)) => Err(format!(
+                "asset '{id}' is an environment map, not a texture image (PNG or JPEG)"
+            )),
+            None => Err(missing(id)),
+        }
+    }
+}
+
+/// Why an image asset cannot be a model or a map.
+fn image_misused(id: &str) -> String {
+    format!("asset '{id}' is a texture image: use it as a material's {{\"texture\": ID}}")
 }
 
 /// Why a scene cannot use asset `id`.

@@ -68,8 +68,9 @@ pub fn furnace(albedo: f64, emission: f64) -> Scene {
     json.materials.insert(
         "shell".into(),
         MaterialJson::Diffuse(SurfaceJson {
-            albedo: [albedo; 3],
-            emission: Some([emission; 3]),
+            albedo: [albedo; 3].into(),
+            emission: Some([emission; 3].into()),
+            normal: None,
         }),
     );
     Scene::from_json(&json).expect("valid furnace")

@@ -1,6 +1,6 @@
 //! What `--scene` names: a built-in scene, a scene JSON file (its model
-//! files and environment map uploaded first), or a model file uploaded and
-//! placed whole.
+//! files, environment map and material textures uploaded first), or a
+//! model file uploaded and placed whole.
 
 use super::{usage, Failure};
 use pathstream_client::wire::asset::{is_environment_name, is_model_name};
@@ -77,5 +77,38 @@ pub async fn scene_spec(client: &Client, scene: &str) -> Result<SceneSpec, Failu
             }
         }
     }
+    // Material textures named by file: uploaded, named by asset.
+    if let Some(materials) = json.get_mut("materials").and_then(|m| m.as_object_mut()) {
+        for (name, m) in materials.iter_mut() {
+            for field in TEXTURED_FIELDS {
+                let slot = m.get_mut(field).and_then(|f| f.as_object_mut());
+                let Some(slot) = slot else { continue };
+                let Some(file) = slot.get("texture").and_then(|t| t.as_str()) else {
+                    continue;
+                };
+                if is_asset_id(file) {
+                    continue;
+                }
+                let what = format!("--scene {scene}: materials.{name}.{field}.texture");
+                let id = upload(client, &dir.join(file), &what).await?;
+                slot.insert("texture".into(), serde_json::Value::String(id));
+            }
+        }
+    }
     Ok(SceneSpec::Json(json))
+}
+
+/// The material fields that may name a texture.
+const TEXTURED_FIELDS: [&str; 6] = [
+    "albedo",
+    "base_color",
+    "metallic",
+    "roughness",
+    "emission",
+    "normal",
+];
+
+/// Whether `name` is an asset id (a SHA-256 in hex) rather than a file.
+fn is_asset_id(name: &str) -> bool {
+    name.len() == 64 && name.bytes().all(|b| b.is_ascii_hexdigit())
 }

@@ -195,7 +195,7 @@ impl Importer<'_> {
                 full = format!("{}/{name} ({n})", model.name);
                 n += 1;
             }
-            let mut material = materials::material(&full, m)
+            let mut material = materials::material(&full, m, self.resolver)
                 .map_err(|e| SceneError::new(path, format!("{}: {e}", model.name)))?;
             material.imported = true;
             material.maps = maps.clone();

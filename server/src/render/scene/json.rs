@@ -35,6 +35,7 @@
 //! `camera` may be left out (the scene is then framed on its bounds, or a
 //! model's own camera is used), and so may `materials`.
 
+pub use super::map_json::{ColorInput, NormalJson, ScalarInput};
 use super::SceneError;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -187,24 +188,31 @@ pub enum MaterialJson {
 }
 
 /// Fields of `pbr` materials: glTF 2.0's metallic-roughness model, with
-/// glTF's defaults (white, metallic 1, roughness 1, ior 1.5).
+/// glTF's defaults (white, metallic 1, roughness 1, ior 1.5). Colours and
+/// numbers may be textures (`super::map_json`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct PbrJson {
     #[serde(default = "white")]
-    pub base_color: [f64; 3],
-    #[serde(default = "one")]
-    pub metallic: f64,
-    #[serde(default = "one")]
-    pub roughness: f64,
+    pub base_color: ColorInput,
+    #[serde(default = "one_input")]
+    pub metallic: ScalarInput,
+    #[serde(default = "one_input")]
+    pub roughness: ScalarInput,
     #[serde(default = "default_ior")]
     pub ior: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub emission: Option<[f64; 3]>,
+    pub emission: Option<ColorInput>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<NormalJson>,
 }
 
-fn white() -> [f64; 3] {
-    [1.0; 3]
+fn white() -> ColorInput {
+    ColorInput::Value([1.0; 3])
+}
+
+fn one_input() -> ScalarInput {
+    ScalarInput::Value(1.0)
 }
 
 fn one() -> f64 {
@@ -219,9 +227,11 @@ fn default_ior() -> f64 {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceJson {
-    pub albedo: [f64; 3],
+    pub albedo: ColorInput,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub emission: Option<[f64; 3]>,
+    pub emission: Option<ColorInput>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<NormalJson>,
 }
 
 /// Fields of `glass` materials.
@@ -230,11 +240,13 @@ pub struct SurfaceJson {
 pub struct GlassJson {
     pub ior: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub albedo: Option<[f64; 3]>,
+    pub albedo: Option<ColorInput>,
     #[serde(default)]
     pub fresnel: FresnelJson,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub emission: Option<[f64; 3]>,
+    pub emission: Option<ColorInput>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<NormalJson>,
 }
 
 /// A shape with its material's name, tagged by `type`.

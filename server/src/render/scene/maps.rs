@@ -1,6 +1,7 @@
 //! A scene material's texture maps, as validation and model files give
 //! them (`render::maps` has the hot path's form and how a hit reads them).
 
+pub use super::map_json::MapSource;
 use crate::render::texture::{Sampling, Texture};
 use std::sync::Arc;
 
@@ -9,12 +10,15 @@ use std::sync::Arc;
 pub struct MapSlot {
     pub texture: Arc<Texture>,
     pub sampling: Sampling,
+    /// How scene JSON named it (None: a model file's own).
+    pub source: Option<MapSource>,
 }
 
 impl PartialEq for MapSlot {
     fn eq(&self, o: &Self) -> bool {
         (Arc::ptr_eq(&self.texture, &o.texture) || self.texture == o.texture)
             && self.sampling == o.sampling
+            && self.source == o.source
     }
 }
 

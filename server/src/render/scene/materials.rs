@@ -1,9 +1,13 @@
-//! Material JSON -> validated [`Material`], and back; the error for a
-//! material name a scene does not define.
+//! Material JSON -> validated [`Material`] (with the textures its fields
+//! name), and back; the error for a material name a scene does not define.
 
 use super::json::{FresnelJson, GlassJson, MaterialJson, PbrJson, SurfaceJson};
+use super::map_json::{ColorInput, MapSource, NormalJson, ScalarInput, TextureJson, WrapMode};
+use super::resolve::{ModelSource, Resolver};
 use super::values::{finite, vec3};
-use super::{Fresnel, Material, MaterialKind, SceneError, MAX_EMISSION};
+use super::{Fresnel, MapSlot, Maps, Material, MaterialKind, SceneError, MAX_EMISSION};
+use crate::render::math::DVec3;
+use crate::render::texture::{Sampling, UvTransform, Wrap};
 use std::collections::BTreeMap;
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -12,31 +16,41 @@ type Result<T> = std::result::Result<T, SceneError>;
 const MAX_IOR: f64 = 10.0;
 
 /// Material `name` checked: an index of refraction in [1, [`MAX_IOR`]],
-/// albedo in [0, 1], emission in [0, [`MAX_EMISSION`]].
-pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
+/// albedo in [0, 1], emission in [0, [`MAX_EMISSION`]]; the textures its
+/// fields name read by `resolver`.
+pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) -> Result<Material> {
     let path = format!("materials.{name}");
-    let (kind, albedo, emission) = match m {
-        MaterialJson::Diffuse(SurfaceJson { albedo, emission }) => {
-            (MaterialKind::Diffuse, *albedo, *emission)
-        }
-        MaterialJson::Mirror(SurfaceJson { albedo, emission }) => {
-            (MaterialKind::Mirror, *albedo, *emission)
-        }
+    let white = ColorInput::Value([1.0; 3]);
+    let mut maps = Maps::default();
+    let (kind, albedo, emission, normal) = match m {
+        MaterialJson::Diffuse(SurfaceJson {
+            albedo,
+            emission,
+            normal,
+        }) => (MaterialKind::Diffuse, albedo, emission, normal),
+        MaterialJson::Mirror(SurfaceJson {
+            albedo,
+            emission,
+            normal,
+        }) => (MaterialKind::Mirror, albedo, emission, normal),
         MaterialJson::Glass(GlassJson {
             ior,
             albedo,
             fresnel,
             emission,
+            normal,
         }) => {
             let ior = checked_ior(&path, *ior)?;
             let fresnel = match fresnel {
                 FresnelJson::Exact => Fresnel::Exact,
                 FresnelJson::Schlick => Fresnel::Schlick,
             };
+            let albedo = albedo.as_ref().unwrap_or(&white);
             (
                 MaterialKind::Glass { ior, fresnel },
-                albedo.unwrap_or([1.0; 3]),
-                *emission,
+                albedo,
+                emission,
+                normal,
             )
         }
         MaterialJson::Pbr(PbrJson {
@@ -45,6 +59,7 @@ pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
             roughness,
             ior,
             emission,
+            normal,
         }) => {
             let unit = |field: &str, v: f64| {
                 let v = finite(&format!("{path}.{field}"), v)?;
@@ -58,39 +73,150 @@ pub(super) fn material(name: &str, m: &MaterialJson) -> Result<Material> {
                 }
             };
             let kind = MaterialKind::Pbr {
-                metallic: unit("metallic", *metallic)?,
-                roughness: unit("roughness", *roughness)?,
+                metallic: unit(scalar_field("metallic", metallic), metallic.factor())?,
+                roughness: unit(scalar_field("roughness", roughness), roughness.factor())?,
                 ior: checked_ior(&path, *ior)?,
             };
-            (kind, *base_color, *emission)
+            let at = |field: &str| format!("{path}.{field}");
+            maps.metallic = texture(
+                &at("metallic"),
+                metallic.texture().map(|t| t.source()),
+                resolver,
+            )?;
+            maps.roughness = texture(
+                &at("roughness"),
+                roughness.texture().map(|t| t.source()),
+                resolver,
+            )?;
+            (kind, base_color, emission, normal)
         }
     };
     let field = match m {
         MaterialJson::Pbr(_) => "base_color",
         _ => "albedo",
     };
-    let albedo = vec3(&format!("{path}.{field}"), albedo)?;
+    let factor_path = |field: &str, textured: bool| match textured {
+        true => format!("{path}.{field}.factor"),
+        false => format!("{path}.{field}"),
+    };
+    let albedo_path = factor_path(field, albedo.texture().is_some());
+    let albedo = vec3(&albedo_path, albedo.factor())?;
     if albedo.min_element() < 0.0 || albedo.max_element() > 1.0 {
         return Err(SceneError::new(
-            format!("{path}.{field}"),
+            albedo_path,
             "components must be between 0 and 1",
         ));
     }
-    let emission = vec3(&format!("{path}.emission"), emission.unwrap_or([0.0; 3]))?;
+    let textured_emission = emission.as_ref().is_some_and(|e| e.texture().is_some());
+    let emission_path = factor_path("emission", textured_emission);
+    let emission = vec3(
+        &emission_path,
+        emission.as_ref().map_or([0.0; 3], ColorInput::factor),
+    )?;
     if emission.min_element() < 0.0 || emission.max_element() > MAX_EMISSION {
         return Err(SceneError::new(
-            format!("{path}.emission"),
+            emission_path,
             format!("components must be between 0 and {MAX_EMISSION:e}"),
         ));
+    }
+    let (base, glow) = match m {
+        MaterialJson::Pbr(p) => (p.base_color.texture(), p.emission.as_ref()),
+        MaterialJson::Diffuse(j) | MaterialJson::Mirror(j) => {
+            (j.albedo.texture(), j.emission.as_ref())
+        }
+        MaterialJson::Glass(g) => (
+            g.albedo.as_ref().and_then(|a| a.texture()),
+            g.emission.as_ref(),
+        ),
+    };
+    maps.base_color = texture(
+        &format!("{path}.{field}"),
+        base.map(|t| t.source()),
+        resolver,
+    )?;
+    maps.emission = texture(
+        &format!("{path}.emission"),
+        glow.and_then(|e| e.texture()).map(|t| t.source()),
+        resolver,
+    )?;
+    if let Some(n) = normal {
+        let at = format!("{path}.normal");
+        maps.normal_scale = finite(&format!("{at}.scale"), n.scale)?;
+        maps.normal = texture(&at, Some(n.source()), resolver)?;
     }
     Ok(Material {
         name: name.to_owned(),
         kind,
         albedo,
         emission,
-        maps: Default::default(),
+        maps,
         imported: false,
     })
+}
+
+/// Where a number field's value is: the field, or its texture's factor.
+fn scalar_field(field: &'static str, v: &ScalarInput) -> &'static str {
+    match (v.texture().is_some(), field) {
+        (false, f) => f,
+        (true, "metallic") => "metallic.factor",
+        (true, _) => "roughness.factor",
+    }
+}
+
+/// The slot a field's texture fills, `path` naming the field: its UV set,
+/// transform and wrap checked, its image read by `resolver`.
+fn texture(
+    path: &str,
+    source: Option<MapSource>,
+    resolver: &dyn Resolver,
+) -> Result<Option<MapSlot>> {
+    let Some(source) = source else {
+        return Ok(None);
+    };
+    if source.uv > 1 {
+        return Err(SceneError::new(
+            format!("{path}.uv"),
+            format!("must be 0 or 1 (got {})", source.uv),
+        ));
+    }
+    let transform = match &source.transform {
+        None => UvTransform::IDENTITY,
+        Some(t) => {
+            let at = |f: &str| format!("{path}.transform.{f}");
+            for (i, x) in t.offset.iter().enumerate() {
+                finite(&format!("{}[{i}]", at("offset")), *x)?;
+            }
+            for (i, x) in t.scale.iter().enumerate() {
+                finite(&format!("{}[{i}]", at("scale")), *x)?;
+            }
+            let deg = finite(&at("rotation_deg"), t.rotation_deg)?;
+            UvTransform::new(t.offset, deg.to_radians(), t.scale)
+        }
+    };
+    let name = source.texture.trim();
+    if name.is_empty() {
+        return Err(SceneError::new(
+            format!("{path}.texture"),
+            "must name a PNG or JPEG file or an uploaded image's asset id",
+        ));
+    }
+    let image = resolver
+        .texture(ModelSource::of_map(name))
+        .map_err(|e| SceneError::new(format!("{path}.texture"), e))?;
+    let wrap = source.wrap.axes().map(|w| match w {
+        WrapMode::Repeat => Wrap::Repeat,
+        WrapMode::Clamp => Wrap::Clamp,
+        WrapMode::Mirror => Wrap::Mirror,
+    });
+    Ok(Some(MapSlot {
+        texture: image,
+        sampling: Sampling {
+            uv: source.uv,
+            transform,
+            wrap,
+        },
+        source: Some(source),
+    }))
 }
 
 /// An index of refraction in [1, [`MAX_IOR`]].
@@ -105,39 +231,61 @@ fn checked_ior(path: &str, ior: f64) -> Result<f64> {
     Ok(ior)
 }
 
-/// The material's JSON form.
+/// The material's JSON form (textured fields name their texture again).
 pub(super) fn to_json(m: &Material) -> MaterialJson {
-    let emission = m.is_emissive().then(|| m.emission.to_array());
+    let color = |c: DVec3, slot: &Option<MapSlot>| match source(slot) {
+        Some(src) => {
+            let factor = (c != DVec3::ONE).then(|| c.to_array());
+            ColorInput::Texture(TextureJson::of(src, factor))
+        }
+        None => ColorInput::Value(c.to_array()),
+    };
+    let scalar = |x: f64, slot: &Option<MapSlot>| match source(slot) {
+        Some(src) => ScalarInput::Texture(TextureJson::of(src, (x != 1.0).then_some(x))),
+        None => ScalarInput::Value(x),
+    };
+    let emission = m.is_emissive().then(|| color(m.emission, &m.maps.emission));
+    let normal = source(&m.maps.normal).map(|src| NormalJson::of(src, m.maps.normal_scale));
+    let albedo = color(m.albedo, &m.maps.base_color);
     match m.kind {
         MaterialKind::Diffuse => MaterialJson::Diffuse(SurfaceJson {
-            albedo: m.albedo.to_array(),
+            albedo,
             emission,
+            normal,
         }),
         MaterialKind::Mirror => MaterialJson::Mirror(SurfaceJson {
-            albedo: m.albedo.to_array(),
+            albedo,
             emission,
+            normal,
         }),
         MaterialKind::Glass { ior, fresnel } => MaterialJson::Glass(GlassJson {
             ior,
-            albedo: Some(m.albedo.to_array()),
+            albedo: Some(albedo),
             fresnel: match fresnel {
                 Fresnel::Exact => FresnelJson::Exact,
                 Fresnel::Schlick => FresnelJson::Schlick,
             },
             emission,
+            normal,
         }),
         MaterialKind::Pbr {
             metallic,
             roughness,
             ior,
         } => MaterialJson::Pbr(PbrJson {
-            base_color: m.albedo.to_array(),
-            metallic,
-            roughness,
+            base_color: albedo,
+            metallic: scalar(metallic, &m.maps.metallic),
+            roughness: scalar(roughness, &m.maps.roughness),
             ior,
             emission,
+            normal,
         }),
     }
+}
+
+/// How scene JSON named a slot's texture, if it did.
+fn source(slot: &Option<MapSlot>) -> Option<&MapSource> {
+    slot.as_ref().and_then(|s| s.source.as_ref())
 }
 
 /// The error for a material name that the scene does not define.
@@ -151,4 +299,142 @@ pub(super) fn unknown_material(
         path,
         format!("unknown material '{name}' (known: {})", known.join(", ")),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::texture::Texture;
+    use serde_json::{json, Value};
+    use std::sync::Arc;
+
+    /// Knows one image, `a.png`.
+    struct OneImage(Arc<Texture>);
+
+    impl Resolver for OneImage {
+        fn resolve(
+            &self,
+            s: ModelSource<'_>,
+        ) -> std::result::Result<Arc<super::super::LoadedModel>, String> {
+            Err(super::super::NoFiles::refusal(s))
+        }
+
+        fn texture(&self, s: ModelSource<'_>) -> std::result::Result<Arc<Texture>, String> {
+            match s {
+                ModelSource::File("a.png") => Ok(self.0.clone()),
+                _ => Err("no such image".to_owned()),
+            }
+        }
+    }
+
+    fn resolver() -> OneImage {
+        OneImage(Arc::new(
+            Texture::new("a.png", 1, 1, &[1, 2, 3, 255]).expect("valid"),
+        ))
+    }
+
+    fn check(m: Value) -> Result<Material> {
+        let json = crate::render::scene::SceneJson::from_value(json!({
+            "materials": {"m": m},
+            "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}],
+        }))?;
+        material("m", &json.materials["m"], &resolver())
+    }
+
+    #[test]
+    fn bad_texture_fields_are_named() {
+        let cases = [
+            (
+                json!({"type": "diffuse", "albedo": {"texture": "a.png", "uv": 2}}),
+                "materials.m.albedo.uv",
+                "must be 0 or 1",
+            ),
+            (
+                json!({"type": "pbr", "base_color": {"texture": "a.png", "factor": [2, 0, 0]}}),
+                "materials.m.base_color.factor",
+                "between 0 and 1",
+            ),
+            (
+                json!({"type": "pbr", "metallic": {"texture": "a.png", "factor": 1.5}}),
+                "materials.m.metallic.factor",
+                "between 0 and 1",
+            ),
+            (
+                json!({"type": "pbr", "roughness": -0.5}),
+                "materials.m.roughness",
+                "between 0 and 1",
+            ),
+            (
+                json!({"type": "glass", "ior": 1.5, "emission": {"texture": "b.png"}}),
+                "materials.m.emission.texture",
+                "no such image",
+            ),
+            (
+                json!({"type": "mirror", "albedo": [1, 1, 1], "normal": {"texture": " "}}),
+                "materials.m.normal.texture",
+                "must name a PNG or JPEG",
+            ),
+            (
+                json!({"type": "diffuse", "albedo": {"texture": "a.png", "wrap": "wavy"}}),
+                "materials.m.albedo",
+                "wrap",
+            ),
+            (
+                json!({"type": "diffuse", "albedo": "white"}),
+                "materials.m.albedo",
+                "expected a colour",
+            ),
+        ];
+        for (m, path, words) in cases {
+            let e = check(m.clone()).expect_err("refused");
+            assert!(
+                e.path == path && e.reason.contains(words),
+                "{m}: {e} (wanted {path}: ...{words}...)"
+            );
+        }
+        // Without a resolver that reads files, the error says how to upload.
+        let json = crate::render::scene::SceneJson::from_value(json!({
+            "materials": {"m": {"type": "diffuse", "albedo": {"texture": "a.png"}}},
+            "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}],
+        }))
+        .expect("parses");
+        let e = crate::render::scene::Scene::from_json(&json).expect_err("no files");
+        assert_eq!(e.path, "materials.m.albedo.texture");
+        assert!(e.reason.contains("POST /api/assets"), "{e}");
+    }
+
+    #[test]
+    fn textured_fields_fill_their_slots_and_write_back_as_given() {
+        for m in [
+            json!({"type": "diffuse", "albedo": {"texture": "a.png", "factor": [0.5, 0.5, 0.5], "uv": 1,
+                "wrap": ["clamp", "mirror"], "transform": {"offset": [0.5, 0.0], "rotation_deg": 90.0, "scale": [2.0, 2.0]}}}),
+            json!({"type": "pbr", "base_color": [0.2, 0.3, 0.4], "metallic": {"texture": "a.png"},
+                "roughness": {"texture": "a.png", "factor": 0.5}, "ior": 1.5,
+                "emission": {"texture": "a.png", "factor": [4.0, 4.0, 4.0]}, "normal": {"texture": "a.png", "scale": 0.5}}),
+            json!({"type": "glass", "ior": 1.4, "albedo": {"texture": "a.png"}, "fresnel": "exact"}),
+        ] {
+            let got = check(m.clone()).expect("valid");
+            assert_eq!(
+                serde_json::to_value(to_json(&got)).expect("json"),
+                m,
+                "written back"
+            );
+        }
+        let m = check(
+            json!({"type": "diffuse", "albedo": {"texture": "a.png", "uv": 1, "wrap": "clamp",
+            "transform": {"rotation_deg": 90}}}),
+        )
+        .expect("valid");
+        let slot = m.maps.base_color.expect("base colour");
+        assert_eq!(
+            (slot.sampling.uv, slot.sampling.wrap),
+            (1, [Wrap::Clamp; 2])
+        );
+        let t = slot.sampling.transform.apply([1.0, 0.0]);
+        assert!(t[0].abs() < 1e-6 && (t[1] + 1.0).abs() < 1e-6, "{t:?}");
+        let m = check(json!({"type": "pbr", "metallic": {"texture": "a.png"}, "emission": {"texture": "a.png"}}))
+            .expect("valid");
+        assert!(m.maps.metallic.is_some() && m.maps.roughness.is_none());
+        assert_eq!(m.emission, DVec3::ONE, "an emission texture's factor is 1");
+    }
 }

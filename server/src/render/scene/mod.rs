@@ -39,6 +39,7 @@ mod environment;
 mod frame;
 mod import;
 mod json;
+mod map_json;
 mod maps;
 mod materials;
 mod placement;
@@ -56,6 +57,10 @@ pub use json::{
     CameraJson, EnvMapJson, EnvironmentJson, FresnelJson, GlassJson, ImportJson, MaterialJson,
     MeshDataJson, ObjectJson, PbrJson, ProjectionJson, QuadJson, RotateJson, ScaleJson, SceneJson,
     SkyJson, SphereJson, SurfaceJson, TransformJson,
+};
+pub use map_json::{
+    ColorInput, MapSource, NormalJson, ScalarInput, TextureJson, UvTransformJson, WrapJson,
+    WrapMode,
 };
 pub use maps::{MapSlot, Maps};
 pub use resolve::{LoadedModel, ModelSource, NoFiles, Resolver};

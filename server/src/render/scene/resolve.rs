@@ -13,6 +13,7 @@ use super::{CameraJson, ImportJson, MaterialJson, Scene};
 use crate::render::envmap::EnvMap;
 use crate::render::math::DAffine3;
 use crate::render::shape::{Mesh, MeshData};
+use crate::render::texture::Texture;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -54,6 +55,11 @@ pub trait Resolver: Sync {
     /// names, read and its sampling tables built.
     fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
         Err(NoFiles::map_refusal(source))
+    }
+
+    /// The image (PNG or JPEG) a material's `texture` names, decoded.
+    fn texture(&self, source: ModelSource<'_>) -> Result<Arc<Texture>, String> {
+        Err(NoFiles::texture_refusal(source))
     }
 }
 
@@ -148,6 +154,17 @@ impl NoFiles {
             ModelSource::Asset(_) => Self::refusal(source),
         }
     }
+
+    /// Why a texture `source` cannot be read here.
+    pub fn texture_refusal(source: ModelSource<'_>) -> String {
+        match source {
+            ModelSource::File(f) => format!(
+                "'{f}': files are read only from scene files on the command line; over the \
+                 API upload the image (POST /api/assets) and give its id as \"texture\""
+            ),
+            ModelSource::Asset(_) => Self::refusal(source),
+        }
+    }
 }
 
 impl Resolver for NoFiles {
@@ -182,6 +199,18 @@ impl Resolver for Reuse<'_> {
         match &self.scene.environment_map {
             Some(e) if ModelSource::of_map(&e.json.map) == source => Ok(e.map.clone()),
             _ => self.fallback.environment(source),
+        }
+    }
+
+    fn texture(&self, source: ModelSource<'_>) -> Result<Arc<Texture>, String> {
+        let held = (self.scene.materials.iter())
+            .flat_map(|m| m.maps.slots().map(|(_, s)| s))
+            .find(|s| {
+                (s.source.as_ref()).is_some_and(|j| ModelSource::of_map(&j.texture) == source)
+            });
+        match held {
+            Some(s) => Ok(s.texture.clone()),
+            None => self.fallback.texture(source),
         }
     }
 }

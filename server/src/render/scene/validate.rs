@@ -29,7 +29,7 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
     let mut index_of = BTreeMap::new();
     for (name, m) in &raw.materials {
         index_of.insert(name.clone(), materials.len());
-        materials.push(materials::material(name, m)?);
+        materials.push(materials::material(name, m, resolver)?);
     }
 
     if raw.objects.is_empty() {
