@@ -193,4 +193,19 @@ static inline float3 emitted(const Scene *sc, __global const Light *L, const Hit
     TexCoords tc = texcoords(sc, h, &sf);
     return L->emission.xyz * map_read(sc, &sc->maps[L->maps].emission, &tc, 1).xyz;
 }
+
+#if HAS_ALPHA
+/* AlphaTest::alpha with a texture: its factor times the alpha channel at
+ * the triangle's interpolated coordinates (0, 0 without any). */
+static inline float alpha_texel(const Scene *sc, __global const Instance *in, __global const AlphaTest *a, uint slot,
+                                float3 bary) {
+    float2 uv = (float2)(0.0f);
+    if (in->uv_base != NO_NORMALS) {
+        __global const float4 *c = sc->uvs + (size_t)(in->uv_base + slot - in->tri_base) * 3u;
+        float4 m = c[0] * bary.x + c[1] * bary.y + c[2] * bary.z;
+        uv = (a->tex.info.y & 1u) != 0u ? m.zw : m.xy;
+    }
+    return a->factor * tex_lookup(sc, &a->tex, uv, 0).w;
+}
+#endif
 #endif

@@ -33,4 +33,5 @@
     X(MaterialMaps, maps)  /* material texture maps (maps.h) */          \
     X(TexImage, tex_images) /* each texture's place in texels */        \
     X(uint, texels)        /* RGBA8 texels of every texture */           \
-    X(float, srgb)         /* sRGB byte -> linear table */
+    X(float, srgb)         /* sRGB byte -> linear table */               \
+    X(AlphaTest, alpha)    /* alpha tests per instance slot (triangles.h) */

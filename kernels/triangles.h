@@ -101,10 +101,61 @@ static inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2
     return 1;
 }
 
+#if HAS_ALPHA
+/* alpha.rs, blend_u: a number in [0, 1) from the camera-space ray (o, d)
+ * and triangle `index`. */
+static inline uint alpha_mix(uint x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+static inline float blend_u(float3 o, float3 d, uint index) {
+    uint h = 0x9E3779B9u;
+    h = alpha_mix(h ^ as_uint(o.x));
+    h = alpha_mix(h ^ as_uint(o.y));
+    h = alpha_mix(h ^ as_uint(o.z));
+    h = alpha_mix(h ^ as_uint(d.x));
+    h = alpha_mix(h ^ as_uint(d.y));
+    h = alpha_mix(h ^ as_uint(d.z));
+    h = alpha_mix(h ^ index);
+    return (float)(h >> 8) * (1.0f / 16777216.0f);
+}
+
+#if HAS_TEXTURES
+static inline float alpha_texel(const Scene *sc, __global const Instance *in, __global const AlphaTest *a, uint slot,
+                                float3 bary);
+#endif
+
+/* AlphaTest::passes: whether the ray (o, d) stops at leaf slot `slot`
+ * (triangle `index`, mesh material slot `mslot`) of instance `in`. */
+static inline int alpha_passes(const Scene *sc, __global const Instance *in, uint slot, uint index, uint mslot,
+                               float3 bary, float3 o, float3 d) {
+    __global const AlphaTest *a = &sc->alpha[in->alpha_base + mslot];
+    if (a->mode == 0u) {
+        return 1;
+    }
+    float alpha = a->factor;
+#if HAS_TEXTURES
+    if (a->tex.info.x != NO_TEXTURE) {
+        alpha = alpha_texel(sc, in, a, slot, bary);
+    }
+#endif
+    if (a->mode == 1u) {
+        return alpha >= a->cutoff;
+    }
+    return blend_u(o, d, index) < alpha;
+}
+#endif
+
 /* The triangles of leaf slots first .. first+count of instance `in`,
- * offered to *best (all but triangle `skip`). */
+ * offered to *best (all but triangle `skip`); (o, d) the camera-space ray
+ * (alpha tests hash it). */
 static inline void offer_triangles(const Scene *sc, __global const Instance *in, uint id, const TriRay *r, uint first,
-                            uint count, uint skip, Hit *best) {
+                            uint count, uint skip, float3 o, float3 d, Hit *best) {
     for (uint k = first; k < first + count; ++k) {
         uint slot = in->tri_base + k;
         __global const TriVerts *tri = &sc->tris[slot];
@@ -115,6 +166,14 @@ static inline void offer_triangles(const Scene *sc, __global const Instance *in,
         float t;
         float3 bary;
         if (tri_intersect(r, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, best->t, &t, &bary)) {
+#if HAS_ALPHA
+            if (in->alpha_base != NO_NORMALS && !alpha_passes(sc, in, slot, index, as_uint(tri->v1.w), bary, o, d)) {
+                continue;
+            }
+#else
+            (void)o;
+            (void)d;
+#endif
             offer_hit(best, t, id, index, slot, bary);
         }
     }
@@ -130,7 +189,7 @@ static inline void offer_instance(const Scene *sc, uint id, __global const Objec
     TriRay r = tri_ray(oo, dd);
     __global const BvhNode *nodes = sc->mesh_nodes + in->node_base;
     BVH_SEARCH(nodes, MESH_STACK, oo, dd, best->t,
-               offer_triangles(sc, in, id, &r, leaf_first, leaf_count, skip, best));
+               offer_triangles(sc, in, id, &r, leaf_first, leaf_count, skip, o, d, best));
 }
 
 /* Instance::surface, into *sf. */

@@ -77,6 +77,17 @@ typedef struct {
     float4 factors;
 } MaterialMaps;
 
+/* A mesh slot's alpha test (render/alpha.rs, AlphaTest): the base colour
+ * texture whose alpha channel multiplies `factor` (tex.info.x NO_TEXTURE:
+ * none); mode 0 opaque, 1 mask (alpha >= cutoff), 2 blend. */
+typedef struct {
+    MapSlot tex;
+    float cutoff;
+    float factor;
+    uint mode;
+    uint pad0;
+} AlphaTest;
+
 /* Where a texture's RGBA8 texels start in `texels`, and its size. */
 typedef struct {
     uint offset;
@@ -166,6 +177,10 @@ typedef struct {
     uint normal_base;  /* 3 vertex normals per triangle from here, or NO_NORMALS */
     uint uv_base;      /* 3 corners' (u0, v0, u1, v1) per triangle, or NO_NORMALS */
     uint tangent_base; /* 3 corners' tangents (w: sign) per triangle, or NO_NORMALS */
+    uint alpha_base;   /* its mesh slots' alpha tests in `alpha`, or NO_NORMALS */
+    uint pad0;
+    uint pad1;
+    uint pad2;
 } Instance;
 
 /* The nearest hit: object, triangle (NO_PRIM for spheres and quads), the
@@ -216,6 +231,7 @@ typedef struct {
 #define HAS_SUN 1
 #define HAS_LENS 1
 #define HAS_TEXTURES 1
+#define HAS_ALPHA 1
 #define USE_BVH (P->use_bvh != 0u)
 #define OBJECT_COUNT (P->num_objects)
 #define LIGHT_COUNT (P->num_lights)

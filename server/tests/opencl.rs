@@ -382,6 +382,8 @@ fn every_feature_combination_builds() {
                         features: materials % 3 == 2,
                         // Texture maps with a quarter (every material kind).
                         textures: lights == 1 || (lights == 2 && materials == 3),
+                        // Alpha tests with meshes, with and without textures.
+                        alpha: shapes.2 && lights <= 1,
                         inject_nan_every: None,
                     }));
                 }

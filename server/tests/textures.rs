@@ -504,6 +504,7 @@ fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
         normal_scale: 0.8,
         emissive: [2.0, 1.5, 0.5],
         emissive_texture: Some(noise(3, 2, 3)),
+        ..GlbMaterial::default()
     };
     let scene = scene_with(&dir, &glb(&quad(0), &material), json!([1, 1, 1]), json!({}));
     let job = pathstream::render::RenderJob::new(&scene, 8, 8, &quality());

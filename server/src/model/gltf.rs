@@ -16,8 +16,9 @@
 //!   exact corners); else the metallic-roughness model (`pbr`) with the
 //!   file's factors and ior. The albedo is the base colour factor's rgb; emission is the emissive factor
 //!   times KHR_materials_emissive_strength. Texture maps (`gltf_maps`):
-//!   base colour, metallic-roughness, normal and emissive; occlusion maps,
-//!   transmission textures and alpha modes other than OPAQUE: noted.
+//!   base colour, metallic-roughness, normal and emissive; `alphaMode` MASK
+//!   and BLEND with the base colour's alpha (opaque where it is 1
+//!   everywhere); occlusion maps and transmission textures: noted.
 //! - The first camera met in the walk (preorder), perspective or
 //!   orthographic (its view 2 ymag tall), becomes the model's camera, in
 //!   world space (it looks down -Z, +Y up, in its node's frame); the others

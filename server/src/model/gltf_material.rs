@@ -78,14 +78,28 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     {
         ignored.push("transmission texture".to_owned());
     }
-    match m.alpha_mode() {
-        AlphaMode::Opaque => {}
-        AlphaMode::Mask => ignored.push(format!(
-            "alpha mode MASK (cutoff {})",
-            m.alpha_cutoff().map_or(0.5, widen)
-        )),
-        AlphaMode::Blend => ignored.push("alpha mode BLEND".to_owned()),
-    }
+    let mut maps = maps;
+    let alpha = widen(base[3]);
+    maps.alpha = if alpha.is_finite() {
+        alpha.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    // A surface whose alpha is 1 everywhere stays opaque (no test to pay).
+    let translucent = maps.alpha < 1.0 || maps.base_color.is_some();
+    maps.alpha_mode = match m.alpha_mode() {
+        AlphaMode::Opaque => super::AlphaMode::Opaque,
+        AlphaMode::Mask => {
+            let cutoff = m.alpha_cutoff().map_or(0.5, widen);
+            let cutoff = if cutoff.is_finite() { cutoff } else { 0.5 };
+            match translucent || cutoff > 1.0 {
+                true => super::AlphaMode::Mask(cutoff),
+                false => super::AlphaMode::Opaque,
+            }
+        }
+        AlphaMode::Blend if translucent => super::AlphaMode::Blend,
+        AlphaMode::Blend => super::AlphaMode::Opaque,
+    };
 
     let json = if t > 0.0 {
         if t < 1.0 {

@@ -109,6 +109,21 @@ pub struct Maps {
     pub normal_scale: f64,
     /// Multiplies the emission (sRGB RGB).
     pub emissive: Option<TextureRef>,
+    /// glTF's `alphaMode` and the base colour factor's alpha (which the
+    /// base colour texture's alpha channel multiplies).
+    pub alpha_mode: AlphaMode,
+    pub alpha: f64,
+}
+
+/// Which surfaces a ray stops at.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    #[default]
+    Opaque,
+    /// Where alpha >= the cutoff.
+    Mask(f64),
+    /// With probability alpha.
+    Blend,
 }
 
 impl Default for Maps {
@@ -119,6 +134,8 @@ impl Default for Maps {
             normal: None,
             normal_scale: 1.0,
             emissive: None,
+            alpha_mode: AlphaMode::Opaque,
+            alpha: 1.0,
         }
     }
 }

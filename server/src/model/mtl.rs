@@ -3,6 +3,8 @@
 //! materials:
 //!
 //! - `Kd` -> diffuse albedo (0.8 when missing, with a note); `Ke` -> emission;
+//! - `d` (dissolve; else 1 - `Tr`) below 1 -> stochastic transparency with
+//!   that opacity (glTF's alpha mode BLEND: meshes are seen through);
 //! - `illum 3` -> mirror, albedo `Ks` if nonzero, else `Kd`;
 //! - `illum 4` to `7` -> glass, ior `Ni` (1.5 with a note when missing or
 //!   outside [1, 10]), albedo `Tf` when given (else clear);
@@ -20,8 +22,7 @@
 //!   rendered; both need `vt` coordinates (v flipped to glTF's top-left
 //!   origin);
 //! - whatever else changes the look (other textures `map_*`, `disp`,
-//!   `decal`, `refl`; `Ks`/`Ns` of non-mirrors; `Ka`; `d`/`Tr`
-//!   transparency; `Tf` of non-glass; the PBR keys other than `Pr` and `Pm`
+//!   `decal`, `refl`; `Ks`/`Ns` of non-mirrors; `Ka`; `Tf` of non-glass; the PBR keys other than `Pr` and `Pm`
 //!   and unknown statements) is listed in one note per material.
 
 use super::common::{self, Mat};
@@ -221,11 +222,16 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     if nonzero(m.ka) {
         ignored.push("Ka (ambient)".to_owned());
     }
-    if let Some(d) = m.d.filter(|&d| d != 1.0) {
-        ignored.push(format!("d {d} (transparency)"));
-    }
-    if let Some(tr) = m.tr.filter(|&tr| tr != 0.0) {
-        ignored.push(format!("Tr {tr} (transparency)"));
+    // Dissolve: `d`, else 1 - `Tr`; below 1, stochastic transparency.
+    let opacity = match (m.d, m.tr) {
+        (Some(d), _) => d,
+        (None, Some(tr)) => 1.0 - tr,
+        (None, None) => 1.0,
+    };
+    let mut maps = super::Maps::default();
+    if opacity.is_finite() && opacity < 1.0 {
+        maps.alpha_mode = super::AlphaMode::Blend;
+        maps.alpha = opacity.max(0.0);
     }
     if !pbr && !(0..=7).contains(&illum) {
         ignored.push(format!("illum {illum} (rendered diffuse)"));
@@ -300,7 +306,7 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     Mat {
         name: m.name.clone(),
         json,
-        maps: super::Maps::default(),
+        maps,
         notes,
     }
 }

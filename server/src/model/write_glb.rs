@@ -10,8 +10,11 @@ use serde_json::{json, Value};
 /// The material written with the mesh.
 #[derive(Clone, Debug)]
 pub struct GlbMaterial {
-    /// RGBA (alpha written, not used).
+    /// RGBA (alpha read where `alpha_mode` is MASK or BLEND).
     pub base_color: [f64; 4],
+    /// glTF's `alphaMode` (`OPAQUE`, `MASK`, `BLEND`) and `alphaCutoff`.
+    pub alpha_mode: &'static str,
+    pub alpha_cutoff: f64,
     pub metallic: f64,
     pub roughness: f64,
     pub base_color_texture: Option<GlbTexture>,
@@ -27,6 +30,8 @@ impl Default for GlbMaterial {
     fn default() -> Self {
         Self {
             base_color: [1.0; 4],
+            alpha_mode: "OPAQUE",
+            alpha_cutoff: 0.5,
             metallic: 1.0,
             roughness: 1.0,
             base_color_texture: None,
@@ -175,7 +180,8 @@ pub fn glb(mesh: &MeshData, material: &GlbMaterial) -> Vec<u8> {
     if let Some(t) = &m.metallic_roughness_texture {
         pbr["metallicRoughnessTexture"] = info(t, &mut b);
     }
-    let mut mat = json!({"name": "material", "pbrMetallicRoughness": pbr});
+    let mut mat = json!({"name": "material", "pbrMetallicRoughness": pbr,
+        "alphaMode": m.alpha_mode, "alphaCutoff": m.alpha_cutoff});
     if let Some(t) = &m.normal_texture {
         let mut v = info(t, &mut b);
         v["scale"] = json!(m.normal_scale);

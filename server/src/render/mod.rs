@@ -17,6 +17,7 @@
 //! - `isa`: the instruction sets the CPU hot path is compiled for
 
 pub mod adaptive;
+pub mod alpha;
 pub mod backend;
 pub mod bvh;
 pub mod camera;

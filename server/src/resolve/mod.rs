@@ -12,6 +12,7 @@ mod files;
 pub use files::FileResolver;
 
 use crate::model::{self, Model};
+use crate::render::alpha::AlphaMode;
 use crate::render::envmap::EnvMap;
 use crate::render::math::{DAffine3, DMat3, DVec3};
 use crate::render::scene::{
@@ -222,6 +223,12 @@ fn render_maps(maps: &model::Maps, textures: &[Arc<Texture>]) -> Maps {
         normal: slot(&maps.normal),
         emission: slot(&maps.emissive),
         normal_scale: maps.normal_scale,
+        alpha_mode: match maps.alpha_mode {
+            model::AlphaMode::Opaque => AlphaMode::Opaque,
+            model::AlphaMode::Mask(cutoff) => AlphaMode::Mask(cutoff as f32),
+            model::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        alpha: maps.alpha,
     }
 }
 

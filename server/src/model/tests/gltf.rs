@@ -311,7 +311,6 @@ fn expected() -> Model {
             "meshes[1].primitives[2] (mesh \"strips\"): POINTS primitive skipped (only triangles are rendered)",
             "meshes[1].primitives[3] (mesh \"strips\"): LINES primitive skipped (only triangles are rendered)",
             "mesh \"mesh2\": a normal map without TEXCOORD_0 to orient it: the map is not applied",
-            "material \"paint-2\": not modelled, ignored: alpha mode BLEND",
             "material \"partial\": transmission 0.5 is rendered as fully transmissive glass",
             "material \"partial\": base colour [2, 0.5, 0.5] is outside [0, 1]: clamped to [1, 0.5, 0.5]",
         ]
@@ -319,11 +318,13 @@ fn expected() -> Model {
         .to_vec(),
     };
     // paint-2's base colour and normal maps read the one image (mesh2 has no
-    // UVs to orient the normal map: no tangents, as the warning says).
+    // UVs to orient the normal map: no tangents, as the warning says); it
+    // is alpha-blended by its base colour texture's alpha.
     let plain = Some(crate::model::TextureRef::plain(0));
     model.materials[5].2 = crate::model::Maps {
         base_color: plain,
         normal: plain,
+        alpha_mode: crate::model::AlphaMode::Blend,
         ..Default::default()
     };
     model
@@ -595,7 +596,6 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
             "mesh \"mesh0\": morph targets ignored (the base shape is used)",
             "vertex colours ignored",
             "occlusion maps are not used: a path tracer finds the occlusion itself",
-            "material \"material0\": not modelled, ignored: alpha mode MASK (cutoff 0.25)",
         ]
     );
 }

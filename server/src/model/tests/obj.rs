@@ -280,9 +280,16 @@ fn mtl_rules_map_every_material() {
             "material \"glass_bad_ni\": Ni 0.5 is not an index of refraction in [1, 10]: ior 1.5",
             "material \"hot\": Ke [-1, 2, 2] is negative or not finite: those components are 0",
             "material \"hot\": Kd [1.5, 0.5, -0.25] is outside [0, 1]: clamped to [1, 0.5, 0]",
-            "material \"textured\": not modelled, ignored: Ka (ambient), d 0.5 (transparency), Ks/Ns (Pr and Pm describe the highlight)",
+            "material \"textured\": not modelled, ignored: Ka (ambient), Ks/Ns (Pr and Pm describe the highlight)",
         ]
     );
+    // d 0.5: seen through half the time.
+    let textured = &m.materials[8].2;
+    assert_eq!(
+        (textured.alpha_mode, textured.alpha),
+        (crate::model::AlphaMode::Blend, 0.5)
+    );
+    assert_eq!(m.materials[0].2.alpha_mode, crate::model::AlphaMode::Opaque);
 }
 
 #[test]

@@ -2,6 +2,7 @@
 //! them (`render::maps` has the hot path's form and how a hit reads them).
 
 pub use super::map_json::MapSource;
+pub use crate::render::alpha::AlphaMode;
 use crate::render::texture::{Sampling, Texture};
 use std::sync::Arc;
 
@@ -33,6 +34,11 @@ pub struct Maps {
     pub emission: Option<MapSlot>,
     /// The normal map's x and y scale (glTF `normalTexture.scale`).
     pub normal_scale: f64,
+    /// glTF's `alphaMode` (meshes only: `render::alpha`), and the base
+    /// colour factor's alpha, which the base colour texture's alpha channel
+    /// multiplies.
+    pub alpha_mode: AlphaMode,
+    pub alpha: f64,
 }
 
 impl Default for Maps {
@@ -44,6 +50,8 @@ impl Default for Maps {
             normal: None,
             emission: None,
             normal_scale: 1.0,
+            alpha_mode: AlphaMode::Opaque,
+            alpha: 1.0,
         }
     }
 }

@@ -87,12 +87,14 @@ impl World {
                 Shape::Import(k) => {
                     for inst in &scene.imports[k].instances {
                         let index = instances.len() as u32;
-                        instances.push(Instance::new(
+                        let mut placed = Instance::new(
                             inst.mesh.clone(),
                             inst.world_from_object,
                             origin,
                             inst.materials.clone(),
-                        ));
+                        );
+                        placed.alpha = super::textures::alpha_tests(scene, &inst.materials);
+                        instances.push(placed);
                         objects.push(WorldObject {
                             geometry: Geometry::Instance(index),
                             material: u32::MAX,

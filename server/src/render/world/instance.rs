@@ -17,6 +17,7 @@
 //! epsilon, so meshes stay clean from 1e-3 to 1e3 units and beyond.
 
 use super::{Hit, Surface};
+use crate::render::alpha::AlphaTest;
 use crate::render::bvh::{BoxRay, MAX_LEAF};
 use crate::render::math::{gamma, Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
 use crate::render::ray::Ray;
@@ -35,6 +36,9 @@ pub struct Instance {
     pub rt_b: f32,
     /// World material of each of the mesh's material slots.
     pub materials: Arc<[u32]>,
+    /// Each slot's alpha test, where some slot's material has one
+    /// (`render::alpha`); None: every triangle is opaque.
+    pub alpha: Option<Arc<[AlphaTest]>>,
 }
 
 /// Where rays leaving a triangle start: in object space, off the plane.
@@ -75,6 +79,7 @@ impl Instance {
             rt_a,
             rt_b,
             materials,
+            alpha: None,
         }
     }
 
@@ -86,6 +91,12 @@ impl Instance {
         let d = self.obj_from_cam.transform_vector3a(ray.dir);
         let tri_ray = TriRay::new(o, d);
         let mesh = &*self.mesh;
+        // Whether the ray stops at a triangle it meets (alpha-tested slots).
+        let stops = |index: u32, bary: [f32; 3]| match &self.alpha {
+            None => true,
+            Some(tests) => tests[mesh.materials[index as usize] as usize]
+                .passes(mesh, index, bary, ray.origin, ray.dir),
+        };
         let test = |tris: &[crate::render::shape::TriVerts], best: &mut Hit| {
             for tri in tris {
                 let index = tri.index();
@@ -93,7 +104,9 @@ impl Instance {
                     continue;
                 }
                 if let Some((t, bary)) = tri_ray.intersect(tri.vertices(), best.t) {
-                    best.offer(t, id, index, bary);
+                    if stops(index, bary) {
+                        best.offer(t, id, index, bary);
+                    }
                 }
             }
         };
@@ -118,7 +131,7 @@ impl Instance {
                     }
                     if found.scalar & (1 << lane) != 0 {
                         test(std::slice::from_ref(tri), best);
-                    } else if found.t[lane] < best.t {
+                    } else if found.t[lane] < best.t && stops(index, found.bary(lane)) {
                         best.offer(found.t[lane], id, index, found.bary(lane));
                     }
                 }

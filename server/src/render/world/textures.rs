@@ -15,6 +15,7 @@
 //! bitangent's sign flipped by a mirroring placement).
 
 use super::{Geometry, Hit, Surface, World};
+use crate::render::alpha::{AlphaMode, AlphaTest};
 use crate::render::light::Emitter;
 use crate::render::maps::{self, Slot, TexCoords, WorldMaps};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
@@ -79,6 +80,26 @@ pub(super) fn world_maps(
         .iter()
         .all(|m| m.maps == NO_MAPS || (m.maps as usize) < maps.len()));
     (textures, maps)
+}
+
+/// Each of `materials`' alpha tests (scene material indices, one per
+/// mesh slot); None where all are opaque.
+pub(super) fn alpha_tests(scene: &Scene, materials: &[u32]) -> Option<Arc<[AlphaTest]>> {
+    let tests: Vec<AlphaTest> = (materials.iter())
+        .map(|&m| {
+            let maps = &scene.materials[m as usize].maps;
+            match maps.alpha_mode {
+                AlphaMode::Opaque => AlphaTest::OPAQUE,
+                mode => AlphaTest {
+                    mode,
+                    factor: maps.alpha as f32,
+                    texture: (maps.base_color.as_ref()).map(|s| (s.texture.clone(), s.sampling)),
+                },
+            }
+        })
+        .collect();
+    let any = tests.iter().any(|t| t.mode != AlphaMode::Opaque);
+    any.then(|| tests.into())
 }
 
 impl World {

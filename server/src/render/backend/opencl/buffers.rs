@@ -67,7 +67,7 @@ macro_rules! scene_array {
 
 /// The scene's arrays in the order of `kernels/scene_arrays.h`: the
 /// `render` kernel's first parameters.
-pub(super) const SCENE_ARRAYS: [SceneArray; 21] = [
+pub(super) const SCENE_ARRAYS: [SceneArray; 22] = [
     scene_array!("P": "Params", "params", [layout::Params], |p| {
         std::slice::from_ref(&p.params)
     }),
@@ -103,6 +103,9 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 21] = [
     }),
     scene_array!("texels": "uint", "textures", [u32], |p| &p.textures.texels),
     scene_array!("srgb": "float", "sRGB table", [f32], |p| &p.textures.srgb),
+    scene_array!("alpha": "AlphaTest", "alpha tests", [meshes::AlphaTest], |p| {
+        &p.meshes.alpha
+    }),
 ];
 
 /// The `render` kernel's parameters after the scene's arrays, in order:

@@ -299,6 +299,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         projection: 0,
         features: true,
         textures: true,
+        alpha: true,
         inject_nan_every: Some(1),
     };
     let mut known: BTreeSet<String> =

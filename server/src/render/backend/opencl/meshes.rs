@@ -4,7 +4,9 @@
 //! per instance its transforms, the round-trip bound its ray offsets need,
 //! and where its mesh and material slots start in the shared buffers.
 
+use crate::render::alpha as render_alpha;
 use crate::render::bvh::BvhNode;
+use crate::render::maps::{Slot, NO_TEXTURE};
 use crate::render::shape::TriVerts;
 use crate::render::world::World;
 use bytemuck::{Pod, Zeroable};
@@ -41,9 +43,28 @@ pub struct Instance {
     /// Where its per-slot tangents start (3 per triangle, w the sign), or
     /// [`NO_NORMALS`].
     pub tangent_base: u32,
+    /// Where its mesh slots' alpha tests start (`alpha`), or [`NO_NORMALS`]
+    /// where every slot is opaque.
+    pub alpha_base: u32,
+    pub pad: [u32; 3],
 }
 
-const _: () = assert!(std::mem::size_of::<Instance>() == 208);
+const _: () = assert!(std::mem::size_of::<Instance>() == 224);
+
+/// A mesh slot's alpha test (`render::alpha::AlphaTest`): the base colour
+/// texture's slot (texture `NO_TEXTURE`: none), cutoff, factor, mode (0
+/// opaque, 1 mask, 2 blend).
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct AlphaTest {
+    pub tex: super::textures::MapSlot,
+    pub cutoff: f32,
+    pub factor: f32,
+    pub mode: u32,
+    pub pad0: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<AlphaTest>() == 64);
 
 /// Every instance of a world, and the buffers they point into.
 #[derive(Debug, Default)]
@@ -63,6 +84,8 @@ pub struct PackedMeshes {
     pub tangents: Vec<[f32; 4]>,
     /// World material of each instance's mesh slots.
     pub slots: Vec<u32>,
+    /// Alpha tests of the mesh slots of instances that have any.
+    pub alpha: Vec<AlphaTest>,
     /// Deepest mesh BVH.
     pub depth: u32,
 }
@@ -141,6 +164,14 @@ pub fn pack(w: &World) -> PackedMeshes {
             });
         let slot_base = out.slots.len() as u32;
         out.slots.extend_from_slice(&inst.materials);
+        let alpha_base = match &inst.alpha {
+            None => NO_NORMALS,
+            Some(tests) => {
+                let base = out.alpha.len() as u32;
+                out.alpha.extend(tests.iter().map(|t| alpha_test(w, t)));
+                base
+            }
+        };
         out.instances.push(Instance {
             obj_from_cam: affine(&inst.obj_from_cam),
             cam_from_obj: affine(&inst.cam_from_obj),
@@ -153,7 +184,35 @@ pub fn pack(w: &World) -> PackedMeshes {
             normal_base,
             uv_base,
             tangent_base,
+            alpha_base,
+            pad: [0; 3],
         });
     }
     out
+}
+
+/// One slot's alpha test in the kernel's layout; its texture is the
+/// world's (the base colour texture, which `World::textures` holds).
+fn alpha_test(w: &World, t: &render_alpha::AlphaTest) -> AlphaTest {
+    let (mode, cutoff) = match t.mode {
+        render_alpha::AlphaMode::Opaque => (0, 0.0),
+        render_alpha::AlphaMode::Mask(c) => (1, c),
+        render_alpha::AlphaMode::Blend => (2, 0.0),
+    };
+    let slot = match &t.texture {
+        None => Slot::NONE,
+        Some((tex, sampling)) => Slot {
+            texture: (w.textures.iter())
+                .position(|x| Arc::ptr_eq(x, tex))
+                .map_or(NO_TEXTURE, |i| i as u32),
+            sampling: *sampling,
+        },
+    };
+    AlphaTest {
+        tex: super::textures::slot(&slot),
+        cutoff,
+        factor: t.factor,
+        mode,
+        pad0: 0,
+    }
 }

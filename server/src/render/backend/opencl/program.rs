@@ -80,6 +80,8 @@ pub struct Features {
     pub features: bool,
     /// Texture maps on some material (`kernels/maps.h`).
     pub textures: bool,
+    /// Alpha-tested mesh slots (`render::alpha`, `kernels/triangles.h`).
+    pub alpha: bool,
     /// Test hook: every n-th sample becomes NaN (checks the film's rejection).
     pub inject_nan_every: Option<u64>,
 }
@@ -175,6 +177,7 @@ impl Features {
             projection: job.camera.projection as u32,
             features: job.settings.features,
             textures: used.iter().any(|m| m.maps != NO_MAPS),
+            alpha: w.instances.iter().any(|i| i.alpha.is_some()),
             inject_nan_every: None,
         }
     }
@@ -187,7 +190,7 @@ impl Features {
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
-             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={}",
+             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -216,6 +219,7 @@ impl Features {
             self.projection,
             b(self.features),
             b(self.textures),
+            b(self.alpha),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));

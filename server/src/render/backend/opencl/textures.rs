@@ -57,7 +57,7 @@ pub struct PackedTextures {
     pub srgb: Vec<f32>,
 }
 
-fn slot(s: &Slot) -> MapSlot {
+pub(super) fn slot(s: &Slot) -> MapSlot {
     let m = &s.sampling.transform.m;
     MapSlot {
         xf_u: [m[0], m[1], m[2], 0.0],
