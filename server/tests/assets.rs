@@ -51,6 +51,23 @@ fn glb_with_camera() -> Vec<u8> {
     glb
 }
 
+/// Asserts that a session of `scene` is refused (400) with an error that
+/// says `words`.
+async fn assert_refused(base: &str, scene: Value, words: &str) {
+    let r = client()
+        .post(format!("{base}/api/sessions"))
+        .json(&json!({"scene": scene}))
+        .send()
+        .await
+        .expect("req");
+    assert_eq!(r.status(), 400);
+    let e: Value = r.json().await.expect("json");
+    assert!(
+        e["error"].as_str().is_some_and(|e| e.contains(words)),
+        "{words}: {e}"
+    );
+}
+
 async fn upload(base: &str, name: &str, bytes: Vec<u8>) -> (u16, Value) {
     let r = client()
         .post(format!("{base}/api/assets?name={name}"))
@@ -324,18 +341,7 @@ async fn uploaded_environment_maps_light_sessions() {
         ),
     ];
     for (scene, words) in refusals {
-        let r = client()
-            .post(format!("{base}/api/sessions"))
-            .json(&json!({"scene": scene}))
-            .send()
-            .await
-            .expect("req");
-        assert_eq!(r.status(), 400);
-        let e: Value = r.json().await.expect("json");
-        assert!(
-            e["error"].as_str().is_some_and(|e| e.contains(words)),
-            "{e}"
-        );
+        assert_refused(&base, scene, words).await;
     }
     let (status, e) = upload(&base, "cut.hdr", hdr[..hdr.len() / 3].to_vec()).await;
     assert_eq!(status, 400, "{e}");
@@ -526,18 +532,7 @@ async fn uploaded_images_texture_scene_materials() {
             "materials.m.albedo.uv",
         ),
     ] {
-        let r = client()
-            .post(format!("{base}/api/sessions"))
-            .json(&json!({"scene": scene}))
-            .send()
-            .await
-            .expect("req");
-        assert_eq!(r.status(), 400);
-        let e: Value = r.json().await.expect("json");
-        assert!(
-            e["error"].as_str().is_some_and(|e| e.contains(words)),
-            "{words}: {e}"
-        );
+        assert_refused(&base, scene, words).await;
     }
     let bytes = png(2, 1, &[255, 0, 0, 255, 0, 0, 255, 255]);
     let (status, e) = upload(&base, "cut.png", bytes[..bytes.len() - 20].to_vec()).await;

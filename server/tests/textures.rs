@@ -153,21 +153,22 @@ fn a_checkerboard_shows_each_check_where_the_closed_form_says() {
         json!([1, 1, 1]),
         json!({}),
     );
+    assert_checks(&scene, 1.0, "check");
+}
+
+/// Renders `scene` (a 64 x 64 view filled by the checkerboard) on every
+/// backend and asserts that each check shows its colour times `scale`.
+fn assert_checks(scene: &Scene, scale: f64, what: &str) {
     for (name, mut backend) in backends() {
-        let film = render_on(&mut backend, &scene, 64, 64, &quality(), 4);
+        let film = render_on(&mut backend, scene, 64, 64, &quality(), 4);
         // 16 pixels per check; around each centre (16 i + 8) a bilinear
         // lookup reads that check alone for 4 pixels each way.
         for j in 0..4u32 {
             for i in 0..4u32 {
                 let (x, y) = (16 * i + 7, 16 * j + 7);
-                let want = linear(check(i as usize, j as usize));
-                assert_colour(
-                    &film,
-                    x..x + 2,
-                    y..y + 2,
-                    want,
-                    &format!("{name}: check ({i}, {j})"),
-                );
+                let want = linear(check(i as usize, j as usize)).map(|c| scale * c);
+                let what = format!("{name}: {what} ({i}, {j})");
+                assert_colour(&film, x..x + 2, y..y + 2, want, &what);
             }
         }
     }
@@ -327,17 +328,7 @@ fn an_emission_map_glows_as_its_texels() {
         json!([0, 0, 0]),
         json!({}),
     );
-    for (name, mut backend) in backends() {
-        let film = render_on(&mut backend, &scene, 64, 64, &quality(), 4);
-        for j in 0..4u32 {
-            for i in 0..4u32 {
-                let (x, y) = (16 * i + 7, 16 * j + 7);
-                let want = linear(check(i as usize, j as usize)).map(|c| 2.0 * c);
-                let what = format!("{name}: glowing check ({i}, {j})");
-                assert_colour(&film, x..x + 2, y..y + 2, want, &what);
-            }
-        }
-    }
+    assert_checks(&scene, 2.0, "glowing check");
 }
 
 /// A white floor lit by `model` (a glowing quad) held face down above it,
@@ -421,17 +412,7 @@ fn scene_json_materials_name_their_textures() {
         "materials": {"tiles": {"type": "mirror", "albedo": {"texture": "check.png"}}},
         "objects": [quad("tiles")],
     }));
-    for (name, mut backend) in backends() {
-        let film = render_on(&mut backend, &tiles, 64, 64, &quality(), 4);
-        for j in 0..4u32 {
-            for i in 0..4u32 {
-                let (x, y) = (16 * i + 7, 16 * j + 7);
-                let want = linear(check(i as usize, j as usize));
-                let what = format!("{name}: scene JSON check ({i}, {j})");
-                assert_colour(&film, x..x + 2, y..y + 2, want, &what);
-            }
-        }
-    }
+    assert_checks(&tiles, 1.0, "scene JSON check");
 
     // Metal from blue (0.8), roughness from green (0.4) times its factor.
     let lit = |material: Value| {

@@ -82,14 +82,20 @@ pub struct MapSource {
     pub transform: Option<UvTransformJson>,
 }
 
+impl MapSource {
+    fn new(texture: &str, uv: u32, wrap: WrapJson, transform: Option<UvTransformJson>) -> Self {
+        MapSource {
+            texture: texture.to_owned(),
+            uv,
+            wrap,
+            transform,
+        }
+    }
+}
+
 impl<F> TextureJson<F> {
     pub fn source(&self) -> MapSource {
-        MapSource {
-            texture: self.texture.clone(),
-            uv: self.uv,
-            wrap: self.wrap,
-            transform: self.transform,
-        }
+        MapSource::new(&self.texture, self.uv, self.wrap, self.transform)
     }
 
     /// `source` read with factor `factor`.
@@ -106,12 +112,7 @@ impl<F> TextureJson<F> {
 
 impl NormalJson {
     pub fn source(&self) -> MapSource {
-        MapSource {
-            texture: self.texture.clone(),
-            uv: self.uv,
-            wrap: self.wrap,
-            transform: self.transform,
-        }
+        MapSource::new(&self.texture, self.uv, self.wrap, self.transform)
     }
 
     pub fn of(source: &MapSource, scale: f64) -> Self {
