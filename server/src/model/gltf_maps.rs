@@ -144,49 +144,43 @@ fn read_transform(v: &serde_json::Value) -> Option<Transform> {
 
 const TRANSFORM: &str = "KHR_texture_transform";
 
+/// A texture slot's reference, if the material fills it.
+fn read(
+    what: &str,
+    info: Option<::gltf::texture::Info>,
+    images: &mut Images,
+    notes: &mut Vec<String>,
+) -> Option<TextureRef> {
+    let info = info?;
+    let t = info.extension_value(TRANSFORM);
+    reference(what, info.texture(), info.tex_coord(), t, images, notes)
+}
+
 /// The maps of material `m` (notes for what cannot be read).
 pub(super) fn maps(m: &::gltf::Material, images: &mut Images, notes: &mut Vec<String>) -> Maps {
     let pbr = m.pbr_metallic_roughness();
-    let mut out = Maps::default();
-    if let Some(info) = pbr.base_color_texture() {
-        let t = info.extension_value(TRANSFORM);
-        out.base_color = reference(
+    let mut out = Maps {
+        base_color: read(
             "base colour texture",
-            info.texture(),
-            info.tex_coord(),
-            t,
+            pbr.base_color_texture(),
             images,
             notes,
-        );
-    }
-    if let Some(info) = pbr.metallic_roughness_texture() {
-        let t = info.extension_value(TRANSFORM);
-        out.metallic_roughness = reference(
+        ),
+        metallic_roughness: read(
             "metallic-roughness texture",
-            info.texture(),
-            info.tex_coord(),
-            t,
+            pbr.metallic_roughness_texture(),
             images,
             notes,
-        );
-    }
+        ),
+        ..Maps::default()
+    };
     if let Some(n) = m.normal_texture() {
         let t = n.extension_value(TRANSFORM);
         out.normal = reference("normal map", n.texture(), n.tex_coord(), t, images, notes);
         let scale = f64::from(n.scale());
         out.normal_scale = if scale.is_finite() { scale } else { 1.0 };
     }
-    if let Some(info) = m.emissive_texture() {
-        let t = info.extension_value(TRANSFORM);
-        out.emissive = reference(
-            "emissive texture",
-            info.texture(),
-            info.tex_coord(),
-            t,
-            images,
-            notes,
-        );
-    }
+    out.emissive = read("emissive texture", m.emissive_texture(), images, notes);
     out
 }
 
