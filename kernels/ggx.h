@@ -1,8 +1,10 @@
-/* The glTF metallic-roughness BSDF: render/ggx.rs, operation for operation
- * (see there for the model). T is the scene's `ggx` array: the host's
- * directional-albedo tables, TABLE_N x TABLE_N floats of A, as many of B,
- * then TABLE_N averages of each. A material's pbr field holds (metallic,
- * alpha, roughness, f0). Directions are in the shading frame (z the
+/* The glTF metallic-roughness BSDF: render/ggx/mod.rs and ggx/glass.rs,
+ * operation for operation (see there for the model). T is the scene's
+ * `ggx` array: the host's directional-albedo tables, TABLE_N x TABLE_N
+ * floats of A, as many of B, then TABLE_N averages of each (GGX_TABLE_LEN
+ * floats); where a material transmits, the rough glass's table follows. A
+ * material's pbr field holds (metallic, alpha, roughness, f0), its glass
+ * field (transmission, ior). Directions are in the shading frame (z the
  * normal). */
 
 #if HAS_GGX
@@ -62,10 +64,127 @@ static inline float3 ggx_visible_normal(float3 wo, float alpha, float2 u) {
     return normalize3((float3)(c.x * alpha, c.y * alpha, c.z));
 }
 
+#if HAS_TRANSMISSION
+/* The rough dielectric lobe (ggx/glass.rs, Glass): alpha, eta (the far
+ * side's index over wo's side's), scale = 1 / E(mu_o). */
+typedef struct {
+    float alpha, eta, scale;
+} GgxGlass;
+
+/* Table::albedo: E(mu) of the glass table G at roughness and ior, for
+ * light arriving from outside (entering) or inside; trilinear. */
+static inline float glass_albedo(__global const float *G, float mu, float roughness, float ior, int entering) {
+    uint n = GGX_TABLE_N;
+    uint i, j;
+    float tx = ggx_cell(mu, &i);
+    float ty = ggx_cell(roughness, &j);
+    float x = (ior - 1.0f) / (ior + 1.0f);
+    float s = fmin(fmax(x * as_float(GLASS_IOR_SCALE_BITS), 0.0f), 1.0f) * (float)(GLASS_IOR_N - 1u);
+    uint k = min((uint)s, GLASS_IOR_N - 2u);
+    float tz = s - (float)k;
+    uint side = entering ? 0u : 1u;
+    float plane[2];
+    for (uint q = 0u; q < 2u; q++) {
+        __global const float *t = G + (side * GLASS_IOR_N + k + q) * n * n;
+        float row0 = t[j * n + i] * (1.0f - tx) + t[j * n + i + 1u] * tx;
+        float row1 = t[(j + 1u) * n + i] * (1.0f - tx) + t[(j + 1u) * n + i + 1u] * tx;
+        plane[q] = row0 * (1.0f - ty) + row1 * ty;
+    }
+    return plane[0] * (1.0f - tz) + plane[1] * tz;
+}
+
+/* fresnel::exact(cos_i, 1, eta).reflectance. */
+static inline float glass_fresnel(float c, float eta, float *cos_t) {
+    float ct = cos_transmitted(c, 1.0f, eta);
+    if (ct < 0.0f) {
+        *cos_t = 0.0f;
+        return 1.0f;
+    }
+    *cos_t = ct;
+    return fresnel_exact(c, ct, 1.0f, eta);
+}
+
+/* The refraction's half vector facing wo's side; 0 where no microfacet
+ * refracts wo to wi. */
+static inline int glass_refraction_half(const GgxGlass *g, float3 wo, float3 wi, float3 *h) {
+    float3 v = wo + wi * g->eta;
+    float len = sqrt(dot3(v, v));
+    if (!(len > 0.0f)) {
+        return 0;
+    }
+    *h = v.z < 0.0f ? -v / len : v / len;
+    return dot3(wo, *h) > 0.0f && dot3(wi, *h) < 0.0f;
+}
+
+/* Glass::eval_cos: (reflected, transmitted) BSDF |cos_i|, white. */
+static inline float2 glass_eval_cos(const GgxGlass *g, float3 wo, float3 wi) {
+    float a = g->alpha;
+    float ro = ggx_smith_r(wo, a);
+    float ri = ggx_smith_r(wi, a);
+    float cos_t;
+    if (wi.z > 0.0f) {
+        float3 h = normalize3(wo + wi);
+        float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+        float spec = ggx_d(h, a) / (2.0f * (ro * wi.z + ri * wo.z));
+        return (float2)(f * spec * wi.z * g->scale, 0.0f);
+    }
+    float3 h;
+    if (!glass_refraction_half(g, wo, wi, &h)) {
+        return (float2)(0.0f);
+    }
+    float oh = dot3(wo, h);
+    float ih = -dot3(wi, h);
+    float f = glass_fresnel(oh, g->eta, &cos_t);
+    float ci = -wi.z;
+    float denom = oh - g->eta * ih;
+    float t = (1.0f - f) * ggx_d(h, a) * g->eta * g->eta * oh * ih * 2.0f * ci / ((ro * ci + ri * wo.z) * (denom * denom));
+    return (float2)(0.0f, t * g->scale);
+}
+
+/* Glass::pdf. */
+static inline float glass_pdf(const GgxGlass *g, float3 wo, float3 wi) {
+    float a = g->alpha;
+    float ro = ggx_smith_r(wo, a);
+    float cos_t;
+    if (wi.z > 0.0f) {
+        float3 h = normalize3(wo + wi);
+        float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+        return f * ggx_d(h, a) / (2.0f * (wo.z + ro));
+    }
+    float3 h;
+    if (!glass_refraction_half(g, wo, wi, &h)) {
+        return 0.0f;
+    }
+    float oh = dot3(wo, h);
+    float ih = -dot3(wi, h);
+    float f = glass_fresnel(oh, g->eta, &cos_t);
+    float denom = oh - g->eta * ih;
+    return (1.0f - f) * 2.0f * ggx_d(h, a) * oh * g->eta * g->eta * ih / ((wo.z + ro) * (denom * denom));
+}
+
+/* Glass::sample: 0 where the direction leaves on the wrong side. */
+static inline int glass_sample(const GgxGlass *g, float3 wo, float choice, float2 u, float3 *wi) {
+    float3 h = ggx_visible_normal(wo, g->alpha, u);
+    float c = fmax(dot3(wo, h), 0.0f);
+    float cos_t;
+    float f = glass_fresnel(c, g->eta, &cos_t);
+    if (choice < f) {
+        *wi = ggx_reflect(wo, h);
+        return wi->z > 0.0f;
+    }
+    *wi = normalize3(h * (c / g->eta - cos_t) - wo / g->eta);
+    return wi->z < 0.0f;
+}
+#endif
+
 typedef struct {
     float e_o, a_avg, b_avg;
     float3 fms_metal;
     float fms_diel, es_o, es_avg, p_spec;
+#if HAS_TRANSMISSION
+    float p_glass;
+    GgxGlass glass;
+#endif
 } GgxLobes;
 
 static inline float ggx_fresnel_factor(float f_avg, float e_avg) {
@@ -76,7 +195,9 @@ static inline float ggx_mean3(float3 v) {
     return (v.x + v.y + v.z) * (1.0f / 3.0f);
 }
 
-static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float3 base, float3 wo) {
+/* The lobes seen from wo on a surface reached from outside (entering) or
+ * inside; g: the material's glass field. */
+static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, float3 base, float3 wo, int entering) {
     GgxLobes L;
     float f0 = p.w;
     float metallic = p.x;
@@ -96,13 +217,27 @@ static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float3 base,
     float rest = metallic * (1.0f - L.e_o) * ggx_mean3(L.fms_metal) +
                  (1.0f - metallic) * ((1.0f - L.e_o) * L.fms_diel + (1.0f - L.es_o) * ggx_mean3(base));
     L.p_spec = fmin(fmax(spec / (spec + rest), 0.05f), 0.95f);
+#if HAS_TRANSMISSION
+    L.p_glass = (1.0f - metallic) * g.x;
+    L.glass.alpha = p.y;
+    L.glass.eta = 1.0f;
+    L.glass.scale = 0.0f;
+    if (L.p_glass > 0.0f) {
+        float e = glass_albedo(T + GGX_TABLE_LEN, wo.z, p.z, g.y, entering);
+        L.glass.eta = entering ? g.y : 1.0f / g.y;
+        L.glass.scale = 1.0f / fmax(e, 0.05f);
+    }
+#else
+    (void)g;
+    (void)entering;
+#endif
     return L;
 }
 
-/* BSDF cos (ggx.rs, eval_cos): the single-scattering microfacet lobes,
- * the multiple-scattering lobes and the diffuse base. */
-static inline float3 ggx_eval_cos(__global const float *T, float4 p, float3 base, const GgxLobes *L, float3 wo,
-                                  float3 wi) {
+/* BSDF |cos| (ggx/mod.rs, eval_reflection): the single-scattering
+ * microfacet lobes, the multiple-scattering lobes and the diffuse base. */
+static inline float3 ggx_eval_reflection(__global const float *T, float4 p, float4 g, float3 base, const GgxLobes *L,
+                                         float3 wo, float3 wi) {
     if (!(wi.z > 0.0f && wo.z > 0.0f)) {
         return (float3)(0.0f);
     }
@@ -121,31 +256,67 @@ static inline float3 ggx_eval_cos(__global const float *T, float4 p, float3 base
     float ms = (1.0f - L->e_o) * (1.0f - e_i) * M_1_PI_F / fmax(1.0f - e_avg, 1e-6f);
     float es_i = f0 * a_i + b_i + (1.0f - e_i) * L->fms_diel;
     float diffuse = (1.0f - L->es_o) * (1.0f - es_i) * M_1_PI_F / fmax(1.0f - L->es_avg, 1e-6f);
+    float layer = (1.0f - metallic) * (1.0f - g.x);
     float3 single = (base + ((float3)(1.0f) - base) * c5) * (spec * metallic) +
-                    (float3)((f0 + (1.0f - f0) * c5) * spec * (1.0f - metallic));
-    float3 multiple = L->fms_metal * (ms * metallic) + (base * diffuse + (float3)(L->fms_diel * ms)) * (1.0f - metallic);
+                    (float3)((f0 + (1.0f - f0) * c5) * spec * layer);
+    float3 multiple = L->fms_metal * (ms * metallic) + (base * diffuse + (float3)(L->fms_diel * ms)) * layer;
     return (single + multiple) * wi.z;
 }
 
+/* BSDF |cos| (ggx/mod.rs, eval_cos): the lobes above, and the rough glass
+ * where the material transmits. */
+static inline float3 ggx_eval_cos(__global const float *T, float4 p, float4 g, float3 base, const GgxLobes *L, float3 wo,
+                                  float3 wi) {
+    float3 out = (float3)(0.0f);
+#if HAS_TRANSMISSION
+    if (L->p_glass > 0.0f && wo.z > 0.0f) {
+        float2 rt = glass_eval_cos(&L->glass, wo, wi);
+        out = ((float3)(rt.x) + base * rt.y) * L->p_glass;
+    }
+#endif
+    return out + ggx_eval_reflection(T, p, g, base, L, wo, wi);
+}
+
 static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
-    if (!(wi.z > 0.0f && wo.z > 0.0f)) {
+    if (!(wo.z > 0.0f)) {
         return 0.0f;
+    }
+    float glass = 0.0f;
+    float rest = 1.0f;
+#if HAS_TRANSMISSION
+    if (L->p_glass > 0.0f) {
+        glass = L->p_glass * glass_pdf(&L->glass, wo, wi);
+    }
+    rest = 1.0f - L->p_glass;
+#endif
+    if (!(wi.z > 0.0f)) {
+        return glass;
     }
     float3 h = normalize3(wo + wi);
     float vndf = ggx_d(h, p.y) / (2.0f * (wo.z + ggx_smith_r(wo, p.y)));
-    return L->p_spec * vndf + (1.0f - L->p_spec) * wi.z * M_1_PI_F;
+    return (L->p_spec * vndf + (1.0f - L->p_spec) * wi.z * M_1_PI_F) * rest + glass;
 }
 
-/* A direction from wo (shading frame), *weight = BSDF cos / pdf and *pdf
- * its density; returns 0 where the sample leaves below the surface (no
- * contribution). */
-static inline int ggx_sample(__global const float *T, float4 p, float3 base, float3 wo, float choice, float2 u, float3 *wi,
-                      float3 *weight, float *pdf_out) {
+/* A direction from wo (shading frame) on a surface reached from outside
+ * (entering) or inside, *weight = BSDF |cos| / pdf and *pdf its density;
+ * returns 0 where the sample leaves on the wrong side (no contribution). */
+static inline int ggx_sample(__global const float *T, float4 p, float4 g, float3 base, float3 wo, int entering,
+                             float choice, float2 u, float3 *wi, float3 *weight, float *pdf_out) {
     if (!(wo.z > 0.0f)) {
         return 0;
     }
-    GgxLobes L = ggx_lobes(T, p, base, wo);
+    GgxLobes L = ggx_lobes(T, p, g, base, wo, entering);
     float3 w;
+#if HAS_TRANSMISSION
+    if (choice < L.p_glass) {
+        if (!glass_sample(&L.glass, wo, choice / L.p_glass, u, &w)) {
+            return 0;
+        }
+    } else {
+        choice = (choice - L.p_glass) / (1.0f - L.p_glass);
+#else
+    {
+#endif
     if (choice < L.p_spec) {
         w = ggx_reflect(wo, ggx_visible_normal(wo, p.y, u));
     } else {
@@ -156,12 +327,13 @@ static inline int ggx_sample(__global const float *T, float4 p, float3 base, flo
     if (!(w.z > 0.0f)) {
         return 0;
     }
+    }
     float pdf = ggx_pdf(p, &L, wo, w);
     if (!(pdf > 0.0f)) {
         return 0;
     }
     *wi = w;
-    *weight = ggx_eval_cos(T, p, base, &L, wo, w) / pdf;
+    *weight = ggx_eval_cos(T, p, g, base, &L, wo, w) / pdf;
     *pdf_out = pdf;
     return 1;
 }

@@ -91,7 +91,7 @@ static inline float3 direct_from(const Scene *sc, __global const Light *L, float
         float3 wi = (float3)(dot3(dir, ne->t), dot3(dir, ne->b), dot3(dir, ne->n));
         float bsdf_pdf = ggx_pdf(ne->m->pbr, &ne->lobes, ne->wo, wi);
         float w = power_heuristic(pmf / weight, bsdf_pdf);
-        f = ggx_eval_cos(sc->ggx, ne->m->pbr, ne->m->albedo.xyz, &ne->lobes, ne->wo, wi) * w;
+        f = ggx_eval_cos(sc->ggx, ne->m->pbr, ne->m->glass, ne->m->albedo.xyz, &ne->lobes, ne->wo, wi) * w;
     }
 #endif
     float3 le = L->emission.xyz;
@@ -250,7 +250,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             basis(ns, &ne.t, &ne.b);
             ne.n = ns;
             ne.wo = -(float3)(dot3(d, ne.t), dot3(d, ne.b), dot3(d, ns));
-            ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->albedo.xyz, ne.wo);
+            ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->glass, m->albedo.xyz, ne.wo, arriving);
         }
 #endif
         if (gathered) {
@@ -302,8 +302,10 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             }
             beta /= q;
         }
-        int mis = gathered && (m->kind == MAT_PBR || env_map);
-        emit = !gathered || mis ? beta : (float3)(0.0f);
+        /* Light through a surface is BSDF sampling's alone (next-event
+         * estimation gathers what it reflects): counted whole. */
+        int mis = gathered && !transmitted && (m->kind == MAT_PBR || env_map);
+        emit = !gathered || transmitted || mis ? beta : (float3)(0.0f);
 #if HAS_MIS
         last.pdf = 0.0f;
         if (mis) {

@@ -55,6 +55,7 @@ typedef struct {
     uint emissive;
     uint maps;       /* its MaterialMaps, or NO_MAPS */
     float4 pbr;      /* MAT_PBR: metallic, alpha, roughness, f0 (ggx.h) */
+    float4 glass;    /* MAT_PBR: transmission, ior (ggx.h) */
 } Material;
 
 /* A material's texture slot (opencl/textures.rs, MapSlot): its UV
@@ -217,6 +218,7 @@ typedef struct {
 #define HAS_MIRROR 1
 #define HAS_GLASS 1
 #define HAS_GGX 1
+#define HAS_TRANSMISSION 1
 #define HAS_SCHLICK 1
 #define HAS_EXACT 1
 #define HAS_SPHERE_LIGHTS 1

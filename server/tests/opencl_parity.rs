@@ -385,7 +385,8 @@ fn the_bvh_nearest_hit_agrees_on_1e5_rays() {
 }
 
 /// A scene of spheres, one per metallic-roughness corner the kernel must
-/// match: metal, dielectric over a coloured base, a mix, a near-mirror.
+/// match: metal, dielectric over a coloured base, a mix, a near-mirror,
+/// rough glass, and glass mixed with the coated base.
 const PBR_SCENE: &str = r#"{
   "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40},
   "materials": {
@@ -393,6 +394,8 @@ const PBR_SCENE: &str = r#"{
     "plastic": {"type": "pbr", "base_color": [0.2, 0.5, 0.8], "metallic": 0, "roughness": 0.6},
     "mixed": {"type": "pbr", "base_color": [0.7, 0.7, 0.2], "metallic": 0.5, "roughness": 1.0, "ior": 1.33},
     "polished": {"type": "pbr", "metallic": 1, "roughness": 0.02},
+    "frosted": {"type": "pbr", "base_color": [0.9, 0.8, 0.6], "metallic": 0, "roughness": 0.4, "transmission": 1},
+    "half": {"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0.2, "roughness": 0.2, "transmission": 0.5, "ior": 1.33},
     "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 4, 4]}
   },
   "objects": [
@@ -400,6 +403,8 @@ const PBR_SCENE: &str = r#"{
     {"type": "sphere", "center": [-0.5, 0, 0], "radius": 0.5, "material": "plastic"},
     {"type": "sphere", "center": [0.5, 0, 0], "radius": 0.5, "material": "mixed"},
     {"type": "sphere", "center": [1.5, 0, 0], "radius": 0.5, "material": "polished"},
+    {"type": "sphere", "center": [-1, 1, 0], "radius": 0.5, "material": "frosted"},
+    {"type": "sphere", "center": [1, 1, 0], "radius": 0.5, "material": "half"},
     {"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "material": "light"}
   ]
 }"#;
@@ -415,9 +420,9 @@ fn scattering_agrees_for_every_material() {
         job("smallpt"),
         RenderJob::new(&pbr_scene, 16, 16, &Quality::default()),
     ];
-    let tables: &[f32] = &pathstream::render::ggx::tables().data;
     for job in &jobs {
         let packed = pack(job);
+        let tables: &[f32] = &packed.ggx;
         for (index, m) in job.world.materials.iter().enumerate() {
             let kind = match m.bsdf {
                 Bsdf::Diffuse => "diffuse".to_owned(),
@@ -489,7 +494,8 @@ fn scattering_agrees_for_every_material() {
                     // ulp of the random number may go the other way.
                     decisions += 1;
                     assert!(
-                        matches!(m.bsdf, Bsdf::Glass { .. }),
+                        matches!(m.bsdf, Bsdf::Glass { .. })
+                            || matches!(m.bsdf, Bsdf::Pbr(p) if p.transmission > 0.0),
                         "{kind}: item {i}: {device_dir} vs {}",
                         cpu.dir
                     );
@@ -505,7 +511,7 @@ fn scattering_agrees_for_every_material() {
             );
         }
     }
-    assert_eq!(seen.len(), 8, "every material kind was checked: {seen:?}");
+    assert_eq!(seen.len(), 10, "every material kind was checked: {seen:?}");
 }
 
 #[test]

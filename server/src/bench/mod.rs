@@ -122,6 +122,7 @@ impl Config {
                 "furnace",
                 scenes::CORNELL_MESH,
                 scenes::CORNELL_MESH_PBR,
+                scenes::CORNELL_MESH_FROSTED,
             ]
             .map(String::from)
             .to_vec(),

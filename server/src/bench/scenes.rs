@@ -12,6 +12,9 @@
 //! - `cornell-mesh-pbr`: `cornell-mesh` with glTF metallic-roughness balls,
 //!   a rough gold metal and a coated blue plastic (what the GGX lobes
 //!   cost against the diffuse ones);
+//! - `cornell-mesh-frosted`: `cornell-mesh` with rough glass balls, one
+//!   frosted (roughness 0.3, transmission 1), one tinted and half
+//!   transmissive (what the rough dielectric costs);
 //! - `glossy-plane`: a rough metal plane (roughness 0.3) reflecting a
 //!   small bright sphere light, a large dim quad light, an 80-triangle
 //!   glowing ball and a dim sky (every emitter kind in a glossy
@@ -35,6 +38,8 @@ pub const GLASS_MESH: &str = "cornell-glass-mesh";
 pub const CORNELL_MESH: &str = "cornell-mesh";
 /// `cornell-mesh-pbr`.
 pub const CORNELL_MESH_PBR: &str = "cornell-mesh-pbr";
+/// `cornell-mesh-frosted`.
+pub const CORNELL_MESH_FROSTED: &str = "cornell-mesh-frosted";
 /// `glossy-plane`.
 pub const GLOSSY_PLANE: &str = "glossy-plane";
 /// `sunset-balls`.
@@ -47,6 +52,7 @@ pub fn load(name: &str) -> Result<Scene, SceneError> {
         GLASS_MESH => glass_mesh(),
         CORNELL_MESH => cornell_mesh(),
         CORNELL_MESH_PBR => cornell_mesh_pbr(),
+        CORNELL_MESH_FROSTED => cornell_mesh_frosted(),
         GLOSSY_PLANE => glossy_plane(0.3),
         SUNSET_BALLS => sunset_balls(),
         _ => crate::resolve::load_scene(name),
@@ -113,6 +119,15 @@ pub fn cornell_mesh_pbr() -> Result<Scene, SceneError> {
     box_with_balls(
         json!({"type": "pbr", "base_color": [1.0, 0.78, 0.34], "metallic": 1.0, "roughness": 0.35}),
         json!({"type": "pbr", "base_color": [0.2, 0.35, 0.8], "metallic": 0.0, "roughness": 0.5}),
+    )
+}
+
+/// `cornell-mesh-frosted`: the same box, rough glass balls.
+pub fn cornell_mesh_frosted() -> Result<Scene, SceneError> {
+    box_with_balls(
+        json!({"type": "pbr", "metallic": 0.0, "roughness": 0.3, "transmission": 1.0}),
+        json!({"type": "pbr", "base_color": [0.9, 0.6, 0.3], "metallic": 0.0, "roughness": 0.5,
+            "transmission": 0.5}),
     )
 }
 

@@ -10,11 +10,12 @@
 //!   triangles, corners rotated); POINTS and LINES primitives are skipped
 //!   with a warning. A mesh's normals are kept only if every primitive has
 //!   them.
-//! - Materials: transmission > 0 (KHR_materials_transmission) -> glass, ior
-//!   from KHR_materials_ior (1.5 when absent); else metallic 1 and roughness
-//!   0 -> mirror, metallic 0 and roughness 1 -> diffuse (the renderer's
-//!   exact corners); else the metallic-roughness model (`pbr`) with the
-//!   file's factors and ior. The albedo is the base colour factor's rgb; emission is the emissive factor
+//! - Materials: transmission 1 with metallic and roughness 0
+//!   (KHR_materials_transmission) -> glass, ior from KHR_materials_ior (1.5
+//!   when absent); metallic 1 and roughness 0 -> mirror, metallic 0 and
+//!   roughness 1 (no transmission) -> diffuse (the renderer's exact
+//!   corners); else the metallic-roughness model (`pbr`) with the file's
+//!   factors, ior and transmission (rough glass). The albedo is the base colour factor's rgb; emission is the emissive factor
 //!   times KHR_materials_emissive_strength. Texture maps (`gltf_maps`):
 //!   base colour, metallic-roughness, normal and emissive; `alphaMode` MASK
 //!   and BLEND with the base colour's alpha (opaque where it is 1

@@ -70,6 +70,11 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     let t = transmission
         .as_ref()
         .map_or(0.0, |t| widen(t.transmission_factor()));
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
 
     let maps = gltf_maps::maps(m, images, &mut notes);
     if transmission
@@ -101,15 +106,10 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         AlphaMode::Blend => super::AlphaMode::Opaque,
     };
 
-    let json = if t > 0.0 {
-        if t < 1.0 {
-            notes.push(format!(
-                "transmission {t} is rendered as fully transmissive glass"
-            ));
-        }
-        if roughness != 0.0 {
-            ignored.push(format!("roughness {roughness} (the glass is smooth)"));
-        }
+    // Smooth, clear, whole transmission is the `glass` corner of the model.
+    let smooth_glass =
+        t == 1.0 && roughness == 0.0 && metallic == 0.0 && maps.metallic_roughness.is_none();
+    let json = if smooth_glass {
         let ior = match m.ior() {
             None => common::DEFAULT_IOR,
             Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
@@ -124,7 +124,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
         }
-    } else if metallic == 0.0 && roughness == 1.0 && maps.metallic_roughness.is_none() {
+    } else if metallic == 0.0 && roughness == 1.0 && t == 0.0 && maps.metallic_roughness.is_none() {
         Material::Diffuse {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
@@ -138,6 +138,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
                 None => common::DEFAULT_IOR,
                 Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
             },
+            transmission: t,
             emission,
         }
     };

@@ -93,6 +93,9 @@ pub enum Material {
         metallic: f64,
         roughness: f64,
         ior: f64,
+        /// `KHR_materials_transmission`: the dielectric's share that is
+        /// rough glass.
+        transmission: f64,
         emission: Option<[f64; 3]>,
     },
 }

@@ -289,6 +289,7 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
                 Some(ni) => common::ior("Ni", Some(ni), &mut notes),
                 None => common::DEFAULT_IOR,
             },
+            transmission: 0.0,
             emission,
         }
     } else {

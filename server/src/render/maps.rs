@@ -122,7 +122,7 @@ pub fn shade(
             metallic,
             alpha: (roughness * roughness).max(ALPHA_MIN),
             roughness,
-            f0: p.f0,
+            ..p
         });
     }
     if maps.normal.texture != NO_TEXTURE {

@@ -55,7 +55,11 @@ impl SurfaceMaterial {
                 metallic,
                 roughness,
                 ior,
-            } => Bsdf::Pbr(Pbr::new(metallic as f32, roughness as f32, ior as f32)),
+                transmission,
+            } => Bsdf::Pbr(
+                Pbr::new(metallic as f32, roughness as f32, ior as f32)
+                    .transmitting(transmission as f32),
+            ),
         };
         Self {
             bsdf,
@@ -157,12 +161,15 @@ pub fn scatter(
             let u = sampler.bsdf_2d();
             let (t, b) = basis(nl);
             let wo = Vec3A::new(-d.dot(t), -d.dot(b), -d.dot(nl));
-            match ggx::sample(ggx::tables(), &p, m.albedo, wo, choice, u) {
+            match ggx::sample(ggx::tables(), &p, m.albedo, (wo, entering), choice, u) {
+                // Normalised: inside a transmitting object a path may
+                // bounce many times, and each frame's rounding would
+                // otherwise grow the next hit's (and so the next frame's).
                 Some(s) => Scattered {
-                    dir: t * s.wi.x + b * s.wi.y + nl * s.wi.z,
+                    dir: (t * s.wi.x + b * s.wi.y + nl * s.wi.z).normalize(),
                     weight: s.weight,
                     specular: false,
-                    transmitted: false,
+                    transmitted: s.wi.z < 0.0,
                     pdf: s.pdf,
                 },
                 // Below the surface: no contribution (the path ends on its

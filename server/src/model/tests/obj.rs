@@ -250,6 +250,7 @@ fn mtl_rules_map_every_material() {
                 metallic: 0.0,
                 roughness: 0.5,
                 ior: 1.5,
+                transmission: 0.0,
                 emission: None,
             },
             &diffuse([0.8; 3], None),
@@ -313,6 +314,7 @@ fn mtl_pbr_keys_make_the_metallic_roughness_model() {
                     metallic: 1.0,
                     roughness: 1.0,
                     ior: 1.45,
+                    transmission: 0.0,
                     emission: None,
                 }
             ),

@@ -224,7 +224,7 @@ impl Path {
                 let local = |v: Vec3A| Vec3A::new(v.dot(t), v.dot(b), v.dot(ns));
                 let wo = -local(ray.dir);
                 let tables = ggx::tables();
-                let lobes = ggx::Lobes::new(tables, p, m.albedo, wo);
+                let lobes = ggx::Lobes::new(tables, p, m.albedo, wo, entering);
                 let f = |dir: Vec3A, light_pdf: f32| {
                     let wi = local(dir);
                     let bsdf_pdf = ggx::pdf(p, &lobes, wo, wi);
@@ -273,6 +273,9 @@ impl Path {
         }
         (self.emit, self.last) = match (gathered, &m.bsdf) {
             (false, _) => (self.beta, BsdfVertex::NONE),
+            // Light through the surface is BSDF sampling's alone: next-
+            // event estimation gathers what the surface reflects.
+            (true, Bsdf::Pbr(_)) if sc.transmitted => (self.beta, BsdfVertex::NONE),
             (true, Bsdf::Pbr(_)) => (
                 self.beta,
                 BsdfVertex {

@@ -201,6 +201,9 @@ pub struct PbrJson {
     pub roughness: ScalarInput,
     #[serde(default = "default_ior")]
     pub ior: f64,
+    /// The share of the dielectric that is rough glass.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub transmission: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -58,6 +58,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
             metallic,
             roughness,
             ior,
+            transmission,
             emission,
             normal,
         }) => {
@@ -76,6 +77,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 metallic: unit(scalar_field("metallic", metallic), metallic.factor())?,
                 roughness: unit(scalar_field("roughness", roughness), roughness.factor())?,
                 ior: checked_ior(&path, *ior)?,
+                transmission: unit("transmission", *transmission)?,
             };
             let at = |field: &str| format!("{path}.{field}");
             maps.metallic = texture(
@@ -272,11 +274,13 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             metallic,
             roughness,
             ior,
+            transmission,
         } => MaterialJson::Pbr(PbrJson {
             base_color: albedo,
             metallic: scalar(metallic, &m.maps.metallic),
             roughness: scalar(roughness, &m.maps.roughness),
             ior,
+            transmission,
             emission,
             normal,
         }),

@@ -182,6 +182,9 @@ pub enum MaterialKind {
         metallic: f64,
         roughness: f64,
         ior: f64,
+        /// The share of the dielectric that is rough glass
+        /// (`KHR_materials_transmission`), in [0, 1].
+        transmission: f64,
     },
 }
 

@@ -279,6 +279,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         mirror: true,
         glass: true,
         ggx: true,
+        transmission: true,
         schlick: true,
         exact: true,
         sphere_lights: true,

@@ -52,7 +52,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 35] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 38] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -68,6 +68,12 @@ pub const SHARED_CONSTANTS: [(&str, u32); 35] = [
     ("MAT_GLASS", MAT_GLASS),
     ("MAT_PBR", MAT_PBR),
     ("GGX_TABLE_N", crate::render::ggx::TABLE_N as u32),
+    ("GGX_TABLE_LEN", crate::render::ggx::TABLE_LEN as u32),
+    ("GLASS_IOR_N", crate::render::ggx::glass::IOR_N as u32),
+    (
+        "GLASS_IOR_SCALE_BITS",
+        crate::render::ggx::glass::IOR_SCALE.to_bits(),
+    ),
     ("NO_OBJECT", NO_OBJECT),
     ("BVH_ROBUST_BITS", crate::render::bvh::ROBUST.to_bits()),
     ("GAMMA7_BITS", crate::render::math::gamma(7).to_bits()),
@@ -100,6 +106,27 @@ pub const SHARED_CONSTANTS: [(&str, u32); 35] = [
     ("NO_TEXTURE", crate::render::maps::NO_TEXTURE),
     ("ALPHA_MIN_BITS", crate::render::ggx::ALPHA_MIN.to_bits()),
 ];
+
+/// The metallic-roughness albedo tables where a material uses the model,
+/// followed by the rough glass's where one transmits (`kernels/ggx.h`).
+pub fn ggx_tables(w: &crate::render::world::World) -> Vec<f32> {
+    let pbr = |m: &&crate::render::material::SurfaceMaterial| match m.bsdf {
+        Bsdf::Pbr(p) => Some(p),
+        _ => None,
+    };
+    let mut out = Vec::new();
+    if w.materials.iter().any(|m| pbr(&m).is_some()) {
+        out.extend_from_slice(&crate::render::ggx::tables().data);
+    }
+    if w.materials
+        .iter()
+        .filter_map(|m| pbr(&m))
+        .any(|p| p.transmission > 0.0)
+    {
+        out.extend_from_slice(&crate::render::ggx::glass::table().data);
+    }
+    out
+}
 
 /// How a launch finds its pixels and samples (the kernel's `mode`): every
 /// pixel of a range, samples `first..first + count`.
@@ -147,6 +174,8 @@ pub struct Material {
     pub maps: u32,
     /// pbr: metallic, alpha, roughness, f0 (`ggx::Pbr`).
     pub pbr: [f32; 4],
+    /// pbr: transmission, ior.
+    pub glass: [f32; 4],
 }
 
 #[repr(C, align(16))]
@@ -220,7 +249,7 @@ pub struct Light {
 
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
-const _: () = assert!(std::mem::size_of::<Material>() == 64);
+const _: () = assert!(std::mem::size_of::<Material>() == 80);
 const _: () = assert!(std::mem::size_of::<Params>() == 208);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
@@ -390,9 +419,12 @@ pub fn pack(job: &RenderJob) -> Packed {
                 Bsdf::Glass { ior, schlick } => (MAT_GLASS, ior, schlick),
                 Bsdf::Pbr(_) => (MAT_PBR, 1.0, false),
             };
-            let pbr = match m.bsdf {
-                Bsdf::Pbr(p) => [p.metallic, p.alpha, p.roughness, p.f0],
-                _ => [0.0; 4],
+            let (pbr, glass) = match m.bsdf {
+                Bsdf::Pbr(p) => (
+                    [p.metallic, p.alpha, p.roughness, p.f0],
+                    [p.transmission, p.ior, 0.0, 0.0],
+                ),
+                _ => ([0.0; 4], [0.0; 4]),
             };
             Material {
                 albedo: v4(m.albedo, ior),
@@ -402,6 +434,7 @@ pub fn pack(job: &RenderJob) -> Packed {
                 emissive: u32::from(m.emissive),
                 maps: m.maps,
                 pbr,
+                glass,
             }
         })
         .collect();
@@ -453,11 +486,7 @@ pub fn pack(job: &RenderJob) -> Packed {
         meshes: super::meshes::pack(w),
         textures: super::textures::pack(w),
         env_map: w.env_map.as_ref().map(|m| m.map.clone()),
-        ggx: if w.materials.iter().any(|m| matches!(m.bsdf, Bsdf::Pbr(_))) {
-            crate::render::ggx::tables().data.to_vec()
-        } else {
-            Vec::new()
-        },
+        ggx: ggx_tables(w),
     };
     if device_uses_bvh(w) {
         let (bvh, big) = w.device_bvh();

@@ -17,7 +17,7 @@ use opencl3::context::Context;
 use opencl3::program::Program;
 
 /// The kernel's sources in dependency order (`kernels/`, built into the binary).
-pub const SOURCES: [&str; 15] = [
+pub const SOURCES: [&str; 16] = [
     include_str!("../../../../../kernels/scene_arrays.h"),
     include_str!("../../../../../kernels/types.h"),
     include_str!("../../../../../kernels/rng.h"),
@@ -25,6 +25,7 @@ pub const SOURCES: [&str; 15] = [
     include_str!("../../../../../kernels/bvh.h"),
     include_str!("../../../../../kernels/triangles.h"),
     include_str!("../../../../../kernels/world.h"),
+    include_str!("../../../../../kernels/fresnel.h"),
     include_str!("../../../../../kernels/ggx.h"),
     include_str!("../../../../../kernels/maps.h"),
     include_str!("../../../../../kernels/materials.h"),
@@ -45,6 +46,8 @@ pub struct Features {
     pub glass: bool,
     /// glTF's metallic-roughness model (`MAT_PBR`, kernels/ggx.h).
     pub ggx: bool,
+    /// A `MAT_PBR` material transmits (rough glass).
+    pub transmission: bool,
     pub schlick: bool,
     pub exact: bool,
     pub sphere_lights: bool,
@@ -141,6 +144,9 @@ impl Features {
             mirror: mat(MAT_MIRROR),
             glass: mat(MAT_GLASS),
             ggx: mat(MAT_PBR),
+            transmission: used
+                .iter()
+                .any(|m| matches!(m.bsdf, Bsdf::Pbr(p) if p.transmission > 0.0)),
             schlick: glass_with(true),
             exact: glass_with(false),
             sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
@@ -190,7 +196,7 @@ impl Features {
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
-             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={}",
+             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -220,6 +226,7 @@ impl Features {
             b(self.features),
             b(self.textures),
             b(self.alpha),
+            b(self.transmission),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));

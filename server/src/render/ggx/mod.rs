@@ -16,10 +16,19 @@
 //! bilinear lookup; the kernel (`kernels/ggx.h`) gets the same floats and
 //! mirrors every routine here operation for operation.
 //!
-//! Sampling: one lobe by the lobes' albedos seen from `wo` (visible
-//! normals, or cosine for the multiple-scattering and diffuse lobes), and
-//! the sample weighted by the mixture's pdf (one-sample MIS, balance
-//! heuristic), so every lobe is covered whichever was drawn.
+//! Transmission (`KHR_materials_transmission`): the dielectric's diffuse
+//! base gives way to a rough dielectric of the same roughness and index
+//! ([`glass`]), f = metallic metal + (1 - metallic) ((1 - transmission)
+//! coated diffuse + transmission rough glass); what it transmits is tinted
+//! by the base colour, what it reflects is not.
+//!
+//! Sampling: the rough glass with probability (1 - metallic) transmission;
+//! else one lobe by the lobes' albedos seen from `wo` (visible normals, or
+//! cosine for the multiple-scattering and diffuse lobes); the sample
+//! weighted by the mixture's pdf (one-sample MIS, balance heuristic), so
+//! every lobe is covered whichever was drawn.
+
+pub mod glass;
 
 use crate::render::math::{sincos_turns, Vec3A};
 use crate::render::sampler::sobol::sobol_2d;
@@ -48,6 +57,10 @@ pub struct Pbr {
     pub roughness: f32,
     /// Normal-incidence reflectance of the dielectric, ((ior-1)/(ior+1))^2.
     pub f0: f32,
+    /// The share of the dielectric that is rough glass, not coated diffuse.
+    pub transmission: f32,
+    /// The index of refraction (what `f0` came from), for the glass.
+    pub ior: f32,
 }
 
 impl Pbr {
@@ -58,6 +71,16 @@ impl Pbr {
             alpha: (roughness * roughness).max(ALPHA_MIN),
             roughness,
             f0: r * r,
+            transmission: 0.0,
+            ior,
+        }
+    }
+
+    /// The same material, `transmission` of its dielectric rough glass.
+    pub fn transmitting(self, transmission: f32) -> Pbr {
+        Pbr {
+            transmission,
+            ..self
         }
     }
 }
@@ -223,8 +246,13 @@ pub struct Lobes {
     /// The dielectric layer's whole albedo at mu_o and its average.
     es_o: f32,
     es_avg: f32,
-    /// Probability of drawing the visible-normal lobe.
+    /// Probability of drawing the visible-normal lobe (of the lobes other
+    /// than the glass).
     p_spec: f32,
+    /// Probability of drawing the rough glass, (1 - metallic) transmission,
+    /// and the glass itself (meaningless where that is 0).
+    p_glass: f32,
+    glass: glass::Glass,
 }
 
 #[inline(always)]
@@ -238,8 +266,10 @@ fn mean3(v: Vec3A) -> f32 {
 }
 
 impl Lobes {
+    /// The lobes seen from `wo`, on a surface the ray reached from outside
+    /// (`entering`) or inside (which side the glass's index is on).
     #[inline(always)]
-    pub fn new(t: &Tables, p: &Pbr, base: Vec3A, wo: Vec3A) -> Lobes {
+    pub fn new(t: &Tables, p: &Pbr, base: Vec3A, wo: Vec3A, entering: bool) -> Lobes {
         let a_o = t.at(0, wo.z, p.roughness);
         let b_o = t.at(1, wo.z, p.roughness);
         let a_avg = t.avg(0, p.roughness);
@@ -262,6 +292,16 @@ impl Lobes {
         let rest = p.metallic * (1.0 - e_o) * mean3(fms_metal)
             + (1.0 - p.metallic) * ((1.0 - e_o) * fms_diel + (1.0 - es_o) * mean3(base));
         let p_spec = (spec / (spec + rest)).clamp(0.05, 0.95);
+        let p_glass = (1.0 - p.metallic) * p.transmission;
+        let glass = if p_glass > 0.0 {
+            glass::Glass::new(p.alpha, p.roughness, p.ior, wo, entering)
+        } else {
+            glass::Glass {
+                alpha: p.alpha,
+                eta: 1.0,
+                scale: 0.0,
+            }
+        };
         Lobes {
             e_o,
             a_avg,
@@ -271,15 +311,28 @@ impl Lobes {
             es_o,
             es_avg,
             p_spec,
+            p_glass,
+            glass,
         }
     }
 }
 
-/// BSDF times cos(theta_i) for `wo` and `wi` in the shading frame: the
+/// BSDF times |cos(theta_i)| for `wo` and `wi` in the shading frame: the
 /// single-scattering microfacet lobes, the multiple-scattering lobes and
-/// the diffuse base.
+/// the diffuse base, and the rough glass where the material transmits.
 #[inline(always)]
 pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> Vec3A {
+    let mut out = Vec3A::ZERO;
+    if lobes.p_glass > 0.0 && wo.z > 0.0 {
+        let (r, tr) = lobes.glass.eval_cos(wo, wi);
+        out = (Vec3A::splat(r) + base * tr) * lobes.p_glass;
+    }
+    out + eval_reflection(t, p, base, lobes, wo, wi)
+}
+
+/// [`eval_cos`] of the lobes other than the glass.
+#[inline(always)]
+fn eval_reflection(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> Vec3A {
     if !(wi.z > 0.0 && wo.z > 0.0) {
         return Vec3A::ZERO;
     }
@@ -295,28 +348,39 @@ pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: 
     let ms = (1.0 - lobes.e_o) * (1.0 - e_i) * FRAC_1_PI / (1.0 - e_avg).max(1e-6);
     let es_i = p.f0 * a_i + b_i + (1.0 - e_i) * lobes.fms_diel;
     let diffuse = (1.0 - lobes.es_o) * (1.0 - es_i) * FRAC_1_PI / (1.0 - lobes.es_avg).max(1e-6);
+    // The coated diffuse's share.
+    let layer = (1.0 - p.metallic) * (1.0 - p.transmission);
     let single = (base + (Vec3A::ONE - base) * c5) * (spec * p.metallic)
-        + Vec3A::splat((p.f0 + (1.0 - p.f0) * c5) * spec * (1.0 - p.metallic));
+        + Vec3A::splat((p.f0 + (1.0 - p.f0) * c5) * spec * layer);
     let multiple = lobes.fms_metal * (ms * p.metallic)
-        + (base * diffuse + Vec3A::splat(lobes.fms_diel * ms)) * (1.0 - p.metallic);
+        + (base * diffuse + Vec3A::splat(lobes.fms_diel * ms)) * layer;
     (single + multiple) * wi.z
 }
 
 /// The sampling density of direction `wi` (solid angle) from `wo`.
 #[inline(always)]
 pub fn pdf(p: &Pbr, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> f32 {
-    if !(wi.z > 0.0 && wo.z > 0.0) {
+    if !(wo.z > 0.0) {
         return 0.0;
+    }
+    let glass = if lobes.p_glass > 0.0 {
+        lobes.p_glass * lobes.glass.pdf(wo, wi)
+    } else {
+        0.0
+    };
+    if !(wi.z > 0.0) {
+        return glass;
     }
     let h = (wo + wi).normalize();
     // G1(wo) D(h) / (4 cos_o) = D / (2 (cos_o + R_o)).
     let vndf = distribution(h, p.alpha) / (2.0 * (wo.z + smith_r(wo, p.alpha)));
-    lobes.p_spec * vndf + (1.0 - lobes.p_spec) * wi.z * FRAC_1_PI
+    (lobes.p_spec * vndf + (1.0 - lobes.p_spec) * wi.z * FRAC_1_PI) * (1.0 - lobes.p_glass) + glass
 }
 
 /// A sampled direction and its weights.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
+    /// Below the surface (z < 0) where it went through.
     pub wi: Vec3A,
     /// BSDF cos / pdf.
     pub weight: Vec3A,
@@ -325,32 +389,39 @@ pub struct Sample {
     pub pdf: f32,
 }
 
-/// A direction from `wo` (shading frame), drawn with `choice` and (u1, u2)
-/// in [0, 1), and its weights; None where it leaves below the surface (no
+/// A direction from `wo` (shading frame) on a surface reached from
+/// outside (`entering`) or inside, drawn with `choice` and (u1, u2) in
+/// [0, 1), and its weights; None where it leaves on the wrong side (no
 /// contribution).
 #[inline(always)]
 pub fn sample(
     t: &Tables,
     p: &Pbr,
     base: Vec3A,
-    wo: Vec3A,
+    (wo, entering): (Vec3A, bool),
     choice: f32,
     (u1, u2): (f32, f32),
 ) -> Option<Sample> {
     if !(wo.z > 0.0) {
         return None;
     }
-    let lobes = Lobes::new(t, p, base, wo);
-    let wi = if choice < lobes.p_spec {
-        reflect_about(wo, visible_normal(wo, p.alpha, u1, u2))
+    let lobes = Lobes::new(t, p, base, wo, entering);
+    let wi = if choice < lobes.p_glass {
+        lobes.glass.sample(wo, choice / lobes.p_glass, (u1, u2))?
     } else {
-        let (sin, cos) = sincos_turns(u1);
-        let r = u2.sqrt();
-        Vec3A::new(r * cos, r * sin, (1.0 - u2).max(0.0).sqrt())
+        let choice = (choice - lobes.p_glass) / (1.0 - lobes.p_glass);
+        let wi = if choice < lobes.p_spec {
+            reflect_about(wo, visible_normal(wo, p.alpha, u1, u2))
+        } else {
+            let (sin, cos) = sincos_turns(u1);
+            let r = u2.sqrt();
+            Vec3A::new(r * cos, r * sin, (1.0 - u2).max(0.0).sqrt())
+        };
+        if !(wi.z > 0.0) {
+            return None;
+        }
+        wi
     };
-    if !(wi.z > 0.0) {
-        return None;
-    }
     let pdf = pdf(p, &lobes, wo, wi);
     if !(pdf > 0.0) {
         return None;
@@ -363,5 +434,4 @@ pub fn sample(
 }
 
 #[cfg(test)]
-#[path = "ggx_tests.rs"]
 mod tests;

@@ -7,7 +7,7 @@ use crate::render::sampler::Sampler;
 
 const ROUGHNESS: [f32; 5] = [0.05, 0.25, 0.5, 0.75, 1.0];
 
-fn dir(cos: f32, phi: f32) -> Vec3A {
+pub(super) fn dir(cos: f32, phi: f32) -> Vec3A {
     let s = (1.0 - cos * cos).max(0.0).sqrt();
     Vec3A::new(s * phi.cos(), s * phi.sin(), cos)
 }
@@ -20,7 +20,7 @@ fn albedo(p: &Pbr, base: Vec3A, wo: Vec3A, n: u64) -> Vec3A {
         let mut s = Sampler::new(7, i, 0);
         let choice = s.next_f32();
         let u = s.next_2d();
-        if let Some(s) = sample(t, p, base, wo, choice, u) {
+        if let Some(s) = sample(t, p, base, (wo, true), choice, u) {
             sum += s.weight;
         }
     }
@@ -41,6 +41,39 @@ fn white_lobes_keep_the_furnace_energy_at_every_roughness() {
                     assert!(
                         (c - 1.0).abs() < 0.01,
                         "metallic {metallic} roughness {r} mu {mu}: albedo {a}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn transmitting_materials_keep_the_furnace_energy() {
+    // Rough glass alone, and mixed with the coated diffuse and the metal,
+    // from outside and from inside: reflected plus transmitted is 1.
+    let t = tables();
+    for r in [0.05f32, 0.3, 0.7] {
+        for (metallic, transmission) in [(0.0, 1.0), (0.0, 0.5), (0.5, 0.7)] {
+            let p = Pbr::new(metallic, r, 1.5).transmitting(transmission);
+            for entering in [true, false] {
+                for mu in [0.1, 0.5, 1.0] {
+                    let wo = dir(mu, 0.3);
+                    let mut sum = Vec3A::ZERO;
+                    let n = 100_000u64;
+                    for i in 0..n {
+                        let mut s = Sampler::new(9, i, 0);
+                        let choice = s.next_f32();
+                        let u = s.next_2d();
+                        if let Some(s) = sample(t, &p, Vec3A::ONE, (wo, entering), choice, u) {
+                            sum += s.weight;
+                        }
+                    }
+                    let a = sum / n as f32;
+                    assert!(
+                        (a - Vec3A::ONE).abs().max_element() < 0.01,
+                        "metallic {metallic} transmission {transmission} roughness {r} \
+                         entering {entering} mu {mu}: albedo {a}"
                     );
                 }
             }
@@ -104,7 +137,7 @@ fn the_pdf_integrates_to_one() {
         for metallic in [0.0, 1.0] {
             let p = Pbr::new(metallic, r, 1.5);
             let wo = dir(0.7, 0.4);
-            let lobes = Lobes::new(t, &p, Vec3A::new(0.8, 0.6, 0.4), wo);
+            let lobes = Lobes::new(t, &p, Vec3A::new(0.8, 0.6, 0.4), wo, true);
             let (nt, np) = (2000, 1000);
             let mut sum = 0.0f64;
             for i in 0..nt {
@@ -147,8 +180,8 @@ fn eval_is_reciprocal() {
             let p = Pbr::new(metallic, r, 1.45);
             for (a, b) in [((0.3, 0.1), (0.8, 2.0)), ((0.9, 1.0), (0.15, 4.0))] {
                 let (wo, wi) = (dir(a.0, a.1), dir(b.0, b.1));
-                let fo = eval_cos(t, &p, base, &Lobes::new(t, &p, base, wo), wo, wi) / wi.z;
-                let fi = eval_cos(t, &p, base, &Lobes::new(t, &p, base, wi), wi, wo) / wo.z;
+                let fo = eval_cos(t, &p, base, &Lobes::new(t, &p, base, wo, true), wo, wi) / wi.z;
+                let fi = eval_cos(t, &p, base, &Lobes::new(t, &p, base, wi, true), wi, wo) / wo.z;
                 assert!(
                     (fo - fi).abs().max_element() <= 1e-4 * fo.max_element().max(1e-3),
                     "roughness {r} metallic {metallic}: {fo} vs {fi}"
@@ -160,7 +193,7 @@ fn eval_is_reciprocal() {
 
 /// Upper tail of chi-square with `dof` degrees of freedom at `x`
 /// (Wilson-Hilferty normal approximation).
-fn chi2_tail(x: f64, dof: f64) -> f64 {
+pub(super) fn chi2_tail(x: f64, dof: f64) -> f64 {
     let z = ((x / dof).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * dof))) / (2.0 / (9.0 * dof)).sqrt();
     0.5 * erfc(z / std::f64::consts::SQRT_2)
 }
@@ -192,20 +225,23 @@ fn sampling_follows_the_pdf_chi_square() {
     // Bins in (cos theta, phi) over the hemisphere; expected counts from
     // the pdf integrated over each bin; bins expecting fewer than 5 pooled.
     let t = tables();
-    let (bt, bp) = (16usize, 16usize);
+    // The sphere, not the hemisphere: transmitting materials sample both.
+    let (bt, bp) = (32usize, 16usize);
     let n = 400_000u64;
-    for (r, metallic, mu) in [
-        (0.2f32, 1.0f32, 0.6f32),
-        (0.6, 0.0, 0.3),
-        (1.0, 0.5, 0.9),
-        (0.35, 0.0, 0.8),
+    for (r, metallic, mu, transmission) in [
+        (0.2f32, 1.0f32, 0.6f32, 0.0f32),
+        (0.6, 0.0, 0.3, 0.0),
+        (1.0, 0.5, 0.9, 0.0),
+        (0.35, 0.0, 0.8, 0.0),
+        (0.3, 0.0, 0.7, 0.6),
+        (0.5, 0.3, 0.4, 1.0),
     ] {
-        let p = Pbr::new(metallic, r, 1.5);
+        let p = Pbr::new(metallic, r, 1.5).transmitting(transmission);
         let base = Vec3A::new(0.6, 0.5, 0.4);
         let wo = dir(mu, 0.2);
-        let lobes = Lobes::new(t, &p, base, wo);
+        let lobes = Lobes::new(t, &p, base, wo, true);
         let bin = |w: Vec3A| {
-            let i = ((w.z * bt as f32) as usize).min(bt - 1);
+            let i = (((w.z + 1.0) * 0.5 * bt as f32) as usize).min(bt - 1);
             let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
             let j = ((phi / std::f32::consts::TAU * bp as f32) as usize).min(bp - 1);
             i * bp + j
@@ -215,27 +251,20 @@ fn sampling_follows_the_pdf_chi_square() {
             let mut s = Sampler::new(11, k, 0);
             let choice = s.next_f32();
             let u = s.next_2d();
-            // Directions below the surface are part of the density too:
+            // Directions on the wrong side are part of the density too:
             // the test counts where samples land, weights aside.
-            let wi = if choice < lobes.p_spec {
-                reflect_about(wo, visible_normal(wo, p.alpha, u.0, u.1))
-            } else {
-                let (sin, cos) = sincos_turns(u.0);
-                let rr = u.1.sqrt();
-                Vec3A::new(rr * cos, rr * sin, (1.0 - u.1).max(0.0).sqrt())
-            };
-            if wi.z > 0.0 {
-                observed[bin(wi)] += 1.0;
+            if let Some(s) = sample(t, &p, base, (wo, true), choice, u) {
+                observed[bin(s.wi)] += 1.0;
             }
         }
         let sub = 24;
         let mut expected = vec![0f64; bt * bp];
         for i in 0..bt * sub {
-            let cos = (i as f32 + 0.5) / (bt * sub) as f32;
+            let cos = (i as f32 + 0.5) / (bt * sub) as f32 * 2.0 - 1.0;
             for j in 0..bp * sub {
                 let phi = (j as f32 + 0.5) / (bp * sub) as f32 * std::f32::consts::TAU;
                 let w = dir(cos, phi);
-                let area = std::f64::consts::TAU / ((bt * sub) * (bp * sub)) as f64;
+                let area = 2.0 * std::f64::consts::TAU / ((bt * sub) * (bp * sub)) as f64;
                 expected[bin(w)] += f64::from(pdf(&p, &lobes, wo, w)) * area * n as f64;
             }
         }
@@ -256,7 +285,47 @@ fn sampling_follows_the_pdf_chi_square() {
         let tail = chi2_tail(chi2, dof - 1.0);
         assert!(
             tail > 1e-4,
-            "roughness {r} metallic {metallic} mu {mu}: chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
+            "roughness {r} metallic {metallic} transmission {transmission} mu {mu}: \
+             chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
         );
+    }
+}
+
+#[test]
+fn weights_and_densities_are_finite_from_every_angle() {
+    // Grazing, normal and everything between, both sides, every mix: a
+    // sample is either no contribution or a finite weight and density.
+    let t = tables();
+    let base = Vec3A::new(0.9, 0.6, 0.3);
+    for r in [0.0f32, 0.02, 0.3, 1.0] {
+        for (metallic, transmission) in [(0.0, 1.0), (0.0, 0.5), (0.4, 0.6), (0.0, 0.0)] {
+            let p = Pbr::new(metallic, r, 1.5).transmitting(transmission);
+            for k in 0..200_000u64 {
+                let mut s = Sampler::new(21, k, 0);
+                let (u1, u2) = s.next_2d();
+                let wo = dir(u1.max(1e-7), u2 * std::f32::consts::TAU);
+                let entering = k % 2 == 0;
+                let choice = s.next_f32();
+                let (v1, v2) = s.next_2d();
+                let wi = dir(v1 * 2.0 - 1.0, v2 * std::f32::consts::TAU);
+                let lobes = Lobes::new(t, &p, base, wo, entering);
+                let (f, d) = (
+                    eval_cos(t, &p, base, &lobes, wo, wi),
+                    pdf(&p, &lobes, wo, wi),
+                );
+                assert!(
+                    f.is_finite() && d.is_finite(),
+                    "roughness {r} metallic {metallic} transmission {transmission} \
+                     wo {wo} wi {wi} entering {entering}: eval {f} pdf {d}"
+                );
+                if let Some(x) = sample(t, &p, base, (wo, entering), choice, s.next_2d()) {
+                    assert!(
+                        x.weight.is_finite() && x.pdf.is_finite() && x.pdf > 0.0,
+                        "roughness {r} metallic {metallic} transmission {transmission} \
+                         wo {wo} entering {entering}: {x:?}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -1,0 +1,206 @@
+//! The rough dielectric lobe against its own definition: energy in a white
+//! furnace, the table against a plain quadrature of eval, the pdf's
+//! integral over the sphere, sampling against the pdf (chi-square), and
+//! the BTDF's generalised reciprocity.
+
+use super::super::tests::{chi2_tail, dir};
+use super::*;
+use crate::render::sampler::Sampler;
+
+fn lobe(roughness: f32, ior: f32, wo: Vec3A, entering: bool) -> Glass {
+    let alpha = (roughness * roughness).max(ALPHA_MIN);
+    Glass::new(alpha, roughness, ior, wo, entering)
+}
+
+/// The mean of sample weights (eval / pdf) from `wo`.
+fn albedo(g: &Glass, wo: Vec3A, n: u64) -> f64 {
+    let mut sum = 0.0f64;
+    for k in 0..n {
+        let mut s = Sampler::new(5, k, 0);
+        let choice = s.next_f32();
+        if let Some(wi) = g.sample(wo, choice, s.next_2d()) {
+            let (r, t) = g.eval_cos(wo, wi);
+            sum += f64::from((r + t) / g.pdf(wo, wi));
+        }
+    }
+    sum / n as f64
+}
+
+/// Integral over the sphere of `f`, in cos(theta) by x with cos = +-(1 -
+/// x^2) (dense near both poles, where narrow lobes are) and in phi.
+fn over_sphere(f: impl Fn(Vec3A) -> f64) -> f64 {
+    let (nt, np) = (1500, 600);
+    let mut sum = 0.0f64;
+    for side in [1.0f32, -1.0] {
+        for i in 0..nt {
+            let x = (i as f64 + 0.5) / nt as f64;
+            let cos = (1.0 - x * x) as f32 * side;
+            for j in 0..np {
+                let phi = (j as f32 + 0.5) / np as f32 * std::f32::consts::TAU;
+                sum += f(dir(cos, phi)) * 2.0 * x;
+            }
+        }
+    }
+    sum * std::f64::consts::TAU / (nt * np) as f64
+}
+
+#[test]
+fn white_rough_glass_keeps_the_furnace_energy() {
+    // Reflected plus transmitted, compensated, is 1 from every angle, both
+    // sides, at every roughness and index (within 1%: the table's
+    // quadrature and interpolation, and noise).
+    for r in [0.05f32, 0.3, 0.6, 1.0] {
+        for ior in [1.33f32, 1.5, 2.4] {
+            for entering in [true, false] {
+                for mu in [0.1f32, 0.5, 0.95] {
+                    let wo = dir(mu, 0.7);
+                    let a = albedo(&lobe(r, ior, wo, entering), wo, 100_000);
+                    assert!(
+                        (a - 1.0).abs() < 0.01,
+                        "roughness {r} ior {ior} entering {entering} mu {mu}: albedo {a}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_table_is_what_a_plain_quadrature_of_eval_gives() {
+    // E(mu) = integral of the uncompensated BSDF cos over the sphere (no
+    // sampling), against the table.
+    for (r, ior, entering, mu) in [
+        (0.3f32, 1.5f32, true, 0.6f32),
+        (0.6, 1.5, false, 0.9),
+        (1.0, 2.0, true, 0.3),
+        (0.5, 1.33, false, 0.5),
+    ] {
+        let wo = dir(mu, 0.0);
+        let mut g = lobe(r, ior, wo, entering);
+        g.scale = 1.0;
+        let e = over_sphere(|wi| {
+            let (a, b) = g.eval_cos(wo, wi);
+            f64::from(a + b)
+        });
+        let table = f64::from(table().albedo(mu, r, ior, entering));
+        assert!(
+            (e - table).abs() < 5e-3,
+            "roughness {r} ior {ior} entering {entering} mu {mu}: {e} vs table {table}"
+        );
+    }
+}
+
+#[test]
+fn the_pdf_integrates_to_what_lands_on_the_right_side() {
+    for (r, ior, entering, mu) in [(0.3f32, 1.5f32, true, 0.7f32), (0.7, 1.5, false, 0.4)] {
+        let wo = dir(mu, 0.4);
+        let g = lobe(r, ior, wo, entering);
+        let total = over_sphere(|wi| f64::from(g.pdf(wo, wi)));
+        // Samples that leave on the wrong side are not counted by the pdf.
+        let n = 200_000u64;
+        let lost = (0..n)
+            .filter(|&k| {
+                let mut s = Sampler::new(3, k, 0);
+                let choice = s.next_f32();
+                g.sample(wo, choice, s.next_2d()).is_none()
+            })
+            .count() as f64
+            / n as f64;
+        assert!(
+            (total - (1.0 - lost)).abs() < 4e-3,
+            "roughness {r} entering {entering}: {total} vs {} ({lost} lost)",
+            1.0 - lost
+        );
+    }
+}
+
+#[test]
+fn the_btdf_is_reciprocal_up_to_eta_squared() {
+    // Seen from the far side (mirrored so that it is above), the same pair
+    // with eta inverted: f(wo, wi) = eta^2 f(wi, wo).
+    let flip = |v: Vec3A| Vec3A::new(v.x, v.y, -v.z);
+    for r in [0.4f32, 0.7, 1.0] {
+        for (a, b) in [((0.3, 0.1), (-0.8, 3.0)), ((0.9, 1.0), (-0.95, 4.5))] {
+            let (wo, wi) = (dir(a.0, a.1), dir(b.0, b.1));
+            let alpha = r * r;
+            let g = Glass {
+                alpha,
+                eta: 1.5,
+                scale: 1.0,
+            };
+            let back = Glass {
+                alpha,
+                eta: 1.0 / 1.5,
+                scale: 1.0,
+            };
+            let fo = g.eval_cos(wo, wi).1 / wi.z.abs();
+            let fi = back.eval_cos(flip(wi), flip(wo)).1 / wo.z;
+            assert!(fo > 0.0, "roughness {r}: the pair refracts");
+            assert!(
+                (fo - 1.5 * 1.5 * fi).abs() <= 1e-4 * fo,
+                "roughness {r}: {fo} vs eta^2 {fi}"
+            );
+        }
+    }
+}
+
+#[test]
+fn sampling_follows_the_pdf_chi_square() {
+    // Bins in (cos theta, phi) over the whole sphere; expected counts from
+    // the pdf integrated over each bin; bins expecting fewer than 5 pooled.
+    let (bt, bp) = (24usize, 16usize);
+    let n = 400_000u64;
+    for (r, ior, entering, mu) in [
+        (0.2f32, 1.5f32, true, 0.6f32),
+        (0.5, 1.5, false, 0.8),
+        (0.35, 1.33, false, 0.3),
+        (0.8, 2.0, true, 0.2),
+    ] {
+        let wo = dir(mu, 0.2);
+        let g = lobe(r, ior, wo, entering);
+        let bin = |w: Vec3A| {
+            let i = (((w.z + 1.0) * 0.5 * bt as f32) as usize).min(bt - 1);
+            let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
+            let j = ((phi / std::f32::consts::TAU * bp as f32) as usize).min(bp - 1);
+            i * bp + j
+        };
+        let mut observed = vec![0f64; bt * bp];
+        for k in 0..n {
+            let mut s = Sampler::new(11, k, 0);
+            let choice = s.next_f32();
+            if let Some(wi) = g.sample(wo, choice, s.next_2d()) {
+                observed[bin(wi)] += 1.0;
+            }
+        }
+        let sub = 24;
+        let mut expected = vec![0f64; bt * bp];
+        for i in 0..bt * sub {
+            let cos = (i as f32 + 0.5) / (bt * sub) as f32 * 2.0 - 1.0;
+            for j in 0..bp * sub {
+                let phi = (j as f32 + 0.5) / (bp * sub) as f32 * std::f32::consts::TAU;
+                let w = dir(cos, phi);
+                let area = 2.0 * std::f64::consts::TAU / ((bt * sub) * (bp * sub)) as f64;
+                expected[bin(w)] += f64::from(g.pdf(wo, w)) * area * n as f64;
+            }
+        }
+        let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0.0, 0.0, 0.0);
+        for (o, e) in observed.iter().zip(&expected) {
+            if *e < 5.0 {
+                pool_o += o;
+                pool_e += e;
+            } else {
+                chi2 += (o - e) * (o - e) / e;
+                dof += 1.0;
+            }
+        }
+        if pool_e >= 5.0 {
+            chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+            dof += 1.0;
+        }
+        let tail = chi2_tail(chi2, dof - 1.0);
+        assert!(
+            tail > 1e-4,
+            "roughness {r} ior {ior} entering {entering} mu {mu}: chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
+        );
+    }
+}
