@@ -4,7 +4,7 @@
  * floats of A, as many of B, then TABLE_N averages of each (GGX_TABLE_LEN
  * floats); where a material transmits, the rough glass's table follows. A
  * material's pbr field holds (metallic, alpha, roughness, f0), its glass
- * field (transmission, ior). Directions are in the shading frame (z the
+ * field (transmission, ior, 1 for a thin wall). Directions are in the shading frame (z the
  * normal). */
 
 #if HAS_GGX
@@ -69,6 +69,7 @@ static inline float3 ggx_visible_normal(float3 wo, float alpha, float2 u) {
  * side's index over wo's side's), scale = 1 / E(mu_o). */
 typedef struct {
     float alpha, eta, scale;
+    int thin; /* a thin wall: transmission is the reflection mirrored */
 } GgxGlass;
 
 /* Table::albedo: E(mu) of the glass table G at roughness and ior, for
@@ -116,8 +117,24 @@ static inline int glass_refraction_half(const GgxGlass *g, float3 wo, float3 wi,
     return dot3(wo, *h) > 0.0f && dot3(wi, *h) < 0.0f;
 }
 
+/* Glass::thin_eval_cos. */
+static inline float2 glass_thin_eval_cos(const GgxGlass *g, float3 wo, float3 wi) {
+    float3 w = (float3)(wi.x, wi.y, fabs(wi.z));
+    float a = g->alpha;
+    float ro = ggx_smith_r(wo, a);
+    float ri = ggx_smith_r(w, a);
+    float3 h = normalize3(wo + w);
+    float cos_t;
+    float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+    float spec = ggx_d(h, a) / (2.0f * (ro * w.z + ri * wo.z)) * w.z * g->scale;
+    return wi.z > 0.0f ? (float2)(f * spec, 0.0f) : (float2)(0.0f, (1.0f - f) * spec);
+}
+
 /* Glass::eval_cos: (reflected, transmitted) BSDF |cos_i|, white. */
 static inline float2 glass_eval_cos(const GgxGlass *g, float3 wo, float3 wi) {
+    if (g->thin) {
+        return glass_thin_eval_cos(g, wo, wi);
+    }
     float a = g->alpha;
     float ro = ggx_smith_r(wo, a);
     float ri = ggx_smith_r(wi, a);
@@ -146,6 +163,13 @@ static inline float glass_pdf(const GgxGlass *g, float3 wo, float3 wi) {
     float a = g->alpha;
     float ro = ggx_smith_r(wo, a);
     float cos_t;
+    if (g->thin) {
+        float3 w = (float3)(wi.x, wi.y, fabs(wi.z));
+        float3 h = normalize3(wo + w);
+        float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+        float vndf = ggx_d(h, a) / (2.0f * (wo.z + ro));
+        return (wi.z > 0.0f ? f : 1.0f - f) * vndf;
+    }
     if (wi.z > 0.0f) {
         float3 h = normalize3(wo + wi);
         float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
@@ -168,6 +192,11 @@ static inline int glass_sample(const GgxGlass *g, float3 wo, float choice, float
     float c = fmax(dot3(wo, h), 0.0f);
     float cos_t;
     float f = glass_fresnel(c, g->eta, &cos_t);
+    if (g->thin) {
+        float3 wr = ggx_reflect(wo, h);
+        *wi = choice < f ? wr : (float3)(wr.x, wr.y, -wr.z);
+        return wr.z > 0.0f;
+    }
     if (choice < f) {
         *wi = ggx_reflect(wo, h);
         return wi->z > 0.0f;
@@ -222,7 +251,11 @@ static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, fl
     L.glass.alpha = p.y;
     L.glass.eta = 1.0f;
     L.glass.scale = 0.0f;
-    if (L.p_glass > 0.0f) {
+    L.glass.thin = g.z != 0.0f;
+    if (L.p_glass > 0.0f && L.glass.thin) {
+        L.glass.eta = g.y;
+        L.glass.scale = 1.0f / fmax(L.e_o, 0.05f);
+    } else if (L.p_glass > 0.0f) {
         float e = glass_albedo(T + GGX_TABLE_LEN, wo.z, p.z, g.y, entering);
         L.glass.eta = entering ? g.y : 1.0f / g.y;
         L.glass.scale = 1.0f / fmax(e, 0.05f);

@@ -55,7 +55,7 @@ typedef struct {
     uint emissive;
     uint maps;       /* its MaterialMaps, or NO_MAPS */
     float4 pbr;      /* MAT_PBR: metallic, alpha, roughness, f0 (ggx.h) */
-    float4 glass;    /* MAT_PBR: transmission, ior (ggx.h) */
+    float4 glass;    /* MAT_PBR: transmission, ior, thin wall (ggx.h) */
 } Material;
 
 /* A material's texture slot (opencl/textures.rs, MapSlot): its UV

@@ -386,7 +386,7 @@ fn the_bvh_nearest_hit_agrees_on_1e5_rays() {
 
 /// A scene of spheres, one per metallic-roughness corner the kernel must
 /// match: metal, dielectric over a coloured base, a mix, a near-mirror,
-/// rough glass, and glass mixed with the coated base.
+/// rough glass, glass mixed with the coated base, a thin wall.
 const PBR_SCENE: &str = r#"{
   "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40},
   "materials": {
@@ -396,6 +396,7 @@ const PBR_SCENE: &str = r#"{
     "polished": {"type": "pbr", "metallic": 1, "roughness": 0.02},
     "frosted": {"type": "pbr", "base_color": [0.9, 0.8, 0.6], "metallic": 0, "roughness": 0.4, "transmission": 1},
     "half": {"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0.2, "roughness": 0.2, "transmission": 0.5, "ior": 1.33},
+    "thin": {"type": "pbr", "metallic": 0, "roughness": 0.3, "transmission": 1, "thin": true},
     "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 4, 4]}
   },
   "objects": [
@@ -405,6 +406,7 @@ const PBR_SCENE: &str = r#"{
     {"type": "sphere", "center": [1.5, 0, 0], "radius": 0.5, "material": "polished"},
     {"type": "sphere", "center": [-1, 1, 0], "radius": 0.5, "material": "frosted"},
     {"type": "sphere", "center": [1, 1, 0], "radius": 0.5, "material": "half"},
+    {"type": "sphere", "center": [0, 1, 0], "radius": 0.4, "material": "thin"},
     {"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "material": "light"}
   ]
 }"#;
@@ -511,7 +513,7 @@ fn scattering_agrees_for_every_material() {
             );
         }
     }
-    assert_eq!(seen.len(), 10, "every material kind was checked: {seen:?}");
+    assert_eq!(seen.len(), 11, "every material kind was checked: {seen:?}");
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! KHR_materials_transmission) in whole renders on every backend: a white
 //! rough glass sphere under a uniform white sky is invisible (it keeps
 //! every bit of energy, in and out through any number of internal
-//! bounces); a tinted one passes its colour and never more than the sky; a
+//! bounces), and so is a thin-walled one; a tinted one passes its colour and never more than the sky; a
 //! scene of rough glass agrees between the CPU and OpenCL, and with next-
 //! event estimation on and off; bad fields are named.
 
@@ -71,6 +71,21 @@ fn a_white_rough_glass_sphere_in_a_white_sky_is_invisible() {
 }
 
 #[test]
+fn a_white_thin_walled_sphere_in_a_white_sky_is_invisible() {
+    // A bubble: both walls thin (glTF's transmission without a volume).
+    for roughness in [0.0, 0.3, 1.0] {
+        let m = json!({"type": "pbr", "metallic": 0, "roughness": roughness, "transmission": 1,
+            "thin": true});
+        assert_invisible(
+            &sky_sphere(m),
+            64,
+            0.02,
+            &format!("thin wall, roughness {roughness}"),
+        );
+    }
+}
+
+#[test]
 fn glass_mixed_with_the_coated_base_keeps_the_energy_too() {
     for (transmission, metallic, ior) in [(0.5, 0.0, 1.5), (0.7, 0.3, 2.0)] {
         let m = json!({"type": "pbr", "metallic": metallic, "roughness": 0.4,
@@ -101,8 +116,8 @@ fn tinted_rough_glass_passes_its_colour_and_no_more() {
     }
 }
 
-/// Rough glass of two roughnesses, whole and half transmissive, on a
-/// diffuse floor under a quad light and a dim sky.
+/// Rough glass of two roughnesses, whole and half transmissive (that one
+/// a thin wall), on a diffuse floor under a quad light and a dim sky.
 fn glass_scene() -> Scene {
     let s = json!({
         "camera": {"position": [0, 0.6, 4], "look_at": [0, -0.2, 0], "vfov_deg": 45},
@@ -112,7 +127,8 @@ fn glass_scene() -> Scene {
             "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [6, 6, 6]},
             "frosted": {"type": "pbr", "base_color": [0.9, 0.8, 0.6], "metallic": 0, "roughness": 0.5, "transmission": 1},
             "clear": {"type": "pbr", "metallic": 0, "roughness": 0.15, "transmission": 1, "ior": 1.33},
-            "half": {"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0, "roughness": 0.3, "transmission": 0.5}
+            "half": {"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0, "roughness": 0.3, "transmission": 0.5,
+                "thin": true}
         },
         "objects": [
             {"type": "quad", "corner": [-4, -1, -4], "edge_u": [8, 0, 0], "edge_v": [0, 0, 8], "material": "floor"},
@@ -185,4 +201,5 @@ fn bad_transmission_is_named_and_good_survives_the_round_trip() {
     assert_eq!(s.materials, back.materials);
     let text = serde_json::to_string(&s.to_json()).expect("serialises");
     assert!(text.contains("\"transmission\":0.5"), "{text}");
+    assert!(text.contains("\"thin\":true"), "{text}");
 }

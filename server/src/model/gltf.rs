@@ -10,12 +10,13 @@
 //!   triangles, corners rotated); POINTS and LINES primitives are skipped
 //!   with a warning. A mesh's normals are kept only if every primitive has
 //!   them.
-//! - Materials: transmission 1 with metallic and roughness 0
-//!   (KHR_materials_transmission) -> glass, ior from KHR_materials_ior (1.5
-//!   when absent); metallic 1 and roughness 0 -> mirror, metallic 0 and
+//! - Materials: transmission 1 with metallic and roughness 0 and a
+//!   KHR_materials_volume thickness (a solid) -> glass, ior from
+//!   KHR_materials_ior (1.5 when absent); metallic 1 and roughness 0 -> mirror, metallic 0 and
 //!   roughness 1 (no transmission) -> diffuse (the renderer's exact
 //!   corners); else the metallic-roughness model (`pbr`) with the file's
-//!   factors, ior and transmission (rough glass). The albedo is the base colour factor's rgb; emission is the emissive factor
+//!   factors, ior and transmission (rough glass: a thin wall without a
+//!   volume thickness, as glTF defines; volume attenuation is noted). The albedo is the base colour factor's rgb; emission is the emissive factor
 //!   times KHR_materials_emissive_strength. Texture maps (`gltf_maps`):
 //!   base colour, metallic-roughness, normal and emissive; `alphaMode` MASK
 //!   and BLEND with the base colour's alpha (opaque where it is 1
@@ -48,11 +49,12 @@ const ID4: M4 = [
 ];
 
 /// Extensions whose content is read.
-const SUPPORTED: [&str; 5] = [
+const SUPPORTED: [&str; 6] = [
     "KHR_materials_emissive_strength",
     "KHR_texture_transform",
     "KHR_materials_transmission",
     "KHR_materials_ior",
+    "KHR_materials_volume",
     "KHR_mesh_quantization",
 ];
 /// Required extensions without which the geometry cannot be read.

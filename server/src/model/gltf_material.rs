@@ -75,6 +75,22 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     } else {
         0.0
     };
+    // KHR_materials_volume: a thickness makes the transmitting surface a
+    // solid's boundary (light refracts in and out); without one it is a
+    // thin wall, as glTF defines.
+    let volume = m.volume();
+    let solid = volume
+        .as_ref()
+        .is_some_and(|v| widen(v.thickness_factor()) > 0.0);
+    if let Some(v) = volume.as_ref().filter(|_| t > 0.0) {
+        let colour = v.attenuation_color();
+        if v.attenuation_distance().is_finite() && colour.iter().any(|&c| c < 1.0) {
+            ignored.push("volume attenuation".to_owned());
+        }
+        if v.thickness_texture().is_some() {
+            ignored.push("thickness texture".to_owned());
+        }
+    }
 
     let maps = gltf_maps::maps(m, images, &mut notes);
     if transmission
@@ -107,8 +123,11 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     };
 
     // Smooth, clear, whole transmission is the `glass` corner of the model.
-    let smooth_glass =
-        t == 1.0 && roughness == 0.0 && metallic == 0.0 && maps.metallic_roughness.is_none();
+    let smooth_glass = solid
+        && t == 1.0
+        && roughness == 0.0
+        && metallic == 0.0
+        && maps.metallic_roughness.is_none();
     let json = if smooth_glass {
         let ior = match m.ior() {
             None => common::DEFAULT_IOR,
@@ -139,6 +158,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
                 Some(v) => common::ior("ior", Some(widen(v)), &mut notes),
             },
             transmission: t,
+            thin: t > 0.0 && !solid,
             emission,
         }
     };

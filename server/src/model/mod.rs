@@ -96,6 +96,9 @@ pub enum Material {
         /// `KHR_materials_transmission`: the dielectric's share that is
         /// rough glass.
         transmission: f64,
+        /// That glass is a thin wall (glTF: no `KHR_materials_volume`, or
+        /// thickness 0).
+        thin: bool,
         emission: Option<[f64; 3]>,
     },
 }

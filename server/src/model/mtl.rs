@@ -290,6 +290,7 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
                 None => common::DEFAULT_IOR,
             },
             transmission: 0.0,
+            thin: false,
             emission,
         }
     } else {

@@ -56,9 +56,11 @@ impl SurfaceMaterial {
                 roughness,
                 ior,
                 transmission,
+                thin,
             } => Bsdf::Pbr(
                 Pbr::new(metallic as f32, roughness as f32, ior as f32)
-                    .transmitting(transmission as f32),
+                    .transmitting(transmission as f32)
+                    .thin_walled(thin),
             ),
         };
         Self {

@@ -263,6 +263,7 @@ fn material_json(m: model::Material) -> MaterialJson {
             roughness,
             ior,
             transmission,
+            thin,
             emission,
         } => MaterialJson::Pbr(PbrJson {
             base_color: base_color.into(),
@@ -270,6 +271,7 @@ fn material_json(m: model::Material) -> MaterialJson {
             roughness: roughness.into(),
             ior,
             transmission,
+            thin,
             emission: emission.map(Into::into),
             normal: None,
         }),

@@ -138,7 +138,8 @@ fn scene() -> (Value, Vec<u8>) {
         "materials": [
             {"name": "paint", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.2, 0.1, 1], "metallicFactor": 0, "roughnessFactor": 1}},
             {"name": "glass", "pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0},
-             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_ior": {"ior": 1.4}}},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_ior": {"ior": 1.4},
+                "KHR_materials_volume": {"thicknessFactor": 1, "attenuationDistance": 2, "attenuationColor": [0.5, 0.5, 0.5]}}},
             {"name": "chrome", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.9, 0.9, 1], "metallicFactor": 1, "roughnessFactor": 0}},
             {"name": "lamp", "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0},
              "emissiveFactor": [1, 0.5, 0.25], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4}}},
@@ -193,6 +194,7 @@ fn pbr(base_color: [f64; 3], metallic: f64, roughness: f64) -> Material {
         roughness,
         ior: 1.5,
         transmission: 0.0,
+        thin: false,
         emission: None,
     }
 }
@@ -280,6 +282,8 @@ fn expected() -> Model {
                     roughness: 0.0,
                     ior: 1.5,
                     transmission: 0.5,
+                    // No KHR_materials_volume: a thin wall.
+                    thin: true,
                     emission: None,
                 },
             ),
@@ -324,6 +328,7 @@ fn expected() -> Model {
             "meshes[1].primitives[2] (mesh \"strips\"): POINTS primitive skipped (only triangles are rendered)",
             "meshes[1].primitives[3] (mesh \"strips\"): LINES primitive skipped (only triangles are rendered)",
             "mesh \"mesh2\": a normal map without TEXCOORD_0 to orient it: the map is not applied",
+            "material \"glass\": not modelled, ignored: volume attenuation",
             "material \"partial\": base colour [2, 0.5, 0.5] is outside [0, 1]: clamped to [1, 0.5, 0.5]",
         ]
         .map(str::to_owned)

@@ -251,6 +251,7 @@ fn mtl_rules_map_every_material() {
                 roughness: 0.5,
                 ior: 1.5,
                 transmission: 0.0,
+                thin: false,
                 emission: None,
             },
             &diffuse([0.8; 3], None),
@@ -315,6 +316,7 @@ fn mtl_pbr_keys_make_the_metallic_roughness_model() {
                     roughness: 1.0,
                     ior: 1.45,
                     transmission: 0.0,
+                    thin: false,
                     emission: None,
                 }
             ),

@@ -12,6 +12,12 @@
 //! entry and exit scalings cancel), so the BTDF obeys f(wo, wi) = eta^2
 //! f(wi, wo).
 //!
+//! A thin wall (glTF's transmission without `KHR_materials_volume`) has
+//! air on both sides: what it transmits is its reflection mirrored through
+//! the surface (rough but unrefracted), F from the index either way, so its
+//! single-scattering albedo is the reflection lobe's white E(mu_o), which
+//! the metallic-roughness tables already hold.
+//!
 //! Energy: single scattering loses the light that bounces among the
 //! microfacets (a white rough glass sphere goes grey). The lobe is divided
 //! by its white albedo E(mu_o) (Turquin's 2019 scaling), read from
@@ -144,6 +150,8 @@ pub struct Glass {
     pub eta: f32,
     /// 1 / E(mu_o): the energy compensation.
     pub scale: f32,
+    /// A thin wall: transmission is the reflection mirrored.
+    pub thin: bool,
 }
 
 impl Glass {
@@ -157,6 +165,34 @@ impl Glass {
             alpha,
             eta: if entering { ior } else { 1.0 / ior },
             scale: 1.0 / e.max(0.05),
+            thin: false,
+        }
+    }
+
+    /// A thin wall of index `ior`, `scale` = 1 / the reflection lobe's
+    /// white E(mu_o).
+    #[inline(always)]
+    pub fn thin(alpha: f32, ior: f32, scale: f32) -> Glass {
+        Glass {
+            alpha,
+            eta: ior,
+            scale,
+            thin: true,
+        }
+    }
+
+    /// [`eval_cos`](Self::eval_cos) of a thin wall.
+    #[inline(always)]
+    fn thin_eval_cos(&self, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
+        let w = Vec3A::new(wi.x, wi.y, wi.z.abs());
+        let a = self.alpha;
+        let (ro, ri) = (smith_r(wo, a), smith_r(w, a));
+        let h = (wo + w).normalize();
+        let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+        let spec = distribution(h, a) / (2.0 * (ro * w.z + ri * wo.z)) * w.z * self.scale;
+        match wi.z > 0.0 {
+            true => (f * spec, 0.0),
+            false => (0.0, (1.0 - f) * spec),
         }
     }
 
@@ -177,6 +213,9 @@ impl Glass {
     /// white (the caller tints what is transmitted), compensation included.
     #[inline(always)]
     pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
+        if self.thin {
+            return self.thin_eval_cos(wo, wi);
+        }
         let a = self.alpha;
         let (ro, ri) = (smith_r(wo, a), smith_r(wi, a));
         if wi.z > 0.0 {
@@ -202,6 +241,13 @@ impl Glass {
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         let a = self.alpha;
         let ro = smith_r(wo, a);
+        if self.thin {
+            let w = Vec3A::new(wi.x, wi.y, wi.z.abs());
+            let h = (wo + w).normalize();
+            let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+            let vndf = distribution(h, a) / (2.0 * (wo.z + ro));
+            return if wi.z > 0.0 { f } else { 1.0 - f } * vndf;
+        }
         if wi.z > 0.0 {
             let h = (wo + wi).normalize();
             let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
@@ -222,6 +268,15 @@ impl Glass {
     #[inline(always)]
     pub fn sample(&self, wo: Vec3A, choice: f32, (u1, u2): (f32, f32)) -> Option<Vec3A> {
         let h = visible_normal(wo, self.alpha, u1, u2);
+        if self.thin {
+            let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+            let wr = reflect_about(wo, h);
+            return match (wr.z > 0.0, choice < f) {
+                (false, _) => None,
+                (true, true) => Some(wr),
+                (true, false) => Some(Vec3A::new(wr.x, wr.y, -wr.z)),
+            };
+        }
         let (f, wt) = split(wo, h, self.eta);
         if choice < f {
             let wr = reflect_about(wo, h);

@@ -61,6 +61,9 @@ pub struct Pbr {
     pub transmission: f32,
     /// The index of refraction (what `f0` came from), for the glass.
     pub ior: f32,
+    /// The glass is a thin wall (glTF's default without
+    /// `KHR_materials_volume`): what it transmits leaves unrefracted.
+    pub thin: bool,
 }
 
 impl Pbr {
@@ -73,6 +76,7 @@ impl Pbr {
             f0: r * r,
             transmission: 0.0,
             ior,
+            thin: false,
         }
     }
 
@@ -82,6 +86,11 @@ impl Pbr {
             transmission,
             ..self
         }
+    }
+
+    /// The same material with its glass a thin wall (or solid).
+    pub fn thin_walled(self, thin: bool) -> Pbr {
+        Pbr { thin, ..self }
     }
 }
 
@@ -294,12 +303,16 @@ impl Lobes {
         let p_spec = (spec / (spec + rest)).clamp(0.05, 0.95);
         let p_glass = (1.0 - p.metallic) * p.transmission;
         let glass = if p_glass > 0.0 {
-            glass::Glass::new(p.alpha, p.roughness, p.ior, wo, entering)
+            match p.thin {
+                true => glass::Glass::thin(p.alpha, p.ior, 1.0 / (a_o + b_o).max(0.05)),
+                false => glass::Glass::new(p.alpha, p.roughness, p.ior, wo, entering),
+            }
         } else {
             glass::Glass {
                 alpha: p.alpha,
                 eta: 1.0,
                 scale: 0.0,
+                thin: false,
             }
         };
         Lobes {

@@ -204,6 +204,9 @@ pub struct PbrJson {
     /// The share of the dielectric that is rough glass.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub transmission: f64,
+    /// That glass is a thin wall (light passes unrefracted), not a solid.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub thin: bool,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

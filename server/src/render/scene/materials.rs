@@ -59,6 +59,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
             roughness,
             ior,
             transmission,
+            thin,
             emission,
             normal,
         }) => {
@@ -78,6 +79,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 roughness: unit(scalar_field("roughness", roughness), roughness.factor())?,
                 ior: checked_ior(&path, *ior)?,
                 transmission: unit("transmission", *transmission)?,
+                thin: *thin,
             };
             let at = |field: &str| format!("{path}.{field}");
             maps.metallic = texture(
@@ -275,12 +277,14 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             roughness,
             ior,
             transmission,
+            thin,
         } => MaterialJson::Pbr(PbrJson {
             base_color: albedo,
             metallic: scalar(metallic, &m.maps.metallic),
             roughness: scalar(roughness, &m.maps.roughness),
             ior,
             transmission,
+            thin,
             emission,
             normal,
         }),

@@ -185,6 +185,8 @@ pub enum MaterialKind {
         /// The share of the dielectric that is rough glass
         /// (`KHR_materials_transmission`), in [0, 1].
         transmission: f64,
+        /// The glass is a thin wall (unrefracted), not a solid.
+        thin: bool,
     },
 }
 

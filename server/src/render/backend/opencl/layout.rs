@@ -174,7 +174,7 @@ pub struct Material {
     pub maps: u32,
     /// pbr: metallic, alpha, roughness, f0 (`ggx::Pbr`).
     pub pbr: [f32; 4],
-    /// pbr: transmission, ior.
+    /// pbr: transmission, ior, 1 for a thin wall.
     pub glass: [f32; 4],
 }
 
@@ -422,7 +422,7 @@ pub fn pack(job: &RenderJob) -> Packed {
             let (pbr, glass) = match m.bsdf {
                 Bsdf::Pbr(p) => (
                     [p.metallic, p.alpha, p.roughness, p.f0],
-                    [p.transmission, p.ior, 0.0, 0.0],
+                    [p.transmission, p.ior, f32::from(u8::from(p.thin)), 0.0],
                 ),
                 _ => ([0.0; 4], [0.0; 4]),
             };
