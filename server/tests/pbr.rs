@@ -7,7 +7,10 @@
 
 mod common;
 
-use common::{assert_agree, assert_clean, assert_mean, backends, region, render_on};
+use common::{
+    assert_backends_agree, assert_clean, assert_mean, assert_nee_on_off_agree, backends, region,
+    render_on,
+};
 use pathstream::render::{Filter, Quality, Scene};
 use serde_json::json;
 
@@ -121,40 +124,14 @@ fn sphere_grid() -> Scene {
 
 #[test]
 fn a_metal_roughness_grid_agrees_on_every_backend() {
-    let s = sphere_grid();
-    let films: Vec<_> = backends()
-        .into_iter()
-        .map(|(name, mut b)| {
-            let film = render_on(&mut b, &s, 32, 24, &quality(), 128);
-            assert_clean(&film, name);
-            (name, film)
-        })
-        .collect();
-    let (first, a) = &films[0];
-    for (name, b) in &films[1..] {
-        assert_agree(a, b, 4, 4.5, 0.005, &format!("{first} vs {name}"));
-    }
-    if std::env::var_os("CI").is_some() {
-        assert_eq!(films.len(), 2, "CI checks the OpenCL backend too");
-    }
+    assert_backends_agree(&sphere_grid(), (32, 24), &quality(), 128);
 }
 
 #[test]
 fn nee_on_and_off_agree_on_the_grid() {
     // Next-event estimation gathers the broad lobes' light, the next hit
     // the narrow lobes': together the same image as BSDF sampling alone.
-    let s = sphere_grid();
-    for (name, mut backend) in backends() {
-        let on = render_on(&mut backend, &s, 32, 24, &quality(), 128);
-        let off_q = Quality {
-            nee: false,
-            ..quality()
-        };
-        let off = render_on(&mut backend, &s, 32, 24, &off_q, 256);
-        assert_clean(&on, name);
-        assert_clean(&off, name);
-        assert_agree(&on, &off, 4, 4.5, 0.005, &format!("{name}: NEE on vs off"));
-    }
+    assert_nee_on_off_agree(&sphere_grid(), (32, 24), &quality(), 128);
 }
 
 #[test]

@@ -257,6 +257,41 @@ pub fn assert_mean(film: &Film, block: u32, expected: f64, z_max: f64, rel: f64,
     }
 }
 
+/// Renders `scene` on every backend (`spp` samples at w x h) and asserts
+/// that each image agrees with the first one's (4x4 blocks, 4.5 standard
+/// errors, 0.5%); where `CI` is set both backends must have rendered.
+pub fn assert_backends_agree(scene: &Scene, (w, h): (u32, u32), q: &Quality, spp: u64) {
+    let films: Vec<_> = backends()
+        .into_iter()
+        .map(|(name, mut b)| {
+            let film = render_on(&mut b, scene, w, h, q, spp);
+            assert_clean(&film, name);
+            (name, film)
+        })
+        .collect();
+    let (first, a) = &films[0];
+    for (name, b) in &films[1..] {
+        assert_agree(a, b, 4, 4.5, 0.005, &format!("{first} vs {name}"));
+    }
+    if std::env::var_os("CI").is_some() {
+        assert_eq!(films.len(), 2, "CI checks the OpenCL backend too");
+    }
+}
+
+/// On every backend: `scene` with next-event estimation (`spp` samples)
+/// and without it (twice as many) gives the same image (as
+/// [`assert_backends_agree`] compares).
+pub fn assert_nee_on_off_agree(scene: &Scene, (w, h): (u32, u32), q: &Quality, spp: u64) {
+    for (name, mut backend) in backends() {
+        let on = render_on(&mut backend, scene, w, h, q, spp);
+        let off_q = Quality { nee: false, ..*q };
+        let off = render_on(&mut backend, scene, w, h, &off_q, 2 * spp);
+        assert_clean(&on, name);
+        assert_clean(&off, name);
+        assert_agree(&on, &off, 4, 4.5, 0.005, &format!("{name}: NEE on vs off"));
+    }
+}
+
 /// Every pixel mean is finite and nothing was rejected.
 pub fn assert_clean(film: &Film, what: &str) {
     assert_eq!(film.rejected(), 0, "{what}: rejected samples");

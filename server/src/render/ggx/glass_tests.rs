@@ -3,7 +3,7 @@
 //! integral over the sphere, sampling against the pdf (chi-square), and
 //! the BTDF's generalised reciprocity.
 
-use super::super::tests::{chi2_tail, dir};
+use super::super::tests::{dir, sphere_chi2};
 use super::*;
 use crate::render::sampler::Sampler;
 
@@ -199,10 +199,6 @@ fn the_btdf_is_reciprocal_up_to_eta_squared() {
 
 #[test]
 fn sampling_follows_the_pdf_chi_square() {
-    // Bins in (cos theta, phi) over the whole sphere; expected counts from
-    // the pdf integrated over each bin; bins expecting fewer than 5 pooled.
-    let (bt, bp) = (24usize, 16usize);
-    let n = 400_000u64;
     for (r, ior, entering, mu, thin) in [
         (0.2f32, 1.5f32, true, 0.6f32, false),
         (0.5, 1.5, false, 0.8, false),
@@ -215,49 +211,16 @@ fn sampling_follows_the_pdf_chi_square() {
             true => thin_lobe(r, ior, wo),
             false => lobe(r, ior, wo, entering),
         };
-        let bin = |w: Vec3A| {
-            let i = (((w.z + 1.0) * 0.5 * bt as f32) as usize).min(bt - 1);
-            let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
-            let j = ((phi / std::f32::consts::TAU * bp as f32) as usize).min(bp - 1);
-            i * bp + j
-        };
-        let mut observed = vec![0f64; bt * bp];
-        for k in 0..n {
+        let draw = |k: u64| {
             let mut s = Sampler::new(11, k, 0);
             let choice = s.next_f32();
-            if let Some(wi) = g.sample(wo, choice, s.next_2d()) {
-                observed[bin(wi)] += 1.0;
-            }
-        }
-        let sub = 24;
-        let mut expected = vec![0f64; bt * bp];
-        for i in 0..bt * sub {
-            let cos = (i as f32 + 0.5) / (bt * sub) as f32 * 2.0 - 1.0;
-            for j in 0..bp * sub {
-                let phi = (j as f32 + 0.5) / (bp * sub) as f32 * std::f32::consts::TAU;
-                let w = dir(cos, phi);
-                let area = 2.0 * std::f64::consts::TAU / ((bt * sub) * (bp * sub)) as f64;
-                expected[bin(w)] += f64::from(g.pdf(wo, w)) * area * n as f64;
-            }
-        }
-        let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0.0, 0.0, 0.0);
-        for (o, e) in observed.iter().zip(&expected) {
-            if *e < 5.0 {
-                pool_o += o;
-                pool_e += e;
-            } else {
-                chi2 += (o - e) * (o - e) / e;
-                dof += 1.0;
-            }
-        }
-        if pool_e >= 5.0 {
-            chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-            dof += 1.0;
-        }
-        let tail = chi2_tail(chi2, dof - 1.0);
+            g.sample(wo, choice, s.next_2d())
+        };
+        let (chi2, dof, tail) = sphere_chi2(400_000, draw, |w| g.pdf(wo, w));
         assert!(
             tail > 1e-4,
-            "roughness {r} ior {ior} entering {entering} thin {thin} mu {mu}: chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
+            "roughness {r} ior {ior} entering {entering} thin {thin} mu {mu}: \
+             chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
         );
     }
 }

@@ -193,7 +193,7 @@ fn eval_is_reciprocal() {
 
 /// Upper tail of chi-square with `dof` degrees of freedom at `x`
 /// (Wilson-Hilferty normal approximation).
-pub(super) fn chi2_tail(x: f64, dof: f64) -> f64 {
+fn chi2_tail(x: f64, dof: f64) -> f64 {
     let z = ((x / dof).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * dof))) / (2.0 / (9.0 * dof)).sqrt();
     0.5 * erfc(z / std::f64::consts::SQRT_2)
 }
@@ -220,14 +220,61 @@ fn erfc(x: f64) -> f64 {
     }
 }
 
+/// A chi-square goodness-of-fit test of directions over the sphere: `n`
+/// samples (`draw(k)`, None for one that gives no direction) binned in
+/// (cos theta, phi), 32 x 16, against the counts `pdf` integrated over each
+/// bin predicts; bins expecting fewer than 5 pooled. The statistic, its
+/// degrees of freedom and its upper-tail probability.
+pub(super) fn sphere_chi2(
+    n: u64,
+    draw: impl Fn(u64) -> Option<Vec3A>,
+    pdf: impl Fn(Vec3A) -> f32,
+) -> (f64, f64, f64) {
+    let (bt, bp) = (32usize, 16usize);
+    let bin = |w: Vec3A| {
+        let i = (((w.z + 1.0) * 0.5 * bt as f32) as usize).min(bt - 1);
+        let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
+        let j = ((phi / std::f32::consts::TAU * bp as f32) as usize).min(bp - 1);
+        i * bp + j
+    };
+    let mut observed = vec![0f64; bt * bp];
+    for wi in (0..n).filter_map(draw) {
+        observed[bin(wi)] += 1.0;
+    }
+    let sub = 24;
+    let mut expected = vec![0f64; bt * bp];
+    let area = 2.0 * std::f64::consts::TAU / ((bt * sub) * (bp * sub)) as f64;
+    for i in 0..bt * sub {
+        let cos = (i as f32 + 0.5) / (bt * sub) as f32 * 2.0 - 1.0;
+        for j in 0..bp * sub {
+            let phi = (j as f32 + 0.5) / (bp * sub) as f32 * std::f32::consts::TAU;
+            let w = dir(cos, phi);
+            expected[bin(w)] += f64::from(pdf(w)) * area * n as f64;
+        }
+    }
+    let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0.0, 0.0, 0.0);
+    for (o, e) in observed.iter().zip(&expected) {
+        if *e < 5.0 {
+            pool_o += o;
+            pool_e += e;
+        } else {
+            chi2 += (o - e) * (o - e) / e;
+            dof += 1.0;
+        }
+    }
+    if pool_e >= 5.0 {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        dof += 1.0;
+    }
+    (chi2, dof, chi2_tail(chi2, dof - 1.0))
+}
+
 #[test]
 fn sampling_follows_the_pdf_chi_square() {
-    // Bins in (cos theta, phi) over the hemisphere; expected counts from
-    // the pdf integrated over each bin; bins expecting fewer than 5 pooled.
+    // Over the sphere, not the hemisphere: transmitting materials sample
+    // both. Directions on the wrong side count too (where samples land,
+    // weights aside).
     let t = tables();
-    // The sphere, not the hemisphere: transmitting materials sample both.
-    let (bt, bp) = (32usize, 16usize);
-    let n = 400_000u64;
     for (r, metallic, mu, transmission) in [
         (0.2f32, 1.0f32, 0.6f32, 0.0f32),
         (0.6, 0.0, 0.3, 0.0),
@@ -240,49 +287,13 @@ fn sampling_follows_the_pdf_chi_square() {
         let base = Vec3A::new(0.6, 0.5, 0.4);
         let wo = dir(mu, 0.2);
         let lobes = Lobes::new(t, &p, base, wo, true);
-        let bin = |w: Vec3A| {
-            let i = (((w.z + 1.0) * 0.5 * bt as f32) as usize).min(bt - 1);
-            let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
-            let j = ((phi / std::f32::consts::TAU * bp as f32) as usize).min(bp - 1);
-            i * bp + j
-        };
-        let mut observed = vec![0f64; bt * bp];
-        for k in 0..n {
+        let draw = |k: u64| {
             let mut s = Sampler::new(11, k, 0);
             let choice = s.next_f32();
             let u = s.next_2d();
-            // Directions on the wrong side are part of the density too:
-            // the test counts where samples land, weights aside.
-            if let Some(s) = sample(t, &p, base, (wo, true), choice, u) {
-                observed[bin(s.wi)] += 1.0;
-            }
-        }
-        let sub = 24;
-        let mut expected = vec![0f64; bt * bp];
-        for i in 0..bt * sub {
-            let cos = (i as f32 + 0.5) / (bt * sub) as f32 * 2.0 - 1.0;
-            for j in 0..bp * sub {
-                let phi = (j as f32 + 0.5) / (bp * sub) as f32 * std::f32::consts::TAU;
-                let w = dir(cos, phi);
-                let area = 2.0 * std::f64::consts::TAU / ((bt * sub) * (bp * sub)) as f64;
-                expected[bin(w)] += f64::from(pdf(&p, &lobes, wo, w)) * area * n as f64;
-            }
-        }
-        let (mut chi2, mut dof, mut pool_o, mut pool_e) = (0.0, 0.0, 0.0, 0.0);
-        for (o, e) in observed.iter().zip(&expected) {
-            if *e < 5.0 {
-                pool_o += o;
-                pool_e += e;
-            } else {
-                chi2 += (o - e) * (o - e) / e;
-                dof += 1.0;
-            }
-        }
-        if pool_e >= 5.0 {
-            chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-            dof += 1.0;
-        }
-        let tail = chi2_tail(chi2, dof - 1.0);
+            sample(t, &p, base, (wo, true), choice, u).map(|s| s.wi)
+        };
+        let (chi2, dof, tail) = sphere_chi2(400_000, draw, |w| pdf(&p, &lobes, wo, w));
         assert!(
             tail > 1e-4,
             "roughness {r} metallic {metallic} transmission {transmission} mu {mu}: \
