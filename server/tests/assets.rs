@@ -251,18 +251,7 @@ async fn every_bad_upload_or_reference_is_a_4xx_naming_the_problem() {
         ),
     ];
     for (scene, expect) in scenes {
-        let r = client()
-            .post(format!("{base}/api/sessions"))
-            .json(&json!({"scene": scene}))
-            .send()
-            .await
-            .expect("req");
-        assert_eq!(r.status(), 400, "{scene}");
-        let e: Value = r.json().await.expect("json");
-        assert!(
-            e["error"].as_str().is_some_and(|e| e.contains(expect)),
-            "expected '{expect}' in {e}"
-        );
+        assert_refused(&base, scene, expect).await;
     }
     let r = client()
         .delete(format!("{base}/api/assets/nothing"))

@@ -110,19 +110,19 @@ pub const SHARED_CONSTANTS: [(&str, u32); 38] = [
 /// The metallic-roughness albedo tables where a material uses the model,
 /// followed by the rough glass's where one transmits (`kernels/ggx.h`).
 pub fn ggx_tables(w: &crate::render::world::World) -> Vec<f32> {
-    let pbr = |m: &&crate::render::material::SurfaceMaterial| match m.bsdf {
-        Bsdf::Pbr(p) => Some(p),
-        _ => None,
-    };
+    let pbr: Vec<_> = w
+        .materials
+        .iter()
+        .filter_map(|m| match m.bsdf {
+            Bsdf::Pbr(p) => Some(p),
+            _ => None,
+        })
+        .collect();
     let mut out = Vec::new();
-    if w.materials.iter().any(|m| pbr(&m).is_some()) {
+    if !pbr.is_empty() {
         out.extend_from_slice(&crate::render::ggx::tables().data);
     }
-    if w.materials
-        .iter()
-        .filter_map(|m| pbr(&m))
-        .any(|p| p.transmission > 0.0)
-    {
+    if pbr.iter().any(|p| p.transmission > 0.0) {
         out.extend_from_slice(&crate::render::ggx::glass::table().data);
     }
     out
