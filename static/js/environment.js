@@ -9,7 +9,7 @@
 import { api } from "./api.js";
 import { $, el } from "./dom.js";
 import { showMessage } from "./messages.js";
-import { applyAnswer, edit } from "./session.js";
+import { change, edit } from "./session.js";
 import { on, state } from "./state.js";
 import { uploadAsset } from "./upload.js";
 
@@ -90,9 +90,7 @@ function fillEnvironment() {
 async function setEnvironment(environment) {
   if (!state.sessionId) return null;
   try {
-    const status = await api("PUT", `/sessions/${state.sessionId}/environment`, environment);
-    applyAnswer(status);
-    return status;
+    return await change("PUT", `/sessions/${state.sessionId}/environment`, environment);
   } catch (e) {
     showMessage(e.message);
     fillEnvironment();

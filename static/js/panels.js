@@ -8,7 +8,7 @@ import { api } from "./api.js";
 import { $, el } from "./dom.js";
 import { lightChanged } from "./camera.js";
 import { showMessage } from "./messages.js";
-import { applyAnswer, edit, send } from "./session.js";
+import { change, edit, send } from "./session.js";
 import { chooseFormat, streamSettings } from "./streamfmt.js";
 import { on, state } from "./state.js";
 import { same } from "./vec.js";
@@ -51,7 +51,7 @@ $("q-preset").addEventListener("change", async () => {
   const name = $("q-preset").value;
   if (!name || !state.sessionId) return;
   try {
-    applyAnswer(await api("PATCH", `/sessions/${state.sessionId}/quality`, { preset: name }));
+    await change("PATCH", `/sessions/${state.sessionId}/quality`, { preset: name });
   } catch (e) {
     showMessage(e.message);
     fillQuality(state.status && state.status.quality);
@@ -110,8 +110,7 @@ export async function qualityChanged(input) {
   }
   if (!state.sessionId) return;
   try {
-    const status = await api("PATCH", `/sessions/${state.sessionId}/quality`, { [field]: value });
-    applyAnswer(status);
+    await change("PATCH", `/sessions/${state.sessionId}/quality`, { [field]: value });
   } catch (e) {
     showMessage(e.message);
     const active = document.activeElement;

@@ -316,6 +316,24 @@ export function applyAnswer(status) {
   applyStatus(status);
 }
 
+/** Sends a settings change over HTTP and adopts the server's answer. While
+ *  it is on the way, stats from the stream predate it: they must not put
+ *  the old settings back into the panel (a checkbox just unticked would
+ *  tick itself again). A refused change lets the server's settings stand. */
+export async function change(method, path, body) {
+  const before = state.adoptFrom;
+  state.adoptFrom = Math.max(before, state.maxGeneration + 1);
+  try {
+    const status = await api(method, path, body);
+    state.adoptFrom = before;
+    applyAnswer(status);
+    return status;
+  } catch (e) {
+    state.adoptFrom = before;
+    throw e;
+  }
+}
+
 // ---------------------------------------------------------------- camera and light updates
 
 export function touchLocal() {
