@@ -12,8 +12,9 @@ import fs from "node:fs";
 import path from "node:path";
 import { after, before, describe, it } from "node:test";
 import {
-  ARTIFACTS, STATIC_DIR, api, blockDiff, bodyData, canvasStats, freePort, launchBrowser,
-  session, sleep, startServer, waitFor, waitFrame, watchConsole,
+  ARTIFACTS, STATIC_DIR, api, blockDiff, bodyData, canvasStats, compareWithServerFrame, describeDiff,
+  freePort, haltShown, launchBrowser, resume, session, showsRate, sleep, startServer, unreachableControls,
+  waitFor, waitFrame, watchConsole,
 } from "./harness.mjs";
 
 const SMALL = "width=128&height=96";
@@ -59,16 +60,29 @@ describe("browser client", { timeout: 600000 }, () => {
     }
   });
 
-  it("loads without console errors and shows a frame that is not blank", T, async () => {
+  it("loads without console errors and shows the server's frame; the HUD its figures", T, async (t) => {
     await page.goto(`${server.base}/?scene=cornell&${SMALL}`);
     const f = await waitFrame(page, { spp: 4 });
     assert.ok(f.spp >= 4);
-    const img = await canvasStats(page);
-    assert.equal(img.width, 128);
-    assert.equal(img.height, 96);
-    assert.ok(img.mean > 10, `image too dark: mean luminance ${img.mean}`);
-    assert.ok(img.std > 5, `image is flat: std ${img.std}`);
-    assert.ok(img.colours > 50, `only ${img.colours} distinct colours`);
+    // Halted, the frame shown stays: the canvas must be the server's own
+    // frame.png of it, block for block (PNG both ways: exact), and the HUD
+    // must say what the status says of it.
+    const halted = await haltShown(page, server.base, await id(), 8);
+    const c = await compareWithServerFrame(page, server.base, await id());
+    t.diagnostic(describeDiff(c));
+    assert.deepEqual([c.width, c.height, c.frameWidth, c.frameHeight], [128, 96, 128, 96]);
+    assert.ok(c.sentStd > 5, `the server's frame is flat: luminance std ${c.sentStd}`);
+    assert.ok(c.worst <= 1, describeDiff(c));
+    const hud = async (k) => [await page.textContent(`#hud-${k}`), await page.getAttribute(`#hud-${k}`, "data-value")];
+    assert.deepEqual(await hud("spp"), [String(halted.spp), String(halted.spp)]);
+    assert.deepEqual(await hud("state"), ["halted", "halted"]);
+    const [spsText, sps] = await hud("sps");
+    assert.equal(Number(sps), halted.samples_per_sec);
+    assert.ok(halted.samples_per_sec > 0 && showsRate(spsText, halted.samples_per_sec), `HUD ${spsText} paths/s, status ${halted.samples_per_sec}`);
+    const [errText, err] = await hud("error");
+    assert.equal(Number(err), halted.error_estimate);
+    assert.equal(errText, `${(100 * halted.error_estimate).toPrecision(3)} %`);
+    await resume(server.base, await id());
     const d = await bodyData(page);
     assert.match(d.sessionId, /^[0-9a-f]{16}$/);
     assert.equal(d.conn, "live");
@@ -437,8 +451,10 @@ describe("browser client", { timeout: 600000 }, () => {
     assert.equal(s.scene, "cornell");
     assert.equal(s.width, 128);
     assert.equal(s.quality.max_depth, 3, "settings carried over to the new session");
-    const img = await canvasStats(page);
-    assert.ok(img.mean > 10 && img.std > 5, "renders again");
+    // What it shows is the new session's frames.
+    await haltShown(page, server.base, newId, 8);
+    const c = await compareWithServerFrame(page, server.base, newId);
+    assert.ok(c.sentStd > 5 && c.worst <= 1, `renders again: ${describeDiff(c)}`);
     // Only the connection failures while the server was down were logged.
     const unexpected = errors.filter((e) => !/ERR_CONNECTION_REFUSED|WebSocket connection to .* failed|Failed to load resource/.test(e));
     assert.deepEqual(unexpected, []);
@@ -482,53 +498,6 @@ describe("browser client with a token", { timeout: 120000 }, () => {
     await context.close();
   });
 });
-
-/** Every visible control of the page (top bar, panels, touch pad) that a
- *  user cannot reach: cut off at the sides, hidden under something else, or
- *  outside the viewport with no scrollable panel to bring it in. Scrolls
- *  each control into view as a user would; returns what failed and why. */
-async function unreachableControls(page) {
-  return page.evaluate(() => {
-    const vw = window.innerWidth;
-    const vh = window.innerHeight;
-    const slack = 0.5;
-    const problems = [];
-    const name = (c) => `${c.tagName.toLowerCase()}#${c.id || c.dataset.key || c.textContent.trim()}`;
-    const clips = (a) => ["overflow", "overflowX", "overflowY"].some((k) => getComputedStyle(a)[k] !== "visible");
-    if (document.scrollingElement.scrollWidth > vw + slack) {
-      problems.push(`the page scrolls sideways (${document.scrollingElement.scrollWidth} px wide in ${vw})`);
-    }
-    const controls = [...document.querySelectorAll("#bar :is(button, input, select), #panels :is(button, input, select), #touchpad button")]
-      .filter((c) => c.getClientRects().length > 0); // displayed (not in a hidden element)
-    for (const c of controls) {
-      c.scrollIntoView({ block: "nearest", inline: "nearest" });
-      const r = c.getBoundingClientRect();
-      if (r.left < -slack || r.right > vw + slack || r.top < -slack || r.bottom > vh + slack) {
-        problems.push(`${name(c)} at ${Math.round(r.left)},${Math.round(r.top)}-${Math.round(r.right)},${Math.round(r.bottom)} is outside the ${vw}x${vh} viewport`);
-        continue;
-      }
-      for (let a = c.parentElement; a && a !== document.body; a = a.parentElement) {
-        if (!clips(a)) continue;
-        const b = a.getBoundingClientRect();
-        const left = b.left + a.clientLeft;
-        const top = b.top + a.clientTop;
-        if (a.scrollLeft !== 0 || a.scrollWidth > a.clientWidth + 1) {
-          problems.push(`#${a.id || a.tagName} scrolls sideways (${a.scrollWidth} px of content in ${a.clientWidth})`);
-        }
-        if (r.left < left - slack || r.right > left + a.clientWidth + slack || r.top < top - slack || r.bottom > top + a.clientHeight + slack) {
-          problems.push(`${name(c)} is cut off by #${a.id || a.tagName}`);
-        }
-      }
-      const x = Math.min(Math.max(r.left + r.width / 2, 0), vw - 1);
-      const y = Math.min(Math.max(r.top + r.height / 2, 0), vh - 1);
-      const hit = document.elementFromPoint(x, y);
-      if (!(hit === c || c.contains(hit) || (hit && hit.control === c) || (hit && hit.tagName === "LABEL" && hit.contains(c)))) {
-        problems.push(`${name(c)} is covered by ${hit ? name(hit) : "nothing"}`);
-      }
-    }
-    return { count: controls.length, problems: [...new Set(problems)] };
-  });
-}
 
 describe("layout and screenshots", { timeout: 300000 }, () => {
   let server;

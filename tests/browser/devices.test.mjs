@@ -6,7 +6,7 @@
 
 import assert from "node:assert/strict";
 import { after, before, describe, it } from "node:test";
-import { UNDER_CI, openPage, session, waitFor, waitFrame } from "./harness.mjs";
+import { UNDER_CI, haltShown, openPage, showsRate, waitFrame } from "./harness.mjs";
 
 describe("a session on every device in the browser", { timeout: 120000 }, () => {
   let server;
@@ -27,18 +27,27 @@ describe("a session on every device in the browser", { timeout: 120000 }, () => 
     await page.goto(`${server.base}/?scene=cornell&width=96&height=64`);
     await waitFrame(page, { spp: 4 });
     const id = await page.evaluate(() => window.pathstream.sessionId);
-    const s = await session(server.base, id);
+    // Halted, the rates stay put: the HUD must show the status's own.
+    const s = await haltShown(page, server.base, id, 16);
     assert.equal(s.backend, "all");
     const n = s.devices.length;
     t.diagnostic(`devices: ${s.devices.map((d) => `${d.backend} ${d.samples_per_sec.toFixed(0)}/s`).join(", ")}`);
     if (UNDER_CI) assert.equal(n, 2, "PoCL and rayon");
-    const text = await waitFor("every device in the HUD", async () => {
-      const v = await page.textContent("#hud-device");
-      return v.split(" · ").length === n && /^all: cpu /.test(v) ? v : null;
+    assert.ok(s.samples_per_sec > 0 && s.devices.some((d) => d.samples_per_sec > 0), JSON.stringify(s.devices));
+    const text = await page.textContent("#hud-device");
+    t.diagnostic(`HUD: ${text}`);
+    assert.match(text, /^all: /);
+    const parts = text.slice("all: ".length).split(" · ");
+    assert.equal(parts.length, n, text);
+    parts.forEach((part, i) => {
+      const d = s.devices[i];
+      const m = /^(cpu|opencl) (.+)$/.exec(part);
+      assert.ok(m, `${part} in ${text}`);
+      assert.equal(m[1], d.backend, text);
+      assert.ok(showsRate(m[2], d.samples_per_sec), `HUD ${part}, status ${d.backend} ${d.samples_per_sec}/s`);
     });
-    for (const part of text.slice("all: ".length).split(" · ")) {
-      assert.match(part, /^(cpu|opencl) [0-9.]+ ?[kMG]?$/, text);
-    }
+    const sps = await page.textContent("#hud-sps");
+    assert.ok(showsRate(sps, s.samples_per_sec), `HUD ${sps} paths/s in all, status ${s.samples_per_sec}`);
     const title = await page.getAttribute("#hud-device", "title");
     assert.match(title, /cpu: rayon/, title);
     // The line fits its box: nothing cut off with an ellipsis.

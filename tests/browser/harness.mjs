@@ -226,3 +226,170 @@ export function blockDiff(a, b) {
   for (let i = 0; i < a.length; i++) d += Math.abs(a[i] - b[i]);
   return d / a.length;
 }
+
+/** Halts the session at `spp` samples and waits until the page shows its
+ *  last frame. A PATCH of quality.spp restarts the film, which then stops
+ *  at exactly `spp` (the mean, with adaptive sampling) and publishes no
+ *  more frames: what the page shows then stays, and the server's own
+ *  frame.png is that same frame. Returns the halted status. */
+export async function haltShown(page, base, id, spp = 8) {
+  const r = await api(base, "PATCH", `/sessions/${id}/quality`, { spp });
+  if (r.status !== 200) throw new Error(`PATCH quality spp ${spp}: ${r.status} ${JSON.stringify(r.body)}`);
+  const s = await waitFor(`the session halted at ${spp} spp`, async () => {
+    const s = await session(base, id);
+    return s.state === "halted" && s.generation >= r.body.generation ? s : null;
+  });
+  await waitFor(`the page to show the halted frame (spp ${s.spp}, generation ${s.generation})`, async () => {
+    const d = await bodyData(page);
+    return Number(d.frameSpp) === s.spp && Number(d.frameGeneration) === s.generation;
+  }, { interval: 50 });
+  return s;
+}
+
+/** Lets a halted session render again (no spp limit); waits until it does. */
+export async function resume(base, id) {
+  const r = await api(base, "PATCH", `/sessions/${id}/quality`, { spp: null });
+  if (r.status !== 200) throw new Error(`PATCH quality spp null: ${r.status} ${JSON.stringify(r.body)}`);
+  await waitFor("the session rendering again", async () => (await session(base, id)).state === "rendering");
+}
+
+/** What the canvas shows against what the server sent: GET frame.png (which
+ *  must be the frame shown: same spp and generation, so halt the session
+ *  first), decoded by the browser and drawn at the canvas's size as the page
+ *  draws a frame, then each colour channel's mean over `block`x`block`
+ *  blocks (the last ones cut short) of both. Returns the worst and mean
+ *  absolute difference of those means (0..255), where the worst is, both
+ *  images' sizes, and the luminance spread of the server's frame (an image,
+ *  not a blank: else a blank canvas would match a blank frame). */
+export async function compareWithServerFrame(page, base, id, { block = 8 } = {}) {
+  const shown = await bodyData(page);
+  const r = await fetch(`${base}/api/sessions/${id}/frame.png`);
+  if (r.status !== 200) throw new Error(`GET frame.png: ${r.status} ${await r.text()}`);
+  const sent = { spp: Number(r.headers.get("x-pathstream-spp")), generation: Number(r.headers.get("x-pathstream-generation")) };
+  if (sent.spp !== Number(shown.frameSpp) || sent.generation !== Number(shown.frameGeneration)) {
+    throw new Error(`the server's frame (spp ${sent.spp}, generation ${sent.generation}) is not the one the page says it shows (spp ${shown.frameSpp}, generation ${shown.frameGeneration})`);
+  }
+  const png = Buffer.from(await r.arrayBuffer()).toString("base64");
+  const c = await page.evaluate(async ([png, block]) => {
+    const bytes = Uint8Array.from(atob(png), (ch) => ch.charCodeAt(0));
+    const bitmap = await createImageBitmap(new Blob([bytes], { type: "image/png" }));
+    const view = document.getElementById("view");
+    const w = view.width;
+    const h = view.height;
+    const ref = new OffscreenCanvas(w, h).getContext("2d");
+    ref.imageSmoothingEnabled = bitmap.width !== w || bitmap.height !== h;
+    ref.drawImage(bitmap, 0, 0, w, h);
+    const bw = Math.ceil(w / block);
+    const bh = Math.ceil(h / block);
+    const means = (data) => {
+      const sums = new Float64Array(bw * bh * 3);
+      const counts = new Float64Array(bw * bh);
+      for (let y = 0; y < h; y++) {
+        for (let x = 0; x < w; x++) {
+          const b = Math.floor(y / block) * bw + Math.floor(x / block);
+          const i = 4 * (y * w + x);
+          for (let k = 0; k < 3; k++) sums[3 * b + k] += data[i + k];
+          counts[b] += 1;
+        }
+      }
+      return sums.map((s, j) => s / counts[Math.floor(j / 3)]);
+    };
+    const refData = ref.getImageData(0, 0, w, h).data;
+    const a = means(view.getContext("2d").getImageData(0, 0, w, h).data);
+    const b = means(refData);
+    let worst = 0;
+    let at = null;
+    let sum = 0;
+    for (let j = 0; j < a.length; j++) {
+      const d = Math.abs(a[j] - b[j]);
+      sum += d;
+      if (d > worst) {
+        worst = d;
+        const k = Math.floor(j / 3);
+        at = { x: (k % bw) * block, y: Math.floor(k / bw) * block, channel: "rgb"[j % 3], shown: a[j], sent: b[j] };
+      }
+    }
+    let l1 = 0;
+    let l2 = 0;
+    for (let i = 0; i < refData.length; i += 4) {
+      const l = 0.2126 * refData[i] + 0.7152 * refData[i + 1] + 0.0722 * refData[i + 2];
+      l1 += l;
+      l2 += l * l;
+    }
+    const n = w * h;
+    return {
+      width: w, height: h, frameWidth: bitmap.width, frameHeight: bitmap.height,
+      worst, mean: sum / a.length, at, sentStd: Math.sqrt(Math.max(0, l2 / n - (l1 / n) ** 2)),
+    };
+  }, [png, block]);
+  return { ...c, ...sent };
+}
+
+/** One line of a comparison for messages and diagnostics. */
+export function describeDiff(c) {
+  const at = c.at ? ` (worst at block ${c.at.x},${c.at.y} ${c.at.channel}: shown ${c.at.shown.toFixed(1)}, sent ${c.at.sent.toFixed(1)})` : "";
+  return `canvas vs the server's frame (spp ${c.spp}, generation ${c.generation}): block means differ by ${c.mean.toFixed(2)} on average, ${c.worst.toFixed(2)} at worst${at}`;
+}
+
+/** A rate as the HUD writes it ("0", "950", "12.3 k", "1.85 M"; fmtRate)
+ *  read back: its value and how far rounding to the digits shown may have
+ *  moved it from the rate it shows. */
+export function readRate(text) {
+  const m = /^([0-9]+(?:\.([0-9]+))?) ?([kMG]?)$/.exec(text.trim());
+  if (!m) throw new Error(`not a rate: ${JSON.stringify(text)}`);
+  const unit = { "": 1, k: 1e3, M: 1e6, G: 1e9 }[m[3]];
+  return { value: Number(m[1]) * unit, slack: 0.5 * 10 ** -(m[2] ? m[2].length : 0) * unit };
+}
+
+/** Whether the HUD's `text` shows the rate `rate` (to the digits shown). */
+export function showsRate(text, rate) {
+  const { value, slack } = readRate(text);
+  return Math.abs(value - rate) <= slack * (1 + 1e-9) + 1e-9;
+}
+
+/** Every visible control of the page (top bar, panels, touch pad) that a
+ *  user cannot reach: cut off at the sides, hidden under something else, or
+ *  outside the viewport with no scrollable panel to bring it in. Scrolls
+ *  each control into view as a user would; returns what failed and why. */
+export async function unreachableControls(page) {
+  return page.evaluate(() => {
+    const vw = window.innerWidth;
+    const vh = window.innerHeight;
+    const slack = 0.5;
+    const problems = [];
+    const name = (c) => `${c.tagName.toLowerCase()}#${c.id || c.dataset.key || c.textContent.trim()}`;
+    const clips = (a) => ["overflow", "overflowX", "overflowY"].some((k) => getComputedStyle(a)[k] !== "visible");
+    if (document.scrollingElement.scrollWidth > vw + slack) {
+      problems.push(`the page scrolls sideways (${document.scrollingElement.scrollWidth} px wide in ${vw})`);
+    }
+    const controls = [...document.querySelectorAll("#bar :is(button, input, select), #panels :is(button, input, select), #touchpad button")]
+      .filter((c) => c.getClientRects().length > 0); // displayed (not in a hidden element)
+    for (const c of controls) {
+      c.scrollIntoView({ block: "nearest", inline: "nearest" });
+      const r = c.getBoundingClientRect();
+      if (r.left < -slack || r.right > vw + slack || r.top < -slack || r.bottom > vh + slack) {
+        problems.push(`${name(c)} at ${Math.round(r.left)},${Math.round(r.top)}-${Math.round(r.right)},${Math.round(r.bottom)} is outside the ${vw}x${vh} viewport`);
+        continue;
+      }
+      for (let a = c.parentElement; a && a !== document.body; a = a.parentElement) {
+        if (!clips(a)) continue;
+        const b = a.getBoundingClientRect();
+        const left = b.left + a.clientLeft;
+        const top = b.top + a.clientTop;
+        if (a.scrollLeft !== 0 || a.scrollWidth > a.clientWidth + 1) {
+          problems.push(`#${a.id || a.tagName} scrolls sideways (${a.scrollWidth} px of content in ${a.clientWidth})`);
+        }
+        if (r.left < left - slack || r.right > left + a.clientWidth + slack || r.top < top - slack || r.bottom > top + a.clientHeight + slack) {
+          problems.push(`${name(c)} is cut off by #${a.id || a.tagName}`);
+        }
+      }
+      const x = Math.min(Math.max(r.left + r.width / 2, 0), vw - 1);
+      const y = Math.min(Math.max(r.top + r.height / 2, 0), vh - 1);
+      const hit = document.elementFromPoint(x, y);
+      if (!(hit === c || c.contains(hit) || (hit && hit.control === c) || (hit && hit.tagName === "LABEL" && hit.contains(c)))) {
+        problems.push(`${name(c)} is covered by ${hit ? name(hit) : "nothing"}`);
+      }
+    }
+    return { count: controls.length, problems: [...new Set(problems)] };
+  });
+}
