@@ -342,6 +342,13 @@ static inline int ggx_sample(__global const float *T, float4 p, float4 g, float3
     float3 w;
 #if HAS_TRANSMISSION
     if (choice < L.p_glass) {
+        if (!L.glass.thin && fabs(L.glass.eta - 1.0f) < as_float(GLASS_MATCHED_BITS)) {
+            /* Index-matched: straight through, tinted (Glass::matched). */
+            *wi = -wo;
+            *weight = base;
+            *pdf_out = 0.0f;
+            return 1;
+        }
         if (!glass_sample(&L.glass, wo, choice / L.p_glass, u, &w)) {
             return 0;
         }

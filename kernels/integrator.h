@@ -208,6 +208,22 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
 #else
         MatRef m = &materials[sf.material];
 #endif
+        /* Geometric side first: a ray that reaches a solid's surface from
+         * inside has crossed it, and what it carries is absorbed on the way
+         * (Beer-Lambert, integrator.rs). */
+        int arriving = dot3(d, sf.ng) < 0.0f;
+#if HAS_VOLUME
+        if (!arriving && (m->absorb.x != 0.0f || m->absorb.y != 0.0f || m->absorb.z != 0.0f)) {
+            float3 kept = exp(-m->absorb.xyz * hit.t);
+            beta *= kept;
+            emit *= kept;
+#if FEATURES
+            if (!guided) {
+                tint *= kept;
+            }
+#endif
+        }
+#endif
         if (m->emissive) {
             float w = 1.0f;
 #if HAS_MIS
@@ -218,7 +234,6 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             l += emit * m->emission.xyz * w;
         }
         /* Geometric and shading normals on the side the ray came from. */
-        int arriving = dot3(d, sf.ng) < 0.0f;
         float3 nl = arriving ? sf.ng : -sf.ng;
         float3 ns = !sf.smooth ? nl : (dot3(sf.ns, nl) < 0.0f ? -sf.ns : sf.ns);
 #if FEATURES

@@ -81,6 +81,7 @@ fn an_albedo_one_glass_sphere_in_the_furnace_is_invisible() {
                 ior: 1.5,
                 albedo: None,
                 fresnel,
+                attenuation: None,
                 emission: None,
                 normal: None,
             }),

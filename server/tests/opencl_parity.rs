@@ -386,7 +386,8 @@ fn the_bvh_nearest_hit_agrees_on_1e5_rays() {
 
 /// A scene of spheres, one per metallic-roughness corner the kernel must
 /// match: metal, dielectric over a coloured base, a mix, a near-mirror,
-/// rough glass, glass mixed with the coated base, a thin wall.
+/// rough glass, glass mixed with the coated base, a thin wall, index-
+/// matched glass (a delta straight through).
 const PBR_SCENE: &str = r#"{
   "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40},
   "materials": {
@@ -397,6 +398,7 @@ const PBR_SCENE: &str = r#"{
     "frosted": {"type": "pbr", "base_color": [0.9, 0.8, 0.6], "metallic": 0, "roughness": 0.4, "transmission": 1},
     "half": {"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0.2, "roughness": 0.2, "transmission": 0.5, "ior": 1.33},
     "thin": {"type": "pbr", "metallic": 0, "roughness": 0.3, "transmission": 1, "thin": true},
+    "matched": {"type": "pbr", "base_color": [0.5, 0.9, 0.7], "metallic": 0, "roughness": 0.5, "transmission": 0.7, "ior": 1.0},
     "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 4, 4]}
   },
   "objects": [
@@ -407,6 +409,7 @@ const PBR_SCENE: &str = r#"{
     {"type": "sphere", "center": [-1, 1, 0], "radius": 0.5, "material": "frosted"},
     {"type": "sphere", "center": [1, 1, 0], "radius": 0.5, "material": "half"},
     {"type": "sphere", "center": [0, 1, 0], "radius": 0.4, "material": "thin"},
+    {"type": "sphere", "center": [0, -1, 0], "radius": 0.4, "material": "matched"},
     {"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "material": "light"}
   ]
 }"#;
@@ -513,7 +516,7 @@ fn scattering_agrees_for_every_material() {
             );
         }
     }
-    assert_eq!(seen.len(), 11, "every material kind was checked: {seen:?}");
+    assert_eq!(seen.len(), 12, "every material kind was checked: {seen:?}");
 }
 
 #[test]

@@ -16,7 +16,10 @@
 //!   roughness 1 (no transmission) -> diffuse (the renderer's exact
 //!   corners); else the metallic-roughness model (`pbr`) with the file's
 //!   factors, ior and transmission (rough glass: a thin wall without a
-//!   volume thickness, as glTF defines; volume attenuation is noted). The albedo is the base colour factor's rgb; emission is the emissive factor
+//!   volume thickness, as glTF defines). A solid's volume attenuation
+//!   (colour and distance) is its Beer-Lambert absorption, on glass and
+//!   `pbr` alike; a thickness texture is noted. The albedo is the base
+//!   colour factor's rgb; emission is the emissive factor
 //!   times KHR_materials_emissive_strength. Texture maps (`gltf_maps`):
 //!   base colour, metallic-roughness, normal and emissive; `alphaMode` MASK
 //!   and BLEND with the base colour's alpha (opaque where it is 1

@@ -82,10 +82,13 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     let solid = volume
         .as_ref()
         .is_some_and(|v| widen(v.thickness_factor()) > 0.0);
+    let mut attenuation = None;
     if let Some(v) = volume.as_ref().filter(|_| t > 0.0) {
-        let colour = v.attenuation_color();
-        if v.attenuation_distance().is_finite() && colour.iter().any(|&c| c < 1.0) {
-            ignored.push("volume attenuation".to_owned());
+        let color = v.attenuation_color().map(|c| widen(c).clamp(0.0, 1.0));
+        let distance = widen(v.attenuation_distance());
+        // The default distance is infinite: no absorption.
+        if solid && distance.is_finite() && distance > 0.0 && color.iter().any(|&c| c < 1.0) {
+            attenuation = Some(super::Attenuation { color, distance });
         }
         if v.thickness_texture().is_some() {
             ignored.push("thickness texture".to_owned());
@@ -136,6 +139,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         Material::Glass {
             ior,
             albedo: Some(common::albedo("base colour", rgb, &mut notes)),
+            attenuation,
             emission,
         }
     } else if metallic == 1.0 && roughness == 0.0 && maps.metallic_roughness.is_none() {
@@ -159,6 +163,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
             },
             transmission: t,
             thin: t > 0.0 && !solid,
+            attenuation,
             emission,
         }
     };

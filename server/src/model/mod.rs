@@ -86,6 +86,8 @@ pub enum Material {
         ior: f64,
         /// Tint of light passing through (None: clear).
         albedo: Option<[f64; 3]>,
+        /// Absorption inside the solid (None: clear).
+        attenuation: Option<Attenuation>,
         emission: Option<[f64; 3]>,
     },
     Pbr {
@@ -99,8 +101,19 @@ pub enum Material {
         /// That glass is a thin wall (glTF: no `KHR_materials_volume`, or
         /// thickness 0).
         thin: bool,
+        /// Absorption inside the solid (None: clear; never on a thin wall).
+        attenuation: Option<Attenuation>,
         emission: Option<[f64; 3]>,
     },
+}
+
+/// `KHR_materials_volume`'s Beer-Lambert absorption inside a solid: light
+/// that travels `distance` (in world units) through it keeps `color` of
+/// itself (each component in (0, 1]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attenuation {
+    pub color: [f64; 3],
+    pub distance: f64,
 }
 
 /// A material's texture maps (each format's module says which it reads).

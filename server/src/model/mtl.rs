@@ -265,6 +265,7 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
         Material::Glass {
             ior,
             albedo,
+            attenuation: None,
             emission,
         }
     } else if mirror {
@@ -291,6 +292,7 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
             },
             transmission: 0.0,
             thin: false,
+            attenuation: None,
             emission,
         }
     } else {

@@ -179,6 +179,7 @@ mod tests {
             emission: Vec3A::ZERO,
             emissive: false,
             maps: 0,
+            absorb: Vec3A::ZERO,
         }
     }
 

@@ -36,6 +36,9 @@ pub struct SurfaceMaterial {
     pub emissive: bool,
     /// Its texture maps in `World::maps`, or [`NO_MAPS`].
     pub maps: u32,
+    /// The absorption coefficient inside (per scene unit; zero: clear):
+    /// a ray that reaches this surface from inside has crossed the solid.
+    pub absorb: Vec3A,
 }
 
 fn f32x3(v: DVec3) -> Vec3A {
@@ -69,6 +72,9 @@ impl SurfaceMaterial {
             emission: f32x3(m.emission),
             emissive: m.is_emissive(),
             maps: NO_MAPS,
+            absorb: m.attenuation.map_or(Vec3A::ZERO, |a| {
+                Vec3A::from(a.coefficient().as_vec3()).min(Vec3A::splat(f32::MAX))
+            }),
         }
     }
 }
@@ -221,6 +227,7 @@ mod tests {
             emission: Vec3A::ZERO,
             emissive: false,
             maps: NO_MAPS,
+            absorb: Vec3A::ZERO,
         };
         let d = Vec3A::new(0.6, -0.8, 0.0);
         let n = Vec3A::Y;

@@ -19,7 +19,7 @@ use crate::render::scene::{
     builtin, CameraJson, EnvMapJson, EnvironmentJson, GlassJson, ImportJson, LoadedModel,
     MaterialJson, ObjectJson, PbrJson, ProjectionJson, SceneJson, SurfaceJson, BUILTIN_NAMES,
 };
-use crate::render::scene::{FresnelJson, MapSlot, Maps, Scene, SceneError};
+use crate::render::scene::{AttenuationJson, FresnelJson, MapSlot, Maps, Scene, SceneError};
 use crate::render::shape::MeshData;
 use crate::render::texture::{Sampling, Texture, UvTransform, Wrap};
 use std::path::Path;
@@ -249,11 +249,13 @@ fn material_json(m: model::Material) -> MaterialJson {
         model::Material::Glass {
             ior,
             albedo,
+            attenuation,
             emission,
         } => MaterialJson::Glass(GlassJson {
             ior,
             albedo: albedo.map(Into::into),
             fresnel: FresnelJson::Exact,
+            attenuation: attenuation.map(attenuation_json),
             emission: emission.map(Into::into),
             normal: None,
         }),
@@ -264,6 +266,7 @@ fn material_json(m: model::Material) -> MaterialJson {
             ior,
             transmission,
             thin,
+            attenuation,
             emission,
         } => MaterialJson::Pbr(PbrJson {
             base_color: base_color.into(),
@@ -272,9 +275,17 @@ fn material_json(m: model::Material) -> MaterialJson {
             ior,
             transmission,
             thin,
+            attenuation: attenuation.map(attenuation_json),
             emission: emission.map(Into::into),
             normal: None,
         }),
+    }
+}
+
+fn attenuation_json(a: model::Attenuation) -> AttenuationJson {
+    AttenuationJson {
+        color: a.color,
+        distance: a.distance,
     }
 }
 

@@ -48,6 +48,7 @@ fn glass(ior: f64, albedo: Option<[f64; 3]>) -> Material {
     Material::Glass {
         ior,
         albedo,
+        attenuation: None,
         emission: None,
     }
 }
@@ -252,6 +253,7 @@ fn mtl_rules_map_every_material() {
                 ior: 1.5,
                 transmission: 0.0,
                 thin: false,
+                attenuation: None,
                 emission: None,
             },
             &diffuse([0.8; 3], None),
@@ -317,6 +319,7 @@ fn mtl_pbr_keys_make_the_metallic_roughness_model() {
                     ior: 1.45,
                     transmission: 0.0,
                     thin: false,
+                    attenuation: None,
                     emission: None,
                 }
             ),

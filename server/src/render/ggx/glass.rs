@@ -142,6 +142,10 @@ fn split(wo: Vec3A, h: Vec3A, eta: f32) -> (f32, Vec3A) {
     (s.reflectance, wt)
 }
 
+/// How near 1 the ratio of indices makes a solid index-matched
+/// ([`Glass::matched`]): its Fresnel reflectance is below 3e-7 there.
+pub const MATCHED: f32 = 1e-3;
+
 /// The lobe at one shading point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Glass {
@@ -179,6 +183,14 @@ impl Glass {
             scale,
             thin: true,
         }
+    }
+
+    /// Index-matched (a solid within [`MATCHED`] of its surroundings'
+    /// index): light crosses unbent and unreflected, a delta lobe (where
+    /// the microfacet BTDF's half vector is undefined).
+    #[inline(always)]
+    pub fn matched(&self) -> bool {
+        !self.thin && (self.eta - 1.0).abs() < MATCHED
     }
 
     /// [`eval_cos`](Self::eval_cos) of a thin wall.

@@ -398,7 +398,7 @@ pub struct Sample {
     /// BSDF cos / pdf.
     pub weight: Vec3A,
     /// The density it was drawn with ([`pdf`]), for multiple importance
-    /// sampling.
+    /// sampling (0 for index-matched glass's delta).
     pub pdf: f32,
 }
 
@@ -420,6 +420,15 @@ pub fn sample(
     }
     let lobes = Lobes::new(t, p, base, wo, entering);
     let wi = if choice < lobes.p_glass {
+        if lobes.glass.matched() {
+            // Straight through, tinted: the glass's share of eval over the
+            // probability of picking it. A delta: no density to weigh.
+            return Some(Sample {
+                wi: -wo,
+                weight: base,
+                pdf: 0.0,
+            });
+        }
         lobes.glass.sample(wo, choice / lobes.p_glass, (u1, u2))?
     } else {
         let choice = (choice - lobes.p_glass) / (1.0 - lobes.p_glass);

@@ -304,37 +304,49 @@ fn sampling_follows_the_pdf_chi_square() {
 
 #[test]
 fn weights_and_densities_are_finite_from_every_angle() {
-    // Grazing, normal and everything between, both sides, every mix: a
-    // sample is either no contribution or a finite weight and density.
+    // Grazing, normal and everything between, both sides, every mix, and
+    // indices at and near 1 (where refraction's half vector is undefined:
+    // index-matched glass is a delta straight through): a sample is either
+    // no contribution or a finite weight and density.
     let t = tables();
     let base = Vec3A::new(0.9, 0.6, 0.3);
-    for r in [0.0f32, 0.02, 0.3, 1.0] {
-        for (metallic, transmission) in [(0.0, 1.0), (0.0, 0.5), (0.4, 0.6), (0.0, 0.0)] {
-            let p = Pbr::new(metallic, r, 1.5).transmitting(transmission);
-            for k in 0..200_000u64 {
-                let mut s = Sampler::new(21, k, 0);
-                let (u1, u2) = s.next_2d();
-                let wo = dir(u1.max(1e-7), u2 * std::f32::consts::TAU);
-                let entering = k % 2 == 0;
-                let choice = s.next_f32();
-                let (v1, v2) = s.next_2d();
-                let wi = dir(v1 * 2.0 - 1.0, v2 * std::f32::consts::TAU);
-                let lobes = Lobes::new(t, &p, base, wo, entering);
-                let (f, d) = (
-                    eval_cos(t, &p, base, &lobes, wo, wi),
-                    pdf(&p, &lobes, wo, wi),
-                );
-                assert!(
-                    f.is_finite() && d.is_finite(),
-                    "roughness {r} metallic {metallic} transmission {transmission} \
-                     wo {wo} wi {wi} entering {entering}: eval {f} pdf {d}"
-                );
-                if let Some(x) = sample(t, &p, base, (wo, entering), choice, s.next_2d()) {
+    for (ior, n) in [
+        (1.5, 200_000u64),
+        (1.0, 40_000),
+        (1.0005, 40_000),
+        (1.0011, 40_000),
+        (1.01, 40_000),
+    ] {
+        for r in [0.0f32, 0.02, 0.3, 1.0] {
+            for (metallic, transmission) in [(0.0, 1.0), (0.0, 0.5), (0.4, 0.6), (0.0, 0.0)] {
+                let p = Pbr::new(metallic, r, ior).transmitting(transmission);
+                for k in 0..n {
+                    let mut s = Sampler::new(21, k, 0);
+                    let (u1, u2) = s.next_2d();
+                    let wo = dir(u1.max(1e-7), u2 * std::f32::consts::TAU);
+                    let entering = k % 2 == 0;
+                    let choice = s.next_f32();
+                    let (v1, v2) = s.next_2d();
+                    let wi = dir(v1 * 2.0 - 1.0, v2 * std::f32::consts::TAU);
+                    let lobes = Lobes::new(t, &p, base, wo, entering);
+                    let (f, d) = (
+                        eval_cos(t, &p, base, &lobes, wo, wi),
+                        pdf(&p, &lobes, wo, wi),
+                    );
                     assert!(
-                        x.weight.is_finite() && x.pdf.is_finite() && x.pdf > 0.0,
+                        f.is_finite() && d.is_finite(),
                         "roughness {r} metallic {metallic} transmission {transmission} \
+                     wo {wo} wi {wi} entering {entering}: eval {f} pdf {d}"
+                    );
+                    if let Some(x) = sample(t, &p, base, (wo, entering), choice, s.next_2d()) {
+                        let matched =
+                            ior < 1.001 && x.wi == -wo && x.weight == base && x.pdf == 0.0;
+                        assert!(
+                        x.weight.is_finite() && x.pdf.is_finite() && (x.pdf > 0.0 || matched),
+                        "ior {ior} roughness {r} metallic {metallic} transmission {transmission} \
                          wo {wo} entering {entering}: {x:?}"
                     );
+                    }
                 }
             }
         }

@@ -195,12 +195,22 @@ impl Path {
             textured = world.shade(untextured, &hit, &mut s);
             &textured
         };
+        // A ray that reaches a solid's surface from inside has crossed it:
+        // what it carries is absorbed on the way (Beer-Lambert).
+        let entering = ray.dir.dot(s.ng) < 0.0;
+        if !entering && m.absorb != Vec3A::ZERO {
+            let kept = (-m.absorb * hit.t).exp();
+            self.beta *= kept;
+            self.emit *= kept;
+            if !self.guided {
+                self.tint *= kept;
+            }
+        }
         if m.emissive {
             let emitter = || world.lights.index_of(s.object, s.prim);
             self.l += self.emission(world, settings, m.emission, emitter, s.p);
         }
         // Geometric and shading normals on the side the ray came from.
-        let entering = ray.dir.dot(s.ng) < 0.0;
         let nl = if entering { s.ng } else { -s.ng };
         let ns = if !s.smooth {
             nl

@@ -207,6 +207,9 @@ pub struct PbrJson {
     /// That glass is a thin wall (light passes unrefracted), not a solid.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub thin: bool,
+    /// Absorption inside the solid (a thin wall has none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attenuation: Option<AttenuationJson>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -229,6 +232,16 @@ fn default_ior() -> f64 {
     1.5
 }
 
+/// Beer-Lambert absorption inside a transmitting solid
+/// (`KHR_materials_volume`): light that travels `distance` scene units
+/// through it keeps `color` of itself.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AttenuationJson {
+    pub color: [f64; 3],
+    pub distance: f64,
+}
+
 /// Fields of `diffuse` and `mirror` materials.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -249,6 +262,9 @@ pub struct GlassJson {
     pub albedo: Option<ColorInput>,
     #[serde(default)]
     pub fresnel: FresnelJson,
+    /// Absorption inside the solid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attenuation: Option<AttenuationJson>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -1,11 +1,13 @@
 //! Material JSON -> validated [`Material`] (with the textures its fields
 //! name), and back; the error for a material name a scene does not define.
 
-use super::json::{FresnelJson, GlassJson, MaterialJson, PbrJson, SurfaceJson};
+use super::json::{AttenuationJson, FresnelJson, GlassJson, MaterialJson, PbrJson, SurfaceJson};
 use super::map_json::{ColorInput, MapSource, NormalJson, ScalarInput, TextureJson, WrapMode};
 use super::resolve::{ModelSource, Resolver};
 use super::values::{finite, vec3};
-use super::{Fresnel, MapSlot, Maps, Material, MaterialKind, SceneError, MAX_EMISSION};
+use super::{
+    Attenuation, Fresnel, MapSlot, Maps, Material, MaterialKind, SceneError, MAX_EMISSION,
+};
 use crate::render::math::DVec3;
 use crate::render::texture::{Sampling, UvTransform, Wrap};
 use std::collections::BTreeMap;
@@ -22,6 +24,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
     let path = format!("materials.{name}");
     let white = ColorInput::Value([1.0; 3]);
     let mut maps = Maps::default();
+    let mut attenuation = None;
     let (kind, albedo, emission, normal) = match m {
         MaterialJson::Diffuse(SurfaceJson {
             albedo,
@@ -37,9 +40,13 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
             ior,
             albedo,
             fresnel,
+            attenuation: absorbs,
             emission,
             normal,
         }) => {
+            attenuation = absorbs
+                .map(|a| checked_attenuation(&path, &a))
+                .transpose()?;
             let ior = checked_ior(&path, *ior)?;
             let fresnel = match fresnel {
                 FresnelJson::Exact => Fresnel::Exact,
@@ -60,9 +67,19 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
             ior,
             transmission,
             thin,
+            attenuation: absorbs,
             emission,
             normal,
         }) => {
+            attenuation = absorbs
+                .map(|a| checked_attenuation(&path, &a))
+                .transpose()?;
+            if *thin && attenuation.is_some() {
+                return Err(SceneError::new(
+                    format!("{path}.attenuation"),
+                    "a thin wall has no inside to absorb in: drop `thin` or `attenuation`",
+                ));
+            }
             let unit = |field: &str, v: f64| {
                 let v = finite(&format!("{path}.{field}"), v)?;
                 if (0.0..=1.0).contains(&v) {
@@ -154,8 +171,29 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
         albedo,
         emission,
         maps,
+        attenuation,
         imported: false,
     })
+}
+
+/// Absorption with each colour component in [0, 1] and a distance > 0.
+fn checked_attenuation(path: &str, a: &AttenuationJson) -> Result<Attenuation> {
+    let at = |f: &str| format!("{path}.attenuation.{f}");
+    let color = vec3(&at("color"), a.color)?;
+    if color.min_element() < 0.0 || color.max_element() > 1.0 {
+        return Err(SceneError::new(
+            at("color"),
+            "components must be between 0 and 1 (the share of light kept over `distance`)",
+        ));
+    }
+    let distance = finite(&at("distance"), a.distance)?;
+    if !(distance > 0.0) {
+        return Err(SceneError::new(
+            at("distance"),
+            format!("must be > 0 (got {distance})"),
+        ));
+    }
+    Ok(Attenuation { color, distance })
 }
 
 /// Where a number field's value is: the field, or its texture's factor.
@@ -251,6 +289,10 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
     let emission = m.is_emissive().then(|| color(m.emission, &m.maps.emission));
     let normal = source(&m.maps.normal).map(|src| NormalJson::of(src, m.maps.normal_scale));
     let albedo = color(m.albedo, &m.maps.base_color);
+    let attenuation = m.attenuation.map(|a| AttenuationJson {
+        color: a.color.to_array(),
+        distance: a.distance,
+    });
     match m.kind {
         MaterialKind::Diffuse => MaterialJson::Diffuse(SurfaceJson {
             albedo,
@@ -269,6 +311,7 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
                 Fresnel::Exact => FresnelJson::Exact,
                 Fresnel::Schlick => FresnelJson::Schlick,
             },
+            attenuation,
             emission,
             normal,
         }),
@@ -285,6 +328,7 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             ior,
             transmission,
             thin,
+            attenuation,
             emission,
             normal,
         }),

@@ -54,9 +54,9 @@ pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
 pub use environment::EnvironmentMap;
 pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
-    CameraJson, EnvMapJson, EnvironmentJson, FresnelJson, GlassJson, ImportJson, MaterialJson,
-    MeshDataJson, ObjectJson, PbrJson, ProjectionJson, QuadJson, RotateJson, ScaleJson, SceneJson,
-    SkyJson, SphereJson, SurfaceJson, TransformJson,
+    AttenuationJson, CameraJson, EnvMapJson, EnvironmentJson, FresnelJson, GlassJson, ImportJson,
+    MaterialJson, MeshDataJson, ObjectJson, PbrJson, ProjectionJson, QuadJson, RotateJson,
+    ScaleJson, SceneJson, SkyJson, SphereJson, SurfaceJson, TransformJson,
 };
 pub use map_json::{
     ColorInput, MapSource, NormalJson, ScalarInput, TextureJson, UvTransformJson, WrapJson,
@@ -201,6 +201,8 @@ pub struct Material {
     pub emission: DVec3,
     /// Texture maps (`render::maps`): none for most materials.
     pub maps: Maps,
+    /// Absorption inside a transmitting solid (`glass`, `pbr`), or none.
+    pub attenuation: Option<Attenuation>,
     /// Came from a model file (named `file/material`); not written back
     /// to scene JSON, where the file brings it again.
     pub imported: bool,
@@ -209,6 +211,26 @@ pub struct Material {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+}
+
+/// Beer-Lambert absorption inside a transmitting solid
+/// (`KHR_materials_volume`): light that travels `distance` scene units
+/// through it keeps `color` of itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attenuation {
+    pub color: DVec3,
+    pub distance: f64,
+}
+
+impl Attenuation {
+    /// Least share of light kept over `distance`: a colour component of 0
+    /// keeps this much (a finite coefficient).
+    pub const MIN_KEPT: f64 = 1e-6;
+
+    /// The absorption coefficient per scene unit, -ln(color) / distance.
+    pub fn coefficient(&self) -> DVec3 {
+        -self.color.max(DVec3::splat(Self::MIN_KEPT)).map(f64::ln) / self.distance
     }
 }
 

@@ -280,6 +280,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         glass: true,
         ggx: true,
         transmission: true,
+        volume: true,
         schlick: true,
         exact: true,
         sphere_lights: true,

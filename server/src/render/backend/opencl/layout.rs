@@ -52,7 +52,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 38] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 39] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -73,6 +73,10 @@ pub const SHARED_CONSTANTS: [(&str, u32); 38] = [
     (
         "GLASS_IOR_SCALE_BITS",
         crate::render::ggx::glass::IOR_SCALE.to_bits(),
+    ),
+    (
+        "GLASS_MATCHED_BITS",
+        crate::render::ggx::glass::MATCHED.to_bits(),
     ),
     ("NO_OBJECT", NO_OBJECT),
     ("BVH_ROBUST_BITS", crate::render::bvh::ROBUST.to_bits()),
@@ -176,6 +180,8 @@ pub struct Material {
     pub pbr: [f32; 4],
     /// pbr: transmission, ior, 1 for a thin wall.
     pub glass: [f32; 4],
+    /// The absorption coefficient inside (w unused).
+    pub absorb: [f32; 4],
 }
 
 #[repr(C, align(16))]
@@ -249,7 +255,7 @@ pub struct Light {
 
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
-const _: () = assert!(std::mem::size_of::<Material>() == 80);
+const _: () = assert!(std::mem::size_of::<Material>() == 96);
 const _: () = assert!(std::mem::size_of::<Params>() == 208);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
@@ -435,6 +441,7 @@ pub fn pack(job: &RenderJob) -> Packed {
                 maps: m.maps,
                 pbr,
                 glass,
+                absorb: v4(m.absorb, 0.0),
             }
         })
         .collect();

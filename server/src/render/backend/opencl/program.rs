@@ -10,6 +10,7 @@ use super::layout::{
 use crate::render::job::RenderJob;
 use crate::render::light::EmitterShape;
 use crate::render::material::{Bsdf, NO_MAPS};
+use crate::render::math::Vec3A;
 use crate::render::sampler::SamplerKind;
 use crate::render::world::Geometry;
 use crate::render::Filter;
@@ -48,6 +49,8 @@ pub struct Features {
     pub ggx: bool,
     /// A `MAT_PBR` material transmits (rough glass).
     pub transmission: bool,
+    /// A material absorbs inside (Beer-Lambert).
+    pub volume: bool,
     pub schlick: bool,
     pub exact: bool,
     pub sphere_lights: bool,
@@ -147,6 +150,7 @@ impl Features {
             transmission: used
                 .iter()
                 .any(|m| matches!(m.bsdf, Bsdf::Pbr(p) if p.transmission > 0.0)),
+            volume: used.iter().any(|m| m.absorb != Vec3A::ZERO),
             schlick: glass_with(true),
             exact: glass_with(false),
             sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
@@ -196,7 +200,7 @@ impl Features {
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
-             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={}",
+             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={} -D HAS_VOLUME={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -227,6 +231,7 @@ impl Features {
             b(self.textures),
             b(self.alpha),
             b(self.transmission),
+            b(self.volume),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));
