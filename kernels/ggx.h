@@ -4,7 +4,8 @@
  * floats of A, as many of B, then TABLE_N averages of each (GGX_TABLE_LEN
  * floats); where a material transmits, the rough glass's table follows. A
  * material's pbr field holds (metallic, alpha, roughness, f0), its glass
- * field (transmission, ior, 1 for a thin wall). Directions are in the shading frame (z the
+ * field (transmission, ior, 1 for a thin wall), its coat field (clear coat
+ * weight, alpha, roughness). Directions are in the shading frame (z the
  * normal). */
 
 #if HAS_GGX
@@ -206,6 +207,14 @@ static inline int glass_sample(const GgxGlass *g, float3 wo, float choice, float
 }
 #endif
 
+#if HAS_COAT
+/* The clear coat at one shading point (ggx/coat.rs, Coat): weight 0 where
+ * there is none. */
+typedef struct {
+    float weight, alpha, roughness, e_o, e_avg, fms, keep, p;
+} GgxCoat;
+#endif
+
 typedef struct {
     float e_o, a_avg, b_avg;
     float3 fms_metal;
@@ -213,6 +222,9 @@ typedef struct {
 #if HAS_TRANSMISSION
     float p_glass;
     GgxGlass glass;
+#endif
+#if HAS_COAT
+    GgxCoat coat;
 #endif
 } GgxLobes;
 
@@ -224,9 +236,58 @@ static inline float ggx_mean3(float3 v) {
     return (v.x + v.y + v.z) * (1.0f / 3.0f);
 }
 
+#if HAS_COAT
+#define GGX_COAT_F0 0.04f
+
+/* Coat::new: the coat of k = (weight, alpha, roughness) seen from wo over
+ * a base that reflects base_albedo towards wo. */
+static inline GgxCoat ggx_coat(__global const float *T, float4 k, float3 wo, float base_albedo) {
+    GgxCoat c;
+    float a_o = ggx_at(T, 0u, wo.z, k.z);
+    float b_o = ggx_at(T, 1u, wo.z, k.z);
+    c.weight = k.x;
+    c.alpha = k.y;
+    c.roughness = k.z;
+    c.e_o = a_o + b_o;
+    c.e_avg = ggx_avg(T, 0u, k.z) + ggx_avg(T, 1u, k.z);
+    c.fms = ggx_fresnel_factor(GGX_COAT_F0 + (1.0f - GGX_COAT_F0) * (1.0f / 21.0f), c.e_avg);
+    float es_o = GGX_COAT_F0 * a_o + b_o + (1.0f - c.e_o) * c.fms;
+    float reflected = k.x * es_o;
+    c.keep = 1.0f - reflected;
+    c.p = fmin(fmax(reflected / fmax(reflected + c.keep * base_albedo, 1e-6f), 0.05f), 0.95f);
+    return c;
+}
+
+/* Coat::eval_cos: the coat's BSDF |cos| (weight included; white). */
+static inline float ggx_coat_eval_cos(__global const float *T, const GgxCoat *c, float3 wo, float3 wi) {
+    if (!(wi.z > 0.0f && wo.z > 0.0f)) {
+        return 0.0f;
+    }
+    float a = c->alpha;
+    float3 h = normalize3(wo + wi);
+    float ro = ggx_smith_r(wo, a);
+    float ri = ggx_smith_r(wi, a);
+    float spec = ggx_d(h, a) / (2.0f * (ro * wi.z + ri * wo.z));
+    float c5 = ggx_pow5(1.0f - fmin(fmax(dot3(wo, h), 0.0f), 1.0f));
+    float e_i = ggx_at(T, 0u, wi.z, c->roughness) + ggx_at(T, 1u, wi.z, c->roughness);
+    float ms = (1.0f - c->e_o) * (1.0f - e_i) * M_1_PI_F / fmax(1.0f - c->e_avg, 1e-6f);
+    return c->weight * ((GGX_COAT_F0 + (1.0f - GGX_COAT_F0) * c5) * spec + c->fms * ms) * wi.z;
+}
+
+/* Coat::pdf: the density of wi by the coat's visible normals. */
+static inline float ggx_coat_pdf(const GgxCoat *c, float3 wo, float3 wi) {
+    if (!(wi.z > 0.0f && wo.z > 0.0f)) {
+        return 0.0f;
+    }
+    float3 h = normalize3(wo + wi);
+    return ggx_d(h, c->alpha) / (2.0f * (wo.z + ggx_smith_r(wo, c->alpha)));
+}
+#endif
+
 /* The lobes seen from wo on a surface reached from outside (entering) or
  * inside; g: the material's glass field. */
-static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, float3 base, float3 wo, int entering) {
+static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, float4 k, float3 base, float3 wo,
+                                 int entering) {
     GgxLobes L;
     float f0 = p.w;
     float metallic = p.x;
@@ -262,8 +323,25 @@ static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, fl
     }
 #else
     (void)g;
-    (void)entering;
 #endif
+#if HAS_COAT
+    /* The coat faces outwards: both sides of an opaque surface or a thin
+     * wall, the outside of a transmitting solid. */
+    float p_glass = 0.0f;
+    int thin = 0;
+#if HAS_TRANSMISSION
+    p_glass = L.p_glass;
+    thin = L.glass.thin;
+#endif
+    L.coat.weight = 0.0f;
+    if (k.x > 0.0f && (entering || p_glass == 0.0f || thin)) {
+        float below = (spec + rest) * (1.0f - p_glass) + p_glass;
+        L.coat = ggx_coat(T, k, wo, below);
+    }
+#else
+    (void)k;
+#endif
+    (void)entering;
     return L;
 }
 
@@ -307,10 +385,17 @@ static inline float3 ggx_eval_cos(__global const float *T, float4 p, float4 g, f
         out = ((float3)(rt.x) + base * rt.y) * L->p_glass;
     }
 #endif
-    return out + ggx_eval_reflection(T, p, g, base, L, wo, wi);
+    out += ggx_eval_reflection(T, p, g, base, L, wo, wi);
+#if HAS_COAT
+    if (L->coat.weight > 0.0f) {
+        out = out * L->coat.keep + (float3)(ggx_coat_eval_cos(T, &L->coat, wo, wi));
+    }
+#endif
+    return out;
 }
 
-static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
+/* pdf_under_coat: the density of the lobes under the coat. */
+static inline float ggx_pdf_under_coat(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
     if (!(wo.z > 0.0f)) {
         return 0.0f;
     }
@@ -330,22 +415,50 @@ static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
     return (L->p_spec * vndf + (1.0f - L->p_spec) * wi.z * M_1_PI_F) * rest + glass;
 }
 
+/* The sampling density of wi (solid angle) from wo (ggx/mod.rs, pdf). */
+static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
+    float under = ggx_pdf_under_coat(p, L, wo, wi);
+#if HAS_COAT
+    if (L->coat.weight > 0.0f) {
+        return L->coat.p * ggx_coat_pdf(&L->coat, wo, wi) + (1.0f - L->coat.p) * under;
+    }
+#endif
+    return under;
+}
+
 /* A direction from wo (shading frame) on a surface reached from outside
  * (entering) or inside, *weight = BSDF |cos| / pdf and *pdf its density;
  * returns 0 where the sample leaves on the wrong side (no contribution). */
-static inline int ggx_sample(__global const float *T, float4 p, float4 g, float3 base, float3 wo, int entering,
-                             float choice, float2 u, float3 *wi, float3 *weight, float *pdf_out) {
+static inline int ggx_sample(__global const float *T, float4 p, float4 g, float4 k, float3 base, float3 wo,
+                             int entering, float choice, float2 u, float3 *wi, float3 *weight, float *pdf_out) {
     if (!(wo.z > 0.0f)) {
         return 0;
     }
-    GgxLobes L = ggx_lobes(T, p, g, base, wo, entering);
+    GgxLobes L = ggx_lobes(T, p, g, k, base, wo, entering);
     float3 w;
+    int drawn = 0;
+    float under = 1.0f; /* what the coat lets through over 1 - its probability */
+#if HAS_COAT
+    if (L.coat.weight > 0.0f) {
+        if (choice < L.coat.p) {
+            w = ggx_reflect(wo, ggx_visible_normal(wo, L.coat.alpha, u));
+            if (!(w.z > 0.0f)) {
+                return 0;
+            }
+            drawn = 1;
+        } else {
+            choice = (choice - L.coat.p) / (1.0f - L.coat.p);
+            under = L.coat.keep / (1.0f - L.coat.p);
+        }
+    }
+#endif
+    if (!drawn) {
 #if HAS_TRANSMISSION
     if (choice < L.p_glass) {
         if (!L.glass.thin && fabs(L.glass.eta - 1.0f) < as_float(GLASS_MATCHED_BITS)) {
             /* Index-matched: straight through, tinted (Glass::matched). */
             *wi = -wo;
-            *weight = base;
+            *weight = base * under;
             *pdf_out = 0.0f;
             return 1;
         }
@@ -368,6 +481,8 @@ static inline int ggx_sample(__global const float *T, float4 p, float4 g, float3
         return 0;
     }
     }
+    }
+    (void)under;
     float pdf = ggx_pdf(p, &L, wo, w);
     if (!(pdf > 0.0f)) {
         return 0;

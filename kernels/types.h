@@ -57,6 +57,7 @@ typedef struct {
     float4 pbr;      /* MAT_PBR: metallic, alpha, roughness, f0 (ggx.h) */
     float4 glass;    /* MAT_PBR: transmission, ior, thin wall (ggx.h) */
     float4 absorb;   /* absorption per unit inside (HAS_VOLUME); w unused */
+    float4 coat;     /* MAT_PBR: clear coat weight, alpha, roughness (HAS_COAT) */
 } Material;
 
 /* A material's texture slot (opencl/textures.rs, MapSlot): its UV
@@ -221,6 +222,7 @@ typedef struct {
 #define HAS_GGX 1
 #define HAS_TRANSMISSION 1
 #define HAS_VOLUME 1
+#define HAS_COAT 1
 #define HAS_SCHLICK 1
 #define HAS_EXACT 1
 #define HAS_SPHERE_LIGHTS 1

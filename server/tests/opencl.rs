@@ -27,7 +27,7 @@ fn shared_structs_have_the_same_size_on_the_device() {
     let sizes = d.device_layout_sizes().expect("layout kernel");
     assert_eq!(
         sizes,
-        [96, 96, 208, 128, 112, 224, 48],
+        [96, 112, 208, 128, 112, 224, 48],
         "Object, Material, Params, BvhNode, Light, Instance, TriVerts as the device compiler sees them"
     );
 }
@@ -355,6 +355,9 @@ fn every_feature_combination_builds() {
                         transmission: lights == 3,
                         // Absorption inside with glass or rough glass.
                         volume: (glass && lights == 0) || lights == 3,
+                        // A clear coat with the metallic-roughness code,
+                        // with and without rough glass.
+                        coat: lights % 2 == 1 && materials % 2 == 1,
                         schlick,
                         exact,
                         sphere_lights: lights & 1 != 0,

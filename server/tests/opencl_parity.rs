@@ -387,7 +387,8 @@ fn the_bvh_nearest_hit_agrees_on_1e5_rays() {
 /// A scene of spheres, one per metallic-roughness corner the kernel must
 /// match: metal, dielectric over a coloured base, a mix, a near-mirror,
 /// rough glass, glass mixed with the coated base, a thin wall, index-
-/// matched glass (a delta straight through).
+/// matched glass (a delta straight through), clear coats over a mix and
+/// over rough glass.
 const PBR_SCENE: &str = r#"{
   "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40},
   "materials": {
@@ -399,6 +400,8 @@ const PBR_SCENE: &str = r#"{
     "half": {"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0.2, "roughness": 0.2, "transmission": 0.5, "ior": 1.33},
     "thin": {"type": "pbr", "metallic": 0, "roughness": 0.3, "transmission": 1, "thin": true},
     "matched": {"type": "pbr", "base_color": [0.5, 0.9, 0.7], "metallic": 0, "roughness": 0.5, "transmission": 0.7, "ior": 1.0},
+    "coated": {"type": "pbr", "base_color": [0.6, 0.1, 0.1], "metallic": 0.3, "roughness": 0.6, "clearcoat": 0.8, "clearcoat_roughness": 0.1},
+    "lacquer": {"type": "pbr", "metallic": 0, "roughness": 0.3, "transmission": 1, "clearcoat": 1, "clearcoat_roughness": 0.3},
     "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 4, 4]}
   },
   "objects": [
@@ -410,6 +413,8 @@ const PBR_SCENE: &str = r#"{
     {"type": "sphere", "center": [1, 1, 0], "radius": 0.5, "material": "half"},
     {"type": "sphere", "center": [0, 1, 0], "radius": 0.4, "material": "thin"},
     {"type": "sphere", "center": [0, -1, 0], "radius": 0.4, "material": "matched"},
+    {"type": "sphere", "center": [-1, -1, 0], "radius": 0.4, "material": "coated"},
+    {"type": "sphere", "center": [1, -1, 0], "radius": 0.4, "material": "lacquer"},
     {"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "material": "light"}
   ]
 }"#;
@@ -462,6 +467,7 @@ fn scattering_agrees_for_every_material() {
                 .expect("run");
             let mut decisions = 0;
             let mut loose = 0;
+            let mut loose_dirs = 0;
             for (i, (dir, normal)) in dirs.iter().enumerate() {
                 let entering = dir.dot(*normal) < 0.0;
                 let nl = if entering { *normal } else { -*normal };
@@ -494,7 +500,14 @@ fn scattering_agrees_for_every_material() {
                 }
                 assert_eq!(r[6] != 0.0, cpu.specular, "{kind}: item {i}: specular");
                 let gap = (device_dir - cpu.dir).abs().max_element();
-                if gap > if pbr { 1e-5 } else { 1e-6 } {
+                // A narrow lobe's visible normal near the edge of its cap
+                // cancels digits (z + v.z): a few ulps in, 1e-5 out
+                // (measured on PoCL: 1 of 10,000 under a coat of alpha 0.01).
+                if pbr && gap > 1e-5 && gap <= 1e-4 {
+                    loose_dirs += 1;
+                    continue;
+                }
+                if gap > if pbr { 1e-4 } else { 1e-6 } {
                     // A reflect/refract choice on a Fresnel value within an
                     // ulp of the random number may go the other way.
                     decisions += 1;
@@ -514,9 +527,13 @@ fn scattering_agrees_for_every_material() {
                 loose <= 20,
                 "{kind}: {loose} of {n} weights differ by more than 1e-4"
             );
+            assert!(
+                loose_dirs <= 3,
+                "{kind}: {loose_dirs} of {n} directions differ by 1e-5 to 1e-4"
+            );
         }
     }
-    assert_eq!(seen.len(), 12, "every material kind was checked: {seen:?}");
+    assert_eq!(seen.len(), 14, "every material kind was checked: {seen:?}");
 }
 
 #[test]

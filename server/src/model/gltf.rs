@@ -52,7 +52,8 @@ const ID4: M4 = [
 ];
 
 /// Extensions whose content is read.
-const SUPPORTED: [&str; 6] = [
+const SUPPORTED: [&str; 7] = [
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_texture_transform",
     "KHR_materials_transmission",

@@ -102,6 +102,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     {
         ignored.push("transmission texture".to_owned());
     }
+    let (clearcoat, clearcoat_roughness) = clearcoat(m, &mut notes, &mut ignored);
     let mut maps = maps;
     let alpha = widen(base[3]);
     maps.alpha = if alpha.is_finite() {
@@ -125,8 +126,10 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         AlphaMode::Blend => super::AlphaMode::Opaque,
     };
 
-    // Smooth, clear, whole transmission is the `glass` corner of the model.
-    let smooth_glass = solid
+    // Smooth, clear, whole transmission is the `glass` corner of the model
+    // (and the other corners likewise only without a coat).
+    let smooth_glass = clearcoat == 0.0
+        && solid
         && t == 1.0
         && roughness == 0.0
         && metallic == 0.0
@@ -142,12 +145,21 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
             attenuation,
             emission,
         }
-    } else if metallic == 1.0 && roughness == 0.0 && maps.metallic_roughness.is_none() {
+    } else if metallic == 1.0
+        && roughness == 0.0
+        && clearcoat == 0.0
+        && maps.metallic_roughness.is_none()
+    {
         Material::Mirror {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
         }
-    } else if metallic == 0.0 && roughness == 1.0 && t == 0.0 && maps.metallic_roughness.is_none() {
+    } else if metallic == 0.0
+        && roughness == 1.0
+        && t == 0.0
+        && clearcoat == 0.0
+        && maps.metallic_roughness.is_none()
+    {
         Material::Diffuse {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
@@ -164,6 +176,8 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
             transmission: t,
             thin: t > 0.0 && !solid,
             attenuation,
+            clearcoat,
+            clearcoat_roughness,
             emission,
         }
     };
@@ -176,4 +190,35 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         maps,
         notes,
     }
+}
+
+/// `KHR_materials_clearcoat`'s factors (0 where absent), each in [0, 1]
+/// (clamped with a note); its textures are noted as ignored.
+fn clearcoat(
+    m: &::gltf::Material,
+    notes: &mut Vec<String>,
+    ignored: &mut Vec<String>,
+) -> (f64, f64) {
+    let Some(ext) = m.extension_value("KHR_materials_clearcoat") else {
+        return (0.0, 0.0);
+    };
+    let mut factor = |key: &str| {
+        let v = ext
+            .get(key)
+            .and_then(serde_json::Value::as_f64)
+            .unwrap_or(0.0);
+        common::unit(&format!("KHR_materials_clearcoat.{key}"), v, notes)
+    };
+    let weight = factor("clearcoatFactor");
+    let roughness = factor("clearcoatRoughnessFactor");
+    for (key, what) in [
+        ("clearcoatTexture", "clearcoat texture"),
+        ("clearcoatRoughnessTexture", "clearcoat roughness texture"),
+        ("clearcoatNormalTexture", "clearcoat normal map"),
+    ] {
+        if weight > 0.0 && ext.get(key).is_some() {
+            ignored.push(what.to_owned());
+        }
+    }
+    (weight, roughness)
 }

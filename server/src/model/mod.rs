@@ -103,6 +103,9 @@ pub enum Material {
         thin: bool,
         /// Absorption inside the solid (None: clear; never on a thin wall).
         attenuation: Option<Attenuation>,
+        /// `KHR_materials_clearcoat`: the coat's weight and roughness.
+        clearcoat: f64,
+        clearcoat_roughness: f64,
         emission: Option<[f64; 3]>,
     },
 }

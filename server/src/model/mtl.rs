@@ -293,6 +293,8 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
             transmission: 0.0,
             thin: false,
             attenuation: None,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.0,
             emission,
         }
     } else {

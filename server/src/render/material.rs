@@ -60,10 +60,13 @@ impl SurfaceMaterial {
                 ior,
                 transmission,
                 thin,
+                clearcoat,
+                clearcoat_roughness,
             } => Bsdf::Pbr(
                 Pbr::new(metallic as f32, roughness as f32, ior as f32)
                     .transmitting(transmission as f32)
-                    .thin_walled(thin),
+                    .thin_walled(thin)
+                    .coated(clearcoat as f32, clearcoat_roughness as f32),
             ),
         };
         Self {

@@ -267,8 +267,10 @@ fn material_json(m: model::Material) -> MaterialJson {
             transmission,
             thin,
             attenuation,
+            clearcoat,
+            clearcoat_roughness,
             emission,
-        } => MaterialJson::Pbr(PbrJson {
+        } => MaterialJson::Pbr(Box::new(PbrJson {
             base_color: base_color.into(),
             metallic: metallic.into(),
             roughness: roughness.into(),
@@ -276,9 +278,11 @@ fn material_json(m: model::Material) -> MaterialJson {
             transmission,
             thin,
             attenuation: attenuation.map(attenuation_json),
+            clearcoat,
+            clearcoat_roughness,
             emission: emission.map(Into::into),
             normal: None,
-        }),
+        })),
     }
 }
 

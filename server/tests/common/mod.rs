@@ -442,3 +442,42 @@ pub fn oidn() -> bool {
         }
     }
 }
+
+/// A unit ball of `material` at the origin under a uniform white sky,
+/// filling most of a square view.
+pub fn sky_sphere(material: serde_json::Value) -> Scene {
+    let s = serde_json::json!({
+        "camera": {"position": [0, 0, 3.2], "look_at": [0, 0, 0], "vfov_deg": 36},
+        "environment": [1, 1, 1],
+        "materials": {"m": material},
+        "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}]
+    });
+    Scene::from_json_str(&s.to_string()).expect("valid scene")
+}
+
+/// The whole image's mean, and its centre's, is 1 within `rel` (and 4.5 of
+/// its standard errors), in every channel. Paths are unbounded (Russian
+/// roulette ends them): light may bounce inside many times.
+pub fn assert_invisible(scene: &Scene, spp: u64, rel: f64, what: &str) {
+    let q = Quality {
+        max_depth: 0,
+        filter: pathstream::render::Filter::Box,
+        ..Quality::default()
+    };
+    for (name, mut backend) in backends() {
+        let film = render_on(&mut backend, scene, 24, 24, &q, spp);
+        let what = format!("{name}: {what}");
+        assert_clean(&film, &what);
+        let all = region(&film, 0..24, 0..24);
+        let centre = region(&film, 6..18, 6..18);
+        for c in 0..3 {
+            for (r, part) in [(&all, "image"), (&centre, "centre")] {
+                let (m, se) = (r.mean[c], r.var[c].sqrt());
+                assert!(
+                    (m - 1.0).abs() < rel + 4.5 * se,
+                    "{what}: {part} mean {m} (se {se:.1e})"
+                );
+            }
+        }
+    }
+}

@@ -103,8 +103,8 @@ fn scene() -> (Value, Vec<u8>) {
     let doc = json!({
         "asset": {"version": "2.0", "generator": "pathstream tests"},
         "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_emissive_strength",
-                           "KHR_lights_punctual", "KHR_materials_clearcoat"],
-        "extensionsRequired": ["KHR_materials_clearcoat"],
+                           "KHR_lights_punctual", "KHR_materials_clearcoat", "KHR_materials_sheen"],
+        "extensionsRequired": ["KHR_materials_sheen"],
         "scene": 0,
         "scenes": [{"nodes": [0, 4, 6, 7]}, {"nodes": [8]}],
         "nodes": [
@@ -146,7 +146,9 @@ fn scene() -> (Value, Vec<u8>) {
             {"name": "paint", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0.5,
              "roughnessFactor": 0.5, "baseColorTexture": {"index": 0}}, "normalTexture": {"index": 0}, "alphaMode": "BLEND"},
             {"name": "partial", "pbrMetallicRoughness": {"baseColorFactor": [2, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 0},
-             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5}}},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5},
+                "KHR_materials_clearcoat": {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.2,
+                    "clearcoatTexture": {"index": 0}}}},
             {"name": "unused", "emissiveTexture": {"index": 0}}
         ],
         "textures": [{"source": 0}],
@@ -196,6 +198,8 @@ fn pbr(base_color: [f64; 3], metallic: f64, roughness: f64) -> Material {
         transmission: 0.0,
         thin: false,
         attenuation: None,
+        clearcoat: 0.0,
+        clearcoat_roughness: 0.0,
         emission: None,
     }
 }
@@ -291,6 +295,8 @@ fn expected() -> Model {
                     // No KHR_materials_volume: a thin wall.
                     thin: true,
                     attenuation: None,
+                    clearcoat: 0.5,
+                    clearcoat_roughness: 0.2,
                     emission: None,
                 },
             ),
@@ -328,7 +334,7 @@ fn expected() -> Model {
         }),
         warnings: [
             "KHR_lights_punctual: lights ignored",
-            "extension KHR_materials_clearcoat not supported: ignored",
+            "extension KHR_materials_sheen not supported: ignored",
             "1 other scenes ignored (scene 0 is read)",
             "2 more cameras ignored (the first one is used)",
             "primitives without a material use the glTF default material: white diffuse (albedo 1)",
@@ -336,6 +342,7 @@ fn expected() -> Model {
             "meshes[1].primitives[3] (mesh \"strips\"): LINES primitive skipped (only triangles are rendered)",
             "mesh \"mesh2\": a normal map without TEXCOORD_0 to orient it: the map is not applied",
             "material \"partial\": base colour [2, 0.5, 0.5] is outside [0, 1]: clamped to [1, 0.5, 0.5]",
+            "material \"partial\": not modelled, ignored: clearcoat texture",
         ]
         .map(str::to_owned)
         .to_vec(),

@@ -254,6 +254,8 @@ fn mtl_rules_map_every_material() {
                 transmission: 0.0,
                 thin: false,
                 attenuation: None,
+                clearcoat: 0.0,
+                clearcoat_roughness: 0.0,
                 emission: None,
             },
             &diffuse([0.8; 3], None),
@@ -320,6 +322,8 @@ fn mtl_pbr_keys_make_the_metallic_roughness_model() {
                     transmission: 0.0,
                     thin: false,
                     attenuation: None,
+                    clearcoat: 0.0,
+                    clearcoat_roughness: 0.0,
                     emission: None,
                 }
             ),

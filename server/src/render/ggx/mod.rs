@@ -28,6 +28,7 @@
 //! weighted by the mixture's pdf (one-sample MIS, balance heuristic), so
 //! every lobe is covered whichever was drawn.
 
+pub mod coat;
 pub mod glass;
 
 use crate::render::math::{sincos_turns, Vec3A};
@@ -64,6 +65,11 @@ pub struct Pbr {
     /// The glass is a thin wall (glTF's default without
     /// `KHR_materials_volume`): what it transmits leaves unrefracted.
     pub thin: bool,
+    /// The clear coat's weight (`KHR_materials_clearcoat`; 0: none), its
+    /// roughness and alpha ([`coat`]).
+    pub coat: f32,
+    pub coat_roughness: f32,
+    pub coat_alpha: f32,
 }
 
 impl Pbr {
@@ -77,6 +83,19 @@ impl Pbr {
             transmission: 0.0,
             ior,
             thin: false,
+            coat: 0.0,
+            coat_roughness: 0.0,
+            coat_alpha: ALPHA_MIN,
+        }
+    }
+
+    /// The same material under a clear coat of `weight` and `roughness`.
+    pub fn coated(self, weight: f32, roughness: f32) -> Pbr {
+        Pbr {
+            coat: weight,
+            coat_roughness: roughness,
+            coat_alpha: (roughness * roughness).max(ALPHA_MIN),
+            ..self
         }
     }
 
@@ -262,6 +281,9 @@ pub struct Lobes {
     /// and the glass itself (meaningless where that is 0).
     p_glass: f32,
     glass: glass::Glass,
+    /// The clear coat over it all ([`coat::Coat::NONE`] where there is
+    /// none, or on a transmitting solid's inside).
+    coat: coat::Coat,
 }
 
 #[inline(always)]
@@ -315,6 +337,15 @@ impl Lobes {
                 thin: false,
             }
         };
+        // The coat faces outwards: on both sides of an opaque surface or a
+        // thin wall, on the outside of a transmitting solid.
+        let coat = if p.coat > 0.0 && (entering || p_glass == 0.0 || p.thin) {
+            let below = (spec + rest) * (1.0 - p_glass) + p_glass;
+            let c = (p.coat, p.coat_roughness, p.coat_alpha);
+            coat::Coat::new(t, c, wo, below)
+        } else {
+            coat::Coat::NONE
+        };
         Lobes {
             e_o,
             a_avg,
@@ -326,6 +357,7 @@ impl Lobes {
             p_spec,
             p_glass,
             glass,
+            coat,
         }
     }
 }
@@ -340,7 +372,11 @@ pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: 
         let (r, tr) = lobes.glass.eval_cos(wo, wi);
         out = (Vec3A::splat(r) + base * tr) * lobes.p_glass;
     }
-    out + eval_reflection(t, p, base, lobes, wo, wi)
+    out += eval_reflection(t, p, base, lobes, wo, wi);
+    match lobes.coat.on() {
+        true => out * lobes.coat.keep + Vec3A::splat(lobes.coat.eval_cos(t, wo, wi)),
+        false => out,
+    }
 }
 
 /// [`eval_cos`] of the lobes other than the glass.
@@ -373,6 +409,16 @@ fn eval_reflection(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, w
 /// The sampling density of direction `wi` (solid angle) from `wo`.
 #[inline(always)]
 pub fn pdf(p: &Pbr, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> f32 {
+    let under = pdf_under_coat(p, lobes, wo, wi);
+    match lobes.coat.on() {
+        true => lobes.coat.p * lobes.coat.pdf(wo, wi) + (1.0 - lobes.coat.p) * under,
+        false => under,
+    }
+}
+
+/// [`pdf`] of the lobes under the coat.
+#[inline(always)]
+fn pdf_under_coat(p: &Pbr, lobes: &Lobes, wo: Vec3A, wi: Vec3A) -> f32 {
     if !(wo.z > 0.0) {
         return 0.0;
     }
@@ -419,13 +465,24 @@ pub fn sample(
         return None;
     }
     let lobes = Lobes::new(t, p, base, wo, entering);
+    let mut choice = choice;
+    let mut under = 1.0;
+    if lobes.coat.on() {
+        if choice < lobes.coat.p {
+            let wi = lobes.coat.sample(wo, (u1, u2))?;
+            return weighed(t, p, base, &lobes, wo, wi);
+        }
+        choice = (choice - lobes.coat.p) / (1.0 - lobes.coat.p);
+        under = lobes.coat.keep / (1.0 - lobes.coat.p);
+    }
     let wi = if choice < lobes.p_glass {
         if lobes.glass.matched() {
             // Straight through, tinted: the glass's share of eval over the
-            // probability of picking it. A delta: no density to weigh.
+            // probability of picking it (and what the coat lets through). A
+            // delta: no density to weigh.
             return Some(Sample {
                 wi: -wo,
-                weight: base,
+                weight: base * under,
                 pdf: 0.0,
             });
         }
@@ -444,13 +501,26 @@ pub fn sample(
         }
         wi
     };
-    let pdf = pdf(p, &lobes, wo, wi);
+    weighed(t, p, base, &lobes, wo, wi)
+}
+
+/// `wi` drawn from `wo`, weighed by the whole mixture's density.
+#[inline(always)]
+fn weighed(
+    t: &Tables,
+    p: &Pbr,
+    base: Vec3A,
+    lobes: &Lobes,
+    wo: Vec3A,
+    wi: Vec3A,
+) -> Option<Sample> {
+    let pdf = pdf(p, lobes, wo, wi);
     if !(pdf > 0.0) {
         return None;
     }
     Some(Sample {
         wi,
-        weight: eval_cos(t, p, base, &lobes, wo, wi) / pdf,
+        weight: eval_cos(t, p, base, lobes, wo, wi) / pdf,
         pdf,
     })
 }

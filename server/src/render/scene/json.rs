@@ -184,7 +184,8 @@ pub enum MaterialJson {
     Diffuse(SurfaceJson),
     Mirror(SurfaceJson),
     Glass(GlassJson),
-    Pbr(PbrJson),
+    /// Boxed: the largest kind by far (its fields may be textures).
+    Pbr(Box<PbrJson>),
 }
 
 /// Fields of `pbr` materials: glTF 2.0's metallic-roughness model, with
@@ -210,6 +211,11 @@ pub struct PbrJson {
     /// Absorption inside the solid (a thin wall has none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attenuation: Option<AttenuationJson>,
+    /// A clear coat over it all: its weight and roughness.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub clearcoat: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub clearcoat_roughness: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -390,7 +396,7 @@ impl SceneJson {
                     ("diffuse", rest) => MaterialJson::Diffuse(at(&path, rest)?),
                     ("mirror", rest) => MaterialJson::Mirror(at(&path, rest)?),
                     ("glass", rest) => MaterialJson::Glass(at(&path, rest)?),
-                    (_, rest) => MaterialJson::Pbr(at(&path, rest)?),
+                    (_, rest) => MaterialJson::Pbr(Box::new(at(&path, rest)?)),
                 };
                 Ok((name, m))
             })

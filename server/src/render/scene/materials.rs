@@ -60,17 +60,20 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 normal,
             )
         }
-        MaterialJson::Pbr(PbrJson {
-            base_color,
-            metallic,
-            roughness,
-            ior,
-            transmission,
-            thin,
-            attenuation: absorbs,
-            emission,
-            normal,
-        }) => {
+        MaterialJson::Pbr(pbr) => {
+            let PbrJson {
+                base_color,
+                metallic,
+                roughness,
+                ior,
+                transmission,
+                thin,
+                attenuation: absorbs,
+                clearcoat,
+                clearcoat_roughness,
+                emission,
+                normal,
+            } = &**pbr;
             attenuation = absorbs
                 .map(|a| checked_attenuation(&path, &a))
                 .transpose()?;
@@ -97,6 +100,8 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 ior: checked_ior(&path, *ior)?,
                 transmission: unit("transmission", *transmission)?,
                 thin: *thin,
+                clearcoat: unit("clearcoat", *clearcoat)?,
+                clearcoat_roughness: unit("clearcoat_roughness", *clearcoat_roughness)?,
             };
             let at = |field: &str| format!("{path}.{field}");
             maps.metallic = texture(
@@ -321,7 +326,9 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             ior,
             transmission,
             thin,
-        } => MaterialJson::Pbr(PbrJson {
+            clearcoat,
+            clearcoat_roughness,
+        } => MaterialJson::Pbr(Box::new(PbrJson {
             base_color: albedo,
             metallic: scalar(metallic, &m.maps.metallic),
             roughness: scalar(roughness, &m.maps.roughness),
@@ -329,9 +336,11 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             transmission,
             thin,
             attenuation,
+            clearcoat,
+            clearcoat_roughness,
             emission,
             normal,
-        }),
+        })),
     }
 }
 

@@ -187,6 +187,10 @@ pub enum MaterialKind {
         transmission: f64,
         /// The glass is a thin wall (unrefracted), not a solid.
         thin: bool,
+        /// A clear coat's weight (`KHR_materials_clearcoat`, 0: none) and
+        /// roughness, both in [0, 1].
+        clearcoat: f64,
+        clearcoat_roughness: f64,
     },
 }
 

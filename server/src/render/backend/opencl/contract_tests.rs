@@ -281,6 +281,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         ggx: true,
         transmission: true,
         volume: true,
+        coat: true,
         schlick: true,
         exact: true,
         sphere_lights: true,

@@ -182,6 +182,8 @@ pub struct Material {
     pub glass: [f32; 4],
     /// The absorption coefficient inside (w unused).
     pub absorb: [f32; 4],
+    /// pbr: clear coat weight, alpha, roughness.
+    pub coat: [f32; 4],
 }
 
 #[repr(C, align(16))]
@@ -255,7 +257,7 @@ pub struct Light {
 
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
-const _: () = assert!(std::mem::size_of::<Material>() == 96);
+const _: () = assert!(std::mem::size_of::<Material>() == 112);
 const _: () = assert!(std::mem::size_of::<Params>() == 208);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
@@ -425,12 +427,13 @@ pub fn pack(job: &RenderJob) -> Packed {
                 Bsdf::Glass { ior, schlick } => (MAT_GLASS, ior, schlick),
                 Bsdf::Pbr(_) => (MAT_PBR, 1.0, false),
             };
-            let (pbr, glass) = match m.bsdf {
+            let (pbr, glass, coat) = match m.bsdf {
                 Bsdf::Pbr(p) => (
                     [p.metallic, p.alpha, p.roughness, p.f0],
                     [p.transmission, p.ior, f32::from(u8::from(p.thin)), 0.0],
+                    [p.coat, p.coat_alpha, p.coat_roughness, 0.0],
                 ),
-                _ => ([0.0; 4], [0.0; 4]),
+                _ => ([0.0; 4], [0.0; 4], [0.0; 4]),
             };
             Material {
                 albedo: v4(m.albedo, ior),
@@ -442,6 +445,7 @@ pub fn pack(job: &RenderJob) -> Packed {
                 pbr,
                 glass,
                 absorb: v4(m.absorb, 0.0),
+                coat,
             }
         })
         .collect();

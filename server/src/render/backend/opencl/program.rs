@@ -51,6 +51,8 @@ pub struct Features {
     pub transmission: bool,
     /// A material absorbs inside (Beer-Lambert).
     pub volume: bool,
+    /// A `MAT_PBR` material has a clear coat.
+    pub coat: bool,
     pub schlick: bool,
     pub exact: bool,
     pub sphere_lights: bool,
@@ -151,6 +153,9 @@ impl Features {
                 .iter()
                 .any(|m| matches!(m.bsdf, Bsdf::Pbr(p) if p.transmission > 0.0)),
             volume: used.iter().any(|m| m.absorb != Vec3A::ZERO),
+            coat: used
+                .iter()
+                .any(|m| matches!(m.bsdf, Bsdf::Pbr(p) if p.coat > 0.0)),
             schlick: glass_with(true),
             exact: glass_with(false),
             sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
@@ -200,7 +205,7 @@ impl Features {
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
-             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={} -D HAS_VOLUME={}",
+             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={} -D HAS_VOLUME={} -D HAS_COAT={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -232,6 +237,7 @@ impl Features {
             b(self.alpha),
             b(self.transmission),
             b(self.volume),
+            b(self.coat),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));

@@ -1,0 +1,182 @@
+//! The clear coat against its definition: the white furnace under every
+//! coat, a dark material never gaining energy from it, the coat lobe's
+//! integral against its tabulated albedo, sampling against the pdf.
+
+use super::super::tests::{dir, sphere_chi2};
+use super::super::{eval_cos, pdf, sample, tables, Lobes, Pbr};
+use super::*;
+use crate::render::sampler::Sampler;
+
+/// The directional albedo of `p` seen from `wo` on the side `entering`
+/// says: the mean of `n` sample weights.
+fn albedo(p: &Pbr, base: Vec3A, (wo, entering): (Vec3A, bool), n: u64) -> Vec3A {
+    let t = tables();
+    let mut sum = Vec3A::ZERO;
+    for i in 0..n {
+        let mut s = Sampler::new(13, i, 0);
+        let choice = s.next_f32();
+        let u = s.next_2d();
+        if let Some(s) = sample(t, p, base, (wo, entering), choice, u) {
+            sum += s.weight;
+        }
+    }
+    sum / n as f32
+}
+
+#[test]
+fn a_white_material_under_a_coat_keeps_the_furnace_energy() {
+    // Metal, coated diffuse, rough glass (from outside, where the coat is,
+    // and from inside, where it is not), at several coat roughnesses.
+    for coat_r in [0.03f32, 0.3, 1.0] {
+        for (metallic, transmission, r) in [(1.0, 0.0, 0.2), (0.0, 0.0, 0.7), (0.0, 1.0, 0.4)] {
+            for weight in [0.5, 1.0] {
+                let p = Pbr::new(metallic, r, 1.5)
+                    .transmitting(transmission)
+                    .coated(weight, coat_r);
+                for entering in [true, false] {
+                    for mu in [0.1, 0.5, 1.0] {
+                        let a = albedo(&p, Vec3A::ONE, (dir(mu, 0.3), entering), 100_000);
+                        assert!(
+                            (a - Vec3A::ONE).abs().max_element() < 0.01,
+                            "coat {weight} at roughness {coat_r} over metallic {metallic} \
+                             transmission {transmission} roughness {r}, entering {entering}, \
+                             mu {mu}: albedo {a}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_dark_material_never_gains_energy_from_its_coat() {
+    let base = Vec3A::new(0.9, 0.5, 0.1);
+    for coat_r in [0.05f32, 0.5] {
+        for metallic in [0.0, 1.0] {
+            let p = Pbr::new(metallic, 0.5, 1.5).coated(1.0, coat_r);
+            for mu in [0.05, 0.5, 1.0] {
+                let a = albedo(&p, base, (dir(mu, 1.0), true), 100_000);
+                assert!(
+                    a.max_element() < 1.0 && a.min_element() > 0.0,
+                    "metallic {metallic} coat roughness {coat_r} mu {mu}: albedo {a}"
+                );
+            }
+        }
+        // The coat adds a white reflection: a black diffuse base reflects
+        // more under it, and its blue channel more than without.
+        let bare = Pbr::new(0.0, 1.0, 1.5);
+        let black = Vec3A::ZERO;
+        let (without, with) = (
+            albedo(&bare, black, (dir(0.3, 0.0), true), 50_000),
+            albedo(
+                &bare.coated(1.0, coat_r),
+                black,
+                (dir(0.3, 0.0), true),
+                50_000,
+            ),
+        );
+        assert!(with.x > without.x + 0.01, "{without} -> {with}");
+    }
+}
+
+#[test]
+fn the_coat_lobe_integrates_to_its_albedo() {
+    // Midpoint quadrature of the coat's eval over the hemisphere against
+    // weight (F0 A + B + (1 - E) fms) from the tables: the coat reflects
+    // what it takes from the base.
+    let t = tables();
+    for coat_r in [0.2f32, 0.6, 1.0] {
+        for mu in [0.2f32, 0.7, 1.0] {
+            let wo = dir(mu, 0.0);
+            let alpha = (coat_r * coat_r).max(super::super::ALPHA_MIN);
+            let c = Coat::new(t, (0.8, coat_r, alpha), wo, 0.5);
+            let (nt, np) = (1000, 400);
+            let mut sum = 0.0f64;
+            for i in 0..nt {
+                let x = (i as f64 + 0.5) / nt as f64;
+                let cos = (1.0 - x * x) as f32;
+                for j in 0..np {
+                    let phi = (j as f32 + 0.5) / np as f32 * std::f32::consts::TAU;
+                    sum += f64::from(c.eval_cos(t, wo, dir(cos, phi))) * 2.0 * x;
+                }
+            }
+            let integral = sum * std::f64::consts::TAU / (nt * np) as f64;
+            let taken = f64::from(1.0 - c.keep);
+            assert!(
+                (integral - taken).abs() < 4e-3,
+                "coat roughness {coat_r} mu {mu}: integral {integral} vs 1 - keep {taken}"
+            );
+        }
+    }
+}
+
+#[test]
+fn sampling_under_a_coat_follows_the_pdf_chi_square() {
+    let t = tables();
+    for (r, metallic, transmission, coat_r, mu) in [
+        (0.6f32, 0.0f32, 0.0f32, 0.25f32, 0.6f32),
+        (0.2, 1.0, 0.0, 0.5, 0.3),
+        (0.4, 0.0, 1.0, 0.2, 0.8),
+    ] {
+        let p = Pbr::new(metallic, r, 1.5)
+            .transmitting(transmission)
+            .coated(1.0, coat_r);
+        let base = Vec3A::new(0.6, 0.5, 0.4);
+        let wo = dir(mu, 0.2);
+        let lobes = Lobes::new(t, &p, base, wo, true);
+        let draw = |k: u64| {
+            let mut s = Sampler::new(17, k, 0);
+            let choice = s.next_f32();
+            let u = s.next_2d();
+            sample(t, &p, base, (wo, true), choice, u).map(|s| s.wi)
+        };
+        let (chi2, dof, tail) = sphere_chi2(400_000, draw, |w| pdf(&p, &lobes, wo, w));
+        assert!(
+            tail > 1e-4,
+            "roughness {r} metallic {metallic} transmission {transmission} coat {coat_r} \
+             mu {mu}: chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
+        );
+    }
+}
+
+#[test]
+fn weights_under_a_coat_are_eval_over_pdf_and_finite() {
+    let t = tables();
+    let base = Vec3A::new(0.9, 0.6, 0.3);
+    for coat_r in [0.0f32, 0.3, 1.0] {
+        for (metallic, transmission, ior) in [
+            (0.0, 0.0, 1.5),
+            (1.0, 0.0, 1.5),
+            (0.0, 1.0, 1.5),
+            (0.0, 1.0, 1.0),
+        ] {
+            let p = Pbr::new(metallic, 0.3, ior)
+                .transmitting(transmission)
+                .coated(0.7, coat_r);
+            for k in 0..20_000u64 {
+                let mut s = Sampler::new(19, k, 0);
+                let (u1, u2) = s.next_2d();
+                let wo = dir(u1.max(1e-6), u2 * std::f32::consts::TAU);
+                let entering = k % 2 == 0;
+                let choice = s.next_f32();
+                let Some(x) = sample(t, &p, base, (wo, entering), choice, s.next_2d()) else {
+                    continue;
+                };
+                assert!(
+                    x.weight.is_finite() && x.pdf.is_finite(),
+                    "{p:?} wo {wo}: {x:?}"
+                );
+                if x.pdf > 0.0 {
+                    let lobes = Lobes::new(t, &p, base, wo, entering);
+                    let w = eval_cos(t, &p, base, &lobes, wo, x.wi) / pdf(&p, &lobes, wo, x.wi);
+                    assert!(
+                        (w - x.weight).abs().max_element() <= 1e-4 * w.max_element().max(1.0),
+                        "{p:?} wo {wo}: {} vs {w}",
+                        x.weight
+                    );
+                }
+            }
+        }
+    }
+}
