@@ -10,9 +10,9 @@ mod common;
 
 use common::{
     assert_backends_agree, assert_clean, assert_invisible, assert_nee_on_off_agree, backends,
-    region, render_on, sky_sphere,
+    balls_on_a_floor, box_quality, region, render_on, sky_sphere,
 };
-use pathstream::render::{Filter, Quality, Scene};
+use pathstream::render::Scene;
 use serde_json::json;
 
 #[test]
@@ -48,49 +48,37 @@ fn a_white_coated_sphere_in_a_white_sky_is_invisible() {
 /// Spheres of a black base, bare and under a smooth coat, and coated
 /// materials over metal and rough glass, on a floor under a quad light.
 fn coated_scene() -> Scene {
-    let s = json!({
-        "camera": {"position": [0, 0.6, 4], "look_at": [0, -0.2, 0], "vfov_deg": 45},
-        "environment": [0.2, 0.25, 0.3],
-        "materials": {
-            "floor": {"type": "diffuse", "albedo": [0.6, 0.6, 0.6]},
-            "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [6, 6, 6]},
-            "paint": {"type": "pbr", "base_color": [0.6, 0.05, 0.05], "metallic": 0, "roughness": 0.7,
-                "clearcoat": 1, "clearcoat_roughness": 0.05},
-            "flake": {"type": "pbr", "base_color": [0.8, 0.7, 0.3], "metallic": 1, "roughness": 0.5,
-                "clearcoat": 0.7, "clearcoat_roughness": 0.2},
-            "lacquer": {"type": "pbr", "base_color": [0.9, 0.95, 0.9], "metallic": 0, "roughness": 0.3,
-                "transmission": 1, "clearcoat": 1, "clearcoat_roughness": 0.1}
-        },
-        "objects": [
-            {"type": "quad", "corner": [-4, -1, -4], "edge_u": [8, 0, 0], "edge_v": [0, 0, 8], "material": "floor"},
-            {"type": "quad", "corner": [-1, 3, -1], "edge_u": [2, 0, 0], "edge_v": [0, 0, 2], "material": "light"},
-            {"type": "sphere", "center": [-1.1, -0.5, 0], "radius": 0.5, "material": "paint"},
-            {"type": "sphere", "center": [0, -0.5, 0.3], "radius": 0.5, "material": "flake"},
-            {"type": "sphere", "center": [1.1, -0.5, 0], "radius": 0.5, "material": "lacquer"}
-        ]
-    });
-    Scene::from_json_str(&s.to_string()).expect("valid scene")
-}
-
-fn quality() -> Quality {
-    Quality {
-        filter: Filter::Box,
-        ..Quality::default()
-    }
+    balls_on_a_floor([
+        (
+            "paint",
+            json!({"type": "pbr", "base_color": [0.6, 0.05, 0.05], "metallic": 0, "roughness": 0.7,
+            "clearcoat": 1, "clearcoat_roughness": 0.05}),
+        ),
+        (
+            "flake",
+            json!({"type": "pbr", "base_color": [0.8, 0.7, 0.3], "metallic": 1, "roughness": 0.5,
+            "clearcoat": 0.7, "clearcoat_roughness": 0.2}),
+        ),
+        (
+            "lacquer",
+            json!({"type": "pbr", "base_color": [0.9, 0.95, 0.9], "metallic": 0, "roughness": 0.3,
+            "transmission": 1, "clearcoat": 1, "clearcoat_roughness": 0.1}),
+        ),
+    ])
 }
 
 #[test]
 fn a_coated_scene_agrees_on_every_backend() {
-    assert_backends_agree(&coated_scene(), (32, 24), &quality(), 128);
+    assert_backends_agree(&coated_scene(), (32, 24), &box_quality(), 128);
     // Filling the frame: the coat's share of a dark sphere's image.
     let m = json!({"type": "pbr", "base_color": [0.2, 0.3, 0.5], "metallic": 0, "roughness": 0.8,
         "clearcoat": 1, "clearcoat_roughness": 0.3});
-    assert_backends_agree(&sky_sphere(m), (24, 24), &quality(), 64);
+    assert_backends_agree(&sky_sphere(m), (24, 24), &box_quality(), 64);
 }
 
 #[test]
 fn nee_on_and_off_agree_under_a_coat() {
-    assert_nee_on_off_agree(&coated_scene(), (32, 24), &quality(), 128);
+    assert_nee_on_off_agree(&coated_scene(), (32, 24), &box_quality(), 128);
 }
 
 #[test]
@@ -102,7 +90,7 @@ fn a_coat_adds_a_white_reflection_to_a_black_base() {
     coated["clearcoat"] = json!(1);
     for (name, mut backend) in backends() {
         let mean = |m: &serde_json::Value, backend: &mut pathstream::render::Backend| {
-            let film = render_on(backend, &sky_sphere(m.clone()), 24, 24, &quality(), 32);
+            let film = render_on(backend, &sky_sphere(m.clone()), 24, 24, &box_quality(), 32);
             assert_clean(&film, name);
             region(&film, 8..16, 8..16).mean
         };

@@ -8,29 +8,16 @@
 mod common;
 
 use common::{
-    assert_backends_agree, assert_clean, assert_mean, assert_nee_on_off_agree, backends, region,
-    render_on,
+    assert_backends_agree, assert_clean, assert_mean, assert_nee_on_off_agree, backends,
+    box_quality, region, render_on,
 };
-use pathstream::render::{Filter, Quality, Scene};
+use pathstream::render::Scene;
 use serde_json::json;
 
 fn sky_sphere(base: [f64; 3], metallic: f64, roughness: f64) -> Scene {
-    let s = json!({
-        "camera": {"position": [0, 0, 3.2], "look_at": [0, 0, 0], "vfov_deg": 36},
-        "environment": [1, 1, 1],
-        "materials": {
-            "m": {"type": "pbr", "base_color": base, "metallic": metallic, "roughness": roughness}
-        },
-        "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}]
-    });
-    Scene::from_json_str(&s.to_string()).expect("valid scene")
-}
-
-fn quality() -> Quality {
-    Quality {
-        filter: Filter::Box,
-        ..Quality::default()
-    }
+    common::sky_sphere(
+        json!({"type": "pbr", "base_color": base, "metallic": metallic, "roughness": roughness}),
+    )
 }
 
 #[test]
@@ -39,7 +26,7 @@ fn a_white_sphere_in_a_white_sky_is_invisible_at_every_roughness() {
         for metallic in [1.0, 0.0] {
             for roughness in [0.05, 0.25, 0.5, 0.75, 1.0] {
                 let s = sky_sphere([1.0; 3], metallic, roughness);
-                let film = render_on(&mut backend, &s, 24, 24, &quality(), 64);
+                let film = render_on(&mut backend, &s, 24, 24, &box_quality(), 64);
                 let what = format!("{name}: metallic {metallic} roughness {roughness}");
                 assert_clean(&film, &what);
                 // Each 4x4 block within 1% (and its noise), and the whole
@@ -63,7 +50,7 @@ fn a_coloured_sphere_reflects_less_than_the_sky_never_more() {
     for (name, mut backend) in backends() {
         for (metallic, roughness) in [(1.0, 0.4), (0.0, 0.4), (0.5, 0.9)] {
             let s = sky_sphere([0.8, 0.4, 0.1], metallic, roughness);
-            let film = render_on(&mut backend, &s, 24, 24, &quality(), 32);
+            let film = render_on(&mut backend, &s, 24, 24, &box_quality(), 32);
             let centre = region(&film, 8..16, 8..16);
             let what = format!("{name}: metallic {metallic} roughness {roughness}");
             for c in 0..3 {
@@ -124,14 +111,14 @@ fn sphere_grid() -> Scene {
 
 #[test]
 fn a_metal_roughness_grid_agrees_on_every_backend() {
-    assert_backends_agree(&sphere_grid(), (32, 24), &quality(), 128);
+    assert_backends_agree(&sphere_grid(), (32, 24), &box_quality(), 128);
 }
 
 #[test]
 fn nee_on_and_off_agree_on_the_grid() {
     // Next-event estimation gathers the broad lobes' light, the next hit
     // the narrow lobes': together the same image as BSDF sampling alone.
-    assert_nee_on_off_agree(&sphere_grid(), (32, 24), &quality(), 128);
+    assert_nee_on_off_agree(&sphere_grid(), (32, 24), &box_quality(), 128);
 }
 
 #[test]

@@ -10,17 +10,10 @@ mod common;
 
 use common::{
     assert_backends_agree, assert_clean, assert_invisible, assert_nee_on_off_agree, backends,
-    region, render_on, sky_sphere,
+    balls_on_a_floor, box_quality, region, render_on, sky_sphere,
 };
-use pathstream::render::{Filter, Quality, Scene};
+use pathstream::render::Scene;
 use serde_json::json;
-
-fn quality() -> Quality {
-    Quality {
-        filter: Filter::Box,
-        ..Quality::default()
-    }
-}
 
 #[test]
 fn a_white_rough_glass_sphere_in_a_white_sky_is_invisible() {
@@ -72,7 +65,7 @@ fn tinted_rough_glass_passes_its_colour_and_no_more() {
         "roughness": 0.3, "transmission": 1});
     let s = sky_sphere(m);
     for (name, mut backend) in backends() {
-        let film = render_on(&mut backend, &s, 24, 24, &quality(), 32);
+        let film = render_on(&mut backend, &s, 24, 24, &box_quality(), 32);
         assert_clean(&film, name);
         let centre = region(&film, 8..16, 8..16);
         let c = centre.mean;
@@ -86,38 +79,33 @@ fn tinted_rough_glass_passes_its_colour_and_no_more() {
 /// Rough glass of two roughnesses, whole and half transmissive (that one
 /// a thin wall), on a diffuse floor under a quad light and a dim sky.
 fn glass_scene() -> Scene {
-    let s = json!({
-        "camera": {"position": [0, 0.6, 4], "look_at": [0, -0.2, 0], "vfov_deg": 45},
-        "environment": [0.2, 0.25, 0.3],
-        "materials": {
-            "floor": {"type": "diffuse", "albedo": [0.6, 0.6, 0.6]},
-            "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [6, 6, 6]},
-            "frosted": {"type": "pbr", "base_color": [0.9, 0.8, 0.6], "metallic": 0, "roughness": 0.5, "transmission": 1},
-            "clear": {"type": "pbr", "metallic": 0, "roughness": 0.15, "transmission": 1, "ior": 1.33},
-            "half": {"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0, "roughness": 0.3, "transmission": 0.5,
-                "thin": true}
-        },
-        "objects": [
-            {"type": "quad", "corner": [-4, -1, -4], "edge_u": [8, 0, 0], "edge_v": [0, 0, 8], "material": "floor"},
-            {"type": "quad", "corner": [-1, 3, -1], "edge_u": [2, 0, 0], "edge_v": [0, 0, 2], "material": "light"},
-            {"type": "sphere", "center": [-1.1, -0.5, 0], "radius": 0.5, "material": "frosted"},
-            {"type": "sphere", "center": [0, -0.5, 0.3], "radius": 0.5, "material": "clear"},
-            {"type": "sphere", "center": [1.1, -0.5, 0], "radius": 0.5, "material": "half"}
-        ]
-    });
-    Scene::from_json_str(&s.to_string()).expect("valid scene")
+    balls_on_a_floor([
+        (
+            "frosted",
+            json!({"type": "pbr", "base_color": [0.9, 0.8, 0.6], "metallic": 0, "roughness": 0.5, "transmission": 1}),
+        ),
+        (
+            "clear",
+            json!({"type": "pbr", "metallic": 0, "roughness": 0.15, "transmission": 1, "ior": 1.33}),
+        ),
+        (
+            "half",
+            json!({"type": "pbr", "base_color": [0.3, 0.5, 0.9], "metallic": 0, "roughness": 0.3, "transmission": 0.5,
+            "thin": true}),
+        ),
+    ])
 }
 
 #[test]
 fn rough_glass_agrees_on_every_backend() {
-    assert_backends_agree(&glass_scene(), (32, 24), &quality(), 128);
+    assert_backends_agree(&glass_scene(), (32, 24), &box_quality(), 128);
 }
 
 #[test]
 fn nee_on_and_off_agree_through_rough_glass() {
     // Next-event estimation gathers what the glass reflects; what it
     // transmits is BSDF sampling's alone, counted whole: the same image.
-    assert_nee_on_off_agree(&glass_scene(), (32, 24), &quality(), 128);
+    assert_nee_on_off_agree(&glass_scene(), (32, 24), &box_quality(), 128);
 }
 
 #[test]

@@ -10,7 +10,8 @@
 mod common;
 
 use common::{
-    assert_backends_agree, assert_clean, assert_nee_on_off_agree, backends, region, render_on,
+    assert_backends_agree, assert_clean, assert_nee_on_off_agree, backends, balls_on_a_floor,
+    box_quality, region, render_on,
 };
 use pathstream::render::{Filter, Quality, Scene};
 use serde_json::{json, Value};
@@ -120,39 +121,27 @@ fn a_rough_index_1_ball_keeps_the_same() {
 /// Absorbing smooth and rough glass of several indices on a diffuse floor
 /// under a quad light and a dim sky.
 fn absorbing_scene() -> Scene {
-    let s = json!({
-        "camera": {"position": [0, 0.6, 4], "look_at": [0, -0.2, 0], "vfov_deg": 45},
-        "environment": [0.2, 0.25, 0.3],
-        "materials": {
-            "floor": {"type": "diffuse", "albedo": [0.6, 0.6, 0.6]},
-            "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [6, 6, 6]},
-            "amber": {"type": "glass", "ior": 1.5, "attenuation": {"color": [0.9, 0.6, 0.2], "distance": 0.5}},
-            "jade": {"type": "pbr", "base_color": [0.9, 1, 0.9], "metallic": 0, "roughness": 0.4, "transmission": 1,
-                "ior": 1.6, "attenuation": {"color": [0.3, 0.8, 0.5], "distance": 0.3}},
-            "tea": {"type": "pbr", "metallic": 0, "roughness": 0.1, "transmission": 0.8, "ior": 1.33,
-                "attenuation": {"color": [0.7, 0.4, 0.1], "distance": 1}}
-        },
-        "objects": [
-            {"type": "quad", "corner": [-4, -1, -4], "edge_u": [8, 0, 0], "edge_v": [0, 0, 8], "material": "floor"},
-            {"type": "quad", "corner": [-1, 3, -1], "edge_u": [2, 0, 0], "edge_v": [0, 0, 2], "material": "light"},
-            {"type": "sphere", "center": [-1.1, -0.5, 0], "radius": 0.5, "material": "amber"},
-            {"type": "sphere", "center": [0, -0.5, 0.3], "radius": 0.5, "material": "jade"},
-            {"type": "sphere", "center": [1.1, -0.5, 0], "radius": 0.5, "material": "tea"}
-        ]
-    });
-    Scene::from_json_str(&s.to_string()).expect("valid scene")
-}
-
-fn quality() -> Quality {
-    Quality {
-        filter: Filter::Box,
-        ..Quality::default()
-    }
+    balls_on_a_floor([
+        (
+            "amber",
+            json!({"type": "glass", "ior": 1.5, "attenuation": {"color": [0.9, 0.6, 0.2], "distance": 0.5}}),
+        ),
+        (
+            "jade",
+            json!({"type": "pbr", "base_color": [0.9, 1, 0.9], "metallic": 0, "roughness": 0.4, "transmission": 1,
+            "ior": 1.6, "attenuation": {"color": [0.3, 0.8, 0.5], "distance": 0.3}}),
+        ),
+        (
+            "tea",
+            json!({"type": "pbr", "metallic": 0, "roughness": 0.1, "transmission": 0.8, "ior": 1.33,
+            "attenuation": {"color": [0.7, 0.4, 0.1], "distance": 1}}),
+        ),
+    ])
 }
 
 #[test]
 fn absorbing_glass_agrees_on_every_backend() {
-    assert_backends_agree(&absorbing_scene(), (32, 24), &quality(), 128);
+    assert_backends_agree(&absorbing_scene(), (32, 24), &box_quality(), 128);
     // Filling the frame, where what crosses the solid is most of the image
     // (refracted and reflected inside many times).
     for m in [
@@ -160,13 +149,13 @@ fn absorbing_glass_agrees_on_every_backend() {
         json!({"type": "pbr", "metallic": 0, "roughness": 0.3, "transmission": 1, "ior": 1.5,
             "attenuation": {"color": [0.9, 0.6, 0.2], "distance": 1}}),
     ] {
-        assert_backends_agree(&ball(m), (SIZE, SIZE), &quality(), 64);
+        assert_backends_agree(&ball(m), (SIZE, SIZE), &box_quality(), 64);
     }
 }
 
 #[test]
 fn nee_on_and_off_agree_through_absorbing_glass() {
-    assert_nee_on_off_agree(&absorbing_scene(), (32, 24), &quality(), 128);
+    assert_nee_on_off_agree(&absorbing_scene(), (32, 24), &box_quality(), 128);
 }
 
 #[test]

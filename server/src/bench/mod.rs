@@ -123,6 +123,7 @@ impl Config {
                 scenes::CORNELL_MESH,
                 scenes::CORNELL_MESH_PBR,
                 scenes::CORNELL_MESH_FROSTED,
+                scenes::CORNELL_MESH_COATED,
             ]
             .map(String::from)
             .to_vec(),

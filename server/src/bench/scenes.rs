@@ -15,6 +15,9 @@
 //! - `cornell-mesh-frosted`: `cornell-mesh` with rough glass balls, one
 //!   frosted (roughness 0.3, transmission 1), one tinted and half
 //!   transmissive (what the rough dielectric costs);
+//! - `cornell-mesh-coated`: `cornell-mesh` with a red paint under a clear
+//!   coat and an amber rough glass ball that absorbs inside (what the coat
+//!   and the volume's absorption cost);
 //! - `glossy-plane`: a rough metal plane (roughness 0.3) reflecting a
 //!   small bright sphere light, a large dim quad light, an 80-triangle
 //!   glowing ball and a dim sky (every emitter kind in a glossy
@@ -40,6 +43,8 @@ pub const CORNELL_MESH: &str = "cornell-mesh";
 pub const CORNELL_MESH_PBR: &str = "cornell-mesh-pbr";
 /// `cornell-mesh-frosted`.
 pub const CORNELL_MESH_FROSTED: &str = "cornell-mesh-frosted";
+/// `cornell-mesh-coated`.
+pub const CORNELL_MESH_COATED: &str = "cornell-mesh-coated";
 /// `glossy-plane`.
 pub const GLOSSY_PLANE: &str = "glossy-plane";
 /// `sunset-balls`.
@@ -53,6 +58,7 @@ pub fn load(name: &str) -> Result<Scene, SceneError> {
         CORNELL_MESH => cornell_mesh(),
         CORNELL_MESH_PBR => cornell_mesh_pbr(),
         CORNELL_MESH_FROSTED => cornell_mesh_frosted(),
+        CORNELL_MESH_COATED => cornell_mesh_coated(),
         GLOSSY_PLANE => glossy_plane(0.3),
         SUNSET_BALLS => sunset_balls(),
         _ => crate::resolve::load_scene(name),
@@ -128,6 +134,17 @@ pub fn cornell_mesh_frosted() -> Result<Scene, SceneError> {
         json!({"type": "pbr", "metallic": 0.0, "roughness": 0.3, "transmission": 1.0}),
         json!({"type": "pbr", "base_color": [0.9, 0.6, 0.3], "metallic": 0.0, "roughness": 0.5,
             "transmission": 0.5}),
+    )
+}
+
+/// `cornell-mesh-coated`: the same box, a clear-coated paint and an
+/// absorbing rough glass.
+pub fn cornell_mesh_coated() -> Result<Scene, SceneError> {
+    box_with_balls(
+        json!({"type": "pbr", "base_color": [0.7, 0.05, 0.05], "metallic": 0.0, "roughness": 0.6,
+            "clearcoat": 1.0, "clearcoat_roughness": 0.05}),
+        json!({"type": "pbr", "metallic": 0.0, "roughness": 0.1, "transmission": 1.0,
+            "attenuation": {"color": [0.9, 0.6, 0.2], "distance": 20.0}}),
     )
 }
 

@@ -52,10 +52,10 @@ pub struct BenchArgs {
     sections: Vec<SectionArg>,
     /// Scenes for every section, comma-separated (built-in names, the bench
     /// scenes cornell-glass-mesh, cornell-mesh, cornell-mesh-pbr,
-    /// cornell-mesh-frosted, glossy-plane and sunset-balls, or JSON files)
-    /// [default: throughput on cornell, cornell-glass, cornell-quads,
-    /// smallpt, furnace, cornell-mesh, cornell-mesh-pbr,
-    /// cornell-mesh-frosted; trade on cornell, cornell-glass, smallpt; adaptive
+    /// cornell-mesh-frosted, cornell-mesh-coated, glossy-plane and
+    /// sunset-balls, or JSON files) [default: throughput on cornell,
+    /// cornell-glass, cornell-quads, smallpt, furnace, cornell-mesh,
+    /// cornell-mesh-pbr, cornell-mesh-frosted, cornell-mesh-coated; trade on cornell, cornell-glass, smallpt; adaptive
     /// and samplers on the five built-in scenes and the first two mesh
     /// scenes; mis on glossy-plane, cornell-mesh-pbr and sunset-balls].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]

@@ -481,3 +481,40 @@ pub fn assert_invisible(scene: &Scene, spp: u64, rel: f64, what: &str) {
         }
     }
 }
+
+/// The box filter, everything else default: what the material tests use.
+pub fn box_quality() -> Quality {
+    Quality {
+        filter: pathstream::render::Filter::Box,
+        ..Quality::default()
+    }
+}
+
+/// Three balls of radius 0.5 (materials named as `balls` gives them, left
+/// to right, the middle one nearer) on a diffuse floor under a quad light
+/// and a dim sky.
+pub fn balls_on_a_floor(balls: [(&str, serde_json::Value); 3]) -> Scene {
+    let mut materials = serde_json::json!({
+        "floor": {"type": "diffuse", "albedo": [0.6, 0.6, 0.6]},
+        "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [6, 6, 6]}
+    });
+    let mut objects = vec![
+        serde_json::json!({"type": "quad", "corner": [-4, -1, -4], "edge_u": [8, 0, 0], "edge_v": [0, 0, 8], "material": "floor"}),
+        serde_json::json!({"type": "quad", "corner": [-1, 3, -1], "edge_u": [2, 0, 0], "edge_v": [0, 0, 2], "material": "light"}),
+    ];
+    for ((name, m), center) in
+        balls
+            .into_iter()
+            .zip([[-1.1, -0.5, 0.0], [0.0, -0.5, 0.3], [1.1, -0.5, 0.0]])
+    {
+        materials[name] = m;
+        objects.push(serde_json::json!({"type": "sphere", "center": center, "radius": 0.5, "material": name}));
+    }
+    let s = serde_json::json!({
+        "camera": {"position": [0, 0.6, 4], "look_at": [0, -0.2, 0], "vfov_deg": 45},
+        "environment": [0.2, 0.25, 0.3],
+        "materials": materials,
+        "objects": objects
+    });
+    Scene::from_json_str(&s.to_string()).expect("valid scene")
+}

@@ -2,26 +2,10 @@
 //! coat, a dark material never gaining energy from it, the coat lobe's
 //! integral against its tabulated albedo, sampling against the pdf.
 
-use super::super::tests::{dir, sphere_chi2};
+use super::super::tests::{albedo_from as albedo, dir, sphere_chi2};
 use super::super::{eval_cos, pdf, sample, tables, Lobes, Pbr};
 use super::*;
 use crate::render::sampler::Sampler;
-
-/// The directional albedo of `p` seen from `wo` on the side `entering`
-/// says: the mean of `n` sample weights.
-fn albedo(p: &Pbr, base: Vec3A, (wo, entering): (Vec3A, bool), n: u64) -> Vec3A {
-    let t = tables();
-    let mut sum = Vec3A::ZERO;
-    for i in 0..n {
-        let mut s = Sampler::new(13, i, 0);
-        let choice = s.next_f32();
-        let u = s.next_2d();
-        if let Some(s) = sample(t, p, base, (wo, entering), choice, u) {
-            sum += s.weight;
-        }
-    }
-    sum / n as f32
-}
 
 #[test]
 fn a_white_material_under_a_coat_keeps_the_furnace_energy() {

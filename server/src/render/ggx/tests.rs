@@ -12,15 +12,21 @@ pub(super) fn dir(cos: f32, phi: f32) -> Vec3A {
     Vec3A::new(s * phi.cos(), s * phi.sin(), cos)
 }
 
-/// The directional albedo seen from `wo`: the mean of sample weights.
+/// The directional albedo seen from `wo` from outside: the mean of sample
+/// weights.
 fn albedo(p: &Pbr, base: Vec3A, wo: Vec3A, n: u64) -> Vec3A {
+    albedo_from(p, base, (wo, true), n)
+}
+
+/// The directional albedo seen from `wo` on the side `entering` says.
+pub(super) fn albedo_from(p: &Pbr, base: Vec3A, (wo, entering): (Vec3A, bool), n: u64) -> Vec3A {
     let t = tables();
     let mut sum = Vec3A::ZERO;
     for i in 0..n {
         let mut s = Sampler::new(7, i, 0);
         let choice = s.next_f32();
         let u = s.next_2d();
-        if let Some(s) = sample(t, p, base, (wo, true), choice, u) {
+        if let Some(s) = sample(t, p, base, (wo, entering), choice, u) {
             sum += s.weight;
         }
     }
