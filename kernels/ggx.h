@@ -218,7 +218,8 @@ typedef struct {
 typedef struct {
     float e_o, a_avg, b_avg;
     float3 fms_metal;
-    float fms_diel, es_o, es_avg, p_spec;
+    float3 f0, fms_diel, es_o, es_avg; /* the dielectric's F0 per channel */
+    float f90, p_spec;
 #if HAS_TRANSMISSION
     float p_glass;
     GgxGlass glass;
@@ -286,11 +287,14 @@ static inline float ggx_coat_pdf(const GgxCoat *c, float3 wo, float3 wi) {
 
 /* The lobes seen from wo on a surface reached from outside (entering) or
  * inside; g: the material's glass field. */
-static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, float4 k, float3 base, float3 wo,
-                                 int entering) {
+static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, float4 k, float4 sp, float3 base,
+                                 float3 wo, int entering) {
     GgxLobes L;
-    float f0 = p.w;
     float metallic = p.x;
+    float3 f0 = sp.xyz;
+    float f90 = sp.w;
+    L.f0 = f0;
+    L.f90 = f90;
     float a_o = ggx_at(T, 0u, wo.z, p.z);
     float b_o = ggx_at(T, 1u, wo.z, p.z);
     L.a_avg = ggx_avg(T, 0u, p.z);
@@ -300,12 +304,15 @@ static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, fl
     float3 f_avg_metal = base + ((float3)(1.0f) - base) * (1.0f / 21.0f);
     L.fms_metal = (float3)(ggx_fresnel_factor(f_avg_metal.x, e_avg), ggx_fresnel_factor(f_avg_metal.y, e_avg),
                            ggx_fresnel_factor(f_avg_metal.z, e_avg));
-    L.fms_diel = ggx_fresnel_factor(f0 + (1.0f - f0) * (1.0f / 21.0f), e_avg);
-    L.es_o = f0 * a_o + b_o + (1.0f - L.e_o) * L.fms_diel;
-    L.es_avg = f0 * L.a_avg + L.b_avg + (1.0f - e_avg) * L.fms_diel;
-    float spec = metallic * ggx_mean3(base * a_o + (float3)(b_o)) + (1.0f - metallic) * (f0 * a_o + b_o);
+    float3 f_avg_diel = f0 + ((float3)(f90) - f0) * (1.0f / 21.0f);
+    L.fms_diel = (float3)(ggx_fresnel_factor(f_avg_diel.x, e_avg), ggx_fresnel_factor(f_avg_diel.y, e_avg),
+                          ggx_fresnel_factor(f_avg_diel.z, e_avg));
+    L.es_o = f0 * a_o + (float3)(f90 * b_o) + L.fms_diel * (1.0f - L.e_o);
+    L.es_avg = f0 * L.a_avg + (float3)(f90 * L.b_avg) + L.fms_diel * (1.0f - e_avg);
+    float spec = metallic * ggx_mean3(base * a_o + (float3)(b_o)) +
+                 (1.0f - metallic) * ggx_mean3(f0 * a_o + (float3)(f90 * b_o));
     float rest = metallic * (1.0f - L.e_o) * ggx_mean3(L.fms_metal) +
-                 (1.0f - metallic) * ((1.0f - L.e_o) * L.fms_diel + (1.0f - L.es_o) * ggx_mean3(base));
+                 (1.0f - metallic) * ggx_mean3(L.fms_diel * (1.0f - L.e_o) + ((float3)(1.0f) - L.es_o) * base);
     L.p_spec = fmin(fmax(spec / (spec + rest), 0.05f), 0.95f);
 #if HAS_TRANSMISSION
     L.p_glass = (1.0f - metallic) * g.x;
@@ -353,8 +360,9 @@ static inline float3 ggx_eval_reflection(__global const float *T, float4 p, floa
         return (float3)(0.0f);
     }
     float alpha = p.y;
-    float f0 = p.w;
     float metallic = p.x;
+    float3 f0 = L->f0;
+    float f90 = L->f90;
     float3 h = normalize3(wo + wi);
     float ro = ggx_smith_r(wo, alpha);
     float ri = ggx_smith_r(wi, alpha);
@@ -365,12 +373,13 @@ static inline float3 ggx_eval_reflection(__global const float *T, float4 p, floa
     float e_i = a_i + b_i;
     float e_avg = L->a_avg + L->b_avg;
     float ms = (1.0f - L->e_o) * (1.0f - e_i) * M_1_PI_F / fmax(1.0f - e_avg, 1e-6f);
-    float es_i = f0 * a_i + b_i + (1.0f - e_i) * L->fms_diel;
-    float diffuse = (1.0f - L->es_o) * (1.0f - es_i) * M_1_PI_F / fmax(1.0f - L->es_avg, 1e-6f);
+    float3 es_i = f0 * a_i + (float3)(f90 * b_i) + L->fms_diel * (1.0f - e_i);
+    float3 diffuse = ((float3)(1.0f) - L->es_o) * ((float3)(1.0f) - es_i) * M_1_PI_F /
+                     fmax((float3)(1.0f) - L->es_avg, (float3)(1e-6f));
     float layer = (1.0f - metallic) * (1.0f - g.x);
     float3 single = (base + ((float3)(1.0f) - base) * c5) * (spec * metallic) +
-                    (float3)((f0 + (1.0f - f0) * c5) * spec * layer);
-    float3 multiple = L->fms_metal * (ms * metallic) + (base * diffuse + (float3)(L->fms_diel * ms)) * layer;
+                    (f0 + ((float3)(f90) - f0) * c5) * (spec * layer);
+    float3 multiple = L->fms_metal * (ms * metallic) + (base * diffuse + L->fms_diel * ms) * layer;
     return (single + multiple) * wi.z;
 }
 
@@ -429,12 +438,12 @@ static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
 /* A direction from wo (shading frame) on a surface reached from outside
  * (entering) or inside, *weight = BSDF |cos| / pdf and *pdf its density;
  * returns 0 where the sample leaves on the wrong side (no contribution). */
-static inline int ggx_sample(__global const float *T, float4 p, float4 g, float4 k, float3 base, float3 wo,
-                             int entering, float choice, float2 u, float3 *wi, float3 *weight, float *pdf_out) {
+static inline int ggx_sample(__global const float *T, float4 p, float4 g, float4 k, float4 sp, float3 base,
+                             float3 wo, int entering, float choice, float2 u, float3 *wi, float3 *weight, float *pdf_out) {
     if (!(wo.z > 0.0f)) {
         return 0;
     }
-    GgxLobes L = ggx_lobes(T, p, g, k, base, wo, entering);
+    GgxLobes L = ggx_lobes(T, p, g, k, sp, base, wo, entering);
     float3 w;
     int drawn = 0;
     float under = 1.0f; /* what the coat lets through over 1 - its probability */

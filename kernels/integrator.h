@@ -265,7 +265,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             basis(ns, &ne.t, &ne.b);
             ne.n = ns;
             ne.wo = -(float3)(dot3(d, ne.t), dot3(d, ne.b), dot3(d, ns));
-            ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->glass, m->coat, m->albedo.xyz, ne.wo, arriving);
+            ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->glass, m->coat, m->spec, m->albedo.xyz, ne.wo, arriving);
         }
 #endif
         if (gathered) {

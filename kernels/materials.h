@@ -40,7 +40,7 @@ static inline float3 scatter(MatRef m, __global const float *ggx, float3 d, int 
         basis(nl, &t, &b);
         float3 wo = (float3)(-dot3(d, t), -dot3(d, b), -dot3(d, nl));
         float3 wi;
-        if (ggx_sample(ggx, m->pbr, m->glass, m->coat, m->albedo.xyz, wo, entering, choice, u, &wi, weight, pdf)) {
+        if (ggx_sample(ggx, m->pbr, m->glass, m->coat, m->spec, m->albedo.xyz, wo, entering, choice, u, &wi, weight, pdf)) {
             *transmitted = wi.z < 0.0f;
             return normalize3(t * wi.x + b * wi.y + nl * wi.z);
         }

@@ -58,6 +58,7 @@ typedef struct {
     float4 glass;    /* MAT_PBR: transmission, ior, thin wall (ggx.h) */
     float4 absorb;   /* absorption per unit inside (HAS_VOLUME); w unused */
     float4 coat;     /* MAT_PBR: clear coat weight, alpha, roughness (HAS_COAT) */
+    float4 spec;     /* MAT_PBR: the dielectric's Schlick F0 (rgb) and F90 */
 } Material;
 
 /* A material's texture slot (opencl/textures.rs, MapSlot): its UV

@@ -388,7 +388,7 @@ fn the_bvh_nearest_hit_agrees_on_1e5_rays() {
 /// match: metal, dielectric over a coloured base, a mix, a near-mirror,
 /// rough glass, glass mixed with the coated base, a thin wall, index-
 /// matched glass (a delta straight through), clear coats over a mix and
-/// over rough glass.
+/// over rough glass, a weakened and tinted specular.
 const PBR_SCENE: &str = r#"{
   "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "vfov_deg": 40},
   "materials": {
@@ -402,6 +402,7 @@ const PBR_SCENE: &str = r#"{
     "matched": {"type": "pbr", "base_color": [0.5, 0.9, 0.7], "metallic": 0, "roughness": 0.5, "transmission": 0.7, "ior": 1.0},
     "coated": {"type": "pbr", "base_color": [0.6, 0.1, 0.1], "metallic": 0.3, "roughness": 0.6, "clearcoat": 0.8, "clearcoat_roughness": 0.1},
     "lacquer": {"type": "pbr", "metallic": 0, "roughness": 0.3, "transmission": 1, "clearcoat": 1, "clearcoat_roughness": 0.3},
+    "tinted": {"type": "pbr", "base_color": [0.3, 0.6, 0.3], "metallic": 0.1, "roughness": 0.4, "specular": 0.6, "specular_color": [3, 1, 0.2]},
     "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 4, 4]}
   },
   "objects": [
@@ -415,6 +416,7 @@ const PBR_SCENE: &str = r#"{
     {"type": "sphere", "center": [0, -1, 0], "radius": 0.4, "material": "matched"},
     {"type": "sphere", "center": [-1, -1, 0], "radius": 0.4, "material": "coated"},
     {"type": "sphere", "center": [1, -1, 0], "radius": 0.4, "material": "lacquer"},
+    {"type": "sphere", "center": [2, -1, 0], "radius": 0.4, "material": "tinted"},
     {"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "material": "light"}
   ]
 }"#;
@@ -533,7 +535,7 @@ fn scattering_agrees_for_every_material() {
             );
         }
     }
-    assert_eq!(seen.len(), 14, "every material kind was checked: {seen:?}");
+    assert_eq!(seen.len(), 15, "every material kind was checked: {seen:?}");
 }
 
 #[test]

@@ -157,3 +157,61 @@ fn pbr_materials_survive_the_round_trip_through_json() {
     let back = Scene::from_json(&s.to_json()).expect("round trip");
     assert_eq!(s.materials, back.materials);
 }
+
+#[test]
+fn specular_weakened_or_tinted_keeps_a_white_sphere_invisible_and_agrees() {
+    // KHR_materials_specular: what the dielectric does not reflect the
+    // white base does, channel by channel.
+    for (specular, color) in [(0.0, [1.0, 1.0, 1.0]), (0.6, [3.0, 1.0, 0.2])] {
+        let m = json!({"type": "pbr", "metallic": 0, "roughness": 0.4, "specular": specular,
+            "specular_color": color});
+        common::assert_invisible(
+            &common::sky_sphere(m),
+            48,
+            0.015,
+            &format!("specular {specular} colour {color:?}"),
+        );
+    }
+    let m = json!({"type": "pbr", "base_color": [0.2, 0.3, 0.5], "metallic": 0, "roughness": 0.3,
+        "specular": 0.8, "specular_color": [4, 1, 0.2]});
+    assert_backends_agree(&common::sky_sphere(m), (24, 24), &box_quality(), 64);
+}
+
+#[test]
+fn bad_specular_is_named_and_good_survives_the_round_trip() {
+    for (field, bad) in [
+        ("specular", json!(1.2)),
+        ("specular", json!(-0.5)),
+        ("specular_color", json!([1, -1, 1])),
+        ("specular_color", json!([1, 1, 1000])),
+    ] {
+        let mut m = json!({"type": "pbr"});
+        m[field] = bad.clone();
+        let s = json!({
+            "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "vfov_deg": 40},
+            "materials": {"m": m},
+            "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}]
+        });
+        let e = Scene::from_json_str(&s.to_string()).expect_err("invalid");
+        assert!(
+            e.to_string().contains(&format!("materials.m.{field}")),
+            "{bad}: {e}"
+        );
+    }
+    let s = common::sky_sphere(
+        json!({"type": "pbr", "specular": 0.5, "specular_color": [1, 0.5, 0.25]}),
+    );
+    let back = Scene::from_json(&s.to_json()).expect("round trip");
+    assert_eq!(s.materials, back.materials);
+    let text = serde_json::to_string(&s.to_json()).expect("serialises");
+    assert!(
+        text.contains("\"specular\":0.5,\"specular_color\":[1.0,0.5,0.25]"),
+        "{text}"
+    );
+    let plain =
+        serde_json::to_string(&common::sky_sphere(json!({"type": "pbr"})).to_json()).expect("json");
+    assert!(
+        !plain.contains("specular"),
+        "defaults are not written: {plain}"
+    );
+}

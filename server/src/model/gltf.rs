@@ -52,8 +52,9 @@ const ID4: M4 = [
 ];
 
 /// Extensions whose content is read.
-const SUPPORTED: [&str; 7] = [
+const SUPPORTED: [&str; 8] = [
     "KHR_materials_clearcoat",
+    "KHR_materials_specular",
     "KHR_materials_emissive_strength",
     "KHR_texture_transform",
     "KHR_materials_transmission",

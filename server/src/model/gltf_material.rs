@@ -103,6 +103,8 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         ignored.push("transmission texture".to_owned());
     }
     let (clearcoat, clearcoat_roughness) = clearcoat(m, &mut notes, &mut ignored);
+    let (specular, specular_color) = specular(m, &mut notes, &mut ignored);
+    let plain = clearcoat == 0.0 && specular == 1.0 && specular_color == [1.0; 3];
     let mut maps = maps;
     let alpha = widen(base[3]);
     maps.alpha = if alpha.is_finite() {
@@ -128,7 +130,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
 
     // Smooth, clear, whole transmission is the `glass` corner of the model
     // (and the other corners likewise only without a coat).
-    let smooth_glass = clearcoat == 0.0
+    let smooth_glass = plain
         && solid
         && t == 1.0
         && roughness == 0.0
@@ -157,7 +159,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     } else if metallic == 0.0
         && roughness == 1.0
         && t == 0.0
-        && clearcoat == 0.0
+        && plain
         && maps.metallic_roughness.is_none()
     {
         Material::Diffuse {
@@ -178,6 +180,8 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
             attenuation,
             clearcoat,
             clearcoat_roughness,
+            specular,
+            specular_color,
             emission,
         }
     };
@@ -221,4 +225,44 @@ fn clearcoat(
         }
     }
     (weight, roughness)
+}
+
+/// `KHR_materials_specular`'s factor (in [0, 1]) and colour (components
+/// >= 0), 1 and white where absent; its textures are noted as ignored.
+fn specular(
+    m: &::gltf::Material,
+    notes: &mut Vec<String>,
+    ignored: &mut Vec<String>,
+) -> (f64, [f64; 3]) {
+    let Some(ext) = m.extension_value("KHR_materials_specular") else {
+        return (1.0, [1.0; 3]);
+    };
+    let raw = ext
+        .get("specularFactor")
+        .and_then(serde_json::Value::as_f64)
+        .unwrap_or(1.0);
+    let factor = common::unit("KHR_materials_specular.specularFactor", raw, notes);
+    let mut color = [1.0; 3];
+    if let Some(c) = ext
+        .get("specularColorFactor")
+        .and_then(serde_json::Value::as_array)
+    {
+        for (k, v) in c.iter().take(3).enumerate() {
+            let x = v.as_f64().unwrap_or(1.0);
+            color[k] = if x.is_finite() {
+                x.clamp(0.0, 100.0)
+            } else {
+                1.0
+            };
+        }
+    }
+    for (key, what) in [
+        ("specularTexture", "specular texture"),
+        ("specularColorTexture", "specular colour texture"),
+    ] {
+        if ext.get(key).is_some() {
+            ignored.push(what.to_owned());
+        }
+    }
+    (factor, color)
 }

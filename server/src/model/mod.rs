@@ -106,6 +106,9 @@ pub enum Material {
         /// `KHR_materials_clearcoat`: the coat's weight and roughness.
         clearcoat: f64,
         clearcoat_roughness: f64,
+        /// `KHR_materials_specular`: strength and F0 colour (1, white).
+        specular: f64,
+        specular_color: [f64; 3],
         emission: Option<[f64; 3]>,
     },
 }

@@ -295,6 +295,8 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
             attenuation: None,
             clearcoat: 0.0,
             clearcoat_roughness: 0.0,
+            specular: 1.0,
+            specular_color: [1.0; 3],
             emission,
         }
     } else {

@@ -62,11 +62,17 @@ impl SurfaceMaterial {
                 thin,
                 clearcoat,
                 clearcoat_roughness,
+                specular,
+                specular_color,
             } => Bsdf::Pbr(
                 Pbr::new(metallic as f32, roughness as f32, ior as f32)
                     .transmitting(transmission as f32)
                     .thin_walled(thin)
-                    .coated(clearcoat as f32, clearcoat_roughness as f32),
+                    .coated(clearcoat as f32, clearcoat_roughness as f32)
+                    .specular(
+                        specular as f32,
+                        DVec3::from_array(specular_color).as_vec3().into(),
+                    ),
             ),
         };
         Self {

@@ -269,6 +269,8 @@ fn material_json(m: model::Material) -> MaterialJson {
             attenuation,
             clearcoat,
             clearcoat_roughness,
+            specular,
+            specular_color,
             emission,
         } => MaterialJson::Pbr(Box::new(PbrJson {
             base_color: base_color.into(),
@@ -280,6 +282,8 @@ fn material_json(m: model::Material) -> MaterialJson {
             attenuation: attenuation.map(attenuation_json),
             clearcoat,
             clearcoat_roughness,
+            specular,
+            specular_color,
             emission: emission.map(Into::into),
             normal: None,
         })),

@@ -148,7 +148,8 @@ fn scene() -> (Value, Vec<u8>) {
             {"name": "partial", "pbrMetallicRoughness": {"baseColorFactor": [2, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 0},
              "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5},
                 "KHR_materials_clearcoat": {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.2,
-                    "clearcoatTexture": {"index": 0}}}},
+                    "clearcoatTexture": {"index": 0}},
+                "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25]}}},
             {"name": "unused", "emissiveTexture": {"index": 0}}
         ],
         "textures": [{"source": 0}],
@@ -200,6 +201,8 @@ fn pbr(base_color: [f64; 3], metallic: f64, roughness: f64) -> Material {
         attenuation: None,
         clearcoat: 0.0,
         clearcoat_roughness: 0.0,
+        specular: 1.0,
+        specular_color: [1.0; 3],
         emission: None,
     }
 }
@@ -297,6 +300,8 @@ fn expected() -> Model {
                     attenuation: None,
                     clearcoat: 0.5,
                     clearcoat_roughness: 0.2,
+                    specular: 0.5,
+                    specular_color: [1.0, 0.5, 0.25],
                     emission: None,
                 },
             ),

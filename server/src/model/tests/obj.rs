@@ -256,6 +256,8 @@ fn mtl_rules_map_every_material() {
                 attenuation: None,
                 clearcoat: 0.0,
                 clearcoat_roughness: 0.0,
+                specular: 1.0,
+                specular_color: [1.0; 3],
                 emission: None,
             },
             &diffuse([0.8; 3], None),
@@ -324,6 +326,8 @@ fn mtl_pbr_keys_make_the_metallic_roughness_model() {
                     attenuation: None,
                     clearcoat: 0.0,
                     clearcoat_roughness: 0.0,
+                    specular: 1.0,
+                    specular_color: [1.0; 3],
                     emission: None,
                 }
             ),

@@ -2,7 +2,7 @@
 //! coat, a dark material never gaining energy from it, the coat lobe's
 //! integral against its tabulated albedo, sampling against the pdf.
 
-use super::super::tests::{albedo_from as albedo, dir, sphere_chi2};
+use super::super::tests::{albedo_from as albedo, assert_samples_follow_the_pdf, dir};
 use super::super::{eval_cos, pdf, sample, tables, Lobes, Pbr};
 use super::*;
 use crate::render::sampler::Sampler;
@@ -106,21 +106,10 @@ fn sampling_under_a_coat_follows_the_pdf_chi_square() {
         let p = Pbr::new(metallic, r, 1.5)
             .transmitting(transmission)
             .coated(1.0, coat_r);
-        let base = Vec3A::new(0.6, 0.5, 0.4);
-        let wo = dir(mu, 0.2);
-        let lobes = Lobes::new(t, &p, base, wo, true);
-        let draw = |k: u64| {
-            let mut s = Sampler::new(17, k, 0);
-            let choice = s.next_f32();
-            let u = s.next_2d();
-            sample(t, &p, base, (wo, true), choice, u).map(|s| s.wi)
-        };
-        let (chi2, dof, tail) = sphere_chi2(400_000, draw, |w| pdf(&p, &lobes, wo, w));
-        assert!(
-            tail > 1e-4,
-            "roughness {r} metallic {metallic} transmission {transmission} coat {coat_r} \
-             mu {mu}: chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
+        let what = format!(
+            "roughness {r} metallic {metallic} transmission {transmission} coat {coat_r} mu {mu}"
         );
+        assert_samples_follow_the_pdf(t, &p, dir(mu, 0.2), 17, &what);
     }
 }
 

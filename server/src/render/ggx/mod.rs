@@ -65,6 +65,11 @@ pub struct Pbr {
     /// The glass is a thin wall (glTF's default without
     /// `KHR_materials_volume`): what it transmits leaves unrefracted.
     pub thin: bool,
+    /// The dielectric's Schlick F0 per channel and its F90
+    /// (`KHR_materials_specular`: min(f0 specular_color, 1) specular and
+    /// specular; f0 and 1 without it).
+    pub spec_f0: Vec3A,
+    pub spec_f90: f32,
     /// The clear coat's weight (`KHR_materials_clearcoat`; 0: none), its
     /// roughness and alpha ([`coat`]).
     pub coat: f32,
@@ -83,9 +88,22 @@ impl Pbr {
             transmission: 0.0,
             ior,
             thin: false,
+            spec_f0: Vec3A::splat(r * r),
+            spec_f90: 1.0,
             coat: 0.0,
             coat_roughness: 0.0,
             coat_alpha: ALPHA_MIN,
+        }
+    }
+
+    /// The same material with `KHR_materials_specular`'s `factor` and
+    /// `color` (F0 tinted by the colour, at most 1, both scaled by the
+    /// factor).
+    pub fn specular(self, factor: f32, color: Vec3A) -> Pbr {
+        Pbr {
+            spec_f0: (color * self.f0).min(Vec3A::ONE) * factor,
+            spec_f90: factor,
+            ..self
         }
     }
 
@@ -270,10 +288,10 @@ pub struct Lobes {
     /// Kulla-Conty Fresnel factors of the metal (per channel) and of the
     /// dielectric.
     fms_metal: Vec3A,
-    fms_diel: f32,
+    fms_diel: Vec3A,
     /// The dielectric layer's whole albedo at mu_o and its average.
-    es_o: f32,
-    es_avg: f32,
+    es_o: Vec3A,
+    es_avg: Vec3A,
     /// Probability of drawing the visible-normal lobe (of the lobes other
     /// than the glass).
     p_spec: f32,
@@ -313,15 +331,21 @@ impl Lobes {
             fresnel_factor(f_avg_metal.y, e_avg),
             fresnel_factor(f_avg_metal.z, e_avg),
         );
-        let fms_diel = fresnel_factor(p.f0 + (1.0 - p.f0) * (1.0 / 21.0), e_avg);
-        let es_o = p.f0 * a_o + b_o + (1.0 - e_o) * fms_diel;
-        let es_avg = p.f0 * a_avg + b_avg + (1.0 - e_avg) * fms_diel;
+        let (f0, f90) = (p.spec_f0, p.spec_f90);
+        let f_avg_diel = f0 + (Vec3A::splat(f90) - f0) * (1.0 / 21.0);
+        let fms_diel = Vec3A::new(
+            fresnel_factor(f_avg_diel.x, e_avg),
+            fresnel_factor(f_avg_diel.y, e_avg),
+            fresnel_factor(f_avg_diel.z, e_avg),
+        );
+        let es_o = f0 * a_o + Vec3A::splat(f90 * b_o) + fms_diel * (1.0 - e_o);
+        let es_avg = f0 * a_avg + Vec3A::splat(f90 * b_avg) + fms_diel * (1.0 - e_avg);
         // The visible-normal lobe's share of what wo sees: the single-
         // scattering albedos against the cosine-shaped lobes'.
         let spec = p.metallic * mean3(base * a_o + Vec3A::splat(b_o))
-            + (1.0 - p.metallic) * (p.f0 * a_o + b_o);
+            + (1.0 - p.metallic) * mean3(f0 * a_o + Vec3A::splat(f90 * b_o));
         let rest = p.metallic * (1.0 - e_o) * mean3(fms_metal)
-            + (1.0 - p.metallic) * ((1.0 - e_o) * fms_diel + (1.0 - es_o) * mean3(base));
+            + (1.0 - p.metallic) * mean3(fms_diel * (1.0 - e_o) + (Vec3A::ONE - es_o) * base);
         let p_spec = (spec / (spec + rest)).clamp(0.05, 0.95);
         let p_glass = (1.0 - p.metallic) * p.transmission;
         let glass = if p_glass > 0.0 {
@@ -395,14 +419,16 @@ fn eval_reflection(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, w
     let e_i = a_i + b_i;
     let e_avg = lobes.a_avg + lobes.b_avg;
     let ms = (1.0 - lobes.e_o) * (1.0 - e_i) * FRAC_1_PI / (1.0 - e_avg).max(1e-6);
-    let es_i = p.f0 * a_i + b_i + (1.0 - e_i) * lobes.fms_diel;
-    let diffuse = (1.0 - lobes.es_o) * (1.0 - es_i) * FRAC_1_PI / (1.0 - lobes.es_avg).max(1e-6);
+    let (f0, f90) = (p.spec_f0, p.spec_f90);
+    let es_i = f0 * a_i + Vec3A::splat(f90 * b_i) + lobes.fms_diel * (1.0 - e_i);
+    let diffuse = (Vec3A::ONE - lobes.es_o) * (Vec3A::ONE - es_i) * FRAC_1_PI
+        / (Vec3A::ONE - lobes.es_avg).max(Vec3A::splat(1e-6));
     // The coated diffuse's share.
     let layer = (1.0 - p.metallic) * (1.0 - p.transmission);
     let single = (base + (Vec3A::ONE - base) * c5) * (spec * p.metallic)
-        + Vec3A::splat((p.f0 + (1.0 - p.f0) * c5) * spec * layer);
-    let multiple = lobes.fms_metal * (ms * p.metallic)
-        + (base * diffuse + Vec3A::splat(lobes.fms_diel * ms)) * layer;
+        + (f0 + (Vec3A::splat(f90) - f0) * c5) * (spec * layer);
+    let multiple =
+        lobes.fms_metal * (ms * p.metallic) + (base * diffuse + lobes.fms_diel * ms) * layer;
     (single + multiple) * wi.z
 }
 

@@ -290,22 +290,27 @@ fn sampling_follows_the_pdf_chi_square() {
         (0.5, 0.3, 0.4, 1.0),
     ] {
         let p = Pbr::new(metallic, r, 1.5).transmitting(transmission);
-        let base = Vec3A::new(0.6, 0.5, 0.4);
-        let wo = dir(mu, 0.2);
-        let lobes = Lobes::new(t, &p, base, wo, true);
-        let draw = |k: u64| {
-            let mut s = Sampler::new(11, k, 0);
-            let choice = s.next_f32();
-            let u = s.next_2d();
-            sample(t, &p, base, (wo, true), choice, u).map(|s| s.wi)
-        };
-        let (chi2, dof, tail) = sphere_chi2(400_000, draw, |w| pdf(&p, &lobes, wo, w));
-        assert!(
-            tail > 1e-4,
-            "roughness {r} metallic {metallic} transmission {transmission} mu {mu}: \
-             chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
-        );
+        let what = format!("roughness {r} metallic {metallic} transmission {transmission} mu {mu}");
+        assert_samples_follow_the_pdf(t, &p, dir(mu, 0.2), 11, &what);
     }
+}
+
+/// Directions [`sample`]d from `wo` (outside, a fixed base colour, seed
+/// `seed`) pass the chi-square test against [`pdf`] at p > 1e-4.
+pub(super) fn assert_samples_follow_the_pdf(t: &Tables, p: &Pbr, wo: Vec3A, seed: u64, what: &str) {
+    let base = Vec3A::new(0.6, 0.5, 0.4);
+    let lobes = Lobes::new(t, p, base, wo, true);
+    let draw = |k: u64| {
+        let mut s = Sampler::new(seed, k, 0);
+        let choice = s.next_f32();
+        let u = s.next_2d();
+        sample(t, p, base, (wo, true), choice, u).map(|s| s.wi)
+    };
+    let (chi2, dof, tail) = sphere_chi2(400_000, draw, |w| pdf(p, &lobes, wo, w));
+    assert!(
+        tail > 1e-4,
+        "{what}: chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
+    );
 }
 
 #[test]
@@ -357,4 +362,45 @@ fn weights_and_densities_are_finite_from_every_angle() {
             }
         }
     }
+}
+
+#[test]
+fn white_lobes_keep_the_furnace_energy_under_any_specular() {
+    // KHR_materials_specular weakens or tints the dielectric's reflection;
+    // a white base takes whatever it leaves, per channel: still 1.
+    for r in [0.1f32, 0.5, 1.0] {
+        for (factor, color) in [
+            (0.0, Vec3A::ONE),
+            (0.5, Vec3A::ONE),
+            (1.0, Vec3A::new(1.0, 0.4, 0.1)),
+            (0.7, Vec3A::new(20.0, 5.0, 1.0)),
+        ] {
+            let p = Pbr::new(0.0, r, 1.5).specular(factor, color);
+            for mu in [0.1, 0.5, 1.0] {
+                let a = albedo(&p, Vec3A::ONE, dir(mu, 0.3), 100_000);
+                assert!(
+                    (a - Vec3A::ONE).abs().max_element() < 0.01,
+                    "specular {factor} colour {color} roughness {r} mu {mu}: albedo {a}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_tinted_specular_reflects_its_colour_off_a_black_base() {
+    // Over a black base only the dielectric reflects: at normal incidence
+    // a smooth one reflects about F0 = min(0.04 colour, 1) factor per
+    // channel, in the colour's order.
+    let p = Pbr::new(0.0, 0.05, 1.5).specular(0.8, Vec3A::new(10.0, 5.0, 1.0));
+    let a = albedo(&p, Vec3A::ZERO, dir(0.999, 0.0), 100_000);
+    let f0 = (Vec3A::new(10.0, 5.0, 1.0) * 0.04).min(Vec3A::ONE) * 0.8;
+    assert!((a - f0).abs().max_element() < 0.02, "albedo {a}, F0 {f0}");
+    assert!(a.x > a.y && a.y > a.z, "{a}");
+}
+
+#[test]
+fn sampling_under_a_tinted_specular_follows_the_pdf_chi_square() {
+    let p = Pbr::new(0.2, 0.4, 1.5).specular(0.6, Vec3A::new(2.0, 1.0, 0.3));
+    assert_samples_follow_the_pdf(tables(), &p, dir(0.5, 0.2), 23, "tinted specular");
 }

@@ -216,6 +216,11 @@ pub struct PbrJson {
     pub clearcoat: f64,
     #[serde(default, skip_serializing_if = "is_zero")]
     pub clearcoat_roughness: f64,
+    /// The dielectric's reflection strength and F0 colour.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub specular: f64,
+    #[serde(default = "white3", skip_serializing_if = "is_white3")]
+    pub specular_color: [f64; 3],
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -232,6 +237,18 @@ fn one_input() -> ScalarInput {
 
 fn one() -> f64 {
     1.0
+}
+
+fn is_one(v: &f64) -> bool {
+    *v == 1.0
+}
+
+fn white3() -> [f64; 3] {
+    [1.0; 3]
+}
+
+fn is_white3(v: &[f64; 3]) -> bool {
+    *v == [1.0; 3]
 }
 
 fn default_ior() -> f64 {

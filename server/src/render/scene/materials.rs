@@ -71,6 +71,8 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 attenuation: absorbs,
                 clearcoat,
                 clearcoat_roughness,
+                specular,
+                specular_color,
                 emission,
                 normal,
             } = &**pbr;
@@ -102,6 +104,8 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 thin: *thin,
                 clearcoat: unit("clearcoat", *clearcoat)?,
                 clearcoat_roughness: unit("clearcoat_roughness", *clearcoat_roughness)?,
+                specular: unit("specular", *specular)?,
+                specular_color: checked_specular_color(&path, *specular_color)?,
             };
             let at = |field: &str| format!("{path}.{field}");
             maps.metallic = texture(
@@ -179,6 +183,22 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
         attenuation,
         imported: false,
     })
+}
+
+/// Largest component of a `specular_color` (F0 is clamped to 1 anyway).
+const MAX_SPECULAR_COLOR: f64 = 100.0;
+
+/// A specular colour with finite components in [0, [`MAX_SPECULAR_COLOR`]].
+fn checked_specular_color(path: &str, c: [f64; 3]) -> Result<[f64; 3]> {
+    let at = format!("{path}.specular_color");
+    let v = vec3(&at, c)?;
+    if v.min_element() < 0.0 || v.max_element() > MAX_SPECULAR_COLOR {
+        return Err(SceneError::new(
+            at,
+            format!("components must be between 0 and {MAX_SPECULAR_COLOR}"),
+        ));
+    }
+    Ok(c)
 }
 
 /// Absorption with each colour component in [0, 1] and a distance > 0.
@@ -328,6 +348,8 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             thin,
             clearcoat,
             clearcoat_roughness,
+            specular,
+            specular_color,
         } => MaterialJson::Pbr(Box::new(PbrJson {
             base_color: albedo,
             metallic: scalar(metallic, &m.maps.metallic),
@@ -338,6 +360,8 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             attenuation,
             clearcoat,
             clearcoat_roughness,
+            specular,
+            specular_color,
             emission,
             normal,
         })),

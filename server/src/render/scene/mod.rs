@@ -191,6 +191,10 @@ pub enum MaterialKind {
         /// roughness, both in [0, 1].
         clearcoat: f64,
         clearcoat_roughness: f64,
+        /// `KHR_materials_specular`: the dielectric's reflection strength
+        /// in [0, 1] and F0 colour (components >= 0), 1 and white without.
+        specular: f64,
+        specular_color: [f64; 3],
     },
 }
 

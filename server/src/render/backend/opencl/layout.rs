@@ -184,6 +184,8 @@ pub struct Material {
     pub absorb: [f32; 4],
     /// pbr: clear coat weight, alpha, roughness.
     pub coat: [f32; 4],
+    /// pbr: the dielectric's Schlick F0 (rgb) and F90.
+    pub spec: [f32; 4],
 }
 
 #[repr(C, align(16))]
@@ -257,7 +259,7 @@ pub struct Light {
 
 const _: () = assert!(std::mem::size_of::<Light>() == 112);
 const _: () = assert!(std::mem::size_of::<Object>() == 96);
-const _: () = assert!(std::mem::size_of::<Material>() == 112);
+const _: () = assert!(std::mem::size_of::<Material>() == 128);
 const _: () = assert!(std::mem::size_of::<Params>() == 208);
 
 fn v4(v: Vec3A, w: f32) -> [f32; 4] {
@@ -427,13 +429,14 @@ pub fn pack(job: &RenderJob) -> Packed {
                 Bsdf::Glass { ior, schlick } => (MAT_GLASS, ior, schlick),
                 Bsdf::Pbr(_) => (MAT_PBR, 1.0, false),
             };
-            let (pbr, glass, coat) = match m.bsdf {
+            let (pbr, glass, coat, spec) = match m.bsdf {
                 Bsdf::Pbr(p) => (
                     [p.metallic, p.alpha, p.roughness, p.f0],
                     [p.transmission, p.ior, f32::from(u8::from(p.thin)), 0.0],
                     [p.coat, p.coat_alpha, p.coat_roughness, 0.0],
+                    v4(p.spec_f0, p.spec_f90),
                 ),
-                _ => ([0.0; 4], [0.0; 4], [0.0; 4]),
+                _ => ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]),
             };
             Material {
                 albedo: v4(m.albedo, ior),
@@ -446,6 +449,7 @@ pub fn pack(job: &RenderJob) -> Packed {
                 glass,
                 absorb: v4(m.absorb, 0.0),
                 coat,
+                spec,
             }
         })
         .collect();
