@@ -376,7 +376,7 @@ __kernel void check_maps(__global float *out, uint n, __global const float4 *in,
     Material m = materials[which[i]];
     float3 ns = in[3 * i + 1].xyz;
     shade_maps(&sc, &tc, &m, &ns);
-    __global float *o = out + 13 * i;
+    __global float *o = out + 21 * i;
     o[0] = m.albedo.x;
     o[1] = m.albedo.y;
     o[2] = m.albedo.z;
@@ -390,6 +390,14 @@ __kernel void check_maps(__global float *out, uint n, __global const float4 *in,
     o[10] = m.emission.x;
     o[11] = m.emission.y;
     o[12] = m.emission.z;
+    o[13] = m.glass.x;
+    o[14] = m.coat.x;
+    o[15] = m.coat.y;
+    o[16] = m.coat.z;
+    o[17] = m.spec.x;
+    o[18] = m.spec.y;
+    o[19] = m.spec.z;
+    o[20] = m.spec.w;
 }
 #endif
 

@@ -199,11 +199,16 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
         }
         at_vertex(s, bounces);
         Surf sf = surface_at(sc, &hit, o, d);
-#if HAS_TEXTURES
+#if HAS_TEXTURES || HAS_VERTEX_COLORS
         Material shaded = materials[sf.material];
+#if HAS_TEXTURES
         if (shaded.maps != NO_MAPS) {
             apply_maps(sc, &hit, &sf, &shaded);
         }
+#endif
+#if HAS_VERTEX_COLORS && HAS_MESHES
+        apply_vertex_color(sc, &hit, &shaded);
+#endif
         MatRef m = &shaded;
 #else
         MatRef m = &materials[sf.material];

@@ -127,37 +127,76 @@ static inline float4 map_read(const Scene *sc, __global const MapSlot *s, const 
     return tex_lookup(sc, s, tc->uv[s->info.y & 1u], srgb);
 }
 
+#if HAS_GGX
+/* maps::shade_pbr: *m's pbr parameters times their textures at tc, the
+ * derived values made again (Pbr::coated, Pbr::specular). */
+static inline void shade_pbr_maps(const Scene *sc, const TexCoords *tc, __global const MaterialMaps *mm, Material *m) {
+    __global const MapSlot *sl = mm->slot;
+    float metallic = mm->factors.x;
+    float roughness = mm->factors.y;
+    float4 mr = (float4)(0.0f);
+    if (sl[MAP_METALLIC].info.x != NO_TEXTURE) {
+        mr = map_read(sc, &sl[MAP_METALLIC], tc, 0);
+        metallic *= mr.z;
+    }
+    if (sl[MAP_ROUGHNESS].info.x != NO_TEXTURE) {
+        if (mm->factors.w == 0.0f) {
+            mr = map_read(sc, &sl[MAP_ROUGHNESS], tc, 0);
+        }
+        roughness *= mr.y;
+    }
+    m->pbr = (float4)(metallic, fmax(roughness * roughness, as_float(ALPHA_MIN_BITS)), roughness, m->pbr.w);
+    if (sl[MAP_TRANSMISSION].info.x != NO_TEXTURE) {
+        m->glass.x = mm->layers.x * map_read(sc, &sl[MAP_TRANSMISSION], tc, 0).x;
+    }
+    int coat = sl[MAP_CLEARCOAT].info.x != NO_TEXTURE;
+    int coat_rough = sl[MAP_CLEARCOAT_ROUGHNESS].info.x != NO_TEXTURE;
+    if (coat || coat_rough) {
+        float weight = mm->layers.y;
+        float rough = mm->layers.z;
+        if (coat) {
+            weight *= map_read(sc, &sl[MAP_CLEARCOAT], tc, 0).x;
+        }
+        if (coat_rough) {
+            rough *= map_read(sc, &sl[MAP_CLEARCOAT_ROUGHNESS], tc, 0).y;
+        }
+        m->coat = (float4)(weight, fmax(rough * rough, as_float(ALPHA_MIN_BITS)), rough, m->coat.w);
+    }
+    int spec = sl[MAP_SPECULAR].info.x != NO_TEXTURE;
+    int spec_color = sl[MAP_SPECULAR_COLOR].info.x != NO_TEXTURE;
+    if (spec || spec_color) {
+        float factor = mm->layers.w;
+        float3 color = mm->spec_color.xyz;
+        if (spec) {
+            factor *= map_read(sc, &sl[MAP_SPECULAR], tc, 0).w;
+        }
+        if (spec_color) {
+            color = color * map_read(sc, &sl[MAP_SPECULAR_COLOR], tc, 1).xyz;
+        }
+        m->spec = (float4)(fmin(color * m->pbr.w, (float3)(1.0f)) * factor, factor);
+    }
+}
+#endif
+
 /* maps::shade: material *m (which has maps) at coordinates tc, and the
  * unit shading normal *ns turned by its normal map. */
 static inline void shade_maps(const Scene *sc, const TexCoords *tc, Material *m, float3 *ns) {
     __global const MaterialMaps *mm = &sc->maps[m->maps];
-    if (mm->emission.info.x != NO_TEXTURE) {
-        m->emission.xyz = m->emission.xyz * map_read(sc, &mm->emission, tc, 1).xyz;
+    __global const MapSlot *sl = mm->slot;
+    if (sl[MAP_EMISSION].info.x != NO_TEXTURE) {
+        m->emission.xyz = m->emission.xyz * map_read(sc, &sl[MAP_EMISSION], tc, 1).xyz;
     }
-    if (mm->base_color.info.x != NO_TEXTURE) {
-        float4 c = map_read(sc, &mm->base_color, tc, 1);
+    if (sl[MAP_BASE_COLOR].info.x != NO_TEXTURE) {
+        float4 c = map_read(sc, &sl[MAP_BASE_COLOR], tc, 1);
         m->albedo.xyz = m->albedo.xyz * c.xyz;
     }
 #if HAS_GGX
     if (m->kind == MAT_PBR) {
-        float metallic = mm->factors.x;
-        float roughness = mm->factors.y;
-        float4 mr = (float4)(0.0f);
-        if (mm->metallic.info.x != NO_TEXTURE) {
-            mr = map_read(sc, &mm->metallic, tc, 0);
-            metallic *= mr.z;
-        }
-        if (mm->roughness.info.x != NO_TEXTURE) {
-            if (mm->factors.w == 0.0f) {
-                mr = map_read(sc, &mm->roughness, tc, 0);
-            }
-            roughness *= mr.y;
-        }
-        m->pbr = (float4)(metallic, fmax(roughness * roughness, as_float(ALPHA_MIN_BITS)), roughness, m->pbr.w);
+        shade_pbr_maps(sc, tc, mm, m);
     }
 #endif
-    if (mm->normal.info.x != NO_TEXTURE) {
-        float4 c = map_read(sc, &mm->normal, tc, 0);
+    if (sl[MAP_NORMAL].info.x != NO_TEXTURE) {
+        float4 c = map_read(sc, &sl[MAP_NORMAL], tc, 0);
         float x = (c.x * 2.0f - 1.0f) * mm->factors.z;
         float y = (c.y * 2.0f - 1.0f) * mm->factors.z;
         float z = c.z * 2.0f - 1.0f;
@@ -191,7 +230,7 @@ static inline void apply_maps(const Scene *sc, const Hit *h, Surf *sf, Material 
 static inline float3 emitted(const Scene *sc, __global const Light *L, const Hit *h, float3 o, float3 d) {
     Surf sf = surface_at(sc, h, o, d);
     TexCoords tc = texcoords(sc, h, &sf);
-    return L->emission.xyz * map_read(sc, &sc->maps[L->maps].emission, &tc, 1).xyz;
+    return L->emission.xyz * map_read(sc, &sc->maps[L->maps].slot[MAP_EMISSION], &tc, 1).xyz;
 }
 
 #if HAS_ALPHA
@@ -208,4 +247,24 @@ static inline float alpha_texel(const Scene *sc, __global const Instance *in, __
     return a->factor * tex_lookup(sc, &a->tex, uv, 0).w;
 }
 #endif
+#endif
+
+#if HAS_VERTEX_COLORS && HAS_MESHES
+/* World::shade's vertex colour: the base colour times the mesh's
+ * interpolated vertex colour at h (Mesh::color), where it has them. */
+static inline void apply_vertex_color(const Scene *sc, const Hit *h, Material *m) {
+    __global const Object *ob = &sc->objects[h->object];
+    if (ob->kind != KIND_INSTANCE) {
+        return;
+    }
+    __global const Instance *in = &sc->instances[ob->pad0];
+    if (in->color_base == NO_NORMALS) {
+        return;
+    }
+    size_t k = (size_t)(h->slot - in->tri_base) * 3u;
+    __global const float4 *c = sc->colors + (size_t)in->color_base * 3u + k;
+    float3 b = h->bary;
+    float3 col = c[0].xyz * b.x + c[1].xyz * b.y + c[2].xyz * b.z;
+    m->albedo.xyz = m->albedo.xyz * col;
+}
 #endif

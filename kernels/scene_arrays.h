@@ -30,6 +30,7 @@
     X(float, env_dist)     /* its sampling tables (envmap.h) */          \
     X(float4, uvs)         /* texture coordinates per triangle slot */  \
     X(float4, tangents)    /* tangents per triangle slot */              \
+    X(float4, colors)      /* vertex colours per triangle slot */        \
     X(MaterialMaps, maps)  /* material texture maps (maps.h) */          \
     X(TexImage, tex_images) /* each texture's place in texels */        \
     X(uint, texels)        /* RGBA8 texels of every texture */           \

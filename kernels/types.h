@@ -70,15 +70,15 @@ typedef struct {
     uint4 info;
 } MapSlot;
 
-/* A material's maps (maps.rs, WorldMaps); factors: metallic, roughness,
- * normal scale, 1 where metallic and roughness share one lookup. */
+/* A material's maps (maps.rs, WorldMaps): a slot per texture::Map, at
+ * index MAP_*; factors: metallic, roughness, normal scale, 1 where
+ * metallic and roughness share one lookup; layers: transmission, clear
+ * coat weight and roughness, specular; spec_color: the specular colour. */
 typedef struct {
-    MapSlot base_color;
-    MapSlot metallic;
-    MapSlot roughness;
-    MapSlot normal;
-    MapSlot emission;
+    MapSlot slot[MAP_SLOTS];
     float4 factors;
+    float4 layers;
+    float4 spec_color;
 } MaterialMaps;
 
 /* A mesh slot's alpha test (render/alpha.rs, AlphaTest): the base colour
@@ -182,7 +182,7 @@ typedef struct {
     uint uv_base;      /* 3 corners' (u0, v0, u1, v1) per triangle, or NO_NORMALS */
     uint tangent_base; /* 3 corners' tangents (w: sign) per triangle, or NO_NORMALS */
     uint alpha_base;   /* its mesh slots' alpha tests in `alpha`, or NO_NORMALS */
-    uint pad0;
+    uint color_base;   /* 3 corners' vertex colours per triangle, or NO_NORMALS */
     uint pad1;
     uint pad2;
 } Instance;
@@ -224,6 +224,7 @@ typedef struct {
 #define HAS_TRANSMISSION 1
 #define HAS_VOLUME 1
 #define HAS_COAT 1
+#define HAS_VERTEX_COLORS 1
 #define HAS_SCHLICK 1
 #define HAS_EXACT 1
 #define HAS_SPHERE_LIGHTS 1
@@ -263,9 +264,9 @@ typedef struct {
 #define USE_ENV_MAP HAS_ENV_MAP
 #define USE_SUN HAS_SUN
 #endif
-/* A hit's material: a private copy where textures can change it per hit
- * (maps.h), else the scene's own. */
-#if HAS_TEXTURES
+/* A hit's material: a private copy where textures or vertex colours can
+ * change it per hit (maps.h), else the scene's own. */
+#if HAS_TEXTURES || HAS_VERTEX_COLORS
 typedef const Material *MatRef;
 #else
 typedef __global const Material *MatRef;

@@ -34,6 +34,7 @@ fn quad(x0: f32) -> MeshData {
             None,
         ],
         tangents: None,
+        colors: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         materials: vec![0, 0],
     }

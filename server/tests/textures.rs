@@ -28,9 +28,6 @@ mod parity;
 use common::{assert_agree, backends, region, render_on};
 use pathstream::model::write_glb::{glb, GlbMaterial, GlbTexture};
 use pathstream::model::{MeshData, Wrap};
-use pathstream::render::backend::opencl::{pack, CheckArg};
-use pathstream::render::maps::{shade, TexCoords};
-use pathstream::render::material::Bsdf;
 use pathstream::render::texture::srgb_table;
 use pathstream::render::{Backend, Film, Quality, Scene};
 use serde_json::{json, Value};
@@ -52,6 +49,7 @@ fn quad(set: usize) -> MeshData {
         normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
         uvs,
         tangents: None,
+        colors: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         materials: vec![0, 0],
     }
@@ -489,73 +487,5 @@ fn the_kernels_map_routines_agree_with_the_cpus_bit_for_bit() {
     };
     let scene = scene_with(&dir, &glb(&quad(0), &material), json!([1, 1, 1]), json!({}));
     let job = pathstream::render::RenderJob::new(&scene, 8, 8, &quality());
-    let w = &job.world;
-    let which = (w.materials.iter())
-        .position(|m| m.maps != pathstream::render::material::NO_MAPS)
-        .expect("a material with maps") as u32;
-    let packed = pack(&job);
-    let n = 20_000u64;
-    let mut input = Vec::new();
-    let mut cpu = Vec::new();
-    for i in 0..n {
-        let uv = [0, 1, 2, 3].map(|k| parity::uniform(i, 10 + k) * 5.0 - 2.0);
-        let ns = parity::unit(i, 20);
-        let t = parity::unit(i, 30) * 2.0;
-        let sign = if i % 3 == 0 { -1.0 } else { 1.0 };
-        input.extend([uv, ns.extend(0.0).to_array(), t.extend(sign).to_array()]);
-        let tc = TexCoords {
-            uv: [[uv[0], uv[1]], [uv[2], uv[3]]],
-            tangent: t,
-            sign,
-        };
-        let m = &w.materials[which as usize];
-        let mut n_out = ns;
-        let out = shade(&w.textures, &w.maps[m.maps as usize], m, &tc, &mut n_out);
-        let Bsdf::Pbr(p) = out.bsdf else {
-            panic!("a pbr material")
-        };
-        let (a, e) = (out.albedo, out.emission);
-        cpu.push([
-            a.x,
-            a.y,
-            a.z,
-            p.metallic,
-            p.alpha,
-            p.roughness,
-            p.f0,
-            n_out.x,
-            n_out.y,
-            n_out.z,
-            e.x,
-            e.y,
-            e.z,
-        ]);
-    }
-    let t = &packed.textures;
-    let out: Vec<f32> = parity::checks(&d)
-        .run(
-            "check_maps",
-            n as usize,
-            13,
-            &[
-                CheckArg::Buffer(bytemuck::cast_slice(&input)),
-                CheckArg::Buffer(bytemuck::cast_slice(&vec![which; n as usize])),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.materials)),
-                CheckArg::Buffer(bytemuck::cast_slice(&t.maps)),
-                CheckArg::Buffer(bytemuck::cast_slice(&t.images)),
-                CheckArg::Buffer(bytemuck::cast_slice(&t.texels)),
-                CheckArg::Buffer(bytemuck::cast_slice(&t.srgb)),
-            ],
-        )
-        .expect("run");
-    for (i, want) in cpu.iter().enumerate() {
-        let got = &out[13 * i..13 * i + 13];
-        for (k, (g, c)) in got.iter().zip(want).enumerate() {
-            assert_eq!(
-                g.to_bits(),
-                c.to_bits(),
-                "item {i} value {k}: device {g}, CPU {c}"
-            );
-        }
-    }
+    parity::assert_maps_agree(&d, &job, 20_000);
 }

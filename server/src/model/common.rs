@@ -399,9 +399,11 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
             .tangents
             .as_ref()
             .is_none_or(|t| t.len() == n && t.iter().flatten().all(|x| x.is_finite()));
-        if !uvs_ok || !tangents_ok {
+        let colors_ok = (mesh.colors.as_ref())
+            .is_none_or(|c| c.len() == n && c.iter().flatten().all(|x| (0.0..=1.0).contains(x)));
+        if !uvs_ok || !tangents_ok || !colors_ok {
             return Err(ctx.err(format!(
-                "mesh {name:?}: texture coordinates or tangents do not match its vertices (a loader bug)"
+                "mesh {name:?}: texture coordinates, tangents or colours do not match its vertices (a loader bug)"
             )));
         }
         let degenerate = degenerate_count(&mesh);

@@ -21,9 +21,11 @@
 //!   `pbr` alike; a thickness texture is noted. The albedo is the base
 //!   colour factor's rgb; emission is the emissive factor
 //!   times KHR_materials_emissive_strength. Texture maps (`gltf_maps`):
-//!   base colour, metallic-roughness, normal and emissive; `alphaMode` MASK
-//!   and BLEND with the base colour's alpha (opaque where it is 1
-//!   everywhere); occlusion maps and transmission textures: noted.
+//!   base colour, metallic-roughness, normal and emissive, the
+//!   transmission, clear coat (weight and roughness) and specular (strength
+//!   and colour) textures; `alphaMode` MASK and BLEND with the base
+//!   colour's alpha (opaque where it is 1 everywhere); occlusion maps,
+//!   thickness textures and the clear coat's normal map: noted.
 //! - The first camera met in the walk (preorder), perspective or
 //!   orthographic (its view 2 ymag tall), becomes the model's camera, in
 //!   world space (it looks down -Z, +Y up, in its node's frame); the others
@@ -354,6 +356,7 @@ fn read_mesh(
     let mut uvs: [Vec<[f32; 2]>; 2] = [Vec::new(), Vec::new()];
     let mut with_uvs = [0usize; 2];
     let (mut tangents, mut with_tangents) = (Vec::new(), 0usize);
+    let (mut colors, mut with_colors) = (Vec::new(), 0usize);
     let mut primitives = 0usize;
     // The UV set of the first normal map that the mesh's materials use.
     let mut normal_uv = None;
@@ -383,9 +386,6 @@ fn read_mesh(
             ctx.warn(format!(
                 "mesh {name:?}: morph targets ignored (the base shape is used)"
             ));
-        }
-        if prim.get(&Semantic::Colors(0)).is_some() {
-            ctx.warn("vertex colours ignored");
         }
         let n = pos.count();
         ctx.check_vertices(totals.0 + n as u64, Some(&path))?;
@@ -448,6 +448,17 @@ fn read_mesh(
                 _ => {}
             }
         }
+        if let Some(acc) = prim.get(&Semantic::Colors(0)).filter(|a| a.count() == n) {
+            // Primitives without colours are white, as glTF defines.
+            colors.resize(out.positions.len(), [1.0; 3]);
+            colors.extend(vertex_colors(
+                ctx,
+                bufs,
+                &acc,
+                &format!("{path}.attributes.COLOR_0"),
+            )?);
+            with_colors += 1;
+        }
         if let Some(acc) = prim.get(&Semantic::Tangents).filter(|a| a.count() == n) {
             let at = format!("{path}.attributes.TANGENT");
             tangents.resize(out.positions.len(), [0.0; 4]);
@@ -482,6 +493,10 @@ fn read_mesh(
             out.uvs[set] = Some(uv);
         }
     }
+    if with_colors > 0 {
+        colors.resize(vertices, [1.0; 3]);
+        out.colors = Some(colors);
+    }
     let tangents_ok = tangents.iter().all(|t| t.iter().all(|x| x.is_finite()));
     if with_tangents == primitives && primitives > 0 && tangents_ok {
         out.tangents = Some(tangents);
@@ -508,4 +523,27 @@ fn read_mesh(
         }
     }
     Ok(out)
+}
+
+/// COLOR_0 (VEC3 or VEC4, its alpha unused): linear RGB clamped to [0, 1];
+/// a component that is not finite is an error naming the vertex.
+fn vertex_colors(
+    ctx: &Ctx,
+    bufs: &mut Buffers,
+    acc: &::gltf::Accessor,
+    path: &str,
+) -> Result<Vec<[f32; 3]>, ModelError> {
+    let rgb = match acc.dimensions() {
+        ::gltf::accessor::Dimensions::Vec4 => (data::read_vec4(ctx, bufs, acc, path)?.into_iter())
+            .map(|[r, g, b, _]| [r, g, b])
+            .collect(),
+        _ => data::read_vec3(ctx, bufs, acc, path)?,
+    };
+    if let Some(i) = common::first_non_finite(&rgb) {
+        return Err(ctx.err_at(path, format!("colour of vertex {i} is not finite")));
+    }
+    Ok(rgb
+        .into_iter()
+        .map(|c| c.map(|x| x.clamp(0.0, 1.0)))
+        .collect())
 }

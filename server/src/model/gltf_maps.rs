@@ -1,5 +1,6 @@
-//! glTF materials' texture maps: the base colour, metallic-roughness and
-//! normal textures, their samplers' wrap modes, their UV sets and
+//! glTF materials' texture maps: the base colour, metallic-roughness,
+//! normal and emissive textures and the extensions' (transmission, clear
+//! coat, specular), their samplers' wrap modes, their UV sets and
 //! `KHR_texture_transform`; the images they read, decoded once each (PNG
 //! or JPEG, from a buffer view, a `data:` URI or a file beside the
 //! `.gltf`). Samplers' filters are not read: lookups are bilinear.
@@ -18,6 +19,9 @@ pub(super) struct Images {
     of: Vec<Option<usize>>,
     /// glTF image of each model image.
     order: Vec<usize>,
+    /// Each glTF texture's image and wrap modes (for texture infos that
+    /// extensions give as JSON).
+    textures: Vec<(usize, [Wrap; 2])>,
 }
 
 impl Images {
@@ -25,6 +29,10 @@ impl Images {
         Self {
             of: vec![None; doc.images().len()],
             order: Vec::new(),
+            textures: doc
+                .textures()
+                .map(|t| (t.source().index(), wraps(&t)))
+                .collect(),
         }
     }
 
@@ -76,19 +84,29 @@ fn wrap(mode: WrappingMode) -> Wrap {
     }
 }
 
+fn wraps(texture: &Texture) -> [Wrap; 2] {
+    let sampler = texture.sampler();
+    [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())]
+}
+
 /// A texture slot as a reference, or `None` (with a note) where it cannot
-/// be read: a UV set other than 0 and 1.
+/// be read: a UV set other than 0 and 1, a texture index out of range.
 fn reference(
     what: &str,
-    texture: Texture,
+    texture: usize,
     tex_coord: u32,
     transform: Option<&serde_json::Value>,
     images: &mut Images,
     notes: &mut Vec<String>,
 ) -> Option<TextureRef> {
-    let sampler = texture.sampler();
-    let mut r = TextureRef::plain(images.index(texture.source().index()));
-    r.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+    let Some(&(image, wrap)) = images.textures.get(texture) else {
+        notes.push(format!(
+            "{what}: texture {texture} does not exist: not rendered"
+        ));
+        return None;
+    };
+    let mut r = TextureRef::plain(images.index(image));
+    r.wrap = wrap;
     r.uv = tex_coord;
     if let Some(t) = transform {
         match read_transform(t) {
@@ -145,7 +163,7 @@ fn read_transform(v: &serde_json::Value) -> Option<Transform> {
 const TRANSFORM: &str = "KHR_texture_transform";
 
 /// A texture slot's reference, if the material fills it.
-fn read(
+pub(super) fn read(
     what: &str,
     info: Option<::gltf::texture::Info>,
     images: &mut Images,
@@ -153,7 +171,41 @@ fn read(
 ) -> Option<TextureRef> {
     let info = info?;
     let t = info.extension_value(TRANSFORM);
-    reference(what, info.texture(), info.tex_coord(), t, images, notes)
+    reference(
+        what,
+        info.texture().index(),
+        info.tex_coord(),
+        t,
+        images,
+        notes,
+    )
+}
+
+/// An extension's texture info `key` of `ext` (glTF `textureInfo` JSON:
+/// `index`, `texCoord`, `KHR_texture_transform`), if it has one; a
+/// malformed one is noted and not rendered.
+pub(super) fn read_json(
+    what: &str,
+    ext: &serde_json::Value,
+    key: &str,
+    images: &mut Images,
+    notes: &mut Vec<String>,
+) -> Option<TextureRef> {
+    let info = ext.get(key)?;
+    let index = info.get("index").and_then(serde_json::Value::as_u64);
+    let uv = match info.get("texCoord") {
+        None => Some(0),
+        Some(v) => v.as_u64().and_then(|v| u32::try_from(v).ok()),
+    };
+    let (Some(index), Some(uv)) = (index, uv) else {
+        notes.push(format!(
+            "{what}: not a texture reference ({{\"index\": n, \"texCoord\": n}}): not rendered"
+        ));
+        return None;
+    };
+    let t = info.get("extensions").and_then(|e| e.get(TRANSFORM));
+    let index = usize::try_from(index).unwrap_or(usize::MAX);
+    reference(what, index, uv, t, images, notes)
 }
 
 /// The maps of material `m` (notes for what cannot be read).
@@ -176,7 +228,8 @@ pub(super) fn maps(m: &::gltf::Material, images: &mut Images, notes: &mut Vec<St
     };
     if let Some(n) = m.normal_texture() {
         let t = n.extension_value(TRANSFORM);
-        out.normal = reference("normal map", n.texture(), n.tex_coord(), t, images, notes);
+        let index = n.texture().index();
+        out.normal = reference("normal map", index, n.tex_coord(), t, images, notes);
         let scale = f64::from(n.scale());
         out.normal_scale = if scale.is_finite() { scale } else { 1.0 };
     }

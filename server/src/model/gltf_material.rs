@@ -95,17 +95,19 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         }
     }
 
-    let maps = gltf_maps::maps(m, images, &mut notes);
-    if transmission
-        .as_ref()
-        .is_some_and(|t| t.transmission_texture().is_some())
-    {
-        ignored.push("transmission texture".to_owned());
+    let mut maps = gltf_maps::maps(m, images, &mut notes);
+    if let Some(tr) = transmission.as_ref().filter(|_| t > 0.0) {
+        let what = "transmission texture";
+        maps.transmission = gltf_maps::read(what, tr.transmission_texture(), images, &mut notes);
     }
-    let (clearcoat, clearcoat_roughness) = clearcoat(m, &mut notes, &mut ignored);
-    let (specular, specular_color) = specular(m, &mut notes, &mut ignored);
-    let plain = clearcoat == 0.0 && specular == 1.0 && specular_color == [1.0; 3];
-    let mut maps = maps;
+    let (clearcoat, clearcoat_roughness) =
+        clearcoat(m, &mut maps, images, &mut notes, &mut ignored);
+    let (specular, specular_color) = specular(m, &mut maps, images, &mut notes);
+    let plain = clearcoat == 0.0
+        && specular == 1.0
+        && specular_color == [1.0; 3]
+        && maps.specular.is_none()
+        && maps.specular_color.is_none();
     let alpha = widen(base[3]);
     maps.alpha = if alpha.is_finite() {
         alpha.clamp(0.0, 1.0)
@@ -133,6 +135,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     let smooth_glass = plain
         && solid
         && t == 1.0
+        && maps.transmission.is_none()
         && roughness == 0.0
         && metallic == 0.0
         && maps.metallic_roughness.is_none();
@@ -197,9 +200,12 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
 }
 
 /// `KHR_materials_clearcoat`'s factors (0 where absent), each in [0, 1]
-/// (clamped with a note); its textures are noted as ignored.
+/// (clamped with a note), and its textures into `maps` where it coats (its
+/// normal map is noted as ignored).
 fn clearcoat(
     m: &::gltf::Material,
+    maps: &mut Maps,
+    images: &mut Images,
     notes: &mut Vec<String>,
     ignored: &mut Vec<String>,
 ) -> (f64, f64) {
@@ -215,24 +221,25 @@ fn clearcoat(
     };
     let weight = factor("clearcoatFactor");
     let roughness = factor("clearcoatRoughnessFactor");
-    for (key, what) in [
-        ("clearcoatTexture", "clearcoat texture"),
-        ("clearcoatRoughnessTexture", "clearcoat roughness texture"),
-        ("clearcoatNormalTexture", "clearcoat normal map"),
-    ] {
-        if weight > 0.0 && ext.get(key).is_some() {
-            ignored.push(what.to_owned());
+    if weight > 0.0 {
+        let key = "clearcoatTexture";
+        maps.clearcoat = gltf_maps::read_json("clearcoat texture", ext, key, images, notes);
+        let (key, what) = ("clearcoatRoughnessTexture", "clearcoat roughness texture");
+        maps.clearcoat_roughness = gltf_maps::read_json(what, ext, key, images, notes);
+        if ext.get("clearcoatNormalTexture").is_some() {
+            ignored.push("clearcoat normal map (the coat follows the base's normal)".to_owned());
         }
     }
     (weight, roughness)
 }
 
 /// `KHR_materials_specular`'s factor (in [0, 1]) and colour (components
-/// >= 0), 1 and white where absent; its textures are noted as ignored.
+/// >= 0), 1 and white where absent, and its textures into `maps`.
 fn specular(
     m: &::gltf::Material,
+    maps: &mut Maps,
+    images: &mut Images,
     notes: &mut Vec<String>,
-    ignored: &mut Vec<String>,
 ) -> (f64, [f64; 3]) {
     let Some(ext) = m.extension_value("KHR_materials_specular") else {
         return (1.0, [1.0; 3]);
@@ -256,13 +263,8 @@ fn specular(
             };
         }
     }
-    for (key, what) in [
-        ("specularTexture", "specular texture"),
-        ("specularColorTexture", "specular colour texture"),
-    ] {
-        if ext.get(key).is_some() {
-            ignored.push(what.to_owned());
-        }
-    }
+    maps.specular = gltf_maps::read_json("specular texture", ext, "specularTexture", images, notes);
+    let (key, what) = ("specularColorTexture", "specular colour texture");
+    maps.specular_color = gltf_maps::read_json(what, ext, key, images, notes);
     (factor, color)
 }

@@ -134,6 +134,14 @@ pub struct Maps {
     pub normal_scale: f64,
     /// Multiplies the emission (sRGB RGB).
     pub emissive: Option<TextureRef>,
+    /// glTF's extension textures: transmission (red), clear coat weight
+    /// (red) and roughness (green), specular strength (alpha) and colour
+    /// (sRGB RGB; also OBJ's `map_Ks`).
+    pub transmission: Option<TextureRef>,
+    pub clearcoat: Option<TextureRef>,
+    pub clearcoat_roughness: Option<TextureRef>,
+    pub specular: Option<TextureRef>,
+    pub specular_color: Option<TextureRef>,
     /// glTF's `alphaMode` and the base colour factor's alpha (which the
     /// base colour texture's alpha channel multiplies).
     pub alpha_mode: AlphaMode,
@@ -159,6 +167,11 @@ impl Default for Maps {
             normal: None,
             normal_scale: 1.0,
             emissive: None,
+            transmission: None,
+            clearcoat: None,
+            clearcoat_roughness: None,
+            specular: None,
+            specular_color: None,
             alpha_mode: AlphaMode::Opaque,
             alpha: 1.0,
         }
@@ -177,6 +190,11 @@ impl Maps {
             &self.metallic_roughness,
             &self.normal,
             &self.emissive,
+            &self.transmission,
+            &self.clearcoat,
+            &self.clearcoat_roughness,
+            &self.specular,
+            &self.specular_color,
         ]
         .into_iter()
         .flatten()
@@ -240,6 +258,9 @@ pub struct MeshData {
     pub uvs: [Option<Vec<[f32; 2]>>; 2],
     /// Per-vertex tangents (w: the bitangent's sign), given or generated.
     pub tangents: Option<Vec<[f32; 4]>>,
+    /// Per-vertex colours (linear RGB in [0, 1], glTF's COLOR_0, PLY's
+    /// red/green/blue), which multiply the base colour.
+    pub colors: Option<Vec<[f32; 3]>>,
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle: index into [`Model::materials`].
     pub materials: Vec<u32>,

@@ -17,7 +17,10 @@
 //! - `map_Kd` -> a base colour texture (`-clamp on` clamps, else it
 //!   repeats; `-o` and `-s` offset and scale its coordinates); `map_Ke` ->
 //!   an emission texture (the same options; it multiplies `Ke`, 1 where
-//!   `Ke` is missing); `norm`, `map_Bump` or `bump` -> a normal map (`-bm` its
+//!   `Ke` is missing); `map_Ks` -> a `pbr` material's specular colour
+//!   texture (`KHR_materials_specular`'s, which tints the dielectric's F0:
+//!   white keeps it; `Ks` itself stays unread, the options as `map_Kd`;
+//!   noted on other kinds); `norm`, `map_Bump` or `bump` -> a normal map (`-bm` its
 //!   scale) when the image is one, a height map (grey) is noted as not
 //!   rendered; both need `vt` coordinates (v flipped to glTF's top-left
 //!   origin);
@@ -52,8 +55,9 @@ pub(super) struct MtlMaterial {
     /// `map_Kd`'s file, whether `-clamp on` was given, and its `-o` offset
     /// and `-s` scale (u and v).
     pub map_kd: Option<ColorMap>,
-    /// `map_Ke`, as `map_Kd`.
+    /// `map_Ke` and `map_Ks`, as `map_Kd`.
     pub map_ke: Option<ColorMap>,
+    pub map_ks: Option<ColorMap>,
     /// `norm`, `map_Bump` or `bump`'s file and its `-bm` scale (a normal
     /// map, or a height map that the loader then notes as not rendered).
     pub bump: Option<(String, f64)>,
@@ -129,7 +133,7 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                         .map_err(|_| err(format!("illum: {word:?} is not an integer")))?,
                 );
             }
-            "map_kd" | "map_ke" | "norm" | "map_bump" | "bump" => {
+            "map_kd" | "map_ke" | "map_ks" | "norm" | "map_bump" | "bump" => {
                 let Some((&file, options)) = args.split_last() else {
                     return Err(err(format!("{key}: a file name is missing")));
                 };
@@ -137,7 +141,7 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                     let i = options.iter().position(|o| o.eq_ignore_ascii_case(name))?;
                     options.get(i + 1).copied()
                 };
-                if lower == "map_kd" || lower == "map_ke" {
+                if lower.starts_with("map_k") {
                     let pair = |name: &str, default: f64| -> Result<[f64; 2], MtlError> {
                         let Some(i) = options.iter().position(|o| o.eq_ignore_ascii_case(name))
                         else {
@@ -155,6 +159,7 @@ pub(super) fn parse(text: &str) -> Result<Vec<MtlMaterial>, MtlError> {
                     let map = Some((file.to_owned(), clamp, offset, scale));
                     match lower.as_str() {
                         "map_kd" => m.map_kd = map,
+                        "map_ks" => m.map_ks = map,
                         _ => m.map_ke = map,
                     }
                 } else {
@@ -235,6 +240,9 @@ pub(super) fn to_material(m: &MtlMaterial) -> Mat {
     }
     if !pbr && !(0..=7).contains(&illum) {
         ignored.push(format!("illum {illum} (rendered diffuse)"));
+    }
+    if !pbr && m.map_ks.is_some() {
+        ignored.push("map_Ks (a specular colour texture needs Pr or Pm)".to_owned());
     }
     if !mirror && !glass && nonzero(m.ks) {
         ignored.push(match pbr {

@@ -1,4 +1,4 @@
-//! MTL texture maps (`map_Kd`, `map_Ke` and `norm`/`map_Bump`/`bump`) read for an
+//! MTL texture maps (`map_Kd`, `map_Ke`, `map_Ks` and `norm`/`map_Bump`/`bump`) read for an
 //! OBJ: each image file once, relative to the OBJ's directory. A file that
 //! cannot be found (or an upload, which has no directory) is a warning and
 //! the material renders without that map; a file that is found but is not a
@@ -77,6 +77,10 @@ pub(super) fn read(
             })),
         };
         let base = color("map_Kd", &lib.map_kd)?;
+        let specular = match materials[k].json {
+            Material::Pbr { .. } => color("map_Ks", &lib.map_ks)?,
+            _ => None,
+        };
         let emissive = color("map_Ke", &lib.map_ke)?;
         if emissive.is_none() && lib.map_ke.is_some() && lib.ke.is_none() {
             dark(&mut materials[k].json);
@@ -85,11 +89,12 @@ pub(super) fn read(
         if let Some((file, scale)) = lib.bump.as_ref().filter(|_| used(lib)) {
             bump = image(ctx, "bump map", file)?.map(|i| (i, *scale));
         }
-        maps.push((base, emissive, bump));
+        maps.push((base, emissive, specular, bump));
     }
-    for ((base, emissive, bump), m) in maps.into_iter().zip(materials.iter_mut()) {
+    for ((base, emissive, specular, bump), m) in maps.into_iter().zip(materials.iter_mut()) {
         m.maps.base_color = base;
         m.maps.emissive = emissive;
+        m.maps.specular_color = specular;
         if let Some((i, scale)) = bump {
             let grey = images[i]
                 .rgba

@@ -2,12 +2,17 @@
 //! element at a time (so errors name the element, and the line or byte).
 //!
 //! - `element vertex`: `x`, `y`, `z` (any numeric type), optional `nx`, `ny`,
-//!   `nz`; other properties (colours, uv, ...) are named in a warning.
+//!   `nz`, optional colours `red`, `green`, `blue` (or `diffuse_red`, ...;
+//!   integers as fractions of their type's largest value, floats as they
+//!   are, all sRGB-encoded as scanners and MeshLab write them, decoded to
+//!   linear and clamped to [0, 1]); other properties (alpha, uv, ...) are
+//!   named in a warning.
 //! - `element face`: a `vertex_indices` (or `vertex_index`) list of any
 //!   integer type; polygons are fan-triangulated; faces of fewer than 3
 //!   vertices are skipped with a warning.
 //! - Other elements: skipped with a warning. The file has no materials: one
-//!   default diffuse material (albedo 0.8), with a warning.
+//!   default diffuse material (albedo 0.8; white where the vertices have
+//!   colours, which then are the base colour), with a warning.
 //! - Before anything is read, each element's count is checked against the
 //!   limits and against the bytes left after the header (every element
 //!   needs at least its fixed-size part in binary, two bytes per property in
@@ -21,15 +26,26 @@ use ply_rs_bw::ply::{
 };
 use std::io::{Cursor, ErrorKind};
 
-/// A vertex as read: position and normal components (missing ones 0).
+/// A vertex as read: position, normal and colour components (missing
+/// ones 0; the colour as a fraction, still sRGB-encoded).
 #[derive(Default)]
 struct Vertex {
     p: [f64; 3],
     n: [f64; 3],
+    c: [f64; 3],
 }
 
+/// The colour properties, each channel's two spellings.
+const COLOURS: [[&str; 2]; 3] = [
+    ["red", "diffuse_red"],
+    ["green", "diffuse_green"],
+    ["blue", "diffuse_blue"],
+];
+
 impl Vertex {
-    fn set(&mut self, name: &str, v: f64) -> PropertyAccessResult {
+    /// Property `name` = `v`; `full` is the value of a colour of 1 (an
+    /// integer type's largest value, 1 for floats).
+    fn set(&mut self, name: &str, v: f64, full: f64) -> PropertyAccessResult {
         let slot = match name {
             "x" => &mut self.p[0],
             "y" => &mut self.p[1],
@@ -37,11 +53,32 @@ impl Vertex {
             "nx" => &mut self.n[0],
             "ny" => &mut self.n[1],
             "nz" => &mut self.n[2],
-            _ => return PropertyAccessResult::Ignored,
+            _ => match COLOURS.iter().position(|c| c.contains(&name)) {
+                Some(k) => {
+                    self.c[k] = v / full;
+                    return PropertyAccessResult::Set;
+                }
+                None => return PropertyAccessResult::Ignored,
+            },
         };
         *slot = v;
         PropertyAccessResult::Set
     }
+}
+
+/// An sRGB-encoded fraction as linear light in [0, 1] (IEC 61966-2-1);
+/// None where it is not finite.
+fn linear(c: f64) -> Option<f32> {
+    if !c.is_finite() {
+        return None;
+    }
+    let c = c.clamp(0.0, 1.0);
+    let l = if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    };
+    Some(l as f32)
 }
 
 impl PropertyAccess for Vertex {
@@ -49,28 +86,28 @@ impl PropertyAccess for Vertex {
         Self::default()
     }
     fn set_char(&mut self, name: &str, v: i8) -> PropertyAccessResult {
-        self.set(name, v.into())
+        self.set(name, v.into(), f64::from(i8::MAX))
     }
     fn set_uchar(&mut self, name: &str, v: u8) -> PropertyAccessResult {
-        self.set(name, v.into())
+        self.set(name, v.into(), f64::from(u8::MAX))
     }
     fn set_short(&mut self, name: &str, v: i16) -> PropertyAccessResult {
-        self.set(name, v.into())
+        self.set(name, v.into(), f64::from(i16::MAX))
     }
     fn set_ushort(&mut self, name: &str, v: u16) -> PropertyAccessResult {
-        self.set(name, v.into())
+        self.set(name, v.into(), f64::from(u16::MAX))
     }
     fn set_int(&mut self, name: &str, v: i32) -> PropertyAccessResult {
-        self.set(name, v.into())
+        self.set(name, v.into(), f64::from(i32::MAX))
     }
     fn set_uint(&mut self, name: &str, v: u32) -> PropertyAccessResult {
-        self.set(name, v.into())
+        self.set(name, v.into(), f64::from(u32::MAX))
     }
     fn set_float(&mut self, name: &str, v: f32) -> PropertyAccessResult {
-        self.set(name, v.into())
+        self.set(name, v.into(), 1.0)
     }
     fn set_double(&mut self, name: &str, v: f64) -> PropertyAccessResult {
-        self.set(name, v)
+        self.set(name, v, 1.0)
     }
 }
 
@@ -261,6 +298,8 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
     // What the header declares: checked before anything is read.
     let scalar = |def: &ElementDef, name: &str| matches!(def.properties.get(name), Some(p) if matches!(p.data_type, PropertyType::Scalar(_)));
     let (mut has_vertices, mut has_faces, mut has_normals) = (false, false, false);
+    // Which spelling of the colours the vertices use, if they have all three.
+    let mut colours: Option<usize> = None;
     let remaining = bytes.len().saturating_sub(payload) as u128;
     let mut need = 0u128;
     for (name, def) in &header.elements {
@@ -271,13 +310,16 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                     return Err(ctx.err_at("header", "element vertex has no x, y and z properties"));
                 }
                 has_normals = ["nx", "ny", "nz"].iter().all(|p| scalar(def, p));
+                colours = (0..2).find(|&k| COLOURS.iter().all(|c| scalar(def, c[k])));
+                let colour = |p: &str| colours.is_some_and(|k| COLOURS.iter().any(|c| c[k] == p));
                 let other: Vec<&str> = def
                     .properties
                     .keys()
                     .map(String::as_str)
                     .filter(|p| {
                         !(["x", "y", "z"].contains(p)
-                            || has_normals && ["nx", "ny", "nz"].contains(p))
+                            || has_normals && ["nx", "ny", "nz"].contains(p)
+                            || colour(p))
                     })
                     .collect();
                 if !other.is_empty() {
@@ -364,6 +406,7 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
         ..Default::default()
     };
     let mut normals = Vec::new();
+    let mut colors = Vec::new();
     let mut vertices_read = false;
     let mut short_faces = 0usize;
     for (name, def) in &header.elements {
@@ -392,6 +435,15 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
                     mesh.positions.push(p);
                     if has_normals {
                         normals.push(v.n.map(|x| x as f32));
+                    }
+                    if colours.is_some() {
+                        let [Some(r), Some(g), Some(b)] = v.c.map(linear) else {
+                            return Err(ctx.err_at(
+                                at,
+                                format!("vertex {i}: colour {} is not finite", common::fmt3(v.c)),
+                            ));
+                        };
+                        colors.push([r, g, b]);
                     }
                 }
                 vertices_read = true;
@@ -447,13 +499,23 @@ pub(super) fn load(ctx: &mut Ctx, bytes: &[u8]) -> Result<Parts, ModelError> {
     if has_normals {
         mesh.normals = common::clean_normals(ctx, &mesh.name, normals, mesh.positions.len());
     }
-    ctx.warn(format!(
-        "no materials: default diffuse (albedo {})",
-        common::DEFAULT_ALBEDO
-    ));
+    let mut material = Mat::default_diffuse("default");
+    if colours.is_some() {
+        mesh.colors = Some(colors);
+        material.json = super::Material::Diffuse {
+            albedo: [1.0; 3],
+            emission: None,
+        };
+        ctx.warn("no materials: white diffuse, coloured by the vertex colours");
+    } else {
+        ctx.warn(format!(
+            "no materials: default diffuse (albedo {})",
+            common::DEFAULT_ALBEDO
+        ));
+    }
     Ok(Parts {
         meshes: vec![mesh],
-        materials: vec![Mat::default_diffuse("default")],
+        materials: vec![material],
         instances: vec![Instance {
             mesh: 0,
             transform: common::IDENTITY,

@@ -123,6 +123,9 @@ pub(super) fn generate(mesh: &mut MeshData, set: usize) -> bool {
         if let Some(normals) = &mut mesh.normals {
             normals.push(normals[v]);
         }
+        if let Some(colors) = &mut mesh.colors {
+            colors.push(colors[v]);
+        }
         for set in mesh.uvs.iter_mut().flatten() {
             set.push(set[v]);
         }

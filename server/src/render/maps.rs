@@ -1,6 +1,5 @@
-//! A material's texture maps: which slots a material textures (base colour,
-//! metallic, roughness, normal), and how a hit's material and shading
-//! normal are made from them.
+//! A material's texture maps: which slots a material textures ([`Map`]),
+//! and how a hit's material and shading normal are made from them.
 //!
 //! - Base colour: the material's colour times the map's RGB (decoded from
 //!   sRGB), for every kind (diffuse albedo, mirror and glass tint, `pbr`
@@ -8,6 +7,10 @@
 //! - Metallic and roughness (`pbr` only): the factor times the map's blue
 //!   and green channel (glTF's metallic-roughness texture); one lookup
 //!   where both slots read the same texture the same way.
+//! - Transmission, clear coat and its roughness, specular and specular
+//!   colour (`pbr` only): the factor times the map's red, red, green, alpha
+//!   channel and RGB (sRGB), as glTF's `KHR_materials_transmission`,
+//!   `_clearcoat` and `_specular` textures.
 //! - Emission (any kind): the material's emission times the map's RGB
 //!   (decoded from sRGB), where a camera or BSDF ray meets the surface and
 //!   where a shadow ray aimed at it does ([`emission`]).
@@ -21,7 +24,7 @@
 use crate::render::ggx::{Pbr, ALPHA_MIN};
 use crate::render::material::{Bsdf, SurfaceMaterial};
 use crate::render::math::Vec3A;
-use crate::render::texture::{self, Sampling, Texture};
+use crate::render::texture::{self, Map, Sampling, Texture, MAP_SLOTS};
 use std::sync::Arc;
 
 /// A slot's `texture` where the slot is unused.
@@ -45,20 +48,50 @@ impl Slot {
     };
 }
 
-/// A material's maps as the hot path reads them.
+/// A material's maps as the hot path reads them: a slot per [`Map`], and
+/// the factors the textures multiply.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WorldMaps {
-    pub base_color: Slot,
-    pub metallic: Slot,
-    pub roughness: Slot,
-    pub normal: Slot,
-    pub emission: Slot,
+    pub slots: [Slot; MAP_SLOTS],
     /// The material's own metallic and roughness factors (`pbr`).
     pub metallic_factor: f32,
     pub roughness_factor: f32,
     pub normal_scale: f32,
     /// Metallic and roughness read the same texture the same way.
     pub shared_mr: bool,
+    /// `pbr`'s transmission, clear coat weight and roughness, specular
+    /// strength and colour, which their textures multiply.
+    pub transmission_factor: f32,
+    pub clearcoat_factor: f32,
+    pub clearcoat_roughness_factor: f32,
+    pub specular_factor: f32,
+    pub specular_color_factor: Vec3A,
+}
+
+impl WorldMaps {
+    /// No slot set, factors 1 (a material fills what it has).
+    pub const NONE: WorldMaps = WorldMaps {
+        slots: [Slot::NONE; MAP_SLOTS],
+        metallic_factor: 1.0,
+        roughness_factor: 1.0,
+        normal_scale: 1.0,
+        shared_mr: false,
+        transmission_factor: 1.0,
+        clearcoat_factor: 1.0,
+        clearcoat_roughness_factor: 1.0,
+        specular_factor: 1.0,
+        specular_color_factor: Vec3A::ONE,
+    };
+
+    #[inline(always)]
+    pub fn slot(&self, m: Map) -> &Slot {
+        &self.slots[m as usize]
+    }
+
+    #[inline(always)]
+    pub fn has(&self, m: Map) -> bool {
+        self.slots[m as usize].texture != NO_TEXTURE
+    }
 }
 
 /// Texture coordinates and the tangent frame at a hit, for its maps.
@@ -83,7 +116,7 @@ fn read(textures: &[Arc<Texture>], slot: &Slot, tc: &TexCoords, srgb: bool) -> [
 /// coordinates `tc`.
 #[inline(always)]
 pub fn emission(textures: &[Arc<Texture>], maps: &WorldMaps, le: Vec3A, tc: &TexCoords) -> Vec3A {
-    le * texture::rgb(read(textures, &maps.emission, tc, true))
+    le * texture::rgb(read(textures, maps.slot(Map::Emission), tc, true))
 }
 
 /// The material `m` (with maps `maps`) at a hit with coordinates `tc`, and
@@ -98,35 +131,18 @@ pub fn shade(
     ns: &mut Vec3A,
 ) -> SurfaceMaterial {
     let mut out = *m;
-    if maps.emission.texture != NO_TEXTURE {
+    if maps.has(Map::Emission) {
         out.emission = emission(textures, maps, m.emission, tc);
     }
-    if maps.base_color.texture != NO_TEXTURE {
-        out.albedo = m.albedo * texture::rgb(read(textures, &maps.base_color, tc, true));
+    if maps.has(Map::BaseColor) {
+        let c = read(textures, maps.slot(Map::BaseColor), tc, true);
+        out.albedo = m.albedo * texture::rgb(c);
     }
     if let Bsdf::Pbr(p) = m.bsdf {
-        let mut metallic = maps.metallic_factor;
-        let mut roughness = maps.roughness_factor;
-        let mut mr = [0.0f32; 4];
-        if maps.metallic.texture != NO_TEXTURE {
-            mr = read(textures, &maps.metallic, tc, false);
-            metallic *= mr[2];
-        }
-        if maps.roughness.texture != NO_TEXTURE {
-            if !maps.shared_mr {
-                mr = read(textures, &maps.roughness, tc, false);
-            }
-            roughness *= mr[1];
-        }
-        out.bsdf = Bsdf::Pbr(Pbr {
-            metallic,
-            alpha: (roughness * roughness).max(ALPHA_MIN),
-            roughness,
-            ..p
-        });
+        out.bsdf = Bsdf::Pbr(shade_pbr(textures, maps, p, tc));
     }
-    if maps.normal.texture != NO_TEXTURE {
-        let c = read(textures, &maps.normal, tc, false);
+    if maps.has(Map::Normal) {
+        let c = read(textures, maps.slot(Map::Normal), tc, false);
         let x = (c[0] * 2.0 - 1.0) * maps.normal_scale;
         let y = (c[1] * 2.0 - 1.0) * maps.normal_scale;
         let z = c[2] * 2.0 - 1.0;
@@ -138,6 +154,58 @@ pub fn shade(
                 *ns = turned;
             }
         }
+    }
+    out
+}
+
+/// `pbr` parameters `p` with their textures at `tc`: each factor times
+/// its texture's channel ([`Map`]), the derived values (alpha, the
+/// dielectric's F0 and F90, the coat's alpha) made again from them.
+#[inline(always)]
+fn shade_pbr(textures: &[Arc<Texture>], maps: &WorldMaps, p: Pbr, tc: &TexCoords) -> Pbr {
+    let mut metallic = maps.metallic_factor;
+    let mut roughness = maps.roughness_factor;
+    let mut mr = [0.0f32; 4];
+    if maps.has(Map::Metallic) {
+        mr = read(textures, maps.slot(Map::Metallic), tc, false);
+        metallic *= mr[2];
+    }
+    if maps.has(Map::Roughness) {
+        if !maps.shared_mr {
+            mr = read(textures, maps.slot(Map::Roughness), tc, false);
+        }
+        roughness *= mr[1];
+    }
+    let mut out = Pbr {
+        metallic,
+        alpha: (roughness * roughness).max(ALPHA_MIN),
+        roughness,
+        ..p
+    };
+    if maps.has(Map::Transmission) {
+        let t = read(textures, maps.slot(Map::Transmission), tc, false);
+        out.transmission = maps.transmission_factor * t[0];
+    }
+    if maps.has(Map::Clearcoat) || maps.has(Map::ClearcoatRoughness) {
+        let (mut weight, mut rough) = (maps.clearcoat_factor, maps.clearcoat_roughness_factor);
+        if maps.has(Map::Clearcoat) {
+            weight *= read(textures, maps.slot(Map::Clearcoat), tc, false)[0];
+        }
+        if maps.has(Map::ClearcoatRoughness) {
+            rough *= read(textures, maps.slot(Map::ClearcoatRoughness), tc, false)[1];
+        }
+        out = out.coated(weight, rough);
+    }
+    if maps.has(Map::Specular) || maps.has(Map::SpecularColor) {
+        let mut factor = maps.specular_factor;
+        let mut color = maps.specular_color_factor;
+        if maps.has(Map::Specular) {
+            factor *= read(textures, maps.slot(Map::Specular), tc, false)[3];
+        }
+        if maps.has(Map::SpecularColor) {
+            color *= texture::rgb(read(textures, maps.slot(Map::SpecularColor), tc, true));
+        }
+        out = out.specular(factor, color);
     }
     out
 }
@@ -158,18 +226,12 @@ mod tests {
         }
     }
 
-    fn maps() -> WorldMaps {
-        WorldMaps {
-            base_color: Slot::NONE,
-            metallic: Slot::NONE,
-            roughness: Slot::NONE,
-            normal: Slot::NONE,
-            emission: Slot::NONE,
-            metallic_factor: 1.0,
-            roughness_factor: 1.0,
-            normal_scale: 1.0,
-            shared_mr: false,
+    fn maps(set: &[(Map, u32)]) -> WorldMaps {
+        let mut m = WorldMaps::NONE;
+        for &(map, texture) in set {
+            m.slots[map as usize] = slot(texture);
         }
+        m
     }
 
     fn pbr() -> SurfaceMaterial {
@@ -187,13 +249,10 @@ mod tests {
     fn base_colour_multiplies_and_mr_reads_blue_and_green() {
         let textures = [one([255, 128, 0, 255]), one([0, 51, 204, 255])];
         let m = WorldMaps {
-            base_color: slot(0),
-            metallic: slot(1),
-            roughness: slot(1),
             metallic_factor: 0.5,
             roughness_factor: 1.0,
             shared_mr: true,
-            ..maps()
+            ..maps(&[(Map::BaseColor, 0), (Map::Metallic, 1), (Map::Roughness, 1)])
         };
         let tc = TexCoords::default();
         let mut ns = Vec3A::Z;
@@ -218,18 +277,12 @@ mod tests {
             tangent: Vec3A::new(2.0, 0.0, 0.5),
             sign: 1.0,
         };
-        let m = WorldMaps {
-            normal: slot(0),
-            ..maps()
-        };
+        let m = maps(&[(Map::Normal, 0)]);
         let mut ns = Vec3A::Z;
         shade(&textures, &m, &pbr(), &tc, &mut ns);
         assert!((ns - Vec3A::Z).length() < 0.01, "{ns}");
         // Red full: tilted all the way towards the tangent.
-        let m = WorldMaps {
-            normal: slot(1),
-            ..maps()
-        };
+        let m = maps(&[(Map::Normal, 1)]);
         let mut ns = Vec3A::Z;
         shade(&textures, &m, &pbr(), &tc, &mut ns);
         assert!(ns.x > 0.99 && (ns.length() - 1.0).abs() < 1e-6, "{ns}");

@@ -141,6 +141,62 @@ impl UvTransform {
     }
 }
 
+/// What a material's texture slot feeds, in the order of the hot path's
+/// slot arrays (`render::maps::WorldMaps::slots`, the kernel's
+/// `MaterialMaps.slot`, indexed by the shared constants `MAP_*`). Which
+/// channel each reads is glTF's: base colour, emission and specular colour
+/// RGB (sRGB), metallic blue, roughness green, normal RGB, transmission
+/// and clear coat red, clear coat roughness green, specular alpha.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Map {
+    BaseColor = 0,
+    Metallic,
+    Roughness,
+    Normal,
+    Emission,
+    Transmission,
+    Clearcoat,
+    ClearcoatRoughness,
+    Specular,
+    SpecularColor,
+}
+
+/// Slots per material.
+pub const MAP_SLOTS: usize = 10;
+
+impl Map {
+    pub const ALL: [Map; MAP_SLOTS] = [
+        Map::BaseColor,
+        Map::Metallic,
+        Map::Roughness,
+        Map::Normal,
+        Map::Emission,
+        Map::Transmission,
+        Map::Clearcoat,
+        Map::ClearcoatRoughness,
+        Map::Specular,
+        Map::SpecularColor,
+    ];
+
+    /// The scene JSON field it textures (`pbr`'s names; `albedo` is
+    /// `base_color` there).
+    pub fn name(self) -> &'static str {
+        match self {
+            Map::BaseColor => "base_color",
+            Map::Metallic => "metallic",
+            Map::Roughness => "roughness",
+            Map::Normal => "normal",
+            Map::Emission => "emission",
+            Map::Transmission => "transmission",
+            Map::Clearcoat => "clearcoat",
+            Map::ClearcoatRoughness => "clearcoat_roughness",
+            Map::Specular => "specular",
+            Map::SpecularColor => "specular_color",
+        }
+    }
+}
+
 /// How a material slot reads its texture.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sampling {

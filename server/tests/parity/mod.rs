@@ -122,3 +122,91 @@ pub fn assert_camera_rays_agree(d: &OpenClBackend, job: &RenderJob, what: &str) 
         );
     }
 }
+
+/// The kernel's `shade_maps` (check_maps) against `maps::shade` on the
+/// first material of `job` that has maps, at `n` random coordinates,
+/// normals and tangents: every output bit for bit (albedo, metallic,
+/// alpha, roughness, f0, the turned normal, emission, transmission, the
+/// coat's weight, alpha and roughness, the dielectric's F0 and F90).
+pub fn assert_maps_agree(d: &OpenClBackend, job: &RenderJob, n: u64) {
+    use pathstream::render::maps::{shade, TexCoords};
+    use pathstream::render::material::Bsdf;
+    const OUT: usize = 21;
+    let w = &job.world;
+    let which = (w.materials.iter())
+        .position(|m| m.maps != pathstream::render::material::NO_MAPS)
+        .expect("a material with maps") as u32;
+    let packed = pack(job);
+    let mut input = Vec::new();
+    let mut cpu = Vec::new();
+    for i in 0..n {
+        let uv = [0, 1, 2, 3].map(|k| uniform(i, 10 + k) * 5.0 - 2.0);
+        let ns = unit(i, 20);
+        let t = unit(i, 30) * 2.0;
+        let sign = if i % 3 == 0 { -1.0 } else { 1.0 };
+        input.extend([uv, ns.extend(0.0).to_array(), t.extend(sign).to_array()]);
+        let tc = TexCoords {
+            uv: [[uv[0], uv[1]], [uv[2], uv[3]]],
+            tangent: t,
+            sign,
+        };
+        let m = &w.materials[which as usize];
+        let mut n_out = ns;
+        let out = shade(&w.textures, &w.maps[m.maps as usize], m, &tc, &mut n_out);
+        let Bsdf::Pbr(p) = out.bsdf else {
+            panic!("a pbr material")
+        };
+        let (a, e, s) = (out.albedo, out.emission, p.spec_f0);
+        let values: [f32; OUT] = [
+            a.x,
+            a.y,
+            a.z,
+            p.metallic,
+            p.alpha,
+            p.roughness,
+            p.f0,
+            n_out.x,
+            n_out.y,
+            n_out.z,
+            e.x,
+            e.y,
+            e.z,
+            p.transmission,
+            p.coat,
+            p.coat_alpha,
+            p.coat_roughness,
+            s.x,
+            s.y,
+            s.z,
+            p.spec_f90,
+        ];
+        cpu.push(values);
+    }
+    let t = &packed.textures;
+    let out: Vec<f32> = checks(d)
+        .run(
+            "check_maps",
+            n as usize,
+            OUT,
+            &[
+                CheckArg::Buffer(bytemuck::cast_slice(&input)),
+                CheckArg::Buffer(bytemuck::cast_slice(&vec![which; n as usize])),
+                CheckArg::Buffer(bytemuck::cast_slice(&packed.materials)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.maps)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.images)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.texels)),
+                CheckArg::Buffer(bytemuck::cast_slice(&t.srgb)),
+            ],
+        )
+        .expect("run");
+    for (i, want) in cpu.iter().enumerate() {
+        let got = &out[OUT * i..OUT * i + OUT];
+        for (k, (g, c)) in got.iter().zip(want).enumerate() {
+            assert_eq!(
+                g.to_bits(),
+                c.to_bits(),
+                "item {i} value {k}: device {g}, CPU {c}"
+            );
+        }
+    }
+}

@@ -149,7 +149,8 @@ fn scene() -> (Value, Vec<u8>) {
              "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5},
                 "KHR_materials_clearcoat": {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.2,
                     "clearcoatTexture": {"index": 0}},
-                "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25]}}},
+                "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25],
+                    "specularTexture": {"index": 0, "texCoord": 1}, "specularColorTexture": {"index": 9}}}},
             {"name": "unused", "emissiveTexture": {"index": 0}}
         ],
         "textures": [{"source": 0}],
@@ -346,8 +347,8 @@ fn expected() -> Model {
             "meshes[1].primitives[2] (mesh \"strips\"): POINTS primitive skipped (only triangles are rendered)",
             "meshes[1].primitives[3] (mesh \"strips\"): LINES primitive skipped (only triangles are rendered)",
             "mesh \"mesh2\": a normal map without TEXCOORD_0 to orient it: the map is not applied",
+            "material \"partial\": specular colour texture: texture 9 does not exist: not rendered",
             "material \"partial\": base colour [2, 0.5, 0.5] is outside [0, 1]: clamped to [1, 0.5, 0.5]",
-            "material \"partial\": not modelled, ignored: clearcoat texture",
         ]
         .map(str::to_owned)
         .to_vec(),
@@ -360,6 +361,16 @@ fn expected() -> Model {
         base_color: plain,
         normal: plain,
         alpha_mode: crate::model::AlphaMode::Blend,
+        ..Default::default()
+    };
+    // partial's clear coat and specular textures (its specular colour
+    // texture names no texture: a warning).
+    model.materials[6].2 = crate::model::Maps {
+        clearcoat: plain,
+        specular: Some(crate::model::TextureRef {
+            uv: 1,
+            ..crate::model::TextureRef::plain(0)
+        }),
         ..Default::default()
     };
     model
@@ -602,7 +613,7 @@ fn truncated_glb() {
 }
 
 #[test]
-fn animation_skins_morph_targets_and_maps_are_warned() {
+fn animation_skins_morph_targets_and_maps_are_warned_and_colours_read() {
     let m = mini(|d, _| {
         d["animations"] = json!([{"channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
                                   "samplers": [{"input": 2, "output": 0}]}]);
@@ -619,6 +630,8 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
     })
     .expect("loads");
     assert_guarantees(&m);
+    // COLOR_0 (here the normals' accessor) is read as the vertex colours.
+    assert!(m.meshes[0].colors.is_some());
     assert_eq!(
         m.materials,
         untextured([("material0", pbr([1.0; 3], 1.0, 1.0))])
@@ -629,7 +642,6 @@ fn animation_skins_morph_targets_and_maps_are_warned() {
             "1 animations ignored (the scene is read at rest)",
             "skins ignored (skinned meshes are placed by their node's transform)",
             "mesh \"mesh0\": morph targets ignored (the base shape is used)",
-            "vertex colours ignored",
             "occlusion maps are not used: a path tracer finds the occlusion itself",
         ]
     );

@@ -353,3 +353,54 @@ fn header_problems() {
         "q.ply: line 14: 3 triangles, more than the limit of 2"
     );
 }
+
+#[test]
+fn vertex_colours_are_the_base_colour() {
+    // uchar colours (sRGB bytes), and float ones under their other name.
+    let text = "ply\nformat ascii 1.0\nelement vertex 3\n\
+        property float x\nproperty float y\nproperty float z\n\
+        property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n\
+        element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+        0 0 0 255 128 0 255\n1 0 0 0 0 0 255\n0 1 0 10 20 30 255\n3 0 1 2\n";
+    let m = load_bytes(text.as_bytes(), "c.ply", &Limits::default()).expect("loads");
+    assert_guarantees(&m);
+    let decode = |b: u8| {
+        let c = f64::from(b) / 255.0;
+        let l = if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        };
+        l as f32
+    };
+    let want = [[255, 128, 0], [0, 0, 0], [10, 20, 30]].map(|c: [u8; 3]| c.map(decode));
+    assert_eq!(m.meshes[0].colors.as_deref(), Some(&want[..]));
+    assert_eq!(
+        m.materials[0].1,
+        Material::Diffuse {
+            albedo: [1.0; 3],
+            emission: None
+        }
+    );
+    assert_eq!(
+        m.warnings,
+        [
+            "vertex properties ignored: alpha",
+            "no materials: white diffuse, coloured by the vertex colours"
+        ]
+    );
+    let floats = "ply\nformat ascii 1.0\nelement vertex 3\n\
+        property float x\nproperty float y\nproperty float z\n\
+        property float diffuse_red\nproperty float diffuse_green\nproperty float diffuse_blue\n\
+        element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+        0 0 0 1 0.5 2\n1 0 0 0 0 -1\n0 1 0 0.2 0.2 0.2\n3 0 1 2\n";
+    let m = load_bytes(floats.as_bytes(), "c.ply", &Limits::default()).expect("loads");
+    let c = m.meshes[0].colors.as_ref().expect("colours");
+    // Clamped to [0, 1] and decoded: 1 stays 1, 0.5 is 0.214.
+    assert_eq!((c[0][0], c[0][2], c[1][2]), (1.0, 1.0, 0.0));
+    assert!((c[0][1] - 0.214_041_14).abs() < 1e-6, "{c:?}");
+    // A colour that is not finite is an error naming the vertex.
+    let nan = floats.replace("0 0 0 1 0.5 2", "0 0 0 1 1e999 2");
+    let e = err(nan.as_bytes());
+    assert!(e.contains("vertex 0: colour"), "{e}");
+}

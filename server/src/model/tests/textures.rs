@@ -22,6 +22,7 @@ pub(crate) fn quad() -> MeshData {
             Some(vec![[0.5; 2]; 4]),
         ],
         tangents: None,
+        colors: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         materials: vec![0, 0],
     }
@@ -279,6 +280,32 @@ fn obj_map_ke_multiplies_ke_or_is_the_emission() {
     assert_eq!((emission(2), m.materials[2].2.emissive), (None, None));
     assert!(
         m.warnings.iter().any(|w| w.contains("missing.png")),
+        "{:?}",
+        m.warnings
+    );
+}
+
+#[test]
+fn obj_map_ks_is_a_pbr_specular_colour_texture() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = dir.path();
+    std::fs::write(p.join("s.png"), png(1, 1, &[255, 64, 0, 255])).expect("png");
+    let mtl = "newmtl shiny\nKd 1 1 1\nPr 0.3\nmap_Ks -clamp on -s 2 2 s.png\n\
+               newmtl phong\nKd 1 1 1\nmap_Ks s.png\n";
+    std::fs::write(p.join("m.mtl"), mtl).expect("mtl");
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+               usemtl shiny\nf 1/1 2/2 3/3\nusemtl phong\nf 1/1 3/3 2/2\n";
+    std::fs::write(p.join("m.obj"), obj).expect("obj");
+    let m = crate::model::load_file(&p.join("m.obj"), &Limits::default()).expect("loads");
+    let s = m.materials[0].2.specular_color.expect("map_Ks");
+    assert_eq!((s.wrap, s.scale), ([Wrap::Clamp; 2], [2.0, 2.0]));
+    assert_eq!(m.images[s.image].rgba, [255, 64, 0, 255]);
+    // A diffuse material has no F0 to tint: noted, not read.
+    assert!(m.materials[1].2.specular_color.is_none());
+    assert!(
+        m.warnings
+            .iter()
+            .any(|w| w.contains("\"phong\"") && w.contains("map_Ks")),
         "{:?}",
         m.warnings
     );

@@ -189,7 +189,7 @@ impl Path {
         let mut s = world.surface(&hit, ray);
         let untextured = world.material(s.material);
         let textured;
-        let m = if untextured.maps == NO_MAPS {
+        let m = if untextured.maps == NO_MAPS && !world.vertex_colors {
             untextured
         } else {
             textured = world.shade(untextured, &hit, &mut s);

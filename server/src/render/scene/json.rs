@@ -203,8 +203,8 @@ pub struct PbrJson {
     #[serde(default = "default_ior")]
     pub ior: f64,
     /// The share of the dielectric that is rough glass.
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub transmission: f64,
+    #[serde(default = "zero_input", skip_serializing_if = "is_zero_input")]
+    pub transmission: ScalarInput,
     /// That glass is a thin wall (light passes unrefracted), not a solid.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub thin: bool,
@@ -212,15 +212,15 @@ pub struct PbrJson {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attenuation: Option<AttenuationJson>,
     /// A clear coat over it all: its weight and roughness.
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub clearcoat: f64,
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub clearcoat_roughness: f64,
+    #[serde(default = "zero_input", skip_serializing_if = "is_zero_input")]
+    pub clearcoat: ScalarInput,
+    #[serde(default = "zero_input", skip_serializing_if = "is_zero_input")]
+    pub clearcoat_roughness: ScalarInput,
     /// The dielectric's reflection strength and F0 colour.
-    #[serde(default = "one", skip_serializing_if = "is_one")]
-    pub specular: f64,
-    #[serde(default = "white3", skip_serializing_if = "is_white3")]
-    pub specular_color: [f64; 3],
+    #[serde(default = "one_input", skip_serializing_if = "is_one_input")]
+    pub specular: ScalarInput,
+    #[serde(default = "white", skip_serializing_if = "is_white")]
+    pub specular_color: ColorInput,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -239,16 +239,20 @@ fn one() -> f64 {
     1.0
 }
 
-fn is_one(v: &f64) -> bool {
-    *v == 1.0
+fn zero_input() -> ScalarInput {
+    ScalarInput::Value(0.0)
 }
 
-fn white3() -> [f64; 3] {
-    [1.0; 3]
+fn is_zero_input(v: &ScalarInput) -> bool {
+    *v == ScalarInput::Value(0.0)
 }
 
-fn is_white3(v: &[f64; 3]) -> bool {
-    *v == [1.0; 3]
+fn is_one_input(v: &ScalarInput) -> bool {
+    *v == ScalarInput::Value(1.0)
+}
+
+fn is_white(v: &ColorInput) -> bool {
+    *v == ColorInput::Value([1.0; 3])
 }
 
 fn default_ior() -> f64 {

@@ -12,9 +12,11 @@
 //!
 //! `texture` is a PNG or JPEG file (relative to the scene file, on the
 //! command line) or an uploaded image's asset id. Colours (base colour,
-//! albedo, emission) are decoded from sRGB; `metallic` reads the image's
-//! blue channel and `roughness` its green one (glTF's metallic-roughness
-//! texture; a grey image reads the same in every channel). `wrap` is one
+//! albedo, emission, specular colour) are decoded from sRGB; numbers read
+//! the channel glTF gives them (`texture::Map`): `metallic` blue,
+//! `roughness` and `clearcoat_roughness` green, `transmission` and
+//! `clearcoat` red, `specular` alpha (a grey image reads the same in the
+//! colour channels). `wrap` is one
 //! mode for both axes or `[u, v]`; `transform` is `KHR_texture_transform`
 //! (translation x rotation x scale, the rotation counter-clockwise in UV
 //! space). Spheres and quads carry coordinates of their own

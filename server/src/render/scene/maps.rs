@@ -3,7 +3,7 @@
 
 pub use super::map_json::MapSource;
 pub use crate::render::alpha::AlphaMode;
-use crate::render::texture::{Sampling, Texture};
+use crate::render::texture::{Map, Sampling, Texture, MAP_SLOTS};
 use std::sync::Arc;
 
 /// A texture as a material slot reads it.
@@ -32,6 +32,14 @@ pub struct Maps {
     pub normal: Option<MapSlot>,
     /// Multiplies the emission (sRGB RGB, glTF `emissiveTexture`).
     pub emission: Option<MapSlot>,
+    /// `pbr`'s transmission (red), clear coat weight (red) and roughness
+    /// (green), specular strength (alpha) and colour (sRGB RGB), as glTF's
+    /// extensions' textures.
+    pub transmission: Option<MapSlot>,
+    pub clearcoat: Option<MapSlot>,
+    pub clearcoat_roughness: Option<MapSlot>,
+    pub specular: Option<MapSlot>,
+    pub specular_color: Option<MapSlot>,
     /// The normal map's x and y scale (glTF `normalTexture.scale`).
     pub normal_scale: f64,
     /// glTF's `alphaMode` (meshes only: `render::alpha`), and the base
@@ -49,6 +57,11 @@ impl Default for Maps {
             roughness: None,
             normal: None,
             emission: None,
+            transmission: None,
+            clearcoat: None,
+            clearcoat_roughness: None,
+            specular: None,
+            specular_color: None,
             normal_scale: 1.0,
             alpha_mode: AlphaMode::Opaque,
             alpha: 1.0,
@@ -58,23 +71,27 @@ impl Default for Maps {
 
 impl Maps {
     pub fn is_empty(&self) -> bool {
-        self.base_color.is_none()
-            && self.metallic.is_none()
-            && self.roughness.is_none()
-            && self.normal.is_none()
-            && self.emission.is_none()
+        self.by_map().iter().all(Option::is_none)
     }
 
-    /// The slots that are set, by name.
-    pub fn slots(&self) -> impl Iterator<Item = (&'static str, &MapSlot)> {
+    /// The slots in [`Map`]'s order.
+    pub fn by_map(&self) -> [Option<&MapSlot>; MAP_SLOTS] {
         [
-            ("base_color", &self.base_color),
-            ("metallic", &self.metallic),
-            ("roughness", &self.roughness),
-            ("normal", &self.normal),
-            ("emission", &self.emission),
+            self.base_color.as_ref(),
+            self.metallic.as_ref(),
+            self.roughness.as_ref(),
+            self.normal.as_ref(),
+            self.emission.as_ref(),
+            self.transmission.as_ref(),
+            self.clearcoat.as_ref(),
+            self.clearcoat_roughness.as_ref(),
+            self.specular.as_ref(),
+            self.specular_color.as_ref(),
         ]
-        .into_iter()
-        .filter_map(|(n, s)| s.as_ref().map(|s| (n, s)))
+    }
+
+    /// The slots that are set, by their field's name.
+    pub fn slots(&self) -> impl Iterator<Item = (&'static str, &MapSlot)> {
+        (Map::ALL.into_iter().zip(self.by_map())).filter_map(|(m, s)| s.map(|s| (m.name(), s)))
     }
 }

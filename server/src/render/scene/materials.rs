@@ -85,37 +85,44 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                     "a thin wall has no inside to absorb in: drop `thin` or `attenuation`",
                 ));
             }
-            let unit = |field: &str, v: f64| {
-                let v = finite(&format!("{path}.{field}"), v)?;
-                if (0.0..=1.0).contains(&v) {
-                    Ok(v)
-                } else {
-                    Err(SceneError::new(
-                        format!("{path}.{field}"),
+            let number = |field: &str, v: &ScalarInput| {
+                let textured = v.texture().is_some();
+                let v = finite(&field_at(&path, field, textured), v.factor())?;
+                match (0.0..=1.0).contains(&v) {
+                    true => Ok(v),
+                    false => Err(SceneError::new(
+                        field_at(&path, field, textured),
                         format!("must be between 0 and 1 (got {v})"),
-                    ))
+                    )),
                 }
             };
             let kind = MaterialKind::Pbr {
-                metallic: unit(scalar_field("metallic", metallic), metallic.factor())?,
-                roughness: unit(scalar_field("roughness", roughness), roughness.factor())?,
+                metallic: number("metallic", metallic)?,
+                roughness: number("roughness", roughness)?,
                 ior: checked_ior(&path, *ior)?,
-                transmission: unit("transmission", *transmission)?,
+                transmission: number("transmission", transmission)?,
                 thin: *thin,
-                clearcoat: unit("clearcoat", *clearcoat)?,
-                clearcoat_roughness: unit("clearcoat_roughness", *clearcoat_roughness)?,
-                specular: unit("specular", *specular)?,
-                specular_color: checked_specular_color(&path, *specular_color)?,
+                clearcoat: number("clearcoat", clearcoat)?,
+                clearcoat_roughness: number("clearcoat_roughness", clearcoat_roughness)?,
+                specular: number("specular", specular)?,
+                specular_color: checked_specular_color(
+                    &field_at(&path, "specular_color", specular_color.texture().is_some()),
+                    specular_color.factor(),
+                )?,
             };
             let at = |field: &str| format!("{path}.{field}");
-            maps.metallic = texture(
-                &at("metallic"),
-                metallic.texture().map(|t| t.source()),
-                resolver,
-            )?;
-            maps.roughness = texture(
-                &at("roughness"),
-                roughness.texture().map(|t| t.source()),
+            let map = |field: &str, v: &ScalarInput| {
+                texture(&at(field), v.texture().map(|t| t.source()), resolver)
+            };
+            maps.metallic = map("metallic", metallic)?;
+            maps.roughness = map("roughness", roughness)?;
+            maps.transmission = map("transmission", transmission)?;
+            maps.clearcoat = map("clearcoat", clearcoat)?;
+            maps.clearcoat_roughness = map("clearcoat_roughness", clearcoat_roughness)?;
+            maps.specular = map("specular", specular)?;
+            maps.specular_color = texture(
+                &at("specular_color"),
+                specular_color.texture().map(|t| t.source()),
                 resolver,
             )?;
             (kind, base_color, emission, normal)
@@ -125,11 +132,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
         MaterialJson::Pbr(_) => "base_color",
         _ => "albedo",
     };
-    let factor_path = |field: &str, textured: bool| match textured {
-        true => format!("{path}.{field}.factor"),
-        false => format!("{path}.{field}"),
-    };
-    let albedo_path = factor_path(field, albedo.texture().is_some());
+    let albedo_path = field_at(&path, field, albedo.texture().is_some());
     let albedo = vec3(&albedo_path, albedo.factor())?;
     if albedo.min_element() < 0.0 || albedo.max_element() > 1.0 {
         return Err(SceneError::new(
@@ -138,7 +141,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
         ));
     }
     let textured_emission = emission.as_ref().is_some_and(|e| e.texture().is_some());
-    let emission_path = factor_path("emission", textured_emission);
+    let emission_path = field_at(&path, "emission", textured_emission);
     let emission = vec3(
         &emission_path,
         emission.as_ref().map_or([0.0; 3], ColorInput::factor),
@@ -188,9 +191,10 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
 /// Largest component of a `specular_color` (F0 is clamped to 1 anyway).
 const MAX_SPECULAR_COLOR: f64 = 100.0;
 
-/// A specular colour with finite components in [0, [`MAX_SPECULAR_COLOR`]].
-fn checked_specular_color(path: &str, c: [f64; 3]) -> Result<[f64; 3]> {
-    let at = format!("{path}.specular_color");
+/// A specular colour with finite components in [0, [`MAX_SPECULAR_COLOR`]]
+/// (`at` names the field).
+fn checked_specular_color(at: &str, c: [f64; 3]) -> Result<[f64; 3]> {
+    let at = at.to_owned();
     let v = vec3(&at, c)?;
     if v.min_element() < 0.0 || v.max_element() > MAX_SPECULAR_COLOR {
         return Err(SceneError::new(
@@ -221,12 +225,12 @@ fn checked_attenuation(path: &str, a: &AttenuationJson) -> Result<Attenuation> {
     Ok(Attenuation { color, distance })
 }
 
-/// Where a number field's value is: the field, or its texture's factor.
-fn scalar_field(field: &'static str, v: &ScalarInput) -> &'static str {
-    match (v.texture().is_some(), field) {
-        (false, f) => f,
-        (true, "metallic") => "metallic.factor",
-        (true, _) => "roughness.factor",
+/// Where material `path`'s field value is: the field, or (`textured`) its
+/// texture's factor.
+fn field_at(path: &str, field: &str, textured: bool) -> String {
+    match textured {
+        false => format!("{path}.{field}"),
+        true => format!("{path}.{field}.factor"),
     }
 }
 
@@ -355,13 +359,13 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             metallic: scalar(metallic, &m.maps.metallic),
             roughness: scalar(roughness, &m.maps.roughness),
             ior,
-            transmission,
+            transmission: scalar(transmission, &m.maps.transmission),
             thin,
             attenuation,
-            clearcoat,
-            clearcoat_roughness,
-            specular,
-            specular_color,
+            clearcoat: scalar(clearcoat, &m.maps.clearcoat),
+            clearcoat_roughness: scalar(clearcoat_roughness, &m.maps.clearcoat_roughness),
+            specular: scalar(specular, &m.maps.specular),
+            specular_color: color(DVec3::from_array(specular_color), &m.maps.specular_color),
             emission,
             normal,
         })),

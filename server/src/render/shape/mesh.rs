@@ -24,6 +24,9 @@ pub struct MeshData {
     pub uvs: [Option<Vec<[f32; 2]>>; 2],
     /// Per-vertex tangents, w the bitangent's sign (glTF's TANGENT).
     pub tangents: Option<Vec<[f32; 4]>>,
+    /// Per-vertex linear RGB colours in [0, 1] (glTF's COLOR_0), which
+    /// multiply the material's base colour.
+    pub colors: Option<Vec<[f32; 3]>>,
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle: the mesh's material slot (empty: slot 0 everywhere).
     pub materials: Vec<u32>,
@@ -39,6 +42,8 @@ pub struct Mesh {
     pub uvs: [Option<Vec<[f32; 2]>>; 2],
     /// Tangents per vertex (w: the bitangent's sign), where it has them.
     pub tangents: Option<Vec<[f32; 4]>>,
+    /// Colours per vertex, where it has them.
+    pub colors: Option<Vec<[f32; 3]>>,
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle: the mesh's own material slot (an instance maps slots
     /// to scene materials).
@@ -67,6 +72,8 @@ pub enum MeshError {
     NormalCount(usize, usize),
     #[error("{what} of vertex {index} is not finite")]
     Attribute { what: &'static str, index: usize },
+    #[error("COLOR_0 of vertex {0} is outside [0, 1]")]
+    Color(usize),
     #[error("{count} {what} for {vertices} vertices")]
     AttributeCount {
         what: &'static str,
@@ -90,6 +97,7 @@ impl Mesh {
             normals,
             uvs,
             tangents,
+            colors,
             triangles,
             materials,
         } = data;
@@ -118,6 +126,15 @@ impl Mesh {
         }
         if let Some(t) = &tangents {
             attribute("TANGENT", t, n)?;
+        }
+        if let Some(c) = &colors {
+            attribute("COLOR_0", c, n)?;
+            if let Some(index) = c
+                .iter()
+                .position(|c| c.iter().any(|x| !(0.0..=1.0).contains(x)))
+            {
+                return Err(MeshError::Color(index));
+            }
         }
         for (i, t) in triangles.iter().enumerate() {
             if let Some(&bad) = t.iter().find(|&&v| v as usize >= positions.len()) {
@@ -156,6 +173,7 @@ impl Mesh {
             normals,
             uvs,
             tangents,
+            colors,
             triangles,
             materials,
             material_slots,
@@ -206,6 +224,15 @@ impl Mesh {
         Some((t, if p[3] < 0.0 { -1.0 } else { 1.0 }))
     }
 
+    /// The interpolated colour at barycentrics `b` of triangle `i`, if the
+    /// mesh has colours.
+    #[inline(always)]
+    pub fn color(&self, i: u32, b: [f32; 3]) -> Option<Vec3A> {
+        let colors = self.colors.as_ref()?;
+        let [p, q, r] = self.triangles[i as usize].map(|v| Vec3A::from(colors[v as usize]));
+        Some(p * b[0] + q * b[1] + r * b[2])
+    }
+
     pub fn bounds(&self) -> Aabb {
         self.bvh.bounds
     }
@@ -222,6 +249,7 @@ impl Mesh {
                 .map(|u| u.len() * 8)
                 .sum::<usize>()
             + self.tangents.as_ref().map_or(0, |t| t.len() * 16)
+            + self.colors.as_ref().map_or(0, |c| c.len() * 12)
             + self.triangles.len() * 16
             + self.bvh.memory_bytes()
             + self.tris.len() * std::mem::size_of::<TriVerts>()

@@ -183,6 +183,7 @@ impl World {
                 big: sphere_batches(&objects, &big),
             }
         };
+        let vertex_colors = instances.iter().any(|i| i.mesh.colors.is_some());
         Self {
             origin,
             objects,
@@ -190,6 +191,7 @@ impl World {
             materials,
             textures,
             maps,
+            vertex_colors,
             lights,
             environment,
             env_map,

@@ -12,7 +12,7 @@ use crate::render::light::{Emitter, EmitterShape, EnvLight, LightTri, Lights, Su
 use crate::render::maps::{WorldMaps, NO_TEXTURE};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::Vec3A;
-use crate::render::texture::Texture;
+use crate::render::texture::{Map, Texture};
 use std::sync::Arc;
 
 /// The scene's materials with their maps and textures.
@@ -29,7 +29,7 @@ impl Materials<'_> {
         let Some(maps) = self.maps.get(m.maps as usize) else {
             return (NO_MAPS, Vec3A::ONE);
         };
-        match maps.emission.texture {
+        match maps.slot(Map::Emission).texture {
             NO_TEXTURE => (NO_MAPS, Vec3A::ONE),
             t => (m.maps, Vec3A::from(self.textures[t as usize].mean_srgb)),
         }

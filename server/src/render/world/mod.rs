@@ -26,7 +26,7 @@ pub use instance::Instance;
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
 use crate::render::isa::Isa;
 use crate::render::light::{EnvLight, Lights, Receiver};
-use crate::render::material::SurfaceMaterial;
+use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::shape::{Quad, Roots, Sphere, SphereBatch};
@@ -174,6 +174,9 @@ pub struct World {
     pub textures: Vec<std::sync::Arc<crate::render::texture::Texture>>,
     /// Texture maps, by `SurfaceMaterial::maps`.
     pub maps: Vec<crate::render::maps::WorldMaps>,
+    /// Some placed mesh has vertex colours (every hit is then shaded by
+    /// [`World::shade`]).
+    pub vertex_colors: bool,
     pub lights: Lights,
     /// Radiance of rays that leave the scene, where there is no map.
     pub environment: Vec3A,
@@ -365,19 +368,28 @@ impl World {
         &self.materials[index as usize]
     }
 
-    /// Material `m` (which has maps) as it is at `hit` on surface `s`:
-    /// its maps read, and `s`'s shading normal turned by its normal map.
-    /// Not inlined: its lookups would crowd the path loop of every scene,
-    /// textured or not (a call costs little next to four bilinear reads).
+    /// Material `m` as it is at `hit` on surface `s`: its maps read (if it
+    /// has any), `s`'s shading normal turned by its normal map, the base
+    /// colour times the mesh's vertex colour (if it has them). Not inlined:
+    /// its lookups would crowd the path loop of every scene, textured or
+    /// not (a call costs little next to four bilinear reads).
     #[inline(never)]
     pub fn shade(&self, m: &SurfaceMaterial, hit: &Hit, s: &mut Surface) -> SurfaceMaterial {
-        let maps = &self.maps[m.maps as usize];
-        let tc = self.texcoords(hit, s);
-        let mut ns = s.ns;
-        let out = crate::render::maps::shade(&self.textures, maps, m, &tc, &mut ns);
-        if ns != s.ns {
-            s.ns = ns;
-            s.smooth = true;
+        let mut out = *m;
+        if m.maps != NO_MAPS {
+            let maps = &self.maps[m.maps as usize];
+            let tc = self.texcoords(hit, s);
+            let mut ns = s.ns;
+            out = crate::render::maps::shade(&self.textures, maps, m, &tc, &mut ns);
+            if ns != s.ns {
+                s.ns = ns;
+                s.smooth = true;
+            }
+        }
+        if let Geometry::Instance(i) = self.objects[hit.object as usize].geometry {
+            if let Some(c) = self.instances[i as usize].mesh.color(hit.prim, hit.bary) {
+                out.albedo *= c;
+            }
         }
         out
     }

@@ -22,7 +22,8 @@ use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::Vec3A;
 use crate::render::ray::Ray;
 use crate::render::scene::{MapSlot, MaterialKind, Scene};
-use crate::render::texture::Texture;
+use crate::render::texture::{Map, Texture};
+use std::collections::HashMap;
 use std::f32::consts::{FRAC_1_PI, PI};
 use std::sync::Arc;
 
@@ -33,20 +34,18 @@ pub(super) fn world_maps(
     materials: &mut [SurfaceMaterial],
 ) -> (Vec<Arc<Texture>>, Vec<WorldMaps>) {
     let mut textures: Vec<Arc<Texture>> = Vec::new();
+    let mut index_of: HashMap<*const Texture, u32> = HashMap::new();
     let mut maps = Vec::new();
-    let mut slot = |s: &Option<MapSlot>| -> Slot {
+    let mut slot = |s: Option<&MapSlot>| -> Slot {
         let Some(s) = s else {
             return Slot::NONE;
         };
-        let index = match textures.iter().position(|t| Arc::ptr_eq(t, &s.texture)) {
-            Some(i) => i,
-            None => {
-                textures.push(s.texture.clone());
-                textures.len() - 1
-            }
-        };
+        let index = *index_of.entry(Arc::as_ptr(&s.texture)).or_insert_with(|| {
+            textures.push(s.texture.clone());
+            (textures.len() - 1) as u32
+        });
         Slot {
-            texture: index as u32,
+            texture: index,
             sampling: s.sampling,
         }
     };
@@ -54,27 +53,35 @@ pub(super) fn world_maps(
         if m.maps.is_empty() {
             continue;
         }
-        let (metallic, roughness) = match m.kind {
-            MaterialKind::Pbr {
-                metallic,
-                roughness,
-                ..
-            } => (metallic as f32, roughness as f32),
-            _ => (0.0, 1.0),
-        };
-        let (metal, rough) = (slot(&m.maps.metallic), slot(&m.maps.roughness));
+        let mut w = WorldMaps::NONE;
+        for (map, s) in Map::ALL.into_iter().zip(m.maps.by_map()) {
+            w.slots[map as usize] = slot(s);
+        }
+        w.normal_scale = m.maps.normal_scale as f32;
+        w.shared_mr = w.slot(Map::Metallic) == w.slot(Map::Roughness);
+        if let MaterialKind::Pbr {
+            metallic,
+            roughness,
+            transmission,
+            clearcoat,
+            clearcoat_roughness,
+            specular,
+            specular_color,
+            ..
+        } = m.kind
+        {
+            w.metallic_factor = metallic as f32;
+            w.roughness_factor = roughness as f32;
+            w.transmission_factor = transmission as f32;
+            w.clearcoat_factor = clearcoat as f32;
+            w.clearcoat_roughness_factor = clearcoat_roughness as f32;
+            w.specular_factor = specular as f32;
+            w.specular_color_factor = Vec3A::from(specular_color.map(|c| c as f32));
+        } else {
+            (w.metallic_factor, w.roughness_factor) = (0.0, 1.0);
+        }
         out.maps = maps.len() as u32;
-        maps.push(WorldMaps {
-            base_color: slot(&m.maps.base_color),
-            metallic: metal,
-            roughness: rough,
-            normal: slot(&m.maps.normal),
-            emission: slot(&m.maps.emission),
-            metallic_factor: metallic,
-            roughness_factor: roughness,
-            normal_scale: m.maps.normal_scale as f32,
-            shared_mr: metal == rough,
-        });
+        maps.push(w);
     }
     debug_assert!(materials
         .iter()

@@ -67,7 +67,7 @@ macro_rules! scene_array {
 
 /// The scene's arrays in the order of `kernels/scene_arrays.h`: the
 /// `render` kernel's first parameters.
-pub(super) const SCENE_ARRAYS: [SceneArray; 22] = [
+pub(super) const SCENE_ARRAYS: [SceneArray; 23] = [
     scene_array!("P": "Params", "params", [layout::Params], |p| {
         std::slice::from_ref(&p.params)
     }),
@@ -95,6 +95,7 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 22] = [
     }),
     scene_array!("uvs": "float4", "texture coordinates", [[f32; 4]], |p| &p.meshes.uvs),
     scene_array!("tangents": "float4", "tangents", [[f32; 4]], |p| &p.meshes.tangents),
+    scene_array!("colors": "float4", "vertex colours", [[f32; 4]], |p| &p.meshes.colors),
     scene_array!("maps": "MaterialMaps", "material maps", [textures::MaterialMaps], |p| {
         &p.textures.maps
     }),

@@ -24,6 +24,7 @@ use crate::render::light::EmitterShape;
 use crate::render::material::Bsdf;
 use crate::render::math::Vec3A;
 use crate::render::sampler::SamplerKind;
+use crate::render::texture::{Map, MAP_SLOTS};
 use crate::render::world::{AccelChoice, Geometry, World};
 use crate::render::Filter;
 use bytemuck::{Pod, Zeroable};
@@ -52,7 +53,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 39] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 50] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -109,6 +110,17 @@ pub const SHARED_CONSTANTS: [(&str, u32); 39] = [
     ("NO_MAPS", crate::render::material::NO_MAPS),
     ("NO_TEXTURE", crate::render::maps::NO_TEXTURE),
     ("ALPHA_MIN_BITS", crate::render::ggx::ALPHA_MIN.to_bits()),
+    ("MAP_SLOTS", MAP_SLOTS as u32),
+    ("MAP_BASE_COLOR", Map::BaseColor as u32),
+    ("MAP_METALLIC", Map::Metallic as u32),
+    ("MAP_ROUGHNESS", Map::Roughness as u32),
+    ("MAP_NORMAL", Map::Normal as u32),
+    ("MAP_EMISSION", Map::Emission as u32),
+    ("MAP_TRANSMISSION", Map::Transmission as u32),
+    ("MAP_CLEARCOAT", Map::Clearcoat as u32),
+    ("MAP_CLEARCOAT_ROUGHNESS", Map::ClearcoatRoughness as u32),
+    ("MAP_SPECULAR", Map::Specular as u32),
+    ("MAP_SPECULAR_COLOR", Map::SpecularColor as u32),
 ];
 
 /// The metallic-roughness albedo tables where a material uses the model,

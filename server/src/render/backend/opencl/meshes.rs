@@ -7,7 +7,7 @@
 use crate::render::alpha as render_alpha;
 use crate::render::bvh::BvhNode;
 use crate::render::maps::{Slot, NO_TEXTURE};
-use crate::render::shape::TriVerts;
+use crate::render::shape::{Mesh, TriVerts};
 use crate::render::world::World;
 use bytemuck::{Pod, Zeroable};
 use std::collections::HashMap;
@@ -46,7 +46,10 @@ pub struct Instance {
     /// Where its mesh slots' alpha tests start (`alpha`), or [`NO_NORMALS`]
     /// where every slot is opaque.
     pub alpha_base: u32,
-    pub pad: [u32; 3],
+    /// Where its per-slot vertex colours start (3 per triangle, w unused),
+    /// or [`NO_NORMALS`].
+    pub color_base: u32,
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<Instance>() == 224);
@@ -82,6 +85,9 @@ pub struct PackedMeshes {
     pub uvs: Vec<[f32; 4]>,
     /// Tangents likewise (w: the bitangent's sign).
     pub tangents: Vec<[f32; 4]>,
+    /// Vertex colours of each triangle slot's corners (w unused), for
+    /// meshes that have them.
+    pub colors: Vec<[f32; 4]>,
     /// World material of each instance's mesh slots.
     pub slots: Vec<u32>,
     /// Alpha tests of the mesh slots of instances that have any.
@@ -104,12 +110,12 @@ pub fn pack(w: &World) -> PackedMeshes {
     let mut out = PackedMeshes::default();
     // Texture coordinates and tangents only where some material reads maps.
     let textured = !w.maps.is_empty();
-    // (node_base, tri_base, normal_base, uv_base, tangent_base) of each
-    // distinct mesh.
-    let mut placed: HashMap<*const crate::render::shape::Mesh, [u32; 5]> = HashMap::new();
+    // (node_base, tri_base, normal_base, uv_base, tangent_base,
+    // color_base) of each distinct mesh.
+    let mut placed: HashMap<*const Mesh, [u32; 6]> = HashMap::new();
     for inst in &w.instances {
         let mesh = &*inst.mesh;
-        let [node_base, tri_base, normal_base, uv_base, tangent_base] =
+        let [node_base, tri_base, normal_base, uv_base, tangent_base, color_base] =
             *placed.entry(Arc::as_ptr(&inst.mesh)).or_insert_with(|| {
                 let bases = (out.nodes.len() as u32, out.tris.len() as u32);
                 out.nodes.extend_from_slice(&mesh.bvh.nodes);
@@ -119,48 +125,37 @@ pub fn pack(w: &World) -> PackedMeshes {
                     t.v1[3] = f32::from_bits(mesh.materials[t.index() as usize]);
                     t
                 }));
+                let xyz = |[x, y, z]: [f32; 3]| [x, y, z, 0.0];
                 let normal_base = match &mesh.normals {
-                    Some(n) => {
-                        let base = (out.normals.len() / 3) as u32;
-                        for t in &mesh.tris {
-                            for v in mesh.triangles[t.index() as usize] {
-                                let [x, y, z] = n[v as usize];
-                                out.normals.push([x, y, z, 0.0]);
-                            }
-                        }
-                        base
-                    }
+                    Some(n) => corners(&mut out.normals, mesh, |v| xyz(n[v])),
                     None => NO_NORMALS,
                 };
                 let has_uvs = mesh.uvs.iter().any(Option::is_some);
                 let uv_base = if textured && has_uvs {
-                    let base = (out.uvs.len() / 3) as u32;
-                    let zero = |_: usize| [0.0f32; 2];
-                    for t in &mesh.tris {
-                        for v in mesh.triangles[t.index() as usize] {
-                            let v = v as usize;
-                            let [a, b] = mesh.uvs[0].as_ref().map_or_else(|| zero(v), |u| u[v]);
-                            let [c, d] = mesh.uvs[1].as_ref().map_or_else(|| zero(v), |u| u[v]);
-                            out.uvs.push([a, b, c, d]);
-                        }
-                    }
-                    base
+                    let set = |k: usize, v: usize| mesh.uvs[k].as_ref().map_or([0.0; 2], |u| u[v]);
+                    corners(&mut out.uvs, mesh, |v| {
+                        let ([a, b], [c, d]) = (set(0, v), set(1, v));
+                        [a, b, c, d]
+                    })
                 } else {
                     NO_NORMALS
                 };
                 let tangent_base = match (&mesh.tangents, textured) {
-                    (Some(tangents), true) => {
-                        let base = (out.tangents.len() / 3) as u32;
-                        for t in &mesh.tris {
-                            for v in mesh.triangles[t.index() as usize] {
-                                out.tangents.push(tangents[v as usize]);
-                            }
-                        }
-                        base
-                    }
+                    (Some(tangents), true) => corners(&mut out.tangents, mesh, |v| tangents[v]),
                     _ => NO_NORMALS,
                 };
-                [bases.0, bases.1, normal_base, uv_base, tangent_base]
+                let color_base = match &mesh.colors {
+                    Some(colors) => corners(&mut out.colors, mesh, |v| xyz(colors[v])),
+                    None => NO_NORMALS,
+                };
+                [
+                    bases.0,
+                    bases.1,
+                    normal_base,
+                    uv_base,
+                    tangent_base,
+                    color_base,
+                ]
             });
         let slot_base = out.slots.len() as u32;
         out.slots.extend_from_slice(&inst.materials);
@@ -185,10 +180,24 @@ pub fn pack(w: &World) -> PackedMeshes {
             uv_base,
             tangent_base,
             alpha_base,
-            pad: [0; 3],
+            color_base,
+            pad: [0; 2],
         });
     }
     out
+}
+
+/// Appends `mesh`'s per-vertex attribute `at(vertex)` for the three
+/// corners of each triangle in leaf order; the base (in triangles) it
+/// starts at.
+fn corners(out: &mut Vec<[f32; 4]>, mesh: &Mesh, at: impl Fn(usize) -> [f32; 4]) -> u32 {
+    let base = (out.len() / 3) as u32;
+    for t in &mesh.tris {
+        for v in mesh.triangles[t.index() as usize] {
+            out.push(at(v as usize));
+        }
+    }
+    base
 }
 
 /// One slot's alpha test in the kernel's layout; its texture is the

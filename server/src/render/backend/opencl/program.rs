@@ -53,6 +53,8 @@ pub struct Features {
     pub volume: bool,
     /// A `MAT_PBR` material has a clear coat.
     pub coat: bool,
+    /// A placed mesh has vertex colours.
+    pub vertex_colors: bool,
     pub schlick: bool,
     pub exact: bool,
     pub sphere_lights: bool,
@@ -156,6 +158,7 @@ impl Features {
             coat: used
                 .iter()
                 .any(|m| matches!(m.bsdf, Bsdf::Pbr(p) if p.coat > 0.0)),
+            vertex_colors: w.vertex_colors,
             schlick: glass_with(true),
             exact: glass_with(false),
             sphere_lights: job.settings.nee && light_kind(KIND_SPHERE),
@@ -205,7 +208,8 @@ impl Features {
              -D HAS_GLASS={} -D HAS_GGX={} -D HAS_SCHLICK={} -D HAS_EXACT={} -D HAS_SPHERE_LIGHTS={} -D HAS_QUAD_LIGHTS={} \
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
-             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={} -D HAS_VOLUME={} -D HAS_COAT={}",
+             -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={} -D HAS_VOLUME={} -D HAS_COAT={} \
+             -D HAS_VERTEX_COLORS={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -238,6 +242,7 @@ impl Features {
             b(self.transmission),
             b(self.volume),
             b(self.coat),
+            b(self.vertex_colors),
         );
         if let Some(n) = self.inject_nan_every {
             o.push_str(&format!(" -D INJECT_NAN_EVERY={n}UL"));

@@ -6,6 +6,7 @@
 //! scene has maps (`HAS_TEXTURES`).
 
 use crate::render::maps::{Slot, WorldMaps};
+use crate::render::texture::MAP_SLOTS;
 use crate::render::world::World;
 use bytemuck::{Pod, Zeroable};
 
@@ -19,18 +20,19 @@ pub struct MapSlot {
     pub info: [u32; 4],
 }
 
-/// A material's maps and factors (`maps::WorldMaps`).
+/// A material's maps and factors (`maps::WorldMaps`): a slot per
+/// `texture::Map`, in its order.
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct MaterialMaps {
-    pub base_color: MapSlot,
-    pub metallic: MapSlot,
-    pub roughness: MapSlot,
-    pub normal: MapSlot,
-    pub emission: MapSlot,
+    pub slot: [MapSlot; MAP_SLOTS],
     /// metallic factor, roughness factor, normal scale, 1 where metallic
     /// and roughness share a lookup.
     pub factors: [f32; 4],
+    /// transmission, clear coat weight, clear coat roughness, specular.
+    pub layers: [f32; 4],
+    /// The specular colour factor (w unused).
+    pub spec_color: [f32; 4],
 }
 
 /// Where a texture's texels start in `texels`, and its size.
@@ -44,7 +46,7 @@ pub struct TexImage {
 }
 
 const _: () = assert!(std::mem::size_of::<MapSlot>() == 48);
-const _: () = assert!(std::mem::size_of::<MaterialMaps>() == 256);
+const _: () = assert!(std::mem::size_of::<MaterialMaps>() == 528);
 const _: () = assert!(std::mem::size_of::<TexImage>() == 16);
 
 /// A world's maps and textures as the kernel reads them (all empty when
@@ -72,18 +74,22 @@ pub(super) fn slot(s: &Slot) -> MapSlot {
 }
 
 fn maps(m: &WorldMaps) -> MaterialMaps {
+    let c = m.specular_color_factor;
     MaterialMaps {
-        base_color: slot(&m.base_color),
-        metallic: slot(&m.metallic),
-        roughness: slot(&m.roughness),
-        normal: slot(&m.normal),
-        emission: slot(&m.emission),
+        slot: m.slots.map(|s| slot(&s)),
         factors: [
             m.metallic_factor,
             m.roughness_factor,
             m.normal_scale,
             if m.shared_mr { 1.0 } else { 0.0 },
         ],
+        layers: [
+            m.transmission_factor,
+            m.clearcoat_factor,
+            m.clearcoat_roughness_factor,
+            m.specular_factor,
+        ],
+        spec_color: [c.x, c.y, c.z, 0.0],
     }
 }
 
