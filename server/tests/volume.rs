@@ -193,13 +193,7 @@ fn bad_attenuation_is_named_and_good_survives_the_round_trip() {
             "materials.m",
         ),
     ] {
-        let s = json!({
-            "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "vfov_deg": 40},
-            "materials": {"m": material},
-            "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}]
-        });
-        let e = Scene::from_json_str(&s.to_string()).expect_err("invalid");
-        assert!(e.to_string().contains(field), "{material}: {e}");
+        common::assert_material_refused(&material, field);
     }
     let s = absorbing_scene();
     let back = Scene::from_json(&s.to_json()).expect("round trip");

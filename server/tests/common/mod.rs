@@ -455,6 +455,18 @@ pub fn sky_sphere(material: serde_json::Value) -> Scene {
     Scene::from_json_str(&s.to_string()).expect("valid scene")
 }
 
+/// A scene of one sphere of `material` (named `m`) is refused, and the
+/// message names `named` (a field's path, e.g. `materials.m.ior`).
+pub fn assert_material_refused(material: &serde_json::Value, named: &str) {
+    let s = serde_json::json!({
+        "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "vfov_deg": 40},
+        "materials": {"m": material},
+        "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}]
+    });
+    let e = Scene::from_json_str(&s.to_string()).expect_err("invalid");
+    assert!(e.to_string().contains(named), "{material}: {e}");
+}
+
 /// The whole image's mean, and its centre's, is 1 within `rel` (and 4.5 of
 /// its standard errors), in every channel. Paths are unbounded (Russian
 /// roulette ends them): light may bounce inside many times.
