@@ -206,7 +206,7 @@ fn measure(device: &Device, n: usize, args: &Args) -> Row {
     // checks the JSON mesh data).
     let data = bumpy_sphere(n);
     let start = Instant::now();
-    let again = Mesh::new(data).expect("a valid mesh");
+    let again = Mesh::new(data.into()).expect("a valid mesh");
     let build_mesh = start.elapsed().as_secs_f64();
     assert_eq!(again.triangles.len(), triangles.len());
     drop(again);
