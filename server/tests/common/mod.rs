@@ -467,6 +467,14 @@ pub fn assert_material_refused(material: &serde_json::Value, named: &str) {
     assert!(e.to_string().contains(named), "{material}: {e}");
 }
 
+/// `scene` written as JSON and read back has the same materials; the JSON
+/// text, for what a test expects it to say.
+pub fn assert_round_trip(scene: &Scene) -> String {
+    let back = Scene::from_json(&scene.to_json()).expect("round trip");
+    assert_eq!(scene.materials, back.materials);
+    serde_json::to_string(&scene.to_json()).expect("serialises")
+}
+
 /// The whole image's mean, and its centre's, is 1 within `rel` (and 4.5 of
 /// its standard errors), in every channel. Paths are unbounded (Russian
 /// roulette ends them): light may bounce inside many times.
