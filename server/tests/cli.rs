@@ -54,6 +54,24 @@ fn scenes_lists_every_builtin_and_prints_json() {
         scene,
         pathstream::resolve::load_scene("smallpt").expect("smallpt")
     );
+    // The bench's scenes too: listed, and printed as the scene they are
+    // (what a comparison script gives another renderer).
+    for (name, _) in pathstream::bench::scenes::NAMES {
+        assert!(
+            listing.lines().any(|l| l.starts_with(name)),
+            "{name} missing:\n{listing}"
+        );
+    }
+    let out = pathstream(&["scenes", "--json", "cornell-mesh"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    pathstream::render::Scene::from_json_str(&text(&out.stdout)).expect("valid scene JSON");
+    let printed: serde_json::Value = serde_json::from_str(&text(&out.stdout)).expect("JSON");
+    let scene = pathstream::bench::scenes::cornell_mesh().expect("cornell-mesh");
+    let expected = serde_json::to_string(&scene.to_json()).expect("json");
+    assert_eq!(
+        printed,
+        serde_json::from_str::<serde_json::Value>(&expected).expect("json")
+    );
 }
 
 #[test]

@@ -158,6 +158,17 @@ fn bvh_nearest_hit_equals_brute_force_on_random_meshes() {
     );
 }
 
+/// Meshes of one leaf (walls of two triangles, the lamp) are tested
+/// without their node: the same hits.
+#[test]
+fn bvh_nearest_hit_equals_brute_force_in_the_triangle_cornell_box() {
+    let s = pathstream::bench::scenes::cornell_mesh().expect("cornell-mesh");
+    let world = World::new(&s, s.camera.position);
+    assert!(world.uses_bvh());
+    let the_box = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(99.0, 81.6, 170.0));
+    agree(&world, the_box, 3_000, 5, "cornell-mesh");
+}
+
 #[test]
 fn bvh_nearest_hit_equals_brute_force_on_every_built_in_scene() {
     for name in BUILTIN_NAMES {

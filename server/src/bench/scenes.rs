@@ -50,6 +50,38 @@ pub const GLOSSY_PLANE: &str = "glossy-plane";
 /// `sunset-balls`.
 pub const SUNSET_BALLS: &str = "sunset-balls";
 
+/// This module's scenes by name, with what each is for.
+pub const NAMES: [(&str, &str); 7] = [
+    (
+        GLASS_MESH,
+        "cornell-glass with a glass bumpy sphere of 20,000 triangles",
+    ),
+    (
+        CORNELL_MESH,
+        "a diffuse Cornell box of triangles, two 20,480-triangle balls, an area light",
+    ),
+    (
+        CORNELL_MESH_PBR,
+        "cornell-mesh with a rough gold metal ball and a blue plastic one",
+    ),
+    (
+        CORNELL_MESH_FROSTED,
+        "cornell-mesh with a frosted glass ball and a tinted half-clear one",
+    ),
+    (
+        CORNELL_MESH_COATED,
+        "cornell-mesh with a clear-coated paint and an absorbing amber glass",
+    ),
+    (
+        GLOSSY_PLANE,
+        "a rough metal plane reflecting every emitter kind",
+    ),
+    (
+        SUNSET_BALLS,
+        "a diffuse and a rough metal ball lit by an HDR sunset",
+    ),
+];
+
 /// The scene by name: a mesh scene of this module's, else a built-in one
 /// or a file.
 pub fn load(name: &str) -> Result<Scene, SceneError> {

@@ -1,11 +1,13 @@
 //! `pathstream scenes`: the built-in scene names, or one scene's JSON.
 
 use super::CliError;
+use pathstream::bench::scenes as bench;
 use pathstream::render::scene::{builtin, BUILTIN_NAMES};
 
 #[derive(clap::Args, Debug)]
 pub struct ScenesArgs {
-    /// Print this built-in scene as scene JSON (a starting point for your own).
+    /// Print this built-in or bench scene as scene JSON (a starting point for
+    /// your own).
     #[arg(long, value_name = "NAME")]
     json: Option<String>,
 }
@@ -25,19 +27,34 @@ fn describe(name: &str) -> &'static str {
 
 pub fn run(args: ScenesArgs) -> Result<(), CliError> {
     if let Some(name) = args.json {
-        let scene = builtin(&name).ok_or_else(|| {
-            CliError::Usage(format!(
-                "--json: unknown scene '{name}' (known: {})",
-                BUILTIN_NAMES.join(", ")
-            ))
-        })?;
+        let scene = match builtin(&name) {
+            Some(scene) => scene,
+            None if bench::NAMES.iter().any(|(n, _)| *n == name) => {
+                bench::load(&name).map_err(|e| CliError::Failed(e.to_string()))?
+            }
+            None => {
+                let known: Vec<&str> = BUILTIN_NAMES
+                    .iter()
+                    .copied()
+                    .chain(bench::NAMES.iter().map(|(n, _)| *n))
+                    .collect();
+                return Err(CliError::Usage(format!(
+                    "--json: unknown scene '{name}' (known: {})",
+                    known.join(", ")
+                )));
+            }
+        };
         let text = serde_json::to_string_pretty(&scene.to_json())
             .map_err(|e| CliError::Failed(e.to_string()))?;
         println!("{text}");
         return Ok(());
     }
     for name in BUILTIN_NAMES {
-        println!("{name:<14} {}", describe(name));
+        println!("{name:<20} {}", describe(name));
+    }
+    println!("\nbench scenes (`pathstream bench --scenes`, `pathstream scenes --json`):");
+    for (name, what) in bench::NAMES {
+        println!("{name:<20} {what}");
     }
     Ok(())
 }

@@ -145,6 +145,19 @@ impl Bvh {
         self
     }
 
+    /// The one leaf of a hierarchy that is nothing else (a mesh of at most
+    /// [`MAX_LEAF`] primitives): its first slot and count. A ray that
+    /// reached the hierarchy's box may test it at once, without a node.
+    #[inline(always)]
+    pub fn single_leaf(&self) -> Option<(u32, u32)> {
+        match self.nodes.as_slice() {
+            [root] if root.count[0] > 0 && root.child[1..] == [EMPTY; 3] => {
+                Some((root.child[0], root.count[0]))
+            }
+            _ => None,
+        }
+    }
+
     /// Bytes held by the nodes and the slot list.
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<BvhNode>() + self.prims.len() * 4

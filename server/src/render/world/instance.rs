@@ -116,27 +116,37 @@ impl Instance {
         }
         // A leaf's triangles four at a time, offered in slot order as the
         // scalar loop above offers them (see `shape::tri_pack`).
-        mesh.bvh
-            .traverse(&BoxRay::new(o, d), best.t, |first, _, _| {
-                let pack = &mesh.packs[first as usize / MAX_LEAF];
-                let found = tri_ray.intersect4(pack, best.t);
-                let mut lanes = (found.hits | found.scalar) & pack.lanes();
-                while lanes != 0 {
-                    let lane = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
-                    let tri = &mesh.tris[first as usize + lane];
-                    let index = tri.index();
-                    if index == skip {
-                        continue;
-                    }
-                    if found.scalar & (1 << lane) != 0 {
-                        test(std::slice::from_ref(tri), best);
-                    } else if found.t[lane] < best.t && stops(index, found.bary(lane)) {
-                        best.offer(found.t[lane], id, index, found.bary(lane));
-                    }
+        let t_max = best.t;
+        let mut leaf = |first: u32, _: u32, _: f32| {
+            let pack = &mesh.packs[first as usize / MAX_LEAF];
+            let found = tri_ray.intersect4(pack, best.t);
+            let mut lanes = (found.hits | found.scalar) & pack.lanes();
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let tri = &mesh.tris[first as usize + lane];
+                let index = tri.index();
+                if index == skip {
+                    continue;
                 }
-                best.t
-            });
+                if found.scalar & (1 << lane) != 0 {
+                    test(std::slice::from_ref(tri), best);
+                } else if found.t[lane] < best.t && stops(index, found.bary(lane)) {
+                    best.offer(found.t[lane], id, index, found.bary(lane));
+                }
+            }
+            best.t
+        };
+        // A mesh of one leaf (a wall's two triangles) skips its node: the
+        // world's BVH already tested the same box, and the triangles decide.
+        match mesh.bvh.single_leaf() {
+            Some((first, count)) => {
+                leaf(first, count, f32::INFINITY);
+            }
+            None => {
+                mesh.bvh.traverse(&BoxRay::new(o, d), t_max, leaf);
+            }
+        }
     }
 
     /// The surface at `hit` on this instance (number `index`).

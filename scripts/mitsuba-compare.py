@@ -1,0 +1,270 @@
+#!/usr/bin/env python3
+"""pathstream's CPU backend side by side with Mitsuba 3 on one triangle scene.
+
+Both render the same scene (pathstream's own `scenes --json` output, turned
+into a Mitsuba scene here: the same f32 vertices, normals, albedos, lamp and
+camera) at the same resolution, samples per pixel, path depth and pixel
+filter, on the same threads. Reported per renderer and sampler: samples per
+second (render time only: Mitsuba's first render, which compiles its
+kernels, is not timed) and the relative RMS error against a long pathstream
+reference (`pathstream diff`), then the time each needs to reach 1% error.
+
+Not part of the test suite (it needs Mitsuba and minutes). Setup, once:
+
+    apt-get install -y libllvm19          # Mitsuba's llvm variants
+    python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba numpy
+    cargo build --release
+
+Run (from the repository root):
+
+    /tmp/mi/bin/python scripts/mitsuba-compare.py [--scene cornell-mesh]
+        [--size 128] [--spp 64,256,1024] [--max-depth 6] [--threads 2]
+        [--reference-spp 8192] [--out target/mitsuba-compare]
+
+Depths: pathstream's --max-depth counts scattering events, Mitsuba's
+max_depth path vertices, so Mitsuba gets max_depth + 1. Russian roulette
+starts after 5 bounces in both. Samplers: pathstream's `random` against
+Mitsuba's `independent`, its `sobol` (Owen-scrambled) against Mitsuba's
+`multijitter` and `ldsampler`.
+"""
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+
+def run(cmd):
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{out.stderr}")
+    return out.stdout + out.stderr
+
+
+def pathstream_render(exe, scene, args, spp, sampler, seed, path):
+    text = run([
+        exe, "render", "--scene", scene, "--width", str(args.size),
+        "--height", str(args.size), "--spp", str(spp),
+        "--max-depth", str(args.max_depth), "--rr-depth", "5",
+        "--filter", "box", "--sampler", sampler, "--adaptive", "off",
+        "--backend", "cpu", "--seed", str(seed), "--out", path,
+    ])
+    m = re.search(r"in ([0-9.]+) s,", text)
+    if not m:
+        sys.exit(f"no render time in: {text}")
+    return float(m.group(1))
+
+
+def rel_error(exe, reference, image):
+    text = run([exe, "diff", reference, image])
+    m = re.search(r"relative RMS error ([0-9.]+)%", text)
+    if not m:
+        sys.exit(f"no error in: {text}")
+    return float(m.group(1)) / 100.0
+
+
+def mitsuba_scene(mi, scene, args, out_dir):
+    """The scene JSON as a Mitsuba scene: meshes through PLY files written
+    by Mitsuba itself, so that both read the same f32 data."""
+    mats = scene["materials"]
+    d = {
+        "type": "scene",
+        "integrator": {
+            "type": "path",
+            "max_depth": args.max_depth + 1,
+            "rr_depth": 5,
+        },
+    }
+    cam = scene["camera"]
+    d["sensor"] = {
+        "type": "perspective",
+        "fov": cam["vfov_deg"],
+        "fov_axis": "y",
+        "near_clip": cam.get("near_clip", 0.01),
+        "to_world": mi.ScalarTransform4f().look_at(
+            origin=cam["position"], target=cam["look_at"], up=cam["up"]
+        ),
+        "film": {
+            "type": "hdrfilm",
+            "width": args.size,
+            "height": args.size,
+            "rfilter": {"type": "box"},
+            "pixel_format": "rgb",
+        },
+        "sampler": {"type": "independent"},
+    }
+    for i, obj in enumerate(scene["objects"]):
+        if obj["type"] != "mesh":
+            sys.exit(f"object {i}: only meshes are compared (this is {obj['type']})")
+        data = obj["data"]
+        pos = np.array(data["positions"], dtype=np.float32)
+        tri = np.array(data["triangles"], dtype=np.uint32)
+        mat = mats[obj["material"]]
+        if mat["type"] != "diffuse":
+            sys.exit(f"object {i}: only diffuse materials are compared")
+        emitting = any(c > 0 for c in mat.get("emission", [0, 0, 0]))
+        if emitting:
+            # Mitsuba's area lights emit on the front side only; the lamp
+            # faces the room (pathstream's emitters are two-sided, and the
+            # side facing up lights nothing).
+            a, b, c = pos[tri[0, 0]], pos[tri[0, 1]], pos[tri[0, 2]]
+            if np.cross(b - a, c - a)[1] > 0:
+                tri = tri[:, [0, 2, 1]]
+        normals = data.get("normals")
+        mesh = mi.Mesh(
+            f"mesh{i}", len(pos), len(tri), has_vertex_normals=normals is not None
+        )
+        params = mi.traverse(mesh)
+        params["vertex_positions"] = mi.Float(pos.ravel())
+        params["faces"] = mi.UInt32(tri.ravel())
+        if normals is not None:
+            params["vertex_normals"] = mi.Float(np.array(normals, dtype=np.float32).ravel())
+        params.update()
+        ply = os.path.join(out_dir, f"mesh{i}.ply")
+        mesh.write_ply(ply)
+        shape = {
+            "type": "ply",
+            "filename": ply,
+            "face_normals": normals is None,
+            # pathstream's surfaces reflect on both sides, Mitsuba's
+            # diffuse BSDF on its front only.
+            "bsdf": {
+                "type": "twosided",
+                "bsdf": {
+                    "type": "diffuse",
+                    "reflectance": {"type": "rgb", "value": mat["albedo"]},
+                },
+            },
+        }
+        t = obj.get("transform")
+        if t:
+            if set(t) - {"translate", "scale"}:
+                sys.exit(f"object {i}: only translate and scale transforms are compared")
+            m = mi.ScalarTransform4f().translate(t.get("translate", [0, 0, 0]))
+            s = t.get("scale", 1.0)
+            shape["to_world"] = m @ mi.ScalarTransform4f().scale(
+                s if isinstance(s, list) else [s, s, s]
+            )
+        if emitting:
+            shape["emitter"] = {
+                "type": "area",
+                "radiance": {"type": "rgb", "value": mat["emission"]},
+            }
+        d[f"shape{i}"] = shape
+    return d
+
+
+def mitsuba_render(mi, dr, scene_dict, args, spp, sampler, seed, path):
+    scene_dict = dict(scene_dict)
+    sensor = dict(scene_dict["sensor"])
+    sensor["sampler"] = {"type": sampler, "sample_count": spp}
+    scene_dict["sensor"] = sensor
+    scene = mi.load_dict(scene_dict)
+    # The first render compiles Mitsuba's kernels for this scene and spp;
+    # the second, timed, reuses them.
+    img = mi.render(scene, spp=spp, seed=seed + 1000)
+    dr.eval(img)
+    dr.sync_thread()
+    start = time.perf_counter()
+    img = mi.render(scene, spp=spp, seed=seed)
+    dr.eval(img)
+    dr.sync_thread()
+    seconds = time.perf_counter() - start
+    mi.Bitmap(img).write(path)
+    return seconds
+
+
+def time_to(target, rows):
+    """Seconds to reach `target` error from the renders (spp, s, error):
+    the cheapest render that reached it, else the last one extrapolated by
+    error ~ 1/sqrt(time)."""
+    for spp, s, err in rows:
+        if err <= target:
+            return s * (err / target) ** 2, spp
+    spp, s, err = rows[-1]
+    return s * (err / target) ** 2, None
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--scene", default="cornell-mesh")
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--spp", default="64,256,1024")
+    ap.add_argument("--max-depth", type=int, default=6)
+    ap.add_argument("--threads", type=int, default=os.cpu_count())
+    ap.add_argument("--reference-spp", type=int, default=8192)
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--exe", default="target/release/pathstream")
+    ap.add_argument("--out", default="target/mitsuba-compare")
+    args = ap.parse_args()
+    spps = [int(s) for s in args.spp.split(",")]
+    os.makedirs(args.out, exist_ok=True)
+    os.environ["RAYON_NUM_THREADS"] = str(args.threads)
+
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    dr.set_thread_count(args.threads)
+
+    scene_file = os.path.join(args.out, f"{args.scene}.json")
+    with open(scene_file, "w") as f:
+        f.write(run([args.exe, "scenes", "--json", args.scene]))
+    with open(scene_file) as f:
+        scene = json.load(f)
+
+    reference = os.path.join(
+        args.out, f"{args.scene}-{args.size}-d{args.max_depth}-ref{args.reference_spp}.pfm"
+    )
+    if not os.path.exists(reference):
+        print(f"reference: pathstream, {args.reference_spp} spp ...", flush=True)
+        pathstream_render(args.exe, scene_file, args, args.reference_spp, "sobol", 7, reference)
+
+    d = mitsuba_scene(mi, scene, args, args.out)
+    runs = [
+        ("pathstream", "random"),
+        ("pathstream", "sobol"),
+        (f"mitsuba {args.variant}", "independent"),
+        (f"mitsuba {args.variant}", "multijitter"),
+        (f"mitsuba {args.variant}", "ldsampler"),
+    ]
+    pixels = args.size * args.size
+    print(
+        f"\n{args.scene}, {args.size}x{args.size}, max depth {args.max_depth}, box filter, "
+        f"{args.threads} threads; error against pathstream at {args.reference_spp} spp\n"
+    )
+    print("| renderer | sampler | spp | seconds | M samples/s | error |")
+    print("| --- | --- | ---: | ---: | ---: | ---: |")
+    summary = []
+    for who, sampler in runs:
+        rows = []
+        for spp in spps:
+            path = os.path.join(args.out, f"{who.split()[0]}-{sampler}-{spp}.pfm")
+            if who == "pathstream":
+                s = pathstream_render(args.exe, scene_file, args, spp, sampler, 1, path)
+            else:
+                s = mitsuba_render(mi, dr, d, args, spp, sampler, 1, path)
+            err = rel_error(args.exe, reference, path)
+            rows.append((spp, s, err))
+            print(
+                f"| {who} | {sampler} | {spp} | {s:.3f} | {spp * pixels / s / 1e6:.2f} "
+                f"| {err * 100:.2f}% |",
+                flush=True,
+            )
+        summary.append((who, sampler, rows))
+    print("\n| renderer | sampler | M samples/s (median) | seconds to 1% error |")
+    print("| --- | --- | ---: | ---: |")
+    for who, sampler, rows in summary:
+        rate = np.median([spp * pixels / s / 1e6 for spp, s, _ in rows])
+        t, reached = time_to(0.01, rows)
+        how = f"at {reached} spp" if reached else "extrapolated"
+        print(f"| {who} | {sampler} | {rate:.2f} | {t:.2f} ({how}) |")
+
+
+if __name__ == "__main__":
+    main()
