@@ -102,6 +102,14 @@ impl TriRay {
         }
     }
 
+    /// The same ray (direction) from `origin`: what a ray becomes in the
+    /// space of a mesh placed by a translation alone, without redoing the
+    /// direction's permutation, shear and divisions.
+    #[inline(always)]
+    pub fn from_origin(&self, origin: Vec3A) -> Self {
+        Self { origin, ..*self }
+    }
+
     /// Distance to the triangle (in units of the ray's direction) if the
     /// ray meets it strictly between 0 and `t_max`, with the barycentric
     /// weights of its three vertices at the hit.

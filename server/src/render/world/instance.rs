@@ -36,6 +36,9 @@ pub struct Instance {
     pub rt_b: f32,
     /// World material of each of the mesh's material slots.
     pub materials: Arc<[u32]>,
+    /// `cam_from_obj` is a translation (the mesh's matrix is exactly the
+    /// identity): rays keep their direction in object space.
+    pub translation_only: bool,
     /// Each slot's alpha test, where some slot's material has one
     /// (`render::alpha`); None: every triangle is opaque.
     pub alpha: Option<Arc<[AlphaTest]>>,
@@ -79,6 +82,7 @@ impl Instance {
             rt_a,
             rt_b,
             materials,
+            translation_only: cam.matrix3 == DMat3::IDENTITY,
             alpha: None,
         }
     }
@@ -86,10 +90,23 @@ impl Instance {
     /// Offers this instance's nearest triangle hit (other than triangle
     /// `skip`) to `best`; `BRUTE` tests every triangle instead of the BVH.
     #[inline(always)]
-    pub(super) fn offer<const BRUTE: bool>(&self, id: u32, ray: &Ray, skip: u32, best: &mut Hit) {
-        let o = self.obj_from_cam.transform_point3a(ray.origin);
-        let d = self.obj_from_cam.transform_vector3a(ray.dir);
-        let tri_ray = TriRay::new(o, d);
+    pub(super) fn offer<const BRUTE: bool>(
+        &self,
+        id: u32,
+        (ray, tri): (&Ray, &TriRay),
+        skip: u32,
+        best: &mut Hit,
+    ) {
+        // `tri` is `ray` prepared in camera space: a mesh moved but not
+        // turned or scaled (a wall, identity matrix) reuses its direction.
+        let (o, d, tri_ray) = if self.translation_only {
+            let o = ray.origin + self.obj_from_cam.translation;
+            (o, ray.dir, tri.from_origin(o))
+        } else {
+            let o = self.obj_from_cam.transform_point3a(ray.origin);
+            let d = self.obj_from_cam.transform_vector3a(ray.dir);
+            (o, d, TriRay::new(o, d))
+        };
         let mesh = &*self.mesh;
         // Whether the ray stops at a triangle it meets (alpha-tested slots).
         let stops = |index: u32, bary: [f32; 3]| match &self.alpha {

@@ -29,7 +29,7 @@ use crate::render::light::{EnvLight, Lights, Receiver};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
-use crate::render::shape::{Quad, Roots, Sphere, SphereBatch};
+use crate::render::shape::{Quad, Roots, Sphere, SphereBatch, TriRay};
 
 /// `prim` of a hit or origin on an object that is not a mesh.
 pub const NO_PRIM: u32 = u32::MAX;
@@ -268,6 +268,7 @@ impl World {
                 } else {
                     scan::nearest(isa, big, &[], ray, from)
                 };
+                let tri = TriRay::new(ray.origin, ray.dir);
                 bvh.traverse(
                     &BoxRay::new(ray.origin, ray.dir),
                     best.t,
@@ -275,7 +276,7 @@ impl World {
                         for slot in first..first + count {
                             self.offer_object::<false>(
                                 bvh.prims[slot as usize],
-                                ray,
+                                (ray, &tri),
                                 from,
                                 &mut best,
                             );
@@ -293,14 +294,21 @@ impl World {
     /// without any acceleration: what `intersect` must agree with.
     pub fn intersect_brute(&self, ray: &Ray, from: Origin) -> Option<Hit> {
         let mut best = Hit::NONE;
+        let tri = TriRay::new(ray.origin, ray.dir);
         for id in 0..self.objects.len() as u32 {
-            self.offer_object::<true>(id, ray, from, &mut best);
+            self.offer_object::<true>(id, (ray, &tri), from, &mut best);
         }
         (best.t < f32::INFINITY).then_some(best)
     }
 
     #[inline(always)]
-    fn offer_object<const BRUTE: bool>(&self, id: u32, ray: &Ray, from: Origin, best: &mut Hit) {
+    fn offer_object<const BRUTE: bool>(
+        &self,
+        id: u32,
+        (ray, tri): (&Ray, &TriRay),
+        from: Origin,
+        best: &mut Hit,
+    ) {
         match &self.objects[id as usize].geometry {
             Geometry::Sphere(s) => {
                 let roots = match (id == from.object, from.entering) {
@@ -321,7 +329,7 @@ impl World {
                 } else {
                     NO_PRIM
                 };
-                self.instances[*i as usize].offer::<BRUTE>(id, ray, skip, best);
+                self.instances[*i as usize].offer::<BRUTE>(id, (ray, tri), skip, best);
             }
         }
     }
