@@ -184,6 +184,7 @@ impl World {
             }
         };
         let vertex_colors = instances.iter().any(|i| i.mesh.colors.is_some());
+        let translated_meshes = instances.iter().any(|i| i.translation_only);
         Self {
             origin,
             objects,
@@ -192,6 +193,7 @@ impl World {
             textures,
             maps,
             vertex_colors,
+            translated_meshes,
             lights,
             environment,
             env_map,

@@ -93,13 +93,14 @@ impl Instance {
     pub(super) fn offer<const BRUTE: bool>(
         &self,
         id: u32,
-        (ray, tri): (&Ray, &TriRay),
+        (ray, tri): (&Ray, Option<&TriRay>),
         skip: u32,
         best: &mut Hit,
     ) {
-        // `tri` is `ray` prepared in camera space: a mesh moved but not
-        // turned or scaled (a wall, identity matrix) reuses its direction.
-        let (o, d, tri_ray) = if self.translation_only {
+        // `tri` is `ray` prepared in camera space (there whenever some
+        // instance is only translated): a mesh moved but not turned or
+        // scaled (a wall, identity matrix) reuses its direction.
+        let (o, d, tri_ray) = if let (true, Some(tri)) = (self.translation_only, tri) {
             let o = ray.origin + self.obj_from_cam.translation;
             (o, ray.dir, tri.from_origin(o))
         } else {

@@ -177,6 +177,9 @@ pub struct World {
     /// Some placed mesh has vertex colours (every hit is then shaded by
     /// [`World::shade`]).
     pub vertex_colors: bool,
+    /// Some placed mesh is only translated (`Instance::translation_only`):
+    /// rays are then prepared for the triangle test once, in camera space.
+    pub translated_meshes: bool,
     pub lights: Lights,
     /// Radiance of rays that leave the scene, where there is no map.
     pub environment: Vec3A,
@@ -268,7 +271,11 @@ impl World {
                 } else {
                     scan::nearest(isa, big, &[], ray, from)
                 };
-                let tri = TriRay::new(ray.origin, ray.dir);
+                // Only where some instance shares it: scenes of spheres and
+                // quads alone keep their three divisions per ray.
+                let tri = self
+                    .translated_meshes
+                    .then(|| TriRay::new(ray.origin, ray.dir));
                 bvh.traverse(
                     &BoxRay::new(ray.origin, ray.dir),
                     best.t,
@@ -276,7 +283,7 @@ impl World {
                         for slot in first..first + count {
                             self.offer_object::<false>(
                                 bvh.prims[slot as usize],
-                                (ray, &tri),
+                                (ray, tri.as_ref()),
                                 from,
                                 &mut best,
                             );
@@ -296,7 +303,7 @@ impl World {
         let mut best = Hit::NONE;
         let tri = TriRay::new(ray.origin, ray.dir);
         for id in 0..self.objects.len() as u32 {
-            self.offer_object::<true>(id, (ray, &tri), from, &mut best);
+            self.offer_object::<true>(id, (ray, Some(&tri)), from, &mut best);
         }
         (best.t < f32::INFINITY).then_some(best)
     }
@@ -305,7 +312,7 @@ impl World {
     fn offer_object<const BRUTE: bool>(
         &self,
         id: u32,
-        (ray, tri): (&Ray, &TriRay),
+        (ray, tri): (&Ray, Option<&TriRay>),
         from: Origin,
         best: &mut Hit,
     ) {
