@@ -19,6 +19,8 @@ pub struct DeviceRate {
     pub alone: f64,
     /// Camera paths per wall-clock second it added to the split render.
     pub together: f64,
+    /// Camera paths it rendered in the split (the blocks it handed in).
+    pub paths: u64,
 }
 
 /// One scene and size on every device.
@@ -29,9 +31,14 @@ pub struct DevicesRow {
     pub devices: Vec<DeviceRate>,
     /// Camera paths per second of the split render.
     pub combined: f64,
+    /// Camera paths the split render's film holds once merged: the
+    /// devices' blocks, counted by the film, not by the devices.
+    pub film_paths: u64,
     /// The fastest device alone through the split machinery (blocks,
     /// block films, merges): what the machinery itself costs.
     pub split_fastest: f64,
+    /// Camera paths that render's film holds.
+    pub split_fastest_paths: u64,
 }
 
 impl DevicesRow {
@@ -56,11 +63,14 @@ pub struct DevicesCsv<'a> {
     pub device: &'a str,
     pub alone_paths_per_sec: f64,
     pub together_paths_per_sec: f64,
+    /// Camera paths this device rendered in the split; for `all` and
+    /// `split-fastest`, the paths the split render's film holds.
+    pub split_paths: u64,
 }
 
 impl DevicesRow {
     pub fn csv(&self) -> Vec<DevicesCsv<'_>> {
-        let line = |backend, device, alone, together| DevicesCsv {
+        let line = |backend, device, alone, together, split_paths| DevicesCsv {
             scene: &self.scene,
             width: self.size.0,
             height: self.size.1,
@@ -68,16 +78,24 @@ impl DevicesRow {
             device,
             alone_paths_per_sec: alone,
             together_paths_per_sec: together,
+            split_paths,
         };
         let mut out: Vec<_> = (self.devices.iter())
-            .map(|d| line(&d.backend, &d.device, d.alone, d.together))
+            .map(|d| line(&d.backend, &d.device, d.alone, d.together, d.paths))
             .collect();
-        out.push(line("all", "every device", self.ideal(), self.combined));
+        out.push(line(
+            "all",
+            "every device",
+            self.ideal(),
+            self.combined,
+            self.film_paths,
+        ));
         out.push(line(
             "split-fastest",
             "the fastest device alone, through the split",
             self.fastest(),
             self.split_fastest,
+            self.split_fastest_paths,
         ));
         out
     }
@@ -101,6 +119,7 @@ pub fn measure(
             device: b.device(),
             alone: alone.paths_per_sec,
             together: 0.0,
+            paths: 0,
         });
     }
     let timed = Quality {
@@ -110,22 +129,26 @@ pub fn measure(
     let job = RenderJob::new(scene, size.0, size.1, &timed);
     let split = |backends: &mut [Backend]| {
         let mut film = Film::new(size.0, size.1);
-        render_split(&job, backends, &mut film, &timed, |_| {})
+        let (progress, shares) = render_split(&job, backends, &mut film, &timed, |_| {})?;
+        Ok::<_, BackendError>((progress, shares, film.total_samples()))
     };
-    let (progress, shares) = split(backends)?;
+    let (progress, shares, film_paths) = split(backends)?;
     let wall = progress.elapsed.as_secs_f64().max(1e-9);
     for (d, s) in devices.iter_mut().zip(&shares) {
         d.together = s.samples as f64 / wall;
+        d.paths = s.samples;
     }
     let fastest = (0..devices.len())
         .max_by(|&a, &b| devices[a].alone.total_cmp(&devices[b].alone))
         .unwrap_or(0);
-    let (one, _) = split(&mut backends[fastest..=fastest])?;
+    let (one, _, split_fastest_paths) = split(&mut backends[fastest..=fastest])?;
     Ok(DevicesRow {
         scene: name.to_owned(),
         size,
         devices,
         combined: progress.samples as f64 / wall,
+        film_paths,
         split_fastest: one.samples as f64 / one.elapsed.as_secs_f64().max(1e-9),
+        split_fastest_paths,
     })
 }
