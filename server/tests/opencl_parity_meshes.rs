@@ -13,7 +13,7 @@ use pathstream::render::backend::opencl::{pack, CheckArg, KernelParams, OpenClBa
 use pathstream::render::math::Vec3A;
 use pathstream::render::ray::Ray;
 use pathstream::render::shape::TriRay;
-use pathstream::render::world::Origin;
+use pathstream::render::world::{AccelChoice, Origin, World};
 use pathstream::render::{Quality, RenderJob, Scene};
 
 /// Next-event estimation picks one emitter in proportion to its power from
@@ -245,7 +245,9 @@ fn mesh_args<'a>(input: &'a [[f32; 4]], p: &'a Packed) -> Vec<CheckArg<'a>> {
 /// The nearest hit among mesh instances (a rotated and scaled 81,920-
 /// triangle ball placed twice, a coarse ball, spheres and walls) on 1e5
 /// rays from inside the room: the same object, triangle and distance as
-/// the CPU's, bit for bit.
+/// the CPU's, bit for bit; with every mesh on its own instance, and with
+/// the small ones merged (`render::world::merge`: the flat balls become
+/// one mesh placed by a translation).
 #[test]
 fn the_nearest_hit_among_meshes_agrees_on_1e5_rays() {
     let Some(d) = device() else { return };
@@ -262,14 +264,22 @@ fn the_nearest_hit_among_meshes_agrees_on_1e5_rays() {
     objects.push(ball(6, "mirror", [70.0, 50.0, 100.0], 9.0, false));
     objects.push(ball(1, "glass", [50.0, 20.0, 90.0], 8.0, false));
     let s = Scene::from_json_value(j).expect("valid");
-    let job = RenderJob::new(&s, 16, 16, &Quality::default());
-    assert_eq!(job.world.instances.len(), 3);
-    let packed = pack(&job);
+    let merged = RenderJob::new(&s, 16, 16, &Quality::default());
+    assert_eq!(merged.world.instances.len(), 2);
+    let mut unmerged = merged.with_new_id();
+    unmerged.world = World::unmerged(&s, s.camera.position, AccelChoice::Auto);
+    assert_eq!(unmerged.world.instances.len(), 3);
+    nearest_hits_agree(&d, &merged);
+    nearest_hits_agree(&d, &unmerged);
+}
+
+fn nearest_hits_agree(d: &OpenClBackend, job: &RenderJob) {
+    let packed = pack(job);
     let n = 100_000u64;
     let centre = Vec3A::from((job.camera.forward * 200.0).to_array());
     let rays = rays_around(centre, 60.0, n);
     let input = ray_input(&rays);
-    let out: Vec<f32> = checks(&d)
+    let out: Vec<f32> = checks(d)
         .run(
             "check_nearest_meshes",
             n as usize,

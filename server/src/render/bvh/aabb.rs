@@ -1,6 +1,6 @@
 //! Axis-aligned boxes in f32.
 
-use crate::render::math::Vec3A;
+use crate::render::math::{DAffine3, DVec3, Vec3A};
 
 /// An axis-aligned box; the default (and [`Aabb::EMPTY`]) is inverted, so
 /// that growing it by anything gives that thing's box.
@@ -86,5 +86,27 @@ impl Aabb {
     /// Whether `p` lies inside or on the box.
     pub fn contains(&self, p: Vec3A) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+}
+
+impl Aabb {
+    /// The f64 bounds of this box's eight corners mapped by `a` (an
+    /// object-space box placed in the world).
+    pub fn transformed(&self, a: &DAffine3) -> (DVec3, DVec3) {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for i in 0..8 {
+            let pick = |bit: usize, axis: usize| {
+                f64::from(if i >> bit & 1 == 0 {
+                    self.min[axis]
+                } else {
+                    self.max[axis]
+                })
+            };
+            let p = a.transform_point3(DVec3::new(pick(0, 0), pick(1, 1), pick(2, 2)));
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        (lo, hi)
     }
 }

@@ -9,6 +9,7 @@
 //! from culling a hit that the scan would report.
 
 use super::emitters::Sky;
+use super::merge::Placement;
 use super::{Accel, Geometry, Instance, World, WorldObject};
 use crate::render::bvh::{Aabb, Bvh};
 use crate::render::light::{EnvLight, SunLight};
@@ -48,13 +49,49 @@ impl World {
         Self::with_accel(scene, origin, AccelChoice::Auto)
     }
 
+    /// The scene relative to `origin` with the accelerator `choice`.
     pub fn with_accel(scene: &Scene, origin: DVec3, choice: AccelChoice) -> Self {
+        Self::build(scene, origin, choice, true)
+    }
+
+    /// As [`World::with_accel`], every mesh on its own instance (none
+    /// merged, `world::merge`): what merging must agree with.
+    pub fn unmerged(scene: &Scene, origin: DVec3, choice: AccelChoice) -> Self {
+        Self::build(scene, origin, choice, false)
+    }
+
+    fn build(scene: &Scene, origin: DVec3, choice: AccelChoice, merge: bool) -> Self {
         let mut materials: Vec<SurfaceMaterial> =
             scene.materials.iter().map(SurfaceMaterial::new).collect();
         let (textures, maps) = super::textures::world_maps(scene, &mut materials);
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut instances = Vec::new();
         let mut boxes = Vec::with_capacity(scene.objects.len());
+        // Every mesh placement, in object order; those placed once merge.
+        let placements: Vec<Placement<'_>> = (scene.objects.iter())
+            .filter_map(|o| match o.shape {
+                Shape::Import(k) => Some(&scene.imports[k].instances),
+                _ => None,
+            })
+            .flatten()
+            .map(|inst| Placement {
+                mesh: &inst.mesh,
+                world_from_object: inst.world_from_object,
+                materials: &inst.materials,
+            })
+            .collect();
+        let merged = match merge {
+            true => super::merge::merge(&placements),
+            false => Vec::new(),
+        };
+        // Per placement: its merged group, if any.
+        let mut group_of = vec![None; placements.len()];
+        for (g, m) in merged.iter().enumerate() {
+            for &i in &m.members {
+                group_of[i] = Some(g);
+            }
+        }
+        let mut placement = 0;
         for o in &scene.objects {
             match o.shape {
                 Shape::Sphere { center, radius } => {
@@ -86,24 +123,36 @@ impl World {
                 }
                 Shape::Import(k) => {
                     for inst in &scene.imports[k].instances {
+                        let this = placement;
+                        placement += 1;
+                        // A merged group is placed where its first member is.
+                        let (mesh, world_from_object, materials) = match group_of[this] {
+                            None => (
+                                inst.mesh.clone(),
+                                inst.world_from_object,
+                                inst.materials.clone(),
+                            ),
+                            Some(g) if merged[g].members[0] == this => {
+                                let m = &merged[g];
+                                let frame = DAffine3::from_translation(m.frame);
+                                (m.mesh.clone(), frame, m.materials.clone())
+                            }
+                            Some(_) => continue,
+                        };
                         let index = instances.len() as u32;
-                        let mut placed = Instance::new(
-                            inst.mesh.clone(),
-                            inst.world_from_object,
-                            origin,
-                            inst.materials.clone(),
-                        );
-                        placed.alpha = super::textures::alpha_tests(scene, &inst.materials);
+                        let mut placed =
+                            Instance::new(mesh.clone(), world_from_object, origin, materials);
+                        placed.alpha = super::textures::alpha_tests(scene, &placed.materials);
                         instances.push(placed);
                         objects.push(WorldObject {
                             geometry: Geometry::Instance(index),
                             material: u32::MAX,
                         });
                         let cam_from_obj = DAffine3 {
-                            matrix3: inst.world_from_object.matrix3,
-                            translation: inst.world_from_object.translation - origin,
+                            matrix3: world_from_object.matrix3,
+                            translation: world_from_object.translation - origin,
                         };
-                        let (lo, hi) = transformed_bounds(&inst.mesh.bounds(), &cam_from_obj);
+                        let (lo, hi) = mesh.bounds().transformed(&cam_from_obj);
                         boxes.push(padded(lo, hi, 1e-5));
                     }
                 }
@@ -278,25 +327,6 @@ fn padded(lo: DVec3, hi: DVec3, rel: f64) -> Aabb {
         .max(hi.abs().max_element());
     let pad = DVec3::splat(rel * scale + f64::from(f32::MIN_POSITIVE));
     Aabb::new((lo - pad).as_vec3().into(), (hi + pad).as_vec3().into())
-}
-
-/// Bounds of an object-space box's eight corners mapped by `a`.
-pub(super) fn transformed_bounds(b: &Aabb, a: &DAffine3) -> (DVec3, DVec3) {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for i in 0..8 {
-        let pick = |bit: usize, axis: usize| {
-            f64::from(if i >> bit & 1 == 0 {
-                b.min[axis]
-            } else {
-                b.max[axis]
-            })
-        };
-        let p = a.transform_point3(DVec3::new(pick(0, 0), pick(1, 1), pick(2, 2)));
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    (lo, hi)
 }
 
 #[cfg(test)]

@@ -6,7 +6,9 @@
 //! same f32 coordinates here as one at the origin (the subtraction is done in
 //! f64), so f32 only ever holds numbers of the scene's own size. Meshes stay
 //! in their own object space (their BVHs are built once, whatever the
-//! camera does); an instance maps rays into it.
+//! camera does); an instance maps rays into it. Small meshes are first
+//! merged into one, placed in a scene frame by a translation (`merge`,
+//! cached across camera moves): one traversal instead of one per mesh.
 //!
 //! Nearest hits are found by one of two accelerators, chosen per scene:
 //! a scan of every object (spheres eight at a time, then quads), fastest
@@ -17,6 +19,7 @@
 mod build;
 mod emitters;
 mod instance;
+mod merge;
 mod scan;
 mod textures;
 
