@@ -125,6 +125,8 @@ fn cached_or_built(parts: &[&Placement<'_>]) -> Option<(Arc<Mesh>, DVec3)> {
     };
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        // Merges of meshes no scene holds any more are let go at once.
+        cache.retain(|e| e.key.iter().all(|(m, _)| m.strong_count() > 0));
         if let Some(i) = cache.iter().position(|e| same(&e.key)) {
             let entry = cache.remove(i);
             let found = (entry.mesh.clone(), entry.frame);
@@ -138,7 +140,6 @@ fn cached_or_built(parts: &[&Placement<'_>]) -> Option<(Arc<Mesh>, DVec3)> {
         .map(|p| (Arc::downgrade(p.mesh), bits(&p.world_from_object)))
         .collect();
     let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-    cache.retain(|e| e.key.iter().all(|(m, _)| m.strong_count() > 0));
     if cache.len() >= CACHED {
         cache.remove(0);
     }
@@ -333,5 +334,26 @@ mod tests {
         // Moved: a new one.
         let list = [place(&b, at(1.0)), place(&c, at(3.5))];
         assert!(!Arc::ptr_eq(&merge(&list)[0].mesh, &merged[0].mesh));
+    }
+
+    #[test]
+    fn a_merge_is_let_go_once_its_meshes_are() {
+        fn at(mesh: &Arc<Mesh>, x: f64, y: f64) -> Placement<'_> {
+            Placement {
+                mesh,
+                world_from_object: DAffine3::from_translation(DVec3::new(x, y, 0.0)),
+                materials: &[0],
+            }
+        }
+        let (c, d) = (triangle(false), triangle(false));
+        let reused = [at(&c, 0.0, -7.0), at(&d, 1.0, -7.0)];
+        merge(&reused);
+        let kept = {
+            let (a, b) = (triangle(false), triangle(false));
+            merge(&[at(&a, 0.0, 7.0), at(&b, 1.0, 7.0)])[0].mesh.clone()
+        };
+        // A merge found in the cache: the entry whose meshes are gone goes.
+        merge(&reused);
+        assert_eq!(Arc::strong_count(&kept), 1, "only this test holds it");
     }
 }
