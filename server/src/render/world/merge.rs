@@ -31,10 +31,13 @@ use std::sync::{Arc, Mutex, Weak};
 
 /// Meshes of more triangles than this keep their own instance: their own
 /// traversal outweighs the instance's setup, and merging would copy them.
-pub const MERGE_MESH_MAX: usize = 1 << 17;
+pub const MERGE_MESH_MAX: usize = 1 << 16;
 /// At most this many triangles are merged in all (the smallest meshes
-/// first), about 100 MB of copies.
-pub const MERGE_MAX: usize = 1 << 19;
+/// first). An edit that moves one merged mesh (the `light` verb on a
+/// glowing mesh, a moved object) rebuilds the whole merge: at this size
+/// about 70 ms on two cores (the BVH builds 99,224 triangles in 0.05 s,
+/// docs/BENCHMARKS.md), and about 25 MB of copies.
+pub const MERGE_MAX: usize = 1 << 17;
 /// Merges kept for reuse (one per scene rendered lately).
 const CACHED: usize = 4;
 
@@ -334,6 +337,37 @@ mod tests {
         // Moved: a new one.
         let list = [place(&b, at(1.0)), place(&c, at(3.5))];
         assert!(!Arc::ptr_eq(&merge(&list)[0].mesh, &merged[0].mesh));
+    }
+
+    #[test]
+    fn large_meshes_and_those_beyond_the_budget_keep_their_instance() {
+        let big = |n: usize| {
+            let data = MeshData {
+                name: "big".into(),
+                positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                triangles: vec![[0, 1, 2]; n],
+                ..Default::default()
+            };
+            Arc::new(Mesh::new(data).expect("mesh"))
+        };
+        let at = |mesh, x: f64| Placement {
+            mesh,
+            world_from_object: DAffine3::from_translation(DVec3::new(x, 3.0, 0.0)),
+            materials: &[0],
+        };
+        let (a, b, c) = (triangle(false), big(MERGE_MESH_MAX + 1), triangle(false));
+        let merged = merge(&[at(&a, 0.0), at(&b, 1.0), at(&c, 2.0)]);
+        assert_eq!(merged[0].members, [0, 2], "too large to merge");
+        // Two meshes of the largest size fill the budget; the third stays.
+        let (d, e, f) = (
+            big(MERGE_MESH_MAX),
+            big(MERGE_MESH_MAX),
+            big(MERGE_MESH_MAX),
+        );
+        assert_eq!(2 * MERGE_MESH_MAX, MERGE_MAX);
+        let merged = merge(&[at(&d, 0.0), at(&e, 1.0), at(&f, 2.0)]);
+        assert_eq!(merged[0].members, [0, 1]);
+        assert_eq!(merged[0].mesh.triangles.len(), MERGE_MAX);
     }
 
     #[test]
