@@ -52,23 +52,8 @@ pub(super) fn import_bounds(import: &Import) -> Option<(DVec3, DVec3)> {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for inst in &import.instances {
-        let b = inst.mesh.bounds();
-        for i in 0..8 {
-            let pick = |bit: usize, a: usize| {
-                f64::from(if i >> bit & 1 == 0 {
-                    b.min[a]
-                } else {
-                    b.max[a]
-                })
-            };
-            let p = inst.world_from_object.transform_point3(DVec3::new(
-                pick(0, 0),
-                pick(1, 1),
-                pick(2, 2),
-            ));
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
+        let (a, b) = inst.mesh.bounds().transformed(&inst.world_from_object);
+        (lo, hi) = (lo.min(a), hi.max(b));
     }
     (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
 }
