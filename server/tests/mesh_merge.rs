@@ -1,4 +1,4 @@
-//! Meshes placed once merge into one (`render::world::merge`): the merged
+//! Small meshes merge into one (`render::world::merge`): the merged
 //! world finds the surfaces the unmerged one finds, and every backend
 //! renders it as the unmerged world renders.
 
@@ -16,7 +16,8 @@ use serde_json::json;
 
 /// cornell-glass with five icospheres: two flat (one of them an emissive
 /// lamp), two with shading normals (one turned and unevenly scaled), and
-/// one mirrored by its placement.
+/// one mirrored by its placement (the same mesh as the turned one: that one
+/// merges, the mirrored placement keeps its instance).
 fn balls() -> Scene {
     let mut j = scene_json("cornell-glass");
     let objects = j["objects"].as_array_mut().expect("objects");
@@ -43,7 +44,7 @@ fn unit(s: &mut Sampler) -> Vec3A {
 }
 
 #[test]
-fn single_use_meshes_merge_by_kind_and_a_mirrored_one_keeps_its_own() {
+fn small_meshes_merge_by_kind_and_a_mirrored_one_keeps_its_own() {
     let s = balls();
     let merged = World::new(&s, s.camera.position);
     let unmerged = World::unmerged(&s, s.camera.position, AccelChoice::Auto);

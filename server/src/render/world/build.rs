@@ -67,7 +67,7 @@ impl World {
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut instances = Vec::new();
         let mut boxes = Vec::with_capacity(scene.objects.len());
-        // Every mesh placement, in object order; those placed once merge.
+        // Every mesh placement, in object order; small ones merge (`merge`).
         let placements: Vec<Placement<'_>> = (scene.objects.iter())
             .filter_map(|o| match o.shape {
                 Shape::Import(k) => Some(&scene.imports[k].instances),

@@ -168,7 +168,7 @@ fn build(parts: &[&Placement<'_>]) -> Option<(Mesh, DVec3)> {
     let has = |f: fn(&Mesh) -> bool| parts.iter().any(|p| f(p.mesh));
     let uv_sets = [0, 1].map(|s| parts.iter().any(|p| p.mesh.uvs[s].is_some()));
     let mut data = MeshData {
-        name: format!("{} meshes placed once, merged", parts.len()),
+        name: format!("{} small meshes, merged", parts.len()),
         positions: Vec::new(),
         normals: has(|m| m.normals.is_some()).then(Vec::new),
         uvs: uv_sets.map(|any| any.then(Vec::new)),
