@@ -364,6 +364,7 @@ fn grazing_rays_tangent_to_a_sphere() {
             albedo: [a; 3].into(),
             emission: None,
             normal: None,
+            alpha: None,
         }),
     );
     json.objects.push(ObjectJson::Sphere(SphereJson {
@@ -800,6 +801,7 @@ fn out_of_range_is_refused() {
             albedo: [0.5; 3].into(),
             emission: Some([1e21; 3].into()),
             normal: None,
+            alpha: None,
         }),
     );
     assert!(Scene::from_json(&json).is_err());

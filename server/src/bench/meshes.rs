@@ -70,6 +70,7 @@ pub fn ray_set(triangles: usize) -> RaySet {
                 albedo: [0.7; 3].into(),
                 emission: None,
                 normal: None,
+                alpha: None,
             }),
         )]),
         objects: vec![ObjectJson::Mesh(ImportJson {

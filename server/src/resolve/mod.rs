@@ -252,11 +252,13 @@ fn material_json(m: model::Material) -> MaterialJson {
             albedo: albedo.into(),
             emission: emission.map(Into::into),
             normal: None,
+            alpha: None,
         }),
         model::Material::Mirror { albedo, emission } => MaterialJson::Mirror(SurfaceJson {
             albedo: albedo.into(),
             emission: emission.map(Into::into),
             normal: None,
+            alpha: None,
         }),
         model::Material::Glass {
             ior,
@@ -298,6 +300,7 @@ fn material_json(m: model::Material) -> MaterialJson {
             specular_color: specular_color.into(),
             emission: emission.map(Into::into),
             normal: None,
+            alpha: None,
         })),
     }
 }

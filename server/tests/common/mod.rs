@@ -71,6 +71,7 @@ pub fn furnace(albedo: f64, emission: f64) -> Scene {
             albedo: [albedo; 3].into(),
             emission: Some([emission; 3].into()),
             normal: None,
+            alpha: None,
         }),
     );
     Scene::from_json(&json).expect("valid furnace")

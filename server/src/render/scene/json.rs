@@ -225,6 +225,8 @@ pub struct PbrJson {
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal: Option<NormalJson>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha: Option<AlphaJson>,
 }
 
 fn white() -> ColorInput {
@@ -278,6 +280,36 @@ pub struct SurfaceJson {
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal: Option<NormalJson>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha: Option<AlphaJson>,
+}
+
+/// A cut-out or see-through surface (glTF's `alphaMode`, `alphaCutoff` and
+/// the base colour's alpha): the surface is there where its alpha (`factor`
+/// times the base colour or albedo texture's alpha channel) reaches
+/// `cutoff` (`mask`), or with probability alpha (`blend`); elsewhere every
+/// ray passes through it. Quads and meshes only.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AlphaJson {
+    pub mode: AlphaModeJson,
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub factor: f64,
+    /// `mask` only [default: 0.5, as glTF's].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cutoff: Option<f64>,
+}
+
+/// [`AlphaJson`]'s test.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum AlphaModeJson {
+    Mask,
+    Blend,
+}
+
+fn is_one(v: &f64) -> bool {
+    *v == 1.0
 }
 
 /// Fields of `glass` materials.

@@ -1,8 +1,12 @@
 //! Material JSON -> validated [`Material`] (with the textures its fields
 //! name), and back; the error for a material name a scene does not define.
 
-use super::json::{AttenuationJson, FresnelJson, GlassJson, MaterialJson, PbrJson, SurfaceJson};
+use super::json::{
+    AlphaJson, AlphaModeJson, AttenuationJson, FresnelJson, GlassJson, MaterialJson, PbrJson,
+    SurfaceJson,
+};
 use super::map_json::{ColorInput, MapSource, NormalJson, ScalarInput, TextureJson, WrapMode};
+use super::maps::AlphaMode;
 use super::resolve::{ModelSource, Resolver};
 use super::values::{finite, vec3};
 use super::{
@@ -30,11 +34,13 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
             albedo,
             emission,
             normal,
+            alpha: _,
         }) => (MaterialKind::Diffuse, albedo, emission, normal),
         MaterialJson::Mirror(SurfaceJson {
             albedo,
             emission,
             normal,
+            alpha: _,
         }) => (MaterialKind::Mirror, albedo, emission, normal),
         MaterialJson::Glass(GlassJson {
             ior,
@@ -75,6 +81,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 specular_color,
                 emission,
                 normal,
+                alpha: _,
             } = &**pbr;
             attenuation = absorbs
                 .map(|a| checked_attenuation(&path, &a))
@@ -177,6 +184,14 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
         maps.normal_scale = finite(&format!("{at}.scale"), n.scale)?;
         maps.normal = texture(&at, Some(n.source()), resolver)?;
     }
+    let alpha = match m {
+        MaterialJson::Diffuse(j) | MaterialJson::Mirror(j) => j.alpha,
+        MaterialJson::Pbr(p) => p.alpha,
+        MaterialJson::Glass(_) => None,
+    };
+    if let Some(a) = &alpha {
+        (maps.alpha_mode, maps.alpha) = alpha_test(&format!("{path}.alpha"), a)?;
+    }
     Ok(Material {
         name: name.to_owned(),
         kind,
@@ -185,6 +200,47 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
         maps,
         attenuation,
         imported: false,
+    })
+}
+
+/// The test `a` asks for and its factor, checked (`at`: the field's path).
+fn alpha_test(at: &str, a: &AlphaJson) -> Result<(AlphaMode, f64)> {
+    let unit = |field: &str, v: f64| -> Result<f64> {
+        let path = format!("{at}.{field}");
+        match finite(&path, v)? {
+            v if (0.0..=1.0).contains(&v) => Ok(v),
+            v => Err(SceneError::new(
+                path,
+                format!("must be between 0 and 1 (got {v})"),
+            )),
+        }
+    };
+    let factor = unit("factor", a.factor)?;
+    let mode = match (a.mode, a.cutoff) {
+        (AlphaModeJson::Mask, c) => AlphaMode::Mask(unit("cutoff", c.unwrap_or(0.5))? as f32),
+        (AlphaModeJson::Blend, None) => AlphaMode::Blend,
+        (AlphaModeJson::Blend, Some(_)) => {
+            return Err(SceneError::new(
+                format!("{at}.cutoff"),
+                "only `mask` has a cutoff (`blend` keeps the surface with probability alpha)",
+            ))
+        }
+    };
+    Ok((mode, factor))
+}
+
+/// A material's alpha test as JSON (None: opaque).
+fn alpha_json(maps: &Maps) -> Option<AlphaJson> {
+    let (mode, cutoff) = match maps.alpha_mode {
+        AlphaMode::Opaque => return None,
+        // The f32 cutoff's shortest decimal (0.3, not 0.30000001192...).
+        AlphaMode::Mask(c) => (AlphaModeJson::Mask, c.to_string().parse().ok()),
+        AlphaMode::Blend => (AlphaModeJson::Blend, None),
+    };
+    Some(AlphaJson {
+        mode,
+        factor: maps.alpha,
+        cutoff,
     })
 }
 
@@ -318,6 +374,7 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
     let emission = m.is_emissive().then(|| color(m.emission, &m.maps.emission));
     let normal = source(&m.maps.normal).map(|src| NormalJson::of(src, m.maps.normal_scale));
     let albedo = color(m.albedo, &m.maps.base_color);
+    let alpha = alpha_json(&m.maps);
     let attenuation = m.attenuation.map(|a| AttenuationJson {
         color: a.color.to_array(),
         distance: a.distance,
@@ -327,11 +384,13 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             albedo,
             emission,
             normal,
+            alpha,
         }),
         MaterialKind::Mirror => MaterialJson::Mirror(SurfaceJson {
             albedo,
             emission,
             normal,
+            alpha,
         }),
         MaterialKind::Glass { ior, fresnel } => MaterialJson::Glass(GlassJson {
             ior,
@@ -368,6 +427,7 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             specular_color: color(DVec3::from_array(specular_color), &m.maps.specular_color),
             emission,
             normal,
+            alpha,
         })),
     }
 }

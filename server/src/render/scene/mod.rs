@@ -54,9 +54,10 @@ pub use edit::{CameraEdit, EditError, LightEdit, LightInfo};
 pub use environment::EnvironmentMap;
 pub use import::{Import, ImportKind, MeshInstance};
 pub use json::{
-    AttenuationJson, CameraJson, EnvMapJson, EnvironmentJson, FresnelJson, GlassJson, ImportJson,
-    MaterialJson, MeshDataJson, ObjectJson, PbrJson, ProjectionJson, QuadJson, RotateJson,
-    ScaleJson, SceneJson, SkyJson, SphereJson, SurfaceJson, TransformJson,
+    AlphaJson, AlphaModeJson, AttenuationJson, CameraJson, EnvMapJson, EnvironmentJson,
+    FresnelJson, GlassJson, ImportJson, MaterialJson, MeshDataJson, ObjectJson, PbrJson,
+    ProjectionJson, QuadJson, RotateJson, ScaleJson, SceneJson, SkyJson, SphereJson, SurfaceJson,
+    TransformJson,
 };
 pub use map_json::{
     ColorInput, MapSource, NormalJson, ScalarInput, TextureJson, UvTransformJson, WrapJson,

@@ -5,6 +5,7 @@ use super::import::{ImportKind, Importer};
 use super::json::{
     CameraJson, EnvironmentJson, ObjectJson, ProjectionJson, QuadJson, SceneJson, SphereJson,
 };
+use super::maps::AlphaMode;
 use super::materials::{self, unknown_material};
 use super::resolve::Resolver;
 use super::values::{finite, point};
@@ -72,7 +73,15 @@ pub(super) fn scene(raw: &SceneJson, resolver: &dyn Resolver) -> Result<Scene> {
             }
             _ => {
                 placed += 1;
-                object(&path, o, importer.index_of)?
+                let object = object(&path, o, importer.index_of)?;
+                let alpha = importer.materials[object.material].maps.alpha_mode;
+                if matches!(object.shape, Shape::Sphere { .. }) && alpha != AlphaMode::Opaque {
+                    return Err(SceneError::new(
+                        format!("{path}.material"),
+                        "an alpha-tested material (its `alpha`) needs a quad or a mesh: spheres are opaque",
+                    ));
+                }
+                object
             }
         };
         objects.push(object);

@@ -11,12 +11,13 @@
 use super::emitters::Sky;
 use super::merge::Placement;
 use super::{Accel, Geometry, Instance, World, WorldObject};
+use crate::render::alpha::AlphaMode;
 use crate::render::bvh::{Aabb, Bvh};
 use crate::render::light::{EnvLight, SunLight};
 use crate::render::material::SurfaceMaterial;
 use crate::render::math::{DAffine3, DVec3, Vec3A};
 use crate::render::scene::{Scene, Shape};
-use crate::render::shape::{Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
+use crate::render::shape::{Mesh, Quad, Sphere, SphereBatch, SPHERE_BATCH_LANES};
 use std::sync::Arc;
 
 /// Scenes whose scan costs at most this much (and without meshes) are
@@ -107,6 +108,23 @@ impl World {
                     corner,
                     edge_u,
                     edge_v,
+                } if scene.materials[o.material].maps.alpha_mode != AlphaMode::Opaque => {
+                    let world_from_object = super::cutout::square_placement(corner, edge_u, edge_v);
+                    let materials: Arc<[u32]> = [o.material as u32].into();
+                    let mesh = super::cutout::unit_square();
+                    let (placed, bounds) =
+                        instance(scene, mesh, world_from_object, origin, materials);
+                    objects.push(WorldObject {
+                        geometry: Geometry::Instance(instances.len() as u32),
+                        material: u32::MAX,
+                    });
+                    instances.push(placed);
+                    boxes.push(bounds);
+                }
+                Shape::Quad {
+                    corner,
+                    edge_u,
+                    edge_v,
                 } => {
                     let c = corner - origin;
                     objects.push(WorldObject {
@@ -139,21 +157,14 @@ impl World {
                             }
                             Some(_) => continue,
                         };
-                        let index = instances.len() as u32;
-                        let mut placed =
-                            Instance::new(mesh.clone(), world_from_object, origin, materials);
-                        placed.alpha = super::textures::alpha_tests(scene, &placed.materials);
-                        instances.push(placed);
+                        let (placed, bounds) =
+                            instance(scene, mesh, world_from_object, origin, materials);
                         objects.push(WorldObject {
-                            geometry: Geometry::Instance(index),
+                            geometry: Geometry::Instance(instances.len() as u32),
                             material: u32::MAX,
                         });
-                        let cam_from_obj = DAffine3 {
-                            matrix3: world_from_object.matrix3,
-                            translation: world_from_object.translation - origin,
-                        };
-                        let (lo, hi) = mesh.bounds().transformed(&cam_from_obj);
-                        boxes.push(padded(lo, hi, 1e-5));
+                        instances.push(placed);
+                        boxes.push(bounds);
                     }
                 }
             }
@@ -251,6 +262,25 @@ impl World {
             accel_choice: choice,
         }
     }
+}
+
+/// `mesh` placed by `world_from_object` relative to `origin`, with its
+/// alpha tests, and its padded box.
+fn instance(
+    scene: &Scene,
+    mesh: Arc<Mesh>,
+    world_from_object: DAffine3,
+    origin: DVec3,
+    materials: Arc<[u32]>,
+) -> (Instance, Aabb) {
+    let cam_from_obj = DAffine3 {
+        matrix3: world_from_object.matrix3,
+        translation: world_from_object.translation - origin,
+    };
+    let (lo, hi) = mesh.bounds().transformed(&cam_from_obj);
+    let mut placed = Instance::new(mesh, world_from_object, origin, materials);
+    placed.alpha = super::textures::alpha_tests(scene, &placed.materials);
+    (placed, padded(lo, hi, 1e-5))
 }
 
 /// A BVH over the objects that are not too large for one, and those

@@ -17,6 +17,7 @@
 //! same hit: among equal distances, the lowest (object, triangle).
 
 mod build;
+pub mod cutout;
 mod emitters;
 mod instance;
 mod merge;
