@@ -58,6 +58,8 @@ fn quick_bench_writes_tables_csv_and_plots_and_caches_references() {
         "## Throughput",
         "## Speed/accuracy trade: `cornell`, 16x16, cpu",
         "## Calibration of the error estimate",
+        "## A sky behind walls: power picks vs the sky probe, 16x16, cpu",
+        "| sky-room (power picks) |",
     ] {
         assert!(md.contains(heading), "{heading} missing:\n{md}");
     }

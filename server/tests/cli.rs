@@ -62,6 +62,10 @@ fn scenes_lists_every_builtin_and_prints_json() {
             "{name} missing:\n{listing}"
         );
     }
+    // A scene made in memory says it has no JSON form.
+    let out = pathstream(&["scenes", "--json", "cornell-mesh-textured"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("cornell-mesh-textured has no JSON form"));
     let out = pathstream(&["scenes", "--json", "cornell-mesh"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     pathstream::render::Scene::from_json_str(&text(&out.stdout)).expect("valid scene JSON");

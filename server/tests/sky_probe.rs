@@ -17,45 +17,10 @@ use serde_json::{json, Value};
 const W: u32 = 32;
 const H: u32 = 32;
 
-/// A 2 x 2 x 2 room of grey quads about the origin with a small lamp under
-/// its ceiling, the camera inside; `window`: a hole of that side in the
-/// wall at x = +1 (the wall then made of four quads around it); `sky`:
-/// the environment.
+/// `bench::scenes::sky_room`: a closed 2 x 2 x 2 room lit by a small
+/// lamp, or one with a window of side `window`, under `sky`.
 fn room(window: Option<f64>, sky: Value) -> Scene {
-    let quad = |corner: [f64; 3], u: [f64; 3], v: [f64; 3]| json!({"type": "quad", "corner": corner, "edge_u": u, "edge_v": v, "material": "grey"});
-    let mut objects = vec![
-        quad([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]), // floor
-        quad([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),  // ceiling
-        quad([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]), // x = -1
-        quad([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]), // z = -1
-        quad([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),  // z = +1
-        json!({"type": "quad", "corner": [-0.2, 0.95, -0.2], "edge_u": [0.4, 0, 0], "edge_v": [0, 0, 0.4], "material": "lamp"}),
-    ];
-    match window {
-        None => objects.push(quad([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0])),
-        Some(a) => {
-            // The x = +1 wall around a hole a x a at its centre.
-            let (lo, hi) = (-a / 2.0, a / 2.0);
-            objects.push(quad(
-                [1.0, -1.0, -1.0],
-                [0.0, 1.0 + lo, 0.0],
-                [0.0, 0.0, 2.0],
-            ));
-            objects.push(quad([1.0, hi, -1.0], [0.0, 1.0 - hi, 0.0], [0.0, 0.0, 2.0]));
-            objects.push(quad([1.0, lo, -1.0], [0.0, a, 0.0], [0.0, 0.0, 1.0 + lo]));
-            objects.push(quad([1.0, lo, hi], [0.0, a, 0.0], [0.0, 0.0, 1.0 - hi]));
-        }
-    }
-    let s = json!({
-        "camera": {"position": [-0.9, 0, 0.9], "look_at": [0.5, -0.2, -0.5], "vfov_deg": 80},
-        "materials": {
-            "grey": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]},
-            "lamp": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [20, 20, 20]}
-        },
-        "objects": objects,
-        "environment": sky,
-    });
-    Scene::from_json_str(&s.to_string()).expect("valid scene")
+    pathstream::bench::scenes::sky_room(window, sky).expect("valid scene")
 }
 
 fn quality(seed: u64) -> Quality {

@@ -11,17 +11,14 @@ use crate::render::Quality;
 pub fn pair() -> [Setting; 2] {
     let uniform = settings::unbiased();
     [
-        Setting {
-            label: "unbounded, uniform".into(),
-            quality: uniform,
-        },
-        Setting {
-            label: "unbounded, adaptive".into(),
-            quality: Quality {
+        Setting::new("unbounded, uniform", uniform),
+        Setting::new(
+            "unbounded, adaptive",
+            Quality {
                 adaptive: true,
                 ..uniform
             },
-        },
+        ),
     ]
 }
 

@@ -24,11 +24,37 @@ fn times(curve: &TradeCurve) -> [Reach; 3] {
     LEVELS.map(|l| fit::time_to(&curve.points, curve.fit.as_ref(), l))
 }
 
-/// The first curve's time / the second's to each level, where both are
-/// known.
-pub fn speedups(first: &TradeCurve, second: &TradeCurve) -> [Option<f64>; 3] {
+/// How much sooner the second setting reaches a level than the first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Speedup {
+    /// The first's time over the second's.
+    Exact(f64),
+    /// The first never got there in its run (nor by its fit): its run's
+    /// length over the second's time.
+    AtLeast(f64),
+}
+
+impl Speedup {
+    fn value(self) -> f64 {
+        match self {
+            Speedup::Exact(x) | Speedup::AtLeast(x) => x,
+        }
+    }
+}
+
+/// The first curve's time / the second's to each level, where the second's
+/// is known.
+pub fn speedups(first: &TradeCurve, second: &TradeCurve) -> [Option<Speedup>; 3] {
     let (u, a) = (times(first), times(second));
-    std::array::from_fn(|i| Some(seconds(u[i])? / seconds(a[i])?))
+    let run = first.points.last().map_or(0.0, |p| p.seconds);
+    std::array::from_fn(|i| {
+        let second = seconds(a[i])?;
+        Some(match seconds(u[i]) {
+            Some(t) => Speedup::Exact(t / second),
+            None if run > 0.0 => Speedup::AtLeast(run / second),
+            None => return None,
+        })
+    })
 }
 
 /// The middle of `values` (the lower middle of an even count), sorted by
@@ -44,12 +70,21 @@ fn time_cell(reaches: Vec<Reach>) -> String {
 }
 
 /// A speed-up cell: the median over seeds, and their range when there are
-/// several.
-fn speedup_cell(values: Vec<Option<f64>>) -> String {
-    let known: Vec<f64> = values.iter().flatten().copied().collect();
-    if known.len() < values.len() {
+/// several; where the first setting did not get there in some seed's run,
+/// the least the speed-up can be over all seeds ("> 12x").
+fn speedup_cell(values: Vec<Option<Speedup>>) -> String {
+    let Some(all) = values.iter().copied().collect::<Option<Vec<Speedup>>>() else {
         return "?".into();
+    };
+    if all.iter().any(|s| matches!(s, Speedup::AtLeast(_))) {
+        let lo = all.iter().map(|s| s.value()).fold(f64::INFINITY, f64::min);
+        // A bound under 1 says nothing.
+        return match lo >= 1.0 {
+            true => format!("> {lo:.1}x"),
+            false => "?".into(),
+        };
     }
+    let known: Vec<f64> = all.iter().map(|s| s.value()).collect();
     let Some(mid) = median_by(known.clone(), |x| *x) else {
         return "?".into();
     };
@@ -144,12 +179,19 @@ mod tests {
 
     #[test]
     fn cells_give_the_median_and_the_range() {
-        assert_eq!(speedup_cell(vec![Some(1.5)]), "1.50x");
+        let x = |v: f64| Some(Speedup::Exact(v));
+        assert_eq!(speedup_cell(vec![x(1.5)]), "1.50x");
         assert_eq!(
-            speedup_cell(vec![Some(1.8), Some(1.2), Some(1.6)]),
+            speedup_cell(vec![x(1.8), x(1.2), x(1.6)]),
             "1.60x (1.20-1.80)"
         );
-        assert_eq!(speedup_cell(vec![Some(1.8), None]), "?");
+        assert_eq!(speedup_cell(vec![x(1.8), None]), "?");
+        assert_eq!(
+            speedup_cell(vec![x(30.0), Some(Speedup::AtLeast(12.04)), x(9.5)]),
+            "> 9.5x",
+            "a bound: the least over the seeds"
+        );
+        assert_eq!(speedup_cell(vec![Some(Speedup::AtLeast(0.7))]), "?");
         assert_eq!(
             time_cell(vec![
                 Reach::Measured(2.0),
@@ -159,5 +201,41 @@ mod tests {
             "2.00 s"
         );
         assert_eq!(time_cell(vec![Reach::Never, Reach::Unknown]), "never");
+    }
+
+    fn curve(points: &[(f64, f64)]) -> TradeCurve {
+        TradeCurve {
+            backend: "cpu".into(),
+            scene: "s".into(),
+            setting: super::super::settings::Setting::new("x", Default::default()),
+            seed: 1,
+            points: (points.iter().enumerate())
+                .map(
+                    |(i, &(seconds, true_error))| super::super::fit::TracePoint {
+                        seconds,
+                        spp: 1 << i,
+                        true_error,
+                        estimate: None,
+                    },
+                )
+                .collect(),
+            fit: None,
+        }
+    }
+
+    #[test]
+    fn a_level_the_first_never_reached_bounds_the_speedup_by_its_run() {
+        let slow = curve(&[(1.0, 0.2), (10.0, 0.06)]);
+        let fast = curve(&[(0.25, 0.1), (0.5, 0.04), (4.0, 0.015)]);
+        let s = speedups(&slow, &fast);
+        // 5%: the slow run never got there in 10 s, the fast one at ~0.37 s.
+        assert!(
+            matches!(s[0], Some(Speedup::AtLeast(x)) if x > 20.0 && x < 40.0),
+            "{s:?}"
+        );
+        // 1%: neither did: unknown.
+        assert_eq!(s[2], None);
+        let exact = speedups(&fast, &slow);
+        assert_eq!(exact[0], None, "the second never got there");
     }
 }

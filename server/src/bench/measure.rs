@@ -4,6 +4,7 @@
 //! warm-up and measuring the error are not.
 
 use super::fit::{corrected, TracePoint};
+use super::settings::Setting;
 use crate::render::film::relative_rms_error;
 use crate::render::progressive::{self, Progress};
 use crate::render::{Backend, BackendError, Film, Quality, RenderJob, Scene};
@@ -56,20 +57,23 @@ pub fn throughput(
     })
 }
 
-/// Renders with `quality` (seed `seed`) for `seconds` of rendering
+/// Renders with `setting` (seed `seed`) for `seconds` of rendering
 /// time, measuring the error against `reference` (whose own error estimate
 /// is `reference_error`) at sample counts growing by half each time.
 pub fn trace(
     backend: &mut Backend,
     scene: &Scene,
     (width, height): (u32, u32),
-    quality: &Quality,
+    setting: &Setting,
     reference: (&[[f32; 3]], f64),
     seconds: f64,
     seed: u64,
 ) -> Result<Vec<TracePoint>, BackendError> {
-    let q = Quality { seed, ..*quality };
-    let job = RenderJob::new(scene, width, height, &q);
+    let q = Quality {
+        seed,
+        ..setting.quality
+    };
+    let job = RenderJob::with_sky_probe(scene, width, height, &q, setting.sky_probe);
     backend.prepare(&job)?;
     let mut film = Film::new(width, height);
     let budget = Duration::from_secs_f64(seconds);

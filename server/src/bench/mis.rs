@@ -13,14 +13,8 @@ use crate::render::Quality;
 pub fn pair() -> [Setting; 2] {
     let mis = settings::unbiased();
     [
-        Setting {
-            label: "unbounded, BSDF only".into(),
-            quality: Quality { nee: false, ..mis },
-        },
-        Setting {
-            label: "unbounded, MIS".into(),
-            quality: mis,
-        },
+        Setting::new("unbounded, BSDF only", Quality { nee: false, ..mis }),
+        Setting::new("unbounded, MIS", mis),
     ]
 }
 

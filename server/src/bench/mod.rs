@@ -15,6 +15,7 @@ pub mod adaptive;
 pub mod cache;
 pub mod cells;
 pub mod compare;
+pub mod cornell_box;
 pub mod devices;
 pub mod fit;
 pub mod measure;
@@ -26,6 +27,8 @@ mod run;
 pub mod samplers;
 pub mod scenes;
 pub mod settings;
+pub mod sky;
+pub mod textured;
 pub mod thesis;
 
 pub use run::run;
@@ -52,6 +55,9 @@ pub struct Sections {
     pub samplers: bool,
     /// BSDF sampling alone vs MIS: time to 5%, 2%, 1% on glossy scenes.
     pub mis: bool,
+    /// Power-proportional light selection vs the sky probe: time to 5%,
+    /// 2%, 1% on rooms under a sky.
+    pub sky: bool,
     /// Every backend alone, then all at once on one render.
     pub devices: bool,
 }
@@ -66,6 +72,7 @@ impl Sections {
         adaptive: true,
         samplers: true,
         mis: true,
+        sky: true,
         devices: true,
     };
 }
@@ -91,7 +98,9 @@ pub struct Config {
     pub sampler_scenes: Vec<String>,
     /// Scenes of the MIS section (at the trade size and time).
     pub mis_scenes: Vec<String>,
-    /// Seeds of the paired sections (adaptive, samplers, mis): each pair of
+    /// Scenes of the sky section (at the trade size and time).
+    pub sky_scenes: Vec<String>,
+    /// Seeds of the paired sections (adaptive, samplers, mis, sky): each pair of
     /// curves is rendered with every one (a single curve's time to 1%
     /// varies by 10-15%).
     pub seeds: u64,
@@ -124,6 +133,7 @@ impl Config {
                 scenes::CORNELL_MESH_PBR,
                 scenes::CORNELL_MESH_FROSTED,
                 scenes::CORNELL_MESH_COATED,
+                scenes::CORNELL_MESH_TEXTURED,
             ]
             .map(String::from)
             .to_vec(),
@@ -160,6 +170,9 @@ impl Config {
             ]
             .map(String::from)
             .to_vec(),
+            sky_scenes: [scenes::SKY_ROOM, scenes::SKY_WINDOW]
+                .map(String::from)
+                .to_vec(),
             seeds: 3,
             trade_size: (64, 64),
             trade_seconds: 10.0,
@@ -182,6 +195,7 @@ impl Config {
             adaptive_scenes: vec!["cornell".into()],
             sampler_scenes: vec!["cornell".into()],
             mis_scenes: vec![scenes::GLOSSY_PLANE.into()],
+            sky_scenes: vec![scenes::SKY_ROOM.into()],
             seeds: 1,
             trade_size: (16, 16),
             trade_seconds: 0.15,
@@ -281,6 +295,9 @@ pub struct Results {
     /// The MIS section: per scene, backend and seed, the BSDF-only curve
     /// then the MIS one.
     pub mis: Vec<TradeCurve>,
+    /// The sky section: per scene, backend and seed, the power-picks curve
+    /// then the sky probe's.
+    pub sky: Vec<TradeCurve>,
     pub specialisation: Vec<SpecialisationRow>,
     pub meshes: Vec<meshes::MeshRow>,
     pub devices: Vec<devices::DevicesRow>,

@@ -29,6 +29,7 @@ pub fn markdown(r: &Results) -> String {
     super::adaptive::markdown(w, r);
     super::samplers::markdown(w, r);
     super::mis::markdown(w, r);
+    super::sky::markdown(w, r);
     calibration(w, r);
     specialisation(w, r);
     meshes(w, r);

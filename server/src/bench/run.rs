@@ -5,7 +5,7 @@ use super::cache::{self, Reference, ReferenceInfo, RENDERER_VERSION};
 use super::measure::TRACE_SEED;
 use super::settings::{self, Setting};
 use super::{
-    adaptive, cells, fit, measure, mis, samplers, scenes, BenchError, CalibrationRow, Config,
+    adaptive, cells, fit, measure, mis, samplers, scenes, sky, BenchError, CalibrationRow, Config,
     Observer, Results, SpecialisationRow, ThroughputRow, TradeCurve,
 };
 use crate::render::progressive::MIN_SPP_FOR_TARGET_ERROR;
@@ -58,21 +58,23 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
         true => load(&config.mis_scenes)?,
         false => Vec::new(),
     };
+    let sky_scenes = match config.sections.sky {
+        true => load(&config.sky_scenes)?,
+        false => Vec::new(),
+    };
     let backends = open_backends(config, observer)?;
     let s = config.sections;
     let settings: Vec<Setting> = if s.trade {
         settings::trade_settings()
     } else {
-        vec![Setting {
-            label: "unbounded".into(),
-            quality: settings::unbiased(),
-        }]
+        vec![Setting::new("unbounded", settings::unbiased())]
     };
     let opencl_count = backends
         .iter()
         .filter(|b| matches!(b, Backend::OpenCl { .. }))
         .count() as u64;
-    let na = (adaptive_scenes.len() + sampler_scenes.len() + mis_scenes.len()) as u64;
+    let na =
+        (adaptive_scenes.len() + sampler_scenes.len() + mis_scenes.len() + sky_scenes.len()) as u64;
     let (nb, nt, nr) = (
         backends.len() as u64,
         throughput_scenes.len() as u64,
@@ -125,6 +127,9 @@ pub fn run(config: &Config, observer: &mut dyn Observer) -> Result<Results, Benc
     }
     if s.mis {
         work.results.mis = work.pairs(&mis_scenes, mis::pair())?;
+    }
+    if s.sky {
+        work.results.sky = work.pairs(&sky_scenes, sky::pair())?;
     }
     if s.specialisation {
         work.specialisation(&throughput_scenes)?;
@@ -270,8 +275,9 @@ impl Work<'_> {
     }
 
     /// `setting`'s error against time on backend `b`; the unbiased
-    /// setting's (uniform or adaptive, Sobol or random) also goes to the
-    /// calibration, as "scene", "scene (adaptive)", "scene (random)".
+    /// setting's (uniform or adaptive, Sobol or random, with the sky probe
+    /// or without) also goes to the calibration, as "scene", "scene
+    /// (adaptive)", "scene (random)", "scene (power picks)".
     fn curve(
         &mut self,
         b: usize,
@@ -293,7 +299,7 @@ impl Work<'_> {
             backend,
             scene,
             config.trade_size,
-            &setting.quality,
+            setting,
             (&reference.pixels, reference_error),
             config.trade_seconds,
             seed,
@@ -311,6 +317,9 @@ impl Work<'_> {
             }
             if q.sampler != plain.sampler {
                 calibrated.push_str(&format!(" ({})", q.sampler.name()));
+            }
+            if !setting.sky_probe {
+                calibrated.push_str(" (power picks)");
             }
             let row = CalibrationRow {
                 backend: backend.name().into(),

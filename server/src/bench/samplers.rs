@@ -12,20 +12,20 @@ use crate::render::Quality;
 pub fn pair() -> [Setting; 2] {
     let sobol = settings::unbiased();
     [
-        Setting {
-            label: "unbounded, random".into(),
-            quality: Quality {
+        Setting::new(
+            "unbounded, random",
+            Quality {
                 sampler: SamplerKind::Random,
                 ..sobol
             },
-        },
-        Setting {
-            label: "unbounded, sobol".into(),
-            quality: Quality {
+        ),
+        Setting::new(
+            "unbounded, sobol",
+            Quality {
                 sampler: SamplerKind::Sobol,
                 ..sobol
             },
-        },
+        ),
     ]
 }
 

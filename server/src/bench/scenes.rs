@@ -1,4 +1,4 @@
-//! The benchmark's mesh scenes, beside the built-in ones (by name, as
+//! The benchmark's own scenes, beside the built-in ones (by name, as
 //! `--scenes` takes them):
 //!
 //! - `cornell-glass-mesh`: `cornell-glass` with its glass ball replaced by
@@ -18,6 +18,8 @@
 //! - `cornell-mesh-coated`: `cornell-mesh` with a red paint under a clear
 //!   coat and an amber rough glass ball that absorbs inside (what the coat
 //!   and the volume's absorption cost);
+//! - `cornell-mesh-textured` (`bench::textured`): `cornell-mesh` with
+//!   textured balls (what the maps cost against `cornell-mesh-pbr`);
 //! - `glossy-plane`: a rough metal plane (roughness 0.3) reflecting a
 //!   small bright sphere light, a large dim quad light, an 80-triangle
 //!   glowing ball and a dim sky (every emitter kind in a glossy
@@ -25,10 +27,16 @@
 //! - `sunset-balls`: a diffuse ball and a rough metal ball (roughness 0.3)
 //!   on a diffuse floor, lit only by a real HDR environment map (Poly
 //!   Haven's CC0 "Venice Sunset" at 256 x 128, `assets/hdri/`, its sun a
-//!   few texels): where the map's importance sampling matters.
+//!   few texels): where the map's importance sampling matters;
+//! - `sky-room`: a closed 2 x 2 x 2 room of grey quads lit by a small lamp
+//!   under its ceiling, under a bright uniform sky (radiance 50) that the
+//!   walls hide: power-proportional light selection would spend nearly
+//!   every shadow ray on the sky (what the sky probe is for);
+//! - `sky-window`: the same room with a 1 x 1 window in one wall, through
+//!   which the sky brings ~15x the lamp's light.
 
+use super::cornell_box::box_json;
 use crate::model::generate::{bumpy_sphere, icosphere};
-use crate::model::MeshData;
 use crate::render::envmap::EnvMap;
 use crate::render::scene::{LoadedModel, ModelSource, NoFiles, Resolver};
 use crate::render::{Scene, SceneError};
@@ -45,13 +53,20 @@ pub const CORNELL_MESH_PBR: &str = "cornell-mesh-pbr";
 pub const CORNELL_MESH_FROSTED: &str = "cornell-mesh-frosted";
 /// `cornell-mesh-coated`.
 pub const CORNELL_MESH_COATED: &str = "cornell-mesh-coated";
+/// `cornell-mesh-textured` (`bench::textured`).
+pub const CORNELL_MESH_TEXTURED: &str = "cornell-mesh-textured";
 /// `glossy-plane`.
 pub const GLOSSY_PLANE: &str = "glossy-plane";
 /// `sunset-balls`.
 pub const SUNSET_BALLS: &str = "sunset-balls";
 
+/// `sky-room`.
+pub const SKY_ROOM: &str = "sky-room";
+/// `sky-window`.
+pub const SKY_WINDOW: &str = "sky-window";
+
 /// This module's scenes by name, with what each is for.
-pub const NAMES: [(&str, &str); 7] = [
+pub const NAMES: [(&str, &str); 10] = [
     (
         GLASS_MESH,
         "cornell-glass with a glass bumpy sphere of 20,000 triangles",
@@ -73,12 +88,24 @@ pub const NAMES: [(&str, &str); 7] = [
         "cornell-mesh with a clear-coated paint and an absorbing amber glass",
     ),
     (
+        CORNELL_MESH_TEXTURED,
+        "cornell-mesh with textured balls: a painted one (colour, roughness, normal and coat maps) and a brushed metal",
+    ),
+    (
         GLOSSY_PLANE,
         "a rough metal plane reflecting every emitter kind",
     ),
     (
         SUNSET_BALLS,
         "a diffuse and a rough metal ball lit by an HDR sunset",
+    ),
+    (
+        SKY_ROOM,
+        "a closed room lit by a small lamp under a bright sky the walls hide",
+    ),
+    (
+        SKY_WINDOW,
+        "sky-room with a 1x1 window the sky shines through",
     ),
 ];
 
@@ -91,8 +118,11 @@ pub fn load(name: &str) -> Result<Scene, SceneError> {
         CORNELL_MESH_PBR => cornell_mesh_pbr(),
         CORNELL_MESH_FROSTED => cornell_mesh_frosted(),
         CORNELL_MESH_COATED => cornell_mesh_coated(),
+        CORNELL_MESH_TEXTURED => super::textured::cornell_mesh_textured(),
         GLOSSY_PLANE => glossy_plane(0.3),
         SUNSET_BALLS => sunset_balls(),
+        SKY_ROOM => sky_room(None, json!([50, 50, 50])),
+        SKY_WINDOW => sky_room(Some(1.0), json!([50, 50, 50])),
         _ => crate::resolve::load_scene(name),
     }
 }
@@ -121,29 +151,6 @@ pub fn glass_mesh() -> Result<Scene, SceneError> {
         }
     }
     Scene::from_json_value(j)
-}
-
-/// Two triangles spanning the parallelogram corner + s u + t v.
-fn square(corner: [f64; 3], u: [f64; 3], v: [f64; 3], material: &str) -> Value {
-    let at = |s: f64, t: f64| [0, 1, 2].map(|k| corner[k] + s * u[k] + t * v[k]);
-    json!({
-        "type": "mesh",
-        "data": {
-            "positions": [at(0.0, 0.0), at(1.0, 0.0), at(1.0, 1.0), at(0.0, 1.0)],
-            "triangles": [[0, 1, 2], [0, 2, 3]],
-        },
-        "material": material,
-    })
-}
-
-/// A smooth icosphere of radius `r` at `center`.
-fn ball(mesh: &MeshData, center: [f64; 3], r: f64, material: &str) -> Value {
-    json!({
-        "type": "mesh",
-        "data": {"positions": mesh.positions, "triangles": mesh.triangles, "normals": mesh.normals},
-        "material": material,
-        "transform": {"translate": center, "scale": r},
-    })
 }
 
 /// `cornell-mesh`: smallpt's box and camera, every surface triangles.
@@ -182,57 +189,7 @@ pub fn cornell_mesh_coated() -> Result<Scene, SceneError> {
 
 /// The triangle Cornell box with two balls of materials `left` and `right`.
 fn box_with_balls(left: Value, right: Value) -> Result<Scene, SceneError> {
-    let sphere = icosphere(5);
-    let (x0, x1, y1, z1) = (1.0, 99.0, 81.6, 170.0);
-    let (lx0, lx1, lz0, lz1) = (34.0, 66.0, 66.0, 98.0);
-    let objects = vec![
-        square([x0, 0.0, 0.0], [0.0, 0.0, z1], [0.0, y1, 0.0], "red"),
-        square([x1, 0.0, 0.0], [0.0, y1, 0.0], [0.0, 0.0, z1], "blue"),
-        square([x0, 0.0, 0.0], [x1 - x0, 0.0, 0.0], [0.0, y1, 0.0], "white"),
-        square([x0, 0.0, 0.0], [0.0, 0.0, z1], [x1 - x0, 0.0, 0.0], "white"),
-        // The ceiling around the lamp's hole, [lx0, lx1] x [lz0, lz1].
-        square([x0, y1, 0.0], [lx0 - x0, 0.0, 0.0], [0.0, 0.0, z1], "white"),
-        square(
-            [lx1, y1, 0.0],
-            [x1 - lx1, 0.0, 0.0],
-            [0.0, 0.0, z1],
-            "white",
-        ),
-        square(
-            [lx0, y1, 0.0],
-            [lx1 - lx0, 0.0, 0.0],
-            [0.0, 0.0, lz0],
-            "white",
-        ),
-        square(
-            [lx0, y1, lz1],
-            [lx1 - lx0, 0.0, 0.0],
-            [0.0, 0.0, z1 - lz1],
-            "white",
-        ),
-        square(
-            [lx0, y1, lz0],
-            [lx1 - lx0, 0.0, 0.0],
-            [0.0, 0.0, lz1 - lz0],
-            "lamp",
-        ),
-        ball(&sphere, [27.0, 16.5, 47.0], 16.5, "left"),
-        ball(&sphere, [73.0, 16.5, 78.0], 16.5, "right"),
-    ];
-    let diffuse = |c: [f64; 3]| json!({"type": "diffuse", "albedo": c});
-    Scene::from_json_value(json!({
-        "camera": {"position": [50.0, 52.0, 295.6], "look_at": [50.0, 51.957388, 294.6],
-                   "vfov_deg": 28.799316231093748, "near_clip": 140.0},
-        "materials": {
-            "red": diffuse([0.75, 0.25, 0.25]),
-            "blue": diffuse([0.25, 0.25, 0.75]),
-            "white": diffuse([0.75, 0.75, 0.75]),
-            "left": left,
-            "right": right,
-            "lamp": {"type": "diffuse", "albedo": [0.0, 0.0, 0.0], "emission": [8.0, 8.0, 8.0]},
-        },
-        "objects": objects,
-    }))
+    Scene::from_json_value(box_json(left, right))
 }
 
 /// `glossy-plane`, its metal of `roughness`.
@@ -255,6 +212,46 @@ pub fn glossy_plane(roughness: f64) -> Result<Scene, SceneError> {
              "data": {"positions": ball.positions, "triangles": ball.triangles},
              "transform": {"translate": [-1.6, 0.5, -0.6], "scale": 0.25}}
         ]
+    }))
+}
+
+/// A 2 x 2 x 2 room of grey quads about the origin with a 0.4 x 0.4 lamp
+/// (radiance 20) under its ceiling, the camera inside; `window`: a hole of
+/// that side in the wall at x = +1 (the wall then made of four quads
+/// around it); `sky`: the environment (`sky-room`, `sky-window`).
+pub fn sky_room(window: Option<f64>, sky: Value) -> Result<Scene, SceneError> {
+    let quad = |corner: [f64; 3], u: [f64; 3], v: [f64; 3]| json!({"type": "quad", "corner": corner, "edge_u": u, "edge_v": v, "material": "grey"});
+    let mut objects = vec![
+        quad([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]), // floor
+        quad([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),  // ceiling
+        quad([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]), // x = -1
+        quad([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]), // z = -1
+        quad([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),  // z = +1
+        json!({"type": "quad", "corner": [-0.2, 0.95, -0.2], "edge_u": [0.4, 0, 0], "edge_v": [0, 0, 0.4], "material": "lamp"}),
+    ];
+    match window {
+        None => objects.push(quad([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0])),
+        Some(a) => {
+            // The x = +1 wall around a hole a x a at its centre.
+            let (lo, hi) = (-a / 2.0, a / 2.0);
+            objects.push(quad(
+                [1.0, -1.0, -1.0],
+                [0.0, 1.0 + lo, 0.0],
+                [0.0, 0.0, 2.0],
+            ));
+            objects.push(quad([1.0, hi, -1.0], [0.0, 1.0 - hi, 0.0], [0.0, 0.0, 2.0]));
+            objects.push(quad([1.0, lo, -1.0], [0.0, a, 0.0], [0.0, 0.0, 1.0 + lo]));
+            objects.push(quad([1.0, lo, hi], [0.0, a, 0.0], [0.0, 0.0, 1.0 - hi]));
+        }
+    }
+    Scene::from_json_value(json!({
+        "camera": {"position": [-0.9, 0, 0.9], "look_at": [0.5, -0.2, -0.5], "vfov_deg": 80},
+        "materials": {
+            "grey": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]},
+            "lamp": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [20, 20, 20]}
+        },
+        "objects": objects,
+        "environment": sky,
     }))
 }
 

@@ -10,6 +10,20 @@ pub struct Setting {
     /// "depth 8 = final".
     pub label: String,
     pub quality: Quality,
+    /// Whether jobs weigh a hidden sky by the probe (`render::sky_probe`,
+    /// as the renderer always does) or pick emitters by power alone.
+    pub sky_probe: bool,
+}
+
+impl Setting {
+    /// A setting as the renderer runs it (with the sky probe).
+    pub fn new(label: impl Into<String>, quality: Quality) -> Self {
+        Self {
+            label: label.into(),
+            quality,
+            sky_probe: true,
+        }
+    }
 }
 
 /// The unbiased setting the references and the calibration use.
@@ -74,7 +88,7 @@ pub fn trade_settings() -> Vec<Setting> {
     for (label, quality) in raw {
         match out.iter_mut().find(|s| s.quality == quality) {
             Some(s) => s.label = format!("{} = {label}", s.label),
-            None => out.push(Setting { label, quality }),
+            None => out.push(Setting::new(label, quality)),
         }
     }
     out

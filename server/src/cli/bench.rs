@@ -28,6 +28,8 @@ pub enum SectionArg {
     Samplers,
     /// BSDF sampling alone vs MIS: time to 5/2/1% error on glossy-plane, cornell-mesh-pbr and sunset-balls.
     Mis,
+    /// Emitters picked by power alone vs the sky probe: time to 5/2/1% error on sky-room and sky-window.
+    Sky,
     /// Every backend alone, then all at once on one render (--backend all): paths/s of each and combined.
     Devices,
 }
@@ -52,12 +54,13 @@ pub struct BenchArgs {
     sections: Vec<SectionArg>,
     /// Scenes for every section, comma-separated (built-in names, the bench
     /// scenes cornell-glass-mesh, cornell-mesh, cornell-mesh-pbr,
-    /// cornell-mesh-frosted, cornell-mesh-coated, glossy-plane and
-    /// sunset-balls, or JSON files) [default: throughput on cornell,
+    /// cornell-mesh-frosted, cornell-mesh-coated, glossy-plane,
+    /// sunset-balls, sky-room and sky-window, or JSON files) [default: throughput on cornell,
     /// cornell-glass, cornell-quads, smallpt, furnace, cornell-mesh,
     /// cornell-mesh-pbr, cornell-mesh-frosted, cornell-mesh-coated; trade on cornell, cornell-glass, smallpt; adaptive
     /// and samplers on the five built-in scenes and the first two mesh
-    /// scenes; mis on glossy-plane, cornell-mesh-pbr and sunset-balls].
+    /// scenes; mis on glossy-plane, cornell-mesh-pbr and sunset-balls; sky
+    /// on sky-room and sky-window].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     scenes: Vec<String>,
     /// A small version that runs in seconds (small images, short runs,
@@ -80,7 +83,7 @@ pub struct BenchArgs {
     /// Seconds per throughput measurement [default: 3; 0.1 with --quick].
     #[arg(long, value_name = "S")]
     throughput_seconds: Option<f64>,
-    /// Seeds of the paired sections (adaptive, samplers, mis): both settings are
+    /// Seeds of the paired sections (adaptive, samplers, mis, sky): both settings are
     /// rendered with each, and the tables give the median speed-up and the
     /// range [default: 3; 1 with --quick].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100))]
@@ -168,6 +171,7 @@ impl BenchArgs {
                 adaptive: has(SectionArg::Adaptive),
                 samplers: has(SectionArg::Samplers),
                 mis: has(SectionArg::Mis),
+                sky: has(SectionArg::Sky),
                 devices: has(SectionArg::Devices),
             };
         }
@@ -177,6 +181,7 @@ impl BenchArgs {
             c.adaptive_scenes = self.scenes.clone();
             c.sampler_scenes = self.scenes.clone();
             c.mis_scenes = self.scenes.clone();
+            c.sky_scenes = self.scenes.clone();
         }
         if let Some(dir) = &self.cache {
             c.cache_dir = dir.clone();

@@ -57,8 +57,9 @@ impl BackendArg {
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
-    /// Built-in scene name (see `pathstream scenes`), a scene JSON file, or a
-    /// model file (.obj, .gltf, .glb, .ply) framed and lit by default.
+    /// Built-in or bench scene name (see `pathstream scenes`), a scene JSON
+    /// file, or a model file (.obj, .gltf, .glb, .ply) framed and lit by
+    /// default.
     #[arg(long, value_name = "NAME|FILE")]
     scene: String,
     /// Image width in pixels.
@@ -245,7 +246,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     quality
         .validate()
         .map_err(|e| usage(format!("--{}: {}", e.field.replace('_', "-"), e.reason)))?;
-    let mut scene = pathstream::resolve::load_scene(&args.scene)
+    let mut scene = pathstream::bench::scenes::load(&args.scene)
         .map_err(|e| usage(format!("--scene {}: {e}", args.scene)))?;
     let lens = pathstream::render::scene::CameraEdit {
         aperture: args.aperture,

@@ -29,6 +29,12 @@ pub fn run(args: ScenesArgs) -> Result<(), CliError> {
     if let Some(name) = args.json {
         let scene = match builtin(&name) {
             Some(scene) => scene,
+            None if name == bench::CORNELL_MESH_TEXTURED => {
+                return Err(CliError::Usage(format!(
+                    "--json: {name} has no JSON form: its balls' models and textures are made in memory \
+                     (render it by name: `pathstream render --scene {name}`)"
+                )))
+            }
             None if bench::NAMES.iter().any(|(n, _)| *n == name) => {
                 bench::load(&name).map_err(|e| CliError::Failed(e.to_string()))?
             }

@@ -1,5 +1,6 @@
 //! Meshes made in code, for tests and benchmarks: closed, indexed (every
-//! edge shared by exactly two triangles, consistently wound outwards).
+//! edge shared by exactly two triangles, consistently wound outwards),
+//! except [`uv_sphere`], which is made for textures.
 
 use super::MeshData;
 use std::collections::HashMap;
@@ -125,6 +126,51 @@ pub fn bumpy_sphere(triangles: usize) -> MeshData {
     }
 }
 
+/// A unit sphere of `rows` latitude bands and `cols` longitude segments
+/// with a sphere object's texture mapping (u = 0.5 facing +z, v = 0 at the
+/// top, as `World::texcoords` maps one), its normals, and tangents along
+/// +u (sign +1): a textured ball. Not closed in the index sense: the seam's
+/// vertices are doubled (u = 0 and u = 1), each pole is a row of vertices,
+/// and the triangles that would be degenerate there are left out.
+pub fn uv_sphere(rows: u32, cols: u32) -> MeshData {
+    let (rows, cols) = (rows.max(2), cols.max(3));
+    let (mut positions, mut uvs, mut tangents) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..=rows {
+        let v = f64::from(i) / f64::from(rows);
+        let (st, ct) = (std::f64::consts::PI * v).sin_cos();
+        for j in 0..=cols {
+            let u = f64::from(j) / f64::from(cols);
+            let (sp, cp) = (std::f64::consts::TAU * (u - 0.5)).sin_cos();
+            positions.push([st * sp, ct, st * cp].map(|x| x as f32));
+            uvs.push([u as f32, v as f32]);
+            tangents.push([cp as f32, 0.0, -sp as f32, 1.0]);
+        }
+    }
+    let at = |i: u32, j: u32| i * (cols + 1) + j;
+    let mut triangles = Vec::new();
+    for i in 0..rows {
+        for j in 0..cols {
+            let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j));
+            if i + 1 < rows {
+                triangles.push([a, d, c]);
+            }
+            if i > 0 {
+                triangles.push([a, c, b]);
+            }
+        }
+    }
+    MeshData {
+        name: "uv-sphere".into(),
+        normals: Some(positions.clone()),
+        positions,
+        uvs: [Some(uvs), None],
+        tangents: Some(tangents),
+        colors: None,
+        materials: vec![0; triangles.len()],
+        triangles,
+    }
+}
+
 fn normalized(p: [f64; 3]) -> [f64; 3] {
     let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
     p.map(|x| x / l)
@@ -171,6 +217,44 @@ mod tests {
                 u[0] * v[1] - u[1] * v[0],
             ];
             assert!(n[0] * a[0] + n[1] * a[1] + n[2] * a[2] > 0.0);
+        }
+    }
+
+    #[test]
+    fn uv_sphere_maps_as_a_sphere_object_and_faces_out() {
+        let m = uv_sphere(8, 16);
+        assert_eq!(m.triangles.len(), 2 * 16 * (8 - 1));
+        let uv = m.uvs[0].as_ref().expect("uvs");
+        let t = m.tangents.as_ref().expect("tangents");
+        for (k, p) in m.positions.iter().enumerate() {
+            let p = p.map(f64::from);
+            let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            assert!((l - 1.0).abs() < 1e-6);
+            // World::texcoords' sphere mapping, away from the seam and poles.
+            let [u, v] = uv[k].map(f64::from);
+            if p[1].abs() < 0.999 && u > 1e-6 && u < 1.0 - 1e-6 {
+                let want_u = 0.5 + p[0].atan2(p[2]) / std::f64::consts::TAU;
+                assert!((u - want_u).abs() < 1e-6, "u {u} vs {want_u}");
+            }
+            assert!((v - p[1].clamp(-1.0, 1.0).acos() / std::f64::consts::PI).abs() < 1e-6);
+            // The tangent is along +u: perpendicular to the normal, (z, 0, -x).
+            let dot = t[k][0] as f64 * p[0] + t[k][2] as f64 * p[2];
+            assert!(dot.abs() < 1e-6 && t[k][1] == 0.0);
+        }
+        for tri in &m.triangles {
+            let [a, b, c] = tri.map(|i| m.positions[i as usize].map(f64::from));
+            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            let centre = [0, 1, 2].map(|k| a[k] + b[k] + c[k]);
+            assert!(
+                n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2] > 0.0,
+                "{tri:?}"
+            );
         }
     }
 

@@ -56,10 +56,22 @@ pub struct RenderJob {
 impl RenderJob {
     /// `scene` and `quality` are already validated; width and height >= 1.
     pub fn new(scene: &Scene, width: u32, height: u32, quality: &Quality) -> Self {
+        Self::with_sky_probe(scene, width, height, quality, true)
+    }
+
+    /// [`RenderJob::new`], with the sky probe or without it (light selection
+    /// by power alone: what the benchmark compares the probe with).
+    pub fn with_sky_probe(
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        quality: &Quality,
+        sky_probe: bool,
+    ) -> Self {
         let camera = CameraRays::new(&scene.camera, width, height);
         let mut world = World::new(scene, scene.camera.position);
         // A sky that walls hide gets few shadow rays (`sky_probe`).
-        if quality.nee {
+        if quality.nee && sky_probe {
             crate::render::sky_probe::weigh_sky(&mut world, &camera);
         }
         Self {
