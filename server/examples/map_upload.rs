@@ -1,14 +1,17 @@
-//! What a job under an environment map costs the OpenCL device before its
-//! first sample: the first job of a map uploads its texels and tables, the
-//! next jobs of the same map (camera moves, edits) share them.
+//! What a job under an environment map, or of a textured scene, costs the
+//! OpenCL device before its first sample: the first job of a map (or of a
+//! set of textures) uploads its texels, the next jobs of the same map or
+//! textures (camera moves, edits) share them.
 //!
 //! ```text
 //! cargo run --release --example map_upload -- MAP.hdr|MAP.exr [--jobs 6]
+//! cargo run --release --example map_upload -- --scene cornell-mesh-textured [--jobs 6]
 //! ```
 //!
 //! The map is scaled up (nearest texel) to 4096 x 2048; each job is a new
-//! `RenderJob` of a small scene under it, rendered for one sample at 64 x
-//! 64 on OpenCL device 0. Prints each job's upload time and bytes.
+//! `RenderJob` of a small scene under it; a scene by name (a bench scene
+//! or a file) gets a camera move per job. Each is rendered for one sample
+//! at 64 x 64 on OpenCL device 0. Prints each job's upload time and bytes.
 
 use pathstream::render::backend::opencl::OpenClBackend;
 use pathstream::render::envmap::EnvMap;
@@ -44,6 +47,50 @@ fn main() -> Result<(), String> {
             .ok_or("--jobs N")?,
         None => 6,
     };
+    let (scene, what) = match source.as_str() {
+        "--scene" => {
+            let name = args.get(1).ok_or("--scene NAME")?;
+            let scene = pathstream::bench::scenes::load(name).map_err(|e| e.to_string())?;
+            (scene, name.clone())
+        }
+        _ => (under_map(source)?, format!("{W}x{H} map")),
+    };
+    let mut device = OpenClBackend::new(Some(0)).map_err(|e| e.to_string())?;
+    println!("{what} on {}", device.device());
+    for k in 0..jobs {
+        let before = device.scene_bytes_uploaded;
+        let mut moved = scene.clone();
+        if source == "--scene" {
+            moved.camera.position.x += k as f64 * 0.5;
+        }
+        let job = RenderJob::new(
+            &moved,
+            64,
+            64,
+            &Quality {
+                seed: k,
+                ..Quality::default()
+            },
+        );
+        let mut film = Film::new(64, 64);
+        let start = std::time::Instant::now();
+        device
+            .render(&job, &mut film, 1)
+            .map_err(|e| e.to_string())?;
+        let whole = start.elapsed();
+        let (took, _) = device.last_upload.unwrap_or_default();
+        println!(
+            "job {k}: {:.1} ms to the first sample, upload {:.1} ms, {:.1} MB of scene arrays",
+            whole.as_secs_f64() * 1e3,
+            took.as_secs_f64() * 1e3,
+            (device.scene_bytes_uploaded - before) as f64 / 1e6
+        );
+    }
+    Ok(())
+}
+
+/// A small scene under `source`'s map scaled up to [`W`] x [`H`].
+fn under_map(source: &str) -> Result<Scene, String> {
     let bytes = std::fs::read(source).map_err(|e| format!("{source}: {e}"))?;
     let small = pathstream::model::hdr::read_hdr(&bytes, source)?;
     let texels = (0..W * H)
@@ -59,31 +106,5 @@ fn main() -> Result<(), String> {
         "objects": [{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "white"}],
         "environment": {"map": "map.hdr"}
     });
-    let scene =
-        Scene::from_json_str_with(&json.to_string(), &OneMap(map)).map_err(|e| e.to_string())?;
-    let mut device = OpenClBackend::new(Some(0)).map_err(|e| e.to_string())?;
-    println!("{W}x{H} map on {}", device.device());
-    for k in 0..jobs {
-        let before = device.scene_bytes_uploaded;
-        let job = RenderJob::new(
-            &scene,
-            64,
-            64,
-            &Quality {
-                seed: k,
-                ..Quality::default()
-            },
-        );
-        let mut film = Film::new(64, 64);
-        device
-            .render(&job, &mut film, 1)
-            .map_err(|e| e.to_string())?;
-        let (took, _) = device.last_upload.unwrap_or_default();
-        println!(
-            "job {k}: upload {:.1} ms, {:.1} MB of scene arrays",
-            took.as_secs_f64() * 1e3,
-            (device.scene_bytes_uploaded - before) as f64 / 1e6
-        );
-    }
-    Ok(())
+    Scene::from_json_str_with(&json.to_string(), &OneMap(map)).map_err(|e| e.to_string())
 }

@@ -259,14 +259,15 @@ async fn a_session_on_every_device_shares_each_device_fairly() {
     let a = busy_on_rayon(&status(&base, everywhere["id"].as_str().expect("id")).await);
     let b = busy_on_rayon(&status(&base, rayon_only["id"].as_str().expect("id")).await);
     eprintln!("rayon time: every device {a:.2} s, rayon alone {b:.2} s");
-    // Passes of about 30 ms taken in turn: near 1:1 (a pass or two apart);
-    // a worker that served one session first would be far outside this.
+    // Passes of about 30 ms taken in turn: near 1:1 (a pass or two apart,
+    // up to 2.06:1 seen while other test binaries loaded both cores); a
+    // worker that served one session first would give the other ~0 s.
     assert!(
         a > 0.2 && b > 0.2,
         "rayon time: every device {a:.2} s, rayon alone {b:.2} s"
     );
     assert!(
-        (0.5..2.0).contains(&(a / b)),
+        (1.0 / 3.0..3.0).contains(&(a / b)),
         "rayon time: every device {a:.2} s, rayon alone {b:.2} s"
     );
 }

@@ -84,3 +84,40 @@ fn jobs_too_large_to_share_the_device_evict_each_other_and_lose_nothing() {
         assert_eq!(f.pixels(), film.pixels(), "evictions changed the image");
     }
 }
+
+/// The device keeps a scene's textures between jobs: a camera move (a new
+/// job of the same textures) uploads the other arrays but not the texels,
+/// and the same job again renders the same samples; another scene's
+/// textures are uploaded.
+#[test]
+fn textures_are_uploaded_once_for_the_jobs_that_share_them() {
+    let Some(mut d) = device() else { return };
+    let textured = pathstream::bench::textured::cornell_mesh_textured().expect("scene");
+    let side = u64::from(pathstream::bench::textured::MAP_SIDE);
+    let texel_bytes = 6 * side * side * 4;
+    let mut render = |s: &pathstream::render::Scene| {
+        let before = d.scene_bytes_uploaded;
+        let job = RenderJob::new(s, 16, 16, &Quality::default());
+        let mut film = Film::new(16, 16);
+        d.render(&job, &mut film, 2).expect("render");
+        (film, d.scene_bytes_uploaded - before)
+    };
+    let (first, all) = render(&textured);
+    assert!(all >= texel_bytes, "first job: {all} bytes");
+    let mut moved = textured.clone();
+    moved.camera.position.x += 5.0;
+    // The same arrays but the texels (the meshes' are as large as before).
+    let (_, uploaded) = render(&moved);
+    assert!(
+        uploaded + texel_bytes <= all,
+        "a camera move: {uploaded} of {all} bytes"
+    );
+    let (again, _) = render(&textured);
+    assert!(
+        first.mean() == again.mean(),
+        "the shared texels render the same samples"
+    );
+    let rebuilt = pathstream::bench::textured::cornell_mesh_textured().expect("scene");
+    let (_, uploaded) = render(&rebuilt);
+    assert!(uploaded >= texel_bytes, "other textures: {uploaded} bytes");
+}

@@ -132,6 +132,21 @@ pub fn scatter(
     nl: Vec3A,
     sampler: &mut Sampler,
 ) -> Scattered {
+    scatter_with(m, d, entering, nl, sampler, None)
+}
+
+/// [`scatter`], a `pbr` material's lobes already built where next-event
+/// estimation built them for the same ray and normal (the same numbers
+/// either way: built once).
+#[inline(always)]
+pub fn scatter_with(
+    m: &SurfaceMaterial,
+    d: Vec3A,
+    entering: bool,
+    nl: Vec3A,
+    sampler: &mut Sampler,
+    lobes: Option<&ggx::Lobes>,
+) -> Scattered {
     match m.bsdf {
         Bsdf::Diffuse => {
             let (u1, u2) = sampler.bsdf_2d();
@@ -178,7 +193,12 @@ pub fn scatter(
             let u = sampler.bsdf_2d();
             let (t, b) = basis(nl);
             let wo = Vec3A::new(-d.dot(t), -d.dot(b), -d.dot(nl));
-            match ggx::sample(ggx::tables(), &p, m.albedo, (wo, entering), choice, u) {
+            let tables = ggx::tables();
+            let sampled = match lobes {
+                Some(l) => ggx::sample_from(tables, &p, m.albedo, l, wo, choice, u),
+                None => ggx::sample(tables, &p, m.albedo, (wo, entering), choice, u),
+            };
+            match sampled {
                 // Normalised: inside a transmitting object a path may
                 // bounce many times, and each frame's rounding would
                 // otherwise grow the next hit's (and so the next frame's).

@@ -194,7 +194,7 @@ pub fn assert_maps_agree(d: &OpenClBackend, job: &RenderJob, n: u64) {
                 CheckArg::Buffer(bytemuck::cast_slice(&packed.materials)),
                 CheckArg::Buffer(bytemuck::cast_slice(&t.maps)),
                 CheckArg::Buffer(bytemuck::cast_slice(&t.images)),
-                CheckArg::Buffer(bytemuck::cast_slice(&t.texels)),
+                CheckArg::Buffer(bytemuck::cast_slice(t.texels())),
                 CheckArg::Buffer(bytemuck::cast_slice(&t.srgb)),
             ],
         )

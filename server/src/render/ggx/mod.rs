@@ -491,12 +491,30 @@ pub fn sample(
         return None;
     }
     let lobes = Lobes::new(t, p, base, wo, entering);
+    sample_from(t, p, base, &lobes, wo, choice, (u1, u2))
+}
+
+/// [`sample`] with the lobes `wo` sees already built (by next-event
+/// estimation at the same vertex, from the same `wo` and side).
+#[inline(always)]
+pub fn sample_from(
+    t: &Tables,
+    p: &Pbr,
+    base: Vec3A,
+    lobes: &Lobes,
+    wo: Vec3A,
+    choice: f32,
+    (u1, u2): (f32, f32),
+) -> Option<Sample> {
+    if !(wo.z > 0.0) {
+        return None;
+    }
     let mut choice = choice;
     let mut under = 1.0;
     if lobes.coat.on() {
         if choice < lobes.coat.p {
             let wi = lobes.coat.sample(wo, (u1, u2))?;
-            return weighed(t, p, base, &lobes, wo, wi);
+            return weighed(t, p, base, lobes, wo, wi);
         }
         choice = (choice - lobes.coat.p) / (1.0 - lobes.coat.p);
         under = lobes.coat.keep / (1.0 - lobes.coat.p);
@@ -527,7 +545,7 @@ pub fn sample(
         }
         wi
     };
-    weighed(t, p, base, &lobes, wo, wi)
+    weighed(t, p, base, lobes, wo, wi)
 }
 
 /// `wi` drawn from `wo`, weighed by the whole mixture's density.

@@ -22,7 +22,7 @@ use crate::render::features::{self, Guide};
 use crate::render::filter::Filter;
 use crate::render::ggx;
 use crate::render::isa::Isa;
-use crate::render::material::{scatter, Bsdf, SurfaceMaterial, NO_MAPS};
+use crate::render::material::{scatter_with, Bsdf, SurfaceMaterial, NO_MAPS};
 use crate::render::math::{basis, max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
@@ -227,6 +227,8 @@ impl Path {
         }
         let ray = &self.ray;
         let gathered = settings.nee && m.bsdf.gathers_light();
+        // A `pbr` surface's lobes, built for NEE, serve the scatter too.
+        let mut lobes_built = None;
         if gathered {
             let sampling = settings.light_sampling;
             if let Bsdf::Pbr(p) = &m.bsdf {
@@ -235,6 +237,7 @@ impl Path {
                 let wo = -local(ray.dir);
                 let tables = ggx::tables();
                 let lobes = ggx::Lobes::new(tables, p, m.albedo, wo, entering);
+                lobes_built = Some(lobes);
                 let f = |dir: Vec3A, light_pdf: f32| {
                     let wi = local(dir);
                     let bsdf_pdf = ggx::pdf(p, &lobes, wo, wi);
@@ -265,7 +268,14 @@ impl Path {
                 }
             }
         }
-        let sc = scatter(m, ray.dir, entering, ns, &mut self.sampler);
+        let sc = scatter_with(
+            m,
+            ray.dir,
+            entering,
+            ns,
+            &mut self.sampler,
+            lobes_built.as_ref(),
+        );
         // A shading normal can send a direction to the wrong side of the
         // actual surface: such a sample has no contribution (the same
         // integral NEE estimates, so NEE on and off still agree).

@@ -39,6 +39,9 @@ pub struct Instance {
     /// `cam_from_obj` is a translation (the mesh's matrix is exactly the
     /// identity): rays keep their direction in object space.
     pub translation_only: bool,
+    /// The placement mirrors (its determinant is negative): tangents'
+    /// bitangent signs flip with it.
+    pub mirrored: bool,
     /// Each slot's alpha test, where some slot's material has one
     /// (`render::alpha`); None: every triangle is opaque.
     pub alpha: Option<Arc<[AlphaTest]>>,
@@ -83,6 +86,7 @@ impl Instance {
             rt_b,
             materials,
             translation_only: cam.matrix3 == DMat3::IDENTITY,
+            mirrored: cam.matrix3.determinant() < 0.0,
             alpha: None,
         }
     }

@@ -150,9 +150,8 @@ impl World {
                 let uv = [0, 1].map(|set| mesh.uv(set, hit.prim, hit.bary));
                 let (tangent, sign) = match mesh.tangent(hit.prim, hit.bary) {
                     Some((t, sign)) => {
-                        let m = inst.cam_from_obj.matrix3;
-                        let flip = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
-                        (m * t, sign * flip)
+                        let flip = if inst.mirrored { -1.0 } else { 1.0 };
+                        (inst.cam_from_obj.matrix3 * t, sign * flip)
                     }
                     None => (Vec3A::ZERO, 1.0),
                 };

@@ -102,7 +102,7 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 23] = [
     scene_array!("tex_images": "TexImage", "texture sizes", [textures::TexImage], |p| {
         &p.textures.images
     }),
-    scene_array!("texels": "uint", "textures", [u32], |p| &p.textures.texels),
+    scene_array!("texels": "uint", "textures", [u32], |p| p.textures.texels()),
     scene_array!("srgb": "float", "sRGB table", [f32], |p| &p.textures.srgb),
     scene_array!("alpha": "AlphaTest", "alpha tests", [meshes::AlphaTest], |p| {
         &p.meshes.alpha
@@ -127,14 +127,30 @@ pub(super) const LAUNCH_PARAMS: [(&str, &str); 9] = [
 /// in its order (an environment map's shared with other jobs of it).
 pub(super) struct SceneBuffers(Vec<Arc<Buffer<u8>>>);
 
+/// What jobs of one scene share on the device instead of uploading again.
+#[derive(Default)]
+pub(super) struct Shared {
+    map: Option<MapBuffers>,
+    textures: Option<TextureBuffer>,
+}
+
 /// The environment map last uploaded and its two buffers: the jobs of one
 /// map (every camera move, edit or quality change under it) share them
 /// instead of uploading its texels and tables again (100 MB for a 4k map).
 /// Held by the map's `Arc`, so that its address cannot be another map's.
-pub(super) struct MapBuffers {
+struct MapBuffers {
     map: Arc<EnvMap>,
     texels: Arc<Buffer<u8>>,
     dist: Arc<Buffer<u8>>,
+}
+
+/// The textures last uploaded (held by their `Arc`s, in order) and their
+/// texels' buffer: the jobs of one scene's textures share it, and their
+/// texels are neither copied nor uploaded again (a product model's maps
+/// are hundreds of MB).
+struct TextureBuffer {
+    textures: Vec<Arc<crate::render::texture::Texture>>,
+    texels: Arc<Buffer<u8>>,
 }
 
 /// Where one launch adds its samples.
@@ -187,9 +203,14 @@ pub struct MemoryLimits {
 /// and its scene's arrays (each at least one element: OpenCL refuses empty
 /// buffers).
 pub(super) fn job_bytes(p: &Packed, film_bytes: usize) -> Vec<(&'static str, usize)> {
-    let arrays = SCENE_ARRAYS
-        .iter()
-        .map(|a| (a.label, (a.bytes)(p).len().max(a.elem_bytes)));
+    let arrays = SCENE_ARRAYS.iter().map(|a| {
+        // The texels are sized without being copied together.
+        let bytes = match a.name {
+            "texels" => p.textures.texel_bytes(),
+            _ => (a.bytes)(p).len(),
+        };
+        (a.label, bytes.max(a.elem_bytes))
+    });
     std::iter::once(("film", film_bytes))
         .chain(arrays)
         .collect()
@@ -224,25 +245,33 @@ pub(super) fn check_fits(bytes: &[(&str, usize)], limits: MemoryLimits) -> Resul
 }
 
 impl SceneBuffers {
-    /// `p`'s arrays on the device, an environment map's taken from `maps`
-    /// where it holds that map (else uploaded, and `maps` then holds it);
-    /// and the bytes uploaded.
+    /// `p`'s arrays on the device, an environment map's and the textures'
+    /// taken from `shared` where it holds those (else uploaded, and
+    /// `shared` then holds them); and the bytes uploaded.
     pub(super) fn upload(
         cl: &OpenClBackend,
         p: &Packed,
-        maps: &mut Option<MapBuffers>,
+        shared: &mut Shared,
     ) -> Result<(Self, usize), OpenClError> {
         let read = Access::ReadOnly;
-        let held = match (&p.env_map, maps.as_ref()) {
+        let held = match (&p.env_map, shared.map.as_ref()) {
             (Some(m), Some(held)) if Arc::ptr_eq(m, &held.map) => Some(held),
             _ => None,
         };
+        let same = |a: &[Arc<_>], b: &[Arc<_>]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| Arc::ptr_eq(x, y))
+        };
+        let textures = &p.textures.textures;
+        let held_texels = (shared.textures.as_ref())
+            .filter(|h| !textures.is_empty() && same(&h.textures, textures))
+            .map(|h| h.texels.clone());
         let mut uploaded = 0;
         let mut buffers = Vec::with_capacity(SCENE_ARRAYS.len());
         for a in &SCENE_ARRAYS {
             let shared = match (a.name, held) {
                 ("env_texels", Some(h)) => Some(h.texels.clone()),
                 ("env_dist", Some(h)) => Some(h.dist.clone()),
+                ("texels", _) => held_texels.clone(),
                 _ => None,
             };
             buffers.push(match (shared, (a.bytes)(p)) {
@@ -255,15 +284,21 @@ impl SceneBuffers {
                 }
             });
         }
+        let at = |name: &str| SCENE_ARRAYS.iter().position(|a| a.name == name);
         if let (None, Some(map)) = (held, &p.env_map) {
-            let at = |name: &str| SCENE_ARRAYS.iter().position(|a| a.name == name);
             if let (Some(t), Some(d)) = (at("env_texels"), at("env_dist")) {
-                *maps = Some(MapBuffers {
+                shared.map = Some(MapBuffers {
                     map: map.clone(),
                     texels: buffers[t].clone(),
                     dist: buffers[d].clone(),
                 });
             }
+        }
+        if let (None, false, Some(t)) = (held_texels, textures.is_empty(), at("texels")) {
+            shared.textures = Some(TextureBuffer {
+                textures: textures.clone(),
+                texels: buffers[t].clone(),
+            });
         }
         Ok((Self(buffers), uploaded))
     }

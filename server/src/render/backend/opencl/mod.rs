@@ -197,11 +197,11 @@ pub struct OpenClBackend {
     /// How long the last upload of a job's scene and film took, and the
     /// device memory they take.
     pub last_upload: Option<(Duration, usize)>,
-    /// Bytes of scene arrays uploaded so far (a map shared across jobs
-    /// counts once).
+    /// Bytes of scene arrays uploaded so far (a map or textures shared
+    /// across jobs count once).
     pub scene_bytes_uploaded: u64,
-    /// The environment map on the device, for the next job of it.
-    maps: Option<buffers::MapBuffers>,
+    /// The environment map and textures on the device, for the next jobs.
+    shared: buffers::Shared,
     /// What the device can hold (from its info; lower it to test).
     pub memory_limits: MemoryLimits,
     /// How adaptive work reaches the kernel.
@@ -291,7 +291,7 @@ impl OpenClBackend {
             },
             last_upload: None,
             scene_bytes_uploaded: 0,
-            maps: None,
+            shared: buffers::Shared::default(),
             memory_limits,
             tile_dispatch: TileDispatch::default(),
             launch_pixels: env_usize("PATHSTREAM_OPENCL_LAUNCH_PIXELS").unwrap_or(if info_is_gpu {
@@ -516,9 +516,9 @@ impl OpenClBackend {
         } else {
             self.upload(Access::ReadWrite, &host_film(film))?
         };
-        let mut maps = self.maps.take();
-        let (scene, uploaded) = buffers::SceneBuffers::upload(self, &packed, &mut maps)?;
-        self.maps = maps;
+        let mut shared = std::mem::take(&mut self.shared);
+        let (scene, uploaded) = buffers::SceneBuffers::upload(self, &packed, &mut shared)?;
+        self.shared = shared;
         self.scene_bytes_uploaded += uploaded as u64;
         let state = JobState {
             job_id: job.id,

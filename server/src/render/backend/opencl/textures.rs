@@ -6,9 +6,10 @@
 //! scene has maps (`HAS_TEXTURES`).
 
 use crate::render::maps::{Slot, WorldMaps};
-use crate::render::texture::MAP_SLOTS;
+use crate::render::texture::{Texture, MAP_SLOTS};
 use crate::render::world::World;
 use bytemuck::{Pod, Zeroable};
+use std::sync::{Arc, OnceLock};
 
 /// A material slot: its UV transform's two rows, then (texture, UV set,
 /// wrap along u, wrap along v); texture `NO_TEXTURE` when unused.
@@ -55,8 +56,29 @@ const _: () = assert!(std::mem::size_of::<TexImage>() == 16);
 pub struct PackedTextures {
     pub maps: Vec<MaterialMaps>,
     pub images: Vec<TexImage>,
-    pub texels: Vec<u32>,
+    /// The textures, in `images`' order: their texels one after another
+    /// are the kernel's `texels` ([`PackedTextures::texels`]).
+    pub textures: Vec<Arc<Texture>>,
+    texels: OnceLock<Vec<u32>>,
     pub srgb: Vec<f32>,
+}
+
+impl PackedTextures {
+    /// Every texture's texels, one after another: copied on first use
+    /// only, so that a device already holding these textures (the jobs of
+    /// one scene: every camera move) never has them copied.
+    pub fn texels(&self) -> &[u32] {
+        self.texels.get_or_init(|| {
+            (self.textures.iter())
+                .flat_map(|t| t.texels.iter().copied())
+                .collect()
+        })
+    }
+
+    /// The bytes [`PackedTextures::texels`] holds, without making it.
+    pub fn texel_bytes(&self) -> usize {
+        self.textures.iter().map(|t| t.texels.len() * 4).sum()
+    }
 }
 
 pub(super) fn slot(s: &Slot) -> MapSlot {
@@ -102,14 +124,16 @@ pub fn pack(w: &World) -> PackedTextures {
         srgb: crate::render::texture::srgb_table().to_vec(),
         ..PackedTextures::default()
     };
+    let mut offset = 0;
     for t in &w.textures {
         out.images.push(TexImage {
-            offset: out.texels.len() as u32,
+            offset: offset as u32,
             width: t.width,
             height: t.height,
             pad0: 0,
         });
-        out.texels.extend_from_slice(&t.texels);
+        offset += t.texels.len();
     }
+    out.textures = w.textures.clone();
     out
 }
