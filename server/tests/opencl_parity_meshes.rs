@@ -235,9 +235,9 @@ fn mesh_args<'a>(input: &'a [[f32; 4]], p: &'a Packed) -> Vec<CheckArg<'a>> {
         CheckArg::Buffer(bytemuck::cast_slice(&p.prims)),
         CheckArg::Buffer(bytemuck::cast_slice(&p.big)),
         CheckArg::Buffer(bytemuck::cast_slice(&m.instances)),
-        CheckArg::Buffer(bytemuck::cast_slice(&m.nodes)),
-        CheckArg::Buffer(bytemuck::cast_slice(&m.tris)),
-        CheckArg::Buffer(bytemuck::cast_slice(&m.normals)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.arrays().nodes)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.arrays().tris)),
+        CheckArg::Buffer(bytemuck::cast_slice(&m.arrays().normals)),
         CheckArg::Buffer(bytemuck::cast_slice(&m.slots)),
     ]
 }

@@ -180,6 +180,18 @@ fn normalized(p: [f64; 3]) -> [f64; 3] {
 mod tests {
     use super::*;
 
+    /// The (unnormalised) normal of triangle `t` by its winding.
+    fn face_normal(m: &MeshData, t: &[u32; 3]) -> [f64; 3] {
+        let [a, b, c] = t.map(|i| m.positions[i as usize].map(f64::from));
+        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ]
+    }
+
     /// Every edge is shared by exactly two triangles, in opposite directions.
     fn assert_closed(m: &MeshData) {
         let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
@@ -208,14 +220,10 @@ mod tests {
         }
         // Wound outwards: each face normal points away from the centre.
         for t in &m.triangles {
-            let [a, b, c] = t.map(|i| m.positions[i as usize].map(f64::from));
-            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
+            let (n, a) = (
+                face_normal(&m, t),
+                m.positions[t[0] as usize].map(f64::from),
+            );
             assert!(n[0] * a[0] + n[1] * a[1] + n[2] * a[2] > 0.0);
         }
     }
@@ -242,14 +250,8 @@ mod tests {
             assert!(dot.abs() < 1e-6 && t[k][1] == 0.0);
         }
         for tri in &m.triangles {
+            let n = face_normal(&m, tri);
             let [a, b, c] = tri.map(|i| m.positions[i as usize].map(f64::from));
-            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
             let centre = [0, 1, 2].map(|k| a[k] + b[k] + c[k]);
             assert!(
                 n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2] > 0.0,

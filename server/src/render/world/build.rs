@@ -112,14 +112,8 @@ impl World {
                     let world_from_object = super::cutout::square_placement(corner, edge_u, edge_v);
                     let materials: Arc<[u32]> = [o.material as u32].into();
                     let mesh = super::cutout::unit_square();
-                    let (placed, bounds) =
-                        instance(scene, mesh, world_from_object, origin, materials);
-                    objects.push(WorldObject {
-                        geometry: Geometry::Instance(instances.len() as u32),
-                        material: u32::MAX,
-                    });
-                    instances.push(placed);
-                    boxes.push(bounds);
+                    let placed = instance(scene, mesh, world_from_object, origin, materials);
+                    push_instance(&mut objects, &mut instances, &mut boxes, placed);
                 }
                 Shape::Quad {
                     corner,
@@ -157,14 +151,8 @@ impl World {
                             }
                             Some(_) => continue,
                         };
-                        let (placed, bounds) =
-                            instance(scene, mesh, world_from_object, origin, materials);
-                        objects.push(WorldObject {
-                            geometry: Geometry::Instance(instances.len() as u32),
-                            material: u32::MAX,
-                        });
-                        instances.push(placed);
-                        boxes.push(bounds);
+                        let placed = instance(scene, mesh, world_from_object, origin, materials);
+                        push_instance(&mut objects, &mut instances, &mut boxes, placed);
                     }
                 }
             }
@@ -281,6 +269,21 @@ fn instance(
     let mut placed = Instance::new(mesh, world_from_object, origin, materials);
     placed.alpha = super::textures::alpha_tests(scene, &placed.materials);
     (placed, padded(lo, hi, 1e-5))
+}
+
+/// Adds `placed` (an instance and its box) as the next object.
+fn push_instance(
+    objects: &mut Vec<WorldObject>,
+    instances: &mut Vec<Instance>,
+    boxes: &mut Vec<Aabb>,
+    (placed, bounds): (Instance, Aabb),
+) {
+    objects.push(WorldObject {
+        geometry: Geometry::Instance(instances.len() as u32),
+        material: u32::MAX,
+    });
+    instances.push(placed);
+    boxes.push(bounds);
 }
 
 /// A BVH over the objects that are not too large for one, and those

@@ -82,10 +82,12 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 23] = [
     scene_array!("instances": "Instance", "instances", [meshes::Instance], |p| {
         &p.meshes.instances
     }),
-    scene_array!("mesh_nodes": "BvhNode", "mesh BVH", [BvhNode], |p| &p.meshes.nodes),
-    scene_array!("tris": "TriVerts", "triangles", [TriVerts], |p| &p.meshes.tris),
+    scene_array!("mesh_nodes": "BvhNode", "mesh BVH", [BvhNode], |p| {
+        &p.meshes.arrays().nodes
+    }),
+    scene_array!("tris": "TriVerts", "triangles", [TriVerts], |p| &p.meshes.arrays().tris),
     scene_array!("normals": "float4", "vertex normals", [[f32; 4]], |p| {
-        &p.meshes.normals
+        &p.meshes.arrays().normals
     }),
     scene_array!("slots": "uint", "material slots", [u32], |p| &p.meshes.slots),
     scene_array!("ggx": "float", "GGX albedo tables", [f32], |p| &p.ggx),
@@ -93,9 +95,15 @@ pub(super) const SCENE_ARRAYS: [SceneArray; 23] = [
     scene_array!("env_dist": "float", "environment map tables", [f32], |p| {
         p.env_dist()
     }),
-    scene_array!("uvs": "float4", "texture coordinates", [[f32; 4]], |p| &p.meshes.uvs),
-    scene_array!("tangents": "float4", "tangents", [[f32; 4]], |p| &p.meshes.tangents),
-    scene_array!("colors": "float4", "vertex colours", [[f32; 4]], |p| &p.meshes.colors),
+    scene_array!("uvs": "float4", "texture coordinates", [[f32; 4]], |p| {
+        &p.meshes.arrays().uvs
+    }),
+    scene_array!("tangents": "float4", "tangents", [[f32; 4]], |p| {
+        &p.meshes.arrays().tangents
+    }),
+    scene_array!("colors": "float4", "vertex colours", [[f32; 4]], |p| {
+        &p.meshes.arrays().colors
+    }),
     scene_array!("maps": "MaterialMaps", "material maps", [textures::MaterialMaps], |p| {
         &p.textures.maps
     }),
@@ -132,6 +140,7 @@ pub(super) struct SceneBuffers(Vec<Arc<Buffer<u8>>>);
 pub(super) struct Shared {
     map: Option<MapBuffers>,
     textures: Option<TextureBuffer>,
+    meshes: Option<MeshBuffers>,
 }
 
 /// The environment map last uploaded and its two buffers: the jobs of one
@@ -142,6 +151,18 @@ struct MapBuffers {
     map: Arc<EnvMap>,
     texels: Arc<Buffer<u8>>,
     dist: Arc<Buffer<u8>>,
+}
+
+/// The meshes last uploaded (held by their `Arc`s, in order, and whether
+/// with their texture coordinates and tangents) and their arrays'
+/// buffers, by name ([`meshes::MESH_ARRAYS`]): a camera move or a quality
+/// change keeps the meshes, and their data is neither copied nor uploaded
+/// again (a million triangles are ~150 MB); only the instances' transforms
+/// are new.
+struct MeshBuffers {
+    meshes: Vec<Arc<crate::render::shape::Mesh>>,
+    textured: bool,
+    buffers: Vec<(&'static str, Arc<Buffer<u8>>)>,
 }
 
 /// The textures last uploaded (held by their `Arc`s, in order) and their
@@ -204,10 +225,11 @@ pub struct MemoryLimits {
 /// buffers).
 pub(super) fn job_bytes(p: &Packed, film_bytes: usize) -> Vec<(&'static str, usize)> {
     let arrays = SCENE_ARRAYS.iter().map(|a| {
-        // The texels are sized without being copied together.
+        // The texels and the meshes' arrays are sized without being
+        // copied together.
         let bytes = match a.name {
             "texels" => p.textures.texel_bytes(),
-            _ => (a.bytes)(p).len(),
+            name => (p.meshes.array_bytes(name)).unwrap_or_else(|| (a.bytes)(p).len()),
         };
         (a.label, bytes.max(a.elem_bytes))
     });
@@ -244,6 +266,11 @@ pub(super) fn check_fits(bytes: &[(&str, usize)], limits: MemoryLimits) -> Resul
     Ok(())
 }
 
+/// Whether `a` and `b` hold the same objects in the same order.
+fn same_arcs<T>(a: &[Arc<T>], b: &[Arc<T>]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| Arc::ptr_eq(x, y))
+}
+
 impl SceneBuffers {
     /// `p`'s arrays on the device, an environment map's and the textures'
     /// taken from `shared` where it holds those (else uploaded, and
@@ -258,13 +285,16 @@ impl SceneBuffers {
             (Some(m), Some(held)) if Arc::ptr_eq(m, &held.map) => Some(held),
             _ => None,
         };
-        let same = |a: &[Arc<_>], b: &[Arc<_>]| {
-            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| Arc::ptr_eq(x, y))
-        };
         let textures = &p.textures.textures;
         let held_texels = (shared.textures.as_ref())
-            .filter(|h| !textures.is_empty() && same(&h.textures, textures))
+            .filter(|h| !textures.is_empty() && same_arcs(&h.textures, textures))
             .map(|h| h.texels.clone());
+        let meshes = &p.meshes;
+        let held_meshes = (shared.meshes.as_ref()).filter(|h| {
+            !meshes.meshes.is_empty()
+                && h.textured == meshes.textured
+                && same_arcs(&h.meshes, &meshes.meshes)
+        });
         let mut uploaded = 0;
         let mut buffers = Vec::with_capacity(SCENE_ARRAYS.len());
         for a in &SCENE_ARRAYS {
@@ -272,7 +302,8 @@ impl SceneBuffers {
                 ("env_texels", Some(h)) => Some(h.texels.clone()),
                 ("env_dist", Some(h)) => Some(h.dist.clone()),
                 ("texels", _) => held_texels.clone(),
-                _ => None,
+                (name, _) => (held_meshes.and_then(|h| h.buffers.iter().find(|b| b.0 == name)))
+                    .map(|b| b.1.clone()),
             };
             buffers.push(match (shared, (a.bytes)(p)) {
                 (Some(b), _) => b,
@@ -293,6 +324,16 @@ impl SceneBuffers {
                     dist: buffers[d].clone(),
                 });
             }
+        }
+        if held_meshes.is_none() && !meshes.meshes.is_empty() {
+            let buffers = (meshes::MESH_ARRAYS.iter())
+                .filter_map(|&name| Some((name, buffers[at(name)?].clone())))
+                .collect();
+            shared.meshes = Some(MeshBuffers {
+                meshes: meshes.meshes.clone(),
+                textured: meshes.textured,
+                buffers,
+            });
         }
         if let (None, false, Some(t)) = (held_texels, textures.is_empty(), at("texels")) {
             shared.textures = Some(TextureBuffer {

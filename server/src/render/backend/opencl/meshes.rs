@@ -11,7 +11,7 @@ use crate::render::shape::{Mesh, TriVerts};
 use crate::render::world::World;
 use bytemuck::{Pod, Zeroable};
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// `normal_base` of an instance whose mesh has no vertex normals.
 pub const NO_NORMALS: u32 = u32::MAX;
@@ -73,6 +73,24 @@ const _: () = assert!(std::mem::size_of::<AlphaTest>() == 64);
 #[derive(Debug, Default)]
 pub struct PackedMeshes {
     pub instances: Vec<Instance>,
+    /// World material of each instance's mesh slots.
+    pub slots: Vec<u32>,
+    /// Alpha tests of the mesh slots of instances that have any.
+    pub alpha: Vec<AlphaTest>,
+    /// Deepest mesh BVH.
+    pub depth: u32,
+    /// The distinct meshes, in the order their data lies in
+    /// [`MeshArrays`], and whether that holds their texture coordinates and
+    /// tangents (some material reads maps): what a device keys the arrays
+    /// it keeps by.
+    pub meshes: Vec<Arc<Mesh>>,
+    pub textured: bool,
+    arrays: OnceLock<MeshArrays>,
+}
+
+/// The distinct meshes' data, one mesh after another.
+#[derive(Debug, Default)]
+pub struct MeshArrays {
     pub nodes: Vec<BvhNode>,
     /// Triangles in leaf order; `v1[3]` holds the triangle's material slot
     /// (as bits), `v0[3]` its index in the mesh, as on the CPU.
@@ -88,12 +106,83 @@ pub struct PackedMeshes {
     /// Vertex colours of each triangle slot's corners (w unused), for
     /// meshes that have them.
     pub colors: Vec<[f32; 4]>,
-    /// World material of each instance's mesh slots.
-    pub slots: Vec<u32>,
-    /// Alpha tests of the mesh slots of instances that have any.
-    pub alpha: Vec<AlphaTest>,
-    /// Deepest mesh BVH.
-    pub depth: u32,
+}
+
+/// The kernel's names of [`MeshArrays`]' fields, in [`counts`]' order.
+pub const MESH_ARRAYS: [&str; 6] = ["mesh_nodes", "tris", "normals", "uvs", "tangents", "colors"];
+
+/// Elements `mesh` adds to each of [`MeshArrays`]' fields ([`MESH_ARRAYS`]
+/// order): what [`pack`] places by and [`MeshArrays`] is built by.
+fn counts(mesh: &Mesh, textured: bool) -> [usize; 6] {
+    let corners = |has: bool| if has { 3 * mesh.tris.len() } else { 0 };
+    [
+        mesh.bvh.nodes.len(),
+        mesh.tris.len(),
+        corners(mesh.normals.is_some()),
+        corners(textured && mesh.uvs.iter().any(Option::is_some)),
+        corners(textured && mesh.tangents.is_some()),
+        corners(mesh.colors.is_some()),
+    ]
+}
+
+impl PackedMeshes {
+    /// The meshes' data: copied together on first use only, so that a
+    /// device already holding these meshes (the jobs of one scene: every
+    /// camera move) never has them copied.
+    pub fn arrays(&self) -> &MeshArrays {
+        self.arrays
+            .get_or_init(|| build(&self.meshes, self.textured))
+    }
+
+    /// Bytes of the field of [`MeshArrays`] the kernel calls `name`, without
+    /// building them; None for another name.
+    pub fn array_bytes(&self, name: &str) -> Option<usize> {
+        let k = MESH_ARRAYS.iter().position(|n| *n == name)?;
+        let elem = [
+            std::mem::size_of::<BvhNode>(),
+            std::mem::size_of::<TriVerts>(),
+            16,
+            16,
+            16,
+            16,
+        ][k];
+        Some(
+            elem * (self.meshes.iter())
+                .map(|m| counts(m, self.textured)[k])
+                .sum::<usize>(),
+        )
+    }
+}
+
+fn build(meshes: &[Arc<Mesh>], textured: bool) -> MeshArrays {
+    let mut out = MeshArrays::default();
+    for mesh in meshes {
+        let c = counts(mesh, textured);
+        out.nodes.extend_from_slice(&mesh.bvh.nodes);
+        out.tris.extend(mesh.tris.iter().map(|t| {
+            let mut t = *t;
+            t.v1[3] = f32::from_bits(mesh.materials[t.index() as usize]);
+            t
+        }));
+        let xyz = |[x, y, z]: [f32; 3]| [x, y, z, 0.0];
+        if let (Some(n), true) = (&mesh.normals, c[2] > 0) {
+            corners(&mut out.normals, mesh, |v| xyz(n[v]));
+        }
+        if c[3] > 0 {
+            let set = |k: usize, v: usize| mesh.uvs[k].as_ref().map_or([0.0; 2], |u| u[v]);
+            corners(&mut out.uvs, mesh, |v| {
+                let ([a, b], [c, d]) = (set(0, v), set(1, v));
+                [a, b, c, d]
+            });
+        }
+        if let (Some(tangents), true) = (&mesh.tangents, c[4] > 0) {
+            corners(&mut out.tangents, mesh, |v| tangents[v]);
+        }
+        if let (Some(colors), true) = (&mesh.colors, c[5] > 0) {
+            corners(&mut out.colors, mesh, |v| xyz(colors[v]));
+        }
+    }
+    out
 }
 
 fn cols3(m: &crate::render::math::Mat3A) -> [[f32; 4]; 3] {
@@ -107,55 +196,31 @@ fn affine(a: &crate::render::math::Affine3A) -> [[f32; 4]; 4] {
 }
 
 pub fn pack(w: &World) -> PackedMeshes {
-    let mut out = PackedMeshes::default();
-    // Texture coordinates and tangents only where some material reads maps.
-    let textured = !w.maps.is_empty();
-    // (node_base, tri_base, normal_base, uv_base, tangent_base,
-    // color_base) of each distinct mesh.
+    let mut out = PackedMeshes {
+        // Texture coordinates and tangents only where some material reads maps.
+        textured: !w.maps.is_empty(),
+        ..PackedMeshes::default()
+    };
+    // Elements placed so far in each of the arrays, and (node_base,
+    // tri_base, normal_base, uv_base, tangent_base, color_base) of each
+    // distinct mesh (per-corner arrays count in triangles).
+    let mut placed_so_far = [0usize; 6];
     let mut placed: HashMap<*const Mesh, [u32; 6]> = HashMap::new();
     for inst in &w.instances {
-        let mesh = &*inst.mesh;
         let [node_base, tri_base, normal_base, uv_base, tangent_base, color_base] =
             *placed.entry(Arc::as_ptr(&inst.mesh)).or_insert_with(|| {
-                let bases = (out.nodes.len() as u32, out.tris.len() as u32);
-                out.nodes.extend_from_slice(&mesh.bvh.nodes);
-                out.depth = out.depth.max(mesh.bvh.depth);
-                out.tris.extend(mesh.tris.iter().map(|t| {
-                    let mut t = *t;
-                    t.v1[3] = f32::from_bits(mesh.materials[t.index() as usize]);
-                    t
-                }));
-                let xyz = |[x, y, z]: [f32; 3]| [x, y, z, 0.0];
-                let normal_base = match &mesh.normals {
-                    Some(n) => corners(&mut out.normals, mesh, |v| xyz(n[v])),
-                    None => NO_NORMALS,
-                };
-                let has_uvs = mesh.uvs.iter().any(Option::is_some);
-                let uv_base = if textured && has_uvs {
-                    let set = |k: usize, v: usize| mesh.uvs[k].as_ref().map_or([0.0; 2], |u| u[v]);
-                    corners(&mut out.uvs, mesh, |v| {
-                        let ([a, b], [c, d]) = (set(0, v), set(1, v));
-                        [a, b, c, d]
-                    })
-                } else {
-                    NO_NORMALS
-                };
-                let tangent_base = match (&mesh.tangents, textured) {
-                    (Some(tangents), true) => corners(&mut out.tangents, mesh, |v| tangents[v]),
+                let c = counts(&inst.mesh, out.textured);
+                let bases: [u32; 6] = std::array::from_fn(|k| match k {
+                    0 | 1 => placed_so_far[k] as u32,
+                    _ if c[k] > 0 => (placed_so_far[k] / 3) as u32,
                     _ => NO_NORMALS,
-                };
-                let color_base = match &mesh.colors {
-                    Some(colors) => corners(&mut out.colors, mesh, |v| xyz(colors[v])),
-                    None => NO_NORMALS,
-                };
-                [
-                    bases.0,
-                    bases.1,
-                    normal_base,
-                    uv_base,
-                    tangent_base,
-                    color_base,
-                ]
+                });
+                for (sum, n) in placed_so_far.iter_mut().zip(c) {
+                    *sum += n;
+                }
+                out.depth = out.depth.max(inst.mesh.bvh.depth);
+                out.meshes.push(inst.mesh.clone());
+                bases
             });
         let slot_base = out.slots.len() as u32;
         out.slots.extend_from_slice(&inst.materials);
@@ -188,16 +253,13 @@ pub fn pack(w: &World) -> PackedMeshes {
 }
 
 /// Appends `mesh`'s per-vertex attribute `at(vertex)` for the three
-/// corners of each triangle in leaf order; the base (in triangles) it
-/// starts at.
-fn corners(out: &mut Vec<[f32; 4]>, mesh: &Mesh, at: impl Fn(usize) -> [f32; 4]) -> u32 {
-    let base = (out.len() / 3) as u32;
+/// corners of each triangle in leaf order.
+fn corners(out: &mut Vec<[f32; 4]>, mesh: &Mesh, at: impl Fn(usize) -> [f32; 4]) {
     for t in &mesh.tris {
         for v in mesh.triangles[t.index() as usize] {
             out.push(at(v as usize));
         }
     }
-    base
 }
 
 /// One slot's alpha test in the kernel's layout; its texture is the
