@@ -119,21 +119,26 @@ fn a_mask_cutout_shadows_with_its_opaque_part_only() {
         Some(glb(&quad(-1.0), &black(1.0, "OPAQUE"))),
     );
     for (name, mut backend) in backends() {
-        let a = render_on(&mut backend, &cutout, 24, 24, &quality(), 64);
-        let b = render_on(&mut backend, &half, 24, 24, &quality(), 64);
-        assert_agree(
-            &a,
-            &b,
-            6,
-            4.5,
-            1e-4,
-            &format!("{name}: cutout vs half quad"),
-        );
-        // And it is not the whole quad's shadow.
-        let c = render_on(&mut backend, &whole, 24, 24, &quality(), 64);
-        let (ma, mc) = (mean(&a), mean(&c));
-        assert!(ma > 1.2 * mc, "{name}: cutout {ma} vs whole quad {mc}");
+        let what = format!("{name}: cutout");
+        assert_cuts_out(&mut backend, [&cutout, &half, &whole], &what);
     }
+}
+
+/// `cutout` renders as `half` (the opaque part alone) does, not as
+/// `whole`; the whole quad's image.
+fn assert_cuts_out(
+    backend: &mut pathstream::render::Backend,
+    [cutout, half, whole]: [&Scene; 3],
+    what: &str,
+) -> Film {
+    let a = render_on(backend, cutout, 24, 24, &quality(), 64);
+    let b = render_on(backend, half, 24, 24, &quality(), 64);
+    assert_agree(&a, &b, 6, 4.5, 1e-4, &format!("{what} vs half quad"));
+    // And it is not the whole quad's shadow.
+    let c = render_on(backend, whole, 24, 24, &quality(), 64);
+    let (ma, mc) = (mean(&a), mean(&c));
+    assert!(ma > 1.2 * mc, "{what} {ma} vs whole quad {mc}");
+    c
 }
 
 fn mean(f: &Film) -> f64 {
@@ -225,19 +230,9 @@ fn a_scene_json_quad_cuts_out_and_blends_as_a_model_file_does() {
         json!({"black": {"type": "diffuse", "albedo": [0, 0, 0]}}),
     );
     for (name, mut backend) in backends() {
-        let a = render_on(&mut backend, &cutout, 24, 24, &quality(), 64);
-        let b = render_on(&mut backend, &half, 24, 24, &quality(), 64);
-        assert_agree(
-            &a,
-            &b,
-            6,
-            4.5,
-            1e-4,
-            &format!("{name}: JSON cutout vs half quad"),
-        );
-        let c = render_on(&mut backend, &whole, 24, 24, &quality(), 64);
-        let (ma, mc) = (mean(&a), mean(&c));
-        assert!(ma > 1.2 * mc, "{name}: cutout {ma} vs whole quad {mc}");
+        let what = format!("{name}: JSON cutout");
+        let c = assert_cuts_out(&mut backend, [&cutout, &half, &whole], &what);
+        let mc = mean(&c);
         let d = render_on(&mut backend, &blend, 24, 24, &quality(), 64);
         let e = render_on(&mut backend, &blend_glb, 24, 24, &quality(), 64);
         assert_agree(
