@@ -132,7 +132,8 @@ pub(super) const LAUNCH_PARAMS: [(&str, &str); 9] = [
 ];
 
 /// The job's scene on the device: one buffer per entry of [`SCENE_ARRAYS`],
-/// in its order (an environment map's shared with other jobs of it).
+/// in its order (an environment map's, textures' and meshes' shared with
+/// other jobs of them).
 pub(super) struct SceneBuffers(Vec<Arc<Buffer<u8>>>);
 
 /// What jobs of one scene share on the device instead of uploading again.
@@ -272,9 +273,9 @@ fn same_arcs<T>(a: &[Arc<T>], b: &[Arc<T>]) -> bool {
 }
 
 impl SceneBuffers {
-    /// `p`'s arrays on the device, an environment map's and the textures'
-    /// taken from `shared` where it holds those (else uploaded, and
-    /// `shared` then holds them); and the bytes uploaded.
+    /// `p`'s arrays on the device, an environment map's, the textures' and
+    /// the meshes' taken from `shared` where it holds those (else
+    /// uploaded, and `shared` then holds them); and the bytes uploaded.
     pub(super) fn upload(
         cl: &OpenClBackend,
         p: &Packed,
