@@ -7,7 +7,6 @@
 
 use super::cornell_box::box_json;
 use crate::model::generate::uv_sphere;
-use crate::render::envmap::EnvMap;
 use crate::render::math::DAffine3;
 use crate::render::scene::{
     LoadedModel, MapSlot, Maps, MaterialJson, ModelSource, NoFiles, PbrJson, Resolver,
@@ -30,10 +29,6 @@ impl Resolver for Balls {
             Some((_, model)) => Ok(model.clone()),
             None => NoFiles.resolve(source),
         }
-    }
-
-    fn environment(&self, source: ModelSource<'_>) -> Result<Arc<EnvMap>, String> {
-        NoFiles.environment(source)
     }
 }
 
