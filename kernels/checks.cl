@@ -358,7 +358,8 @@ __kernel void check_camera_ray(__global float *out, uint n, __global const float
 #if HAS_TEXTURES
 /* maps.h's shade_maps for material which[i] at coordinates in[3i] (set 0
  * in xy, set 1 in zw), shading normal in[3i + 1].xyz and tangent
- * in[3i + 2] (w: the sign): albedo (3), pbr (4), normal (3), ten floats
+ * in[3i + 2] (w: the sign): albedo (3), pbr (4), normal (3), emission
+ * (3), transmission, coat (3), spec (4), the coat's normal (3): 24 floats
  * per item. */
 __kernel void check_maps(__global float *out, uint n, __global const float4 *in, __global const uint *which,
                          __global const Material *materials, __global const MaterialMaps *maps,
@@ -375,8 +376,9 @@ __kernel void check_maps(__global float *out, uint n, __global const float4 *in,
     tc.sign = in[3 * i + 2].w;
     Material m = materials[which[i]];
     float3 ns = in[3 * i + 1].xyz;
-    shade_maps(&sc, &tc, &m, &ns);
-    __global float *o = out + 21 * i;
+    float3 nc = (float3)(0.0f);
+    shade_maps(&sc, &tc, &m, &ns, &nc);
+    __global float *o = out + 24 * i;
     o[0] = m.albedo.x;
     o[1] = m.albedo.y;
     o[2] = m.albedo.z;
@@ -398,6 +400,9 @@ __kernel void check_maps(__global float *out, uint n, __global const float4 *in,
     o[18] = m.spec.y;
     o[19] = m.spec.z;
     o[20] = m.spec.w;
+    o[21] = nc.x;
+    o[22] = nc.y;
+    o[23] = nc.z;
 }
 #endif
 

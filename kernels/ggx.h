@@ -212,6 +212,11 @@ static inline int glass_sample(const GgxGlass *g, float3 wo, float choice, float
  * there is none. */
 typedef struct {
     float weight, alpha, roughness, e_o, e_avg, fms, keep, p;
+#if HAS_COAT_NORMAL
+    /* Its own frame in the base's (coat.rs, Frame), where framed. */
+    float3 ft, fb, fn;
+    int framed;
+#endif
 } GgxCoat;
 #endif
 
@@ -240,10 +245,37 @@ static inline float ggx_mean3(float3 v) {
 #if HAS_COAT
 #define GGX_COAT_F0 0.04f
 
-/* Coat::new: the coat of k = (weight, alpha, roughness) seen from wo over
- * a base that reflects base_albedo towards wo. */
-static inline GgxCoat ggx_coat(__global const float *T, float4 k, float3 wo, float base_albedo) {
+/* Frame::local: v (base frame) in the coat's frame, where it has one. */
+static inline float3 ggx_coat_local(const GgxCoat *c, float3 v) {
+#if HAS_COAT_NORMAL
+    if (c->framed) {
+        return (float3)(dot3(v, c->ft), dot3(v, c->fb), dot3(v, c->fn));
+    }
+#endif
+    return v;
+}
+
+/* Coat::framed: the coat of k = (weight, alpha, roughness) seen from wo
+ * over a base that reflects base_albedo towards wo, on its own unit normal
+ * cn (base frame; zero: the base's). */
+static inline GgxCoat ggx_coat(__global const float *T, float4 k, float3 wo, float base_albedo, float3 cn) {
     GgxCoat c;
+#if HAS_COAT_NORMAL
+    c.framed = cn.x != 0.0f || cn.y != 0.0f || cn.z != 0.0f;
+    if (c.framed) {
+        basis(cn, &c.ft, &c.fb);
+        c.fn = cn;
+        wo = ggx_coat_local(&c, wo);
+        if (!(wo.z > 0.0f)) {
+            c.weight = 0.0f;
+            c.keep = 1.0f;
+            c.p = 0.0f;
+            return c;
+        }
+    }
+#else
+    (void)cn;
+#endif
     float a_o = ggx_at(T, 0u, wo.z, k.z);
     float b_o = ggx_at(T, 1u, wo.z, k.z);
     c.weight = k.x;
@@ -261,6 +293,8 @@ static inline GgxCoat ggx_coat(__global const float *T, float4 k, float3 wo, flo
 
 /* Coat::eval_cos: the coat's BSDF |cos| (weight included; white). */
 static inline float ggx_coat_eval_cos(__global const float *T, const GgxCoat *c, float3 wo, float3 wi) {
+    wo = ggx_coat_local(c, wo);
+    wi = ggx_coat_local(c, wi);
     if (!(wi.z > 0.0f && wo.z > 0.0f)) {
         return 0.0f;
     }
@@ -277,6 +311,8 @@ static inline float ggx_coat_eval_cos(__global const float *T, const GgxCoat *c,
 
 /* Coat::pdf: the density of wi by the coat's visible normals. */
 static inline float ggx_coat_pdf(const GgxCoat *c, float3 wo, float3 wi) {
+    wo = ggx_coat_local(c, wo);
+    wi = ggx_coat_local(c, wi);
     if (!(wi.z > 0.0f && wo.z > 0.0f)) {
         return 0.0f;
     }
@@ -285,10 +321,11 @@ static inline float ggx_coat_pdf(const GgxCoat *c, float3 wo, float3 wi) {
 }
 #endif
 
-/* The lobes seen from wo on a surface reached from outside (entering) or
- * inside; g: the material's glass field. */
+/* Lobes::framed: the lobes seen from wo on a surface reached from outside
+ * (entering) or inside; g: the material's glass field; cn: the coat's own
+ * unit normal in the shading frame (zero: the shading normal). */
 static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, float4 k, float4 sp, float3 base,
-                                 float3 wo, int entering) {
+                                 float3 wo, int entering, float3 cn) {
     GgxLobes L;
     float metallic = p.x;
     float3 f0 = sp.xyz;
@@ -343,10 +380,11 @@ static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, fl
     L.coat.weight = 0.0f;
     if (k.x > 0.0f && (entering || p_glass == 0.0f || thin)) {
         float below = (spec + rest) * (1.0f - p_glass) + p_glass;
-        L.coat = ggx_coat(T, k, wo, below);
+        L.coat = ggx_coat(T, k, wo, below, cn);
     }
 #else
     (void)k;
+    (void)cn;
 #endif
     (void)entering;
     return L;
@@ -439,21 +477,31 @@ static inline float ggx_pdf(float4 p, const GgxLobes *L, float3 wo, float3 wi) {
  * (entering) or inside, *weight = BSDF |cos| / pdf and *pdf its density;
  * returns 0 where the sample leaves on the wrong side (no contribution). */
 static inline int ggx_sample(__global const float *T, float4 p, float4 g, float4 k, float4 sp, float3 base,
-                             float3 wo, int entering, float choice, float2 u, float3 *wi, float3 *weight, float *pdf_out) {
+                             float3 wo, int entering, float3 cn, float choice, float2 u, float3 *wi, float3 *weight,
+                             float *pdf_out) {
     if (!(wo.z > 0.0f)) {
         return 0;
     }
-    GgxLobes L = ggx_lobes(T, p, g, k, sp, base, wo, entering);
+    GgxLobes L = ggx_lobes(T, p, g, k, sp, base, wo, entering, cn);
     float3 w;
     int drawn = 0;
     float under = 1.0f; /* what the coat lets through over 1 - its probability */
 #if HAS_COAT
     if (L.coat.weight > 0.0f) {
         if (choice < L.coat.p) {
-            w = ggx_reflect(wo, ggx_visible_normal(wo, L.coat.alpha, u));
+            float3 wc = ggx_coat_local(&L.coat, wo);
+            if (!(wc.z > 0.0f)) {
+                return 0;
+            }
+            w = ggx_reflect(wc, ggx_visible_normal(wc, L.coat.alpha, u));
             if (!(w.z > 0.0f)) {
                 return 0;
             }
+#if HAS_COAT_NORMAL
+            if (L.coat.framed) {
+                w = L.coat.ft * w.x + L.coat.fb * w.y + L.coat.fn * w.z;
+            }
+#endif
             drawn = 1;
         } else {
             choice = (choice - L.coat.p) / (1.0f - L.coat.p);

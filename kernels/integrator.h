@@ -241,6 +241,11 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
         /* Geometric and shading normals on the side the ray came from. */
         float3 nl = arriving ? sf.ng : -sf.ng;
         float3 ns = !sf.smooth ? nl : (dot3(sf.ns, nl) < 0.0f ? -sf.ns : sf.ns);
+        /* A clear coat's own normal, on the same side (zero: ns). */
+        float3 nc = (float3)(0.0f);
+#if HAS_COAT_NORMAL
+        nc = dot3(sf.nc, nl) < 0.0f ? -sf.nc : sf.nc;
+#endif
 #if FEATURES
         if (!guided) {
             if (m->kind == MAT_MIRROR || m->kind == MAT_GLASS) {
@@ -270,7 +275,8 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
             basis(ns, &ne.t, &ne.b);
             ne.n = ns;
             ne.wo = -(float3)(dot3(d, ne.t), dot3(d, ne.b), dot3(d, ns));
-            ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->glass, m->coat, m->spec, m->albedo.xyz, ne.wo, arriving);
+            float3 cn = (float3)(dot3(nc, ne.t), dot3(nc, ne.b), dot3(nc, ns));
+            ne.lobes = ggx_lobes(sc->ggx, m->pbr, m->glass, m->coat, m->spec, m->albedo.xyz, ne.wo, arriving, cn);
         }
 #endif
         if (gathered) {
@@ -307,7 +313,7 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
         float3 weight;
         float bsdf_pdf;
         int transmitted;
-        float3 next = scatter(m, sc->ggx, d, arriving, ns, s, &weight, &specular, &transmitted, &bsdf_pdf);
+        float3 next = scatter(m, sc->ggx, d, arriving, ns, nc, s, &weight, &specular, &transmitted, &bsdf_pdf);
         /* A shading normal can send a direction to the wrong side of the
          * actual surface: such a sample has no contribution. */
         if (sf.smooth && (dot3(next, nl) > 0.0f) == transmitted) {

@@ -178,9 +178,28 @@ static inline void shade_pbr_maps(const Scene *sc, const TexCoords *tc, __global
 }
 #endif
 
-/* maps::shade: material *m (which has maps) at coordinates tc, and the
- * unit shading normal *ns turned by its normal map. */
-static inline void shade_maps(const Scene *sc, const TexCoords *tc, Material *m, float3 *ns) {
+/* maps::turned: unit normal n turned by the tangent-space normal map in
+ * slot sl (x and y times scale); n where the hit has no tangent. */
+static inline float3 map_turned(const Scene *sc, __global const MapSlot *sl, float scale, const TexCoords *tc,
+                                float3 n) {
+    float4 c = map_read(sc, sl, tc, 0);
+    float x = (c.x * 2.0f - 1.0f) * scale;
+    float y = (c.y * 2.0f - 1.0f) * scale;
+    float z = c.z * 2.0f - 1.0f;
+    float3 t = normalize_or_zero(tc->tangent - n * dot3(n, tc->tangent));
+    if (t.x == 0.0f && t.y == 0.0f && t.z == 0.0f) {
+        return n;
+    }
+    float3 b = cross3(n, t) * tc->sign;
+    float3 turned = t * x + b * y + n * z;
+    float rcp = 1.0f / sqrt(dot3(turned, turned));
+    return isfinite(rcp) && rcp > 0.0f ? turned * rcp : n;
+}
+
+/* maps::shade: material *m (which has maps) at coordinates tc, the unit
+ * shading normal *ns turned by its normal map, and *nc the clear coat's
+ * own normal where it can differ from *ns (else left). */
+static inline void shade_maps(const Scene *sc, const TexCoords *tc, Material *m, float3 *ns, float3 *nc) {
     __global const MaterialMaps *mm = &sc->maps[m->maps];
     __global const MapSlot *sl = mm->slot;
     if (sl[MAP_EMISSION].info.x != NO_TEXTURE) {
@@ -195,30 +214,36 @@ static inline void shade_maps(const Scene *sc, const TexCoords *tc, Material *m,
         shade_pbr_maps(sc, tc, mm, m);
     }
 #endif
+    float3 unmapped = *ns;
     if (sl[MAP_NORMAL].info.x != NO_TEXTURE) {
-        float4 c = map_read(sc, &sl[MAP_NORMAL], tc, 0);
-        float x = (c.x * 2.0f - 1.0f) * mm->factors.z;
-        float y = (c.y * 2.0f - 1.0f) * mm->factors.z;
-        float z = c.z * 2.0f - 1.0f;
-        float3 n = *ns;
-        float3 t = normalize_or_zero(tc->tangent - n * dot3(n, tc->tangent));
-        if (t.x != 0.0f || t.y != 0.0f || t.z != 0.0f) {
-            float3 b = cross3(n, t) * tc->sign;
-            float3 turned = t * x + b * y + n * z;
-            float rcp = 1.0f / sqrt(dot3(turned, turned));
-            if (isfinite(rcp) && rcp > 0.0f) {
-                *ns = turned * rcp;
-            }
+        *ns = map_turned(sc, &sl[MAP_NORMAL], mm->factors.z, tc, unmapped);
+    }
+#if HAS_COAT_NORMAL
+    if (m->kind == MAT_PBR && m->coat.x > 0.0f) {
+        if (sl[MAP_CLEARCOAT_NORMAL].info.x != NO_TEXTURE) {
+            *nc = map_turned(sc, &sl[MAP_CLEARCOAT_NORMAL], mm->spec_color.w, tc, unmapped);
+        } else if (sl[MAP_NORMAL].info.x != NO_TEXTURE) {
+            *nc = unmapped;
         }
     }
+#else
+    (void)nc;
+#endif
 }
 
-/* World::shade: material *m (which has maps) as it is at h, and sf's
- * shading normal turned by its normal map. */
+/* World::shade: material *m (which has maps) as it is at h, sf's shading
+ * normal turned by its normal map and its coat's normal set. */
 static inline void apply_maps(const Scene *sc, const Hit *h, Surf *sf, Material *m) {
     TexCoords tc = texcoords(sc, h, sf);
     float3 ns = sf->ns;
-    shade_maps(sc, &tc, m, &ns);
+    float3 nc = (float3)(0.0f);
+    shade_maps(sc, &tc, m, &ns, &nc);
+#if HAS_COAT_NORMAL
+    if ((nc.x != ns.x || nc.y != ns.y || nc.z != ns.z) && (nc.x != 0.0f || nc.y != 0.0f || nc.z != 0.0f)) {
+        sf->nc = nc;
+        sf->smooth = 1;
+    }
+#endif
     if (ns.x != sf->ns.x || ns.y != sf->ns.y || ns.z != sf->ns.z) {
         sf->ns = ns;
         sf->smooth = 1;

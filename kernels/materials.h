@@ -15,13 +15,14 @@ static inline float3 reflect_dir(float3 d, float3 n) {
 
 /* Samples the continuation of a ray along unit d that arrived at a
  * surface from outside (entering) or inside, nl the shading normal on the
- * side it came from (material.rs, scatter); ggx is the scene's table for
+ * side it came from, nc a clear coat's own normal on that side (zero: nl;
+ * material.rs, scatter_with); ggx is the scene's table for
  * MAT_PBR. Returns the new direction; *weight is BSDF cos / pdf,
  * *specular whether it was a delta lobe, *transmitted whether it went
  * through, *pdf the density of a MAT_PBR direction for MIS, else 0
  * (Scattered::pdf). */
-static inline float3 scatter(MatRef m, __global const float *ggx, float3 d, int entering, float3 nl,
-                      Sampler *s, float3 *weight, int *specular, int *transmitted, float *pdf) {
+static inline float3 scatter(MatRef m, __global const float *ggx, float3 d, int entering, float3 nl, float3 nc,
+                             Sampler *s, float3 *weight, int *specular, int *transmitted, float *pdf) {
     *weight = m->albedo.xyz;
     *pdf = 0.0f;
     *transmitted = 0;
@@ -39,8 +40,10 @@ static inline float3 scatter(MatRef m, __global const float *ggx, float3 d, int 
         float3 t, b;
         basis(nl, &t, &b);
         float3 wo = (float3)(-dot3(d, t), -dot3(d, b), -dot3(d, nl));
+        float3 cn = (float3)(dot3(nc, t), dot3(nc, b), dot3(nc, nl));
         float3 wi;
-        if (ggx_sample(ggx, m->pbr, m->glass, m->coat, m->spec, m->albedo.xyz, wo, entering, choice, u, &wi, weight, pdf)) {
+        if (ggx_sample(ggx, m->pbr, m->glass, m->coat, m->spec, m->albedo.xyz, wo, entering, cn, choice, u, &wi, weight,
+                       pdf)) {
             *transmitted = wi.z < 0.0f;
             return normalize3(t * wi.x + b * wi.y + nl * wi.z);
         }
@@ -86,5 +89,5 @@ static inline float3 scatter_outward(MatRef m, __global const float *ggx, float3
     int entering = dot3(d, n) < 0.0f;
     int transmitted;
     float pdf;
-    return scatter(m, ggx, d, entering, entering ? n : -n, s, weight, specular, &transmitted, &pdf);
+    return scatter(m, ggx, d, entering, entering ? n : -n, (float3)(0.0f), s, weight, specular, &transmitted, &pdf);
 }

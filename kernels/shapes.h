@@ -55,6 +55,9 @@ typedef struct {
     float3 ng;  /* unit geometric normal (outward for spheres) */
     float3 ns;  /* unit shading normal */
     int smooth; /* ns is a mesh's interpolated normal */
+#if HAS_COAT_NORMAL
+    float3 nc; /* a clear coat's own unit normal (zero: ns), World::shade */
+#endif
     uint material;
     uint object;
     uint prim;

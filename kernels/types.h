@@ -73,7 +73,8 @@ typedef struct {
 /* A material's maps (maps.rs, WorldMaps): a slot per texture::Map, at
  * index MAP_*; factors: metallic, roughness, normal scale, 1 where
  * metallic and roughness share one lookup; layers: transmission, clear
- * coat weight and roughness, specular; spec_color: the specular colour. */
+ * coat weight and roughness, specular; spec_color: the specular colour
+ * and the clear coat normal map's scale. */
 typedef struct {
     MapSlot slot[MAP_SLOTS];
     float4 factors;
@@ -224,6 +225,7 @@ typedef struct {
 #define HAS_TRANSMISSION 1
 #define HAS_VOLUME 1
 #define HAS_COAT 1
+#define HAS_COAT_NORMAL 1
 #define HAS_VERTEX_COLORS 1
 #define HAS_SCHLICK 1
 #define HAS_EXACT 1

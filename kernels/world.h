@@ -89,6 +89,9 @@ static inline Surf surface_at(const Scene *sc, const Hit *h, float3 o, float3 d)
     sf.prim = h->prim;
     sf.instance = NO_OBJECT;
     sf.smooth = 0;
+#if HAS_COAT_NORMAL
+    sf.nc = (float3)(0.0f);
+#endif
 #if HAS_MESHES
     if (ob->kind == KIND_INSTANCE) {
         mesh_surface(sc, h, &sf);

@@ -358,6 +358,8 @@ fn every_feature_combination_builds() {
                         // A clear coat with the metallic-roughness code,
                         // with and without rough glass.
                         coat: lights % 2 == 1 && materials % 2 == 1,
+                        // Its own normal where textures are in too.
+                        coat_normal: lights == 1 && materials % 2 == 1,
                         // Vertex colours with meshes, half the time.
                         vertex_colors: shapes.2 && lights % 2 == 0,
                         schlick,

@@ -392,6 +392,7 @@ fn light_picks_and_light_samples_agree_bit_for_bit() {
             p,
             ng: normal,
             ns: normal,
+            nc: Vec3A::ZERO,
             smooth: false,
             material: 0,
             object: on,

@@ -100,8 +100,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         let what = "transmission texture";
         maps.transmission = gltf_maps::read(what, tr.transmission_texture(), images, &mut notes);
     }
-    let (clearcoat, clearcoat_roughness) =
-        clearcoat(m, &mut maps, images, &mut notes, &mut ignored);
+    let (clearcoat, clearcoat_roughness) = clearcoat(m, &mut maps, images, &mut notes);
     let (specular, specular_color) = specular(m, &mut maps, images, &mut notes);
     let plain = clearcoat == 0.0
         && specular == 1.0
@@ -200,14 +199,12 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
 }
 
 /// `KHR_materials_clearcoat`'s factors (0 where absent), each in [0, 1]
-/// (clamped with a note), and its textures into `maps` where it coats (its
-/// normal map is noted as ignored).
+/// (clamped with a note), and its textures into `maps` where it coats.
 fn clearcoat(
     m: &::gltf::Material,
     maps: &mut Maps,
     images: &mut Images,
     notes: &mut Vec<String>,
-    ignored: &mut Vec<String>,
 ) -> (f64, f64) {
     let Some(ext) = m.extension_value("KHR_materials_clearcoat") else {
         return (0.0, 0.0);
@@ -226,8 +223,11 @@ fn clearcoat(
         maps.clearcoat = gltf_maps::read_json("clearcoat texture", ext, key, images, notes);
         let (key, what) = ("clearcoatRoughnessTexture", "clearcoat roughness texture");
         maps.clearcoat_roughness = gltf_maps::read_json(what, ext, key, images, notes);
-        if ext.get("clearcoatNormalTexture").is_some() {
-            ignored.push("clearcoat normal map (the coat follows the base's normal)".to_owned());
+        let (key, what) = ("clearcoatNormalTexture", "clearcoat normal map");
+        maps.clearcoat_normal = gltf_maps::read_json(what, ext, key, images, notes);
+        if maps.clearcoat_normal.is_some() {
+            let scale = ext[key].get("scale").and_then(serde_json::Value::as_f64);
+            maps.clearcoat_normal_scale = scale.filter(|s| s.is_finite()).unwrap_or(1.0);
         }
     }
     (weight, roughness)

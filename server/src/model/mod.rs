@@ -142,6 +142,9 @@ pub struct Maps {
     pub clearcoat_roughness: Option<TextureRef>,
     pub specular: Option<TextureRef>,
     pub specular_color: Option<TextureRef>,
+    /// glTF's `clearcoatNormalTexture` and its x/y scale.
+    pub clearcoat_normal: Option<TextureRef>,
+    pub clearcoat_normal_scale: f64,
     /// glTF's `alphaMode` and the base colour factor's alpha (which the
     /// base colour texture's alpha channel multiplies).
     pub alpha_mode: AlphaMode,
@@ -172,6 +175,8 @@ impl Default for Maps {
             clearcoat_roughness: None,
             specular: None,
             specular_color: None,
+            clearcoat_normal: None,
+            clearcoat_normal_scale: 1.0,
             alpha_mode: AlphaMode::Opaque,
             alpha: 1.0,
         }

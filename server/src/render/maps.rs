@@ -18,6 +18,10 @@
 //!   `scale`, in the frame (T, B, N) of the surface's tangent, its sign's
 //!   bitangent `B = sign (N x T)` and the interpolated shading normal N
 //!   (glTF's convention: the map's green axis along B).
+//! - Clear coat normal (`pbr` with a coat): the coat's own normal, the
+//!   interpolated normal turned by its map as above; without that map the
+//!   coat lies on the interpolated normal, not on the base's mapped one
+//!   (glTF's `clearcoatNormalTexture`).
 //!
 //! `kernels/maps.h` mirrors [`shade`] operation for operation.
 
@@ -66,6 +70,8 @@ pub struct WorldMaps {
     pub clearcoat_roughness_factor: f32,
     pub specular_factor: f32,
     pub specular_color_factor: Vec3A,
+    /// The clear coat normal map's x and y scale.
+    pub clearcoat_normal_scale: f32,
 }
 
 impl WorldMaps {
@@ -81,6 +87,7 @@ impl WorldMaps {
         clearcoat_roughness_factor: 1.0,
         specular_factor: 1.0,
         specular_color_factor: Vec3A::ONE,
+        clearcoat_normal_scale: 1.0,
     };
 
     #[inline(always)]
@@ -121,14 +128,16 @@ pub fn emission(textures: &[Arc<Texture>], maps: &WorldMaps, le: Vec3A, tc: &Tex
 
 /// The material `m` (with maps `maps`) at a hit with coordinates `tc`, and
 /// the unit shading normal `ns` (turned by the normal map, if any; `ns` is
-/// the surface's interpolated shading normal, outward).
+/// the surface's interpolated shading normal, outward); `nc` becomes the
+/// clear coat's own normal where the coat has one that can differ from
+/// the new `ns` (else it is left as it is).
 #[inline(always)]
 pub fn shade(
     textures: &[Arc<Texture>],
     maps: &WorldMaps,
     m: &SurfaceMaterial,
     tc: &TexCoords,
-    ns: &mut Vec3A,
+    (ns, nc): (&mut Vec3A, &mut Vec3A),
 ) -> SurfaceMaterial {
     let mut out = *m;
     if maps.has(Map::Emission) {
@@ -141,21 +150,41 @@ pub fn shade(
     if let Bsdf::Pbr(p) = m.bsdf {
         out.bsdf = Bsdf::Pbr(shade_pbr(textures, maps, p, tc));
     }
+    let unmapped = *ns;
     if maps.has(Map::Normal) {
-        let c = read(textures, maps.slot(Map::Normal), tc, false);
-        let x = (c[0] * 2.0 - 1.0) * maps.normal_scale;
-        let y = (c[1] * 2.0 - 1.0) * maps.normal_scale;
-        let z = c[2] * 2.0 - 1.0;
-        let n = *ns;
-        let t = (tc.tangent - n * n.dot(tc.tangent)).normalize_or_zero();
-        if t != Vec3A::ZERO {
-            let b = n.cross(t) * tc.sign;
-            if let Some(turned) = (t * x + b * y + n * z).try_normalize() {
-                *ns = turned;
-            }
+        *ns = turned(
+            textures,
+            maps.slot(Map::Normal),
+            maps.normal_scale,
+            tc,
+            unmapped,
+        );
+    }
+    if matches!(out.bsdf, Bsdf::Pbr(p) if p.coat > 0.0) {
+        if maps.has(Map::ClearcoatNormal) {
+            let (slot, scale) = (maps.slot(Map::ClearcoatNormal), maps.clearcoat_normal_scale);
+            *nc = turned(textures, slot, scale, tc, unmapped);
+        } else if maps.has(Map::Normal) {
+            *nc = unmapped;
         }
     }
     out
+}
+
+/// Unit normal `n` turned by the tangent-space normal map in `slot` (x and
+/// y times `scale`); `n` where the hit has no tangent.
+#[inline(always)]
+fn turned(textures: &[Arc<Texture>], slot: &Slot, scale: f32, tc: &TexCoords, n: Vec3A) -> Vec3A {
+    let c = read(textures, slot, tc, false);
+    let x = (c[0] * 2.0 - 1.0) * scale;
+    let y = (c[1] * 2.0 - 1.0) * scale;
+    let z = c[2] * 2.0 - 1.0;
+    let t = (tc.tangent - n * n.dot(tc.tangent)).normalize_or_zero();
+    if t == Vec3A::ZERO {
+        return n;
+    }
+    let b = n.cross(t) * tc.sign;
+    (t * x + b * y + n * z).try_normalize().unwrap_or(n)
 }
 
 /// `pbr` parameters `p` with their textures at `tc`: each factor times
@@ -256,7 +285,13 @@ mod tests {
         };
         let tc = TexCoords::default();
         let mut ns = Vec3A::Z;
-        let out = shade(&textures, &m, &pbr(), &tc, &mut ns);
+        let out = shade(
+            &textures,
+            &m,
+            &pbr(),
+            &tc,
+            (&mut ns, &mut Vec3A::splat(0.0)),
+        );
         let t = texture::srgb_table();
         assert_eq!(out.albedo, Vec3A::new(0.5, t[128], 0.0));
         let Bsdf::Pbr(p) = out.bsdf else {
@@ -279,12 +314,24 @@ mod tests {
         };
         let m = maps(&[(Map::Normal, 0)]);
         let mut ns = Vec3A::Z;
-        shade(&textures, &m, &pbr(), &tc, &mut ns);
+        shade(
+            &textures,
+            &m,
+            &pbr(),
+            &tc,
+            (&mut ns, &mut Vec3A::splat(0.0)),
+        );
         assert!((ns - Vec3A::Z).length() < 0.01, "{ns}");
         // Red full: tilted all the way towards the tangent.
         let m = maps(&[(Map::Normal, 1)]);
         let mut ns = Vec3A::Z;
-        shade(&textures, &m, &pbr(), &tc, &mut ns);
+        shade(
+            &textures,
+            &m,
+            &pbr(),
+            &tc,
+            (&mut ns, &mut Vec3A::splat(0.0)),
+        );
         assert!(ns.x > 0.99 && (ns.length() - 1.0).abs() < 1e-6, "{ns}");
         // No tangent: the normal stays.
         let mut ns = Vec3A::Z;
@@ -292,7 +339,53 @@ mod tests {
             tangent: Vec3A::ZERO,
             ..tc
         };
-        shade(&textures, &m, &pbr(), &flat, &mut ns);
+        shade(
+            &textures,
+            &m,
+            &pbr(),
+            &flat,
+            (&mut ns, &mut Vec3A::splat(0.0)),
+        );
         assert_eq!(ns, Vec3A::Z);
+    }
+
+    #[test]
+    fn a_coat_keeps_the_unmapped_normal_or_follows_its_own_map() {
+        let textures = [one([255, 128, 128, 255]), one([128, 255, 128, 255])];
+        let tc = TexCoords {
+            uv: [[0.5; 2]; 2],
+            tangent: Vec3A::X,
+            sign: 1.0,
+        };
+        let coated = SurfaceMaterial {
+            bsdf: Bsdf::Pbr(Pbr::new(0.0, 0.5, 1.5).coated(1.0, 0.1)),
+            ..pbr()
+        };
+        let run = |m: &WorldMaps, mat: &SurfaceMaterial| {
+            let (mut ns, mut nc) = (Vec3A::Z, Vec3A::ZERO);
+            shade(&textures, m, mat, &tc, (&mut ns, &mut nc));
+            (ns, nc)
+        };
+        // The base's map tilts the base towards x; the coat stays on z.
+        let (ns, nc) = run(&maps(&[(Map::Normal, 0)]), &coated);
+        assert!(ns.x > 0.99 && nc == Vec3A::Z, "{ns} {nc}");
+        // The coat's own map tilts it towards the bitangent (y); the base
+        // stays on z.
+        let m = WorldMaps {
+            clearcoat_normal_scale: 1.0,
+            ..maps(&[(Map::ClearcoatNormal, 1)])
+        };
+        let (ns, nc) = run(&m, &coated);
+        assert!(ns == Vec3A::Z && nc.y > 0.99, "{ns} {nc}");
+        // Its scale scales its x and y, as the base map's does.
+        let m = WorldMaps {
+            clearcoat_normal_scale: 0.0,
+            ..m
+        };
+        let (_, nc) = run(&m, &coated);
+        assert!((nc - Vec3A::Z).length() < 1e-6, "{nc}");
+        // No coat: no coat normal.
+        let (ns, nc) = run(&maps(&[(Map::Normal, 0)]), &pbr());
+        assert!(ns.x > 0.99 && nc == Vec3A::ZERO, "{ns} {nc}");
     }
 }

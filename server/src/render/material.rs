@@ -132,12 +132,21 @@ pub fn scatter(
     nl: Vec3A,
     sampler: &mut Sampler,
 ) -> Scattered {
-    scatter_with(m, d, entering, nl, sampler, None)
+    scatter_with(m, d, entering, nl, sampler, Lobes::Build(None))
 }
 
-/// [`scatter`], a `pbr` material's lobes already built where next-event
-/// estimation built them for the same ray and normal (the same numbers
-/// either way: built once).
+/// A `pbr` material's lobes for [`scatter_with`].
+#[derive(Clone, Copy, Debug)]
+pub enum Lobes<'a> {
+    /// Built by next-event estimation for the same ray and normal (the
+    /// same numbers either way: built once).
+    Built(&'a ggx::Lobes),
+    /// To build, the clear coat on its own unit normal where it has one
+    /// (world space, on the side of the shading normal).
+    Build(Option<Vec3A>),
+}
+
+/// [`scatter`] with a `pbr` material's [`Lobes`].
 #[inline(always)]
 pub fn scatter_with(
     m: &SurfaceMaterial,
@@ -145,7 +154,7 @@ pub fn scatter_with(
     entering: bool,
     nl: Vec3A,
     sampler: &mut Sampler,
-    lobes: Option<&ggx::Lobes>,
+    lobes: Lobes,
 ) -> Scattered {
     match m.bsdf {
         Bsdf::Diffuse => {
@@ -195,8 +204,13 @@ pub fn scatter_with(
             let wo = Vec3A::new(-d.dot(t), -d.dot(b), -d.dot(nl));
             let tables = ggx::tables();
             let sampled = match lobes {
-                Some(l) => ggx::sample_from(tables, &p, m.albedo, l, wo, choice, u),
-                None => ggx::sample(tables, &p, m.albedo, (wo, entering), choice, u),
+                Lobes::Built(l) => ggx::sample_from(tables, &p, m.albedo, l, wo, choice, u),
+                Lobes::Build(None) => ggx::sample(tables, &p, m.albedo, (wo, entering), choice, u),
+                Lobes::Build(Some(nc)) => {
+                    let frame = ggx::coat::Frame::new(Vec3A::new(nc.dot(t), nc.dot(b), nc.dot(nl)));
+                    let l = ggx::Lobes::framed(tables, &p, m.albedo, (wo, entering), Some(frame));
+                    ggx::sample_from(tables, &p, m.albedo, &l, wo, choice, u)
+                }
             };
             match sampled {
                 // Normalised: inside a transmitting object a path may

@@ -145,8 +145,9 @@ impl UvTransform {
 /// slot arrays (`render::maps::WorldMaps::slots`, the kernel's
 /// `MaterialMaps.slot`, indexed by the shared constants `MAP_*`). Which
 /// channel each reads is glTF's: base colour, emission and specular colour
-/// RGB (sRGB), metallic blue, roughness green, normal RGB, transmission
-/// and clear coat red, clear coat roughness green, specular alpha.
+/// RGB (sRGB), metallic blue, roughness green, normal and clear coat
+/// normal RGB, transmission and clear coat red, clear coat roughness green,
+/// specular alpha.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
 pub enum Map {
@@ -160,10 +161,11 @@ pub enum Map {
     ClearcoatRoughness,
     Specular,
     SpecularColor,
+    ClearcoatNormal,
 }
 
 /// Slots per material.
-pub const MAP_SLOTS: usize = 10;
+pub const MAP_SLOTS: usize = 11;
 
 impl Map {
     pub const ALL: [Map; MAP_SLOTS] = [
@@ -177,6 +179,7 @@ impl Map {
         Map::ClearcoatRoughness,
         Map::Specular,
         Map::SpecularColor,
+        Map::ClearcoatNormal,
     ];
 
     /// The scene JSON field it textures (`pbr`'s names; `albedo` is
@@ -193,6 +196,7 @@ impl Map {
             Map::ClearcoatRoughness => "clearcoat_roughness",
             Map::Specular => "specular",
             Map::SpecularColor => "specular_color",
+            Map::ClearcoatNormal => "clearcoat_normal",
         }
     }
 }

@@ -234,7 +234,9 @@ fn render_maps(maps: &model::Maps, textures: &[Arc<Texture>]) -> Maps {
         clearcoat_roughness: slot(&maps.clearcoat_roughness),
         specular: slot(&maps.specular),
         specular_color: slot(&maps.specular_color),
+        clearcoat_normal: slot(&maps.clearcoat_normal),
         normal_scale: maps.normal_scale,
+        clearcoat_normal_scale: maps.clearcoat_normal_scale,
         alpha_mode: match maps.alpha_mode {
             model::AlphaMode::Opaque => AlphaMode::Opaque,
             model::AlphaMode::Mask(cutoff) => AlphaMode::Mask(cutoff as f32),
@@ -300,6 +302,7 @@ fn material_json(m: model::Material) -> MaterialJson {
             specular_color: specular_color.into(),
             emission: emission.map(Into::into),
             normal: None,
+            clearcoat_normal: None,
             alpha: None,
         })),
     }

@@ -131,7 +131,7 @@ pub fn assert_camera_rays_agree(d: &OpenClBackend, job: &RenderJob, what: &str) 
 pub fn assert_maps_agree(d: &OpenClBackend, job: &RenderJob, n: u64) {
     use pathstream::render::maps::{shade, TexCoords};
     use pathstream::render::material::Bsdf;
-    const OUT: usize = 21;
+    const OUT: usize = 24;
     let w = &job.world;
     let which = (w.materials.iter())
         .position(|m| m.maps != pathstream::render::material::NO_MAPS)
@@ -151,8 +151,14 @@ pub fn assert_maps_agree(d: &OpenClBackend, job: &RenderJob, n: u64) {
             sign,
         };
         let m = &w.materials[which as usize];
-        let mut n_out = ns;
-        let out = shade(&w.textures, &w.maps[m.maps as usize], m, &tc, &mut n_out);
+        let (mut n_out, mut nc) = (ns, Vec3A::ZERO);
+        let out = shade(
+            &w.textures,
+            &w.maps[m.maps as usize],
+            m,
+            &tc,
+            (&mut n_out, &mut nc),
+        );
         let Bsdf::Pbr(p) = out.bsdf else {
             panic!("a pbr material")
         };
@@ -179,6 +185,9 @@ pub fn assert_maps_agree(d: &OpenClBackend, job: &RenderJob, n: u64) {
             s.y,
             s.z,
             p.spec_f90,
+            nc.x,
+            nc.y,
+            nc.z,
         ];
         cpu.push(values);
     }

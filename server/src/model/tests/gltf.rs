@@ -148,7 +148,7 @@ fn scene() -> (Value, Vec<u8>) {
             {"name": "partial", "pbrMetallicRoughness": {"baseColorFactor": [2, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 0},
              "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5},
                 "KHR_materials_clearcoat": {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.2,
-                    "clearcoatTexture": {"index": 0}},
+                    "clearcoatTexture": {"index": 0}, "clearcoatNormalTexture": {"index": 0, "scale": 0.5}},
                 "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25],
                     "specularTexture": {"index": 0, "texCoord": 1}, "specularColorTexture": {"index": 9}}}},
             {"name": "unused", "emissiveTexture": {"index": 0}}
@@ -363,10 +363,12 @@ fn expected() -> Model {
         alpha_mode: crate::model::AlphaMode::Blend,
         ..Default::default()
     };
-    // partial's clear coat and specular textures (its specular colour
-    // texture names no texture: a warning).
+    // partial's clear coat (its own normal map too) and specular textures
+    // (its specular colour texture names no texture: a warning).
     model.materials[6].2 = crate::model::Maps {
         clearcoat: plain,
+        clearcoat_normal: plain,
+        clearcoat_normal_scale: 0.5,
         specular: Some(crate::model::TextureRef {
             uv: 1,
             ..crate::model::TextureRef::plain(0)

@@ -12,13 +12,48 @@
 //!
 //! Sampling: the coat's visible normals with probability `p`, its albedo's
 //! share of what the coated material reflects towards `wo`.
+//!
+//! The coat has its own normal ([`Frame`]) where it differs from the
+//! base's: glTF's coat follows the surface's unmapped normal, or its own
+//! `clearcoatNormalTexture`, not the base's normal map. Its lobe is then
+//! evaluated, and sampled, in that frame, and the base keeps what the coat
+//! lets through towards `wo` as seen from the coat's normal.
 
 use super::{distribution, fresnel_factor, pow5, reflect_about, smith_r, visible_normal, Tables};
-use crate::render::math::Vec3A;
+use crate::render::math::{basis, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
 /// The coat's normal-incidence reflectance (index 1.5, as glTF fixes it).
 pub const F0: f32 = 0.04;
+
+/// The coat's shading frame in the base's (whose normal is z).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    t: Vec3A,
+    b: Vec3A,
+    n: Vec3A,
+}
+
+impl Frame {
+    /// The frame of unit normal `n` (in the base's frame).
+    #[inline(always)]
+    pub fn new(n: Vec3A) -> Frame {
+        let (t, b) = basis(n);
+        Frame { t, b, n }
+    }
+
+    /// `v` (base frame) in the coat's frame.
+    #[inline(always)]
+    fn local(&self, v: Vec3A) -> Vec3A {
+        Vec3A::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    /// `v` (coat frame) in the base's frame.
+    #[inline(always)]
+    fn base(&self, v: Vec3A) -> Vec3A {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+}
 
 /// The coat at one shading point (`weight` 0: none).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,6 +71,8 @@ pub struct Coat {
     pub keep: f32,
     /// Probability of sampling the coat.
     pub p: f32,
+    /// Its own frame (None: the base's).
+    frame: Option<Frame>,
 }
 
 impl Coat {
@@ -48,18 +85,36 @@ impl Coat {
         fms: 0.0,
         keep: 1.0,
         p: 0.0,
+        frame: None,
     };
 
     /// The coat of `weight` and `roughness` (alpha its square, at least
     /// `ALPHA_MIN`) seen from `wo`, over a base that reflects `base_albedo`
     /// towards `wo` (for the sampling probability only).
     #[inline(always)]
-    pub fn new(
+    pub fn new(t: &Tables, k: (f32, f32, f32), wo: Vec3A, base_albedo: f32) -> Coat {
+        Coat::framed(t, k, wo, base_albedo, None)
+    }
+
+    /// [`Coat::new`] with the coat's own `frame` (None: the base's); `wo`
+    /// in the base's frame.
+    #[inline(always)]
+    pub fn framed(
         t: &Tables,
         (weight, roughness, alpha): (f32, f32, f32),
         wo: Vec3A,
         base_albedo: f32,
+        frame: Option<Frame>,
     ) -> Coat {
+        let wo = match &frame {
+            Some(f) => f.local(wo),
+            None => wo,
+        };
+        // Seen edge-on or from behind its own normal, the coat reflects
+        // nothing and lets everything through.
+        if !(wo.z > 0.0) {
+            return Coat::NONE;
+        }
         let (a_o, b_o) = (t.at(0, wo.z, roughness), t.at(1, wo.z, roughness));
         let e_o = a_o + b_o;
         let e_avg = t.avg(0, roughness) + t.avg(1, roughness);
@@ -77,6 +132,16 @@ impl Coat {
             fms,
             keep,
             p,
+            frame,
+        }
+    }
+
+    /// `wo` and `wi` (base frame) in the coat's frame.
+    #[inline(always)]
+    fn local(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, Vec3A) {
+        match &self.frame {
+            Some(f) => (f.local(wo), f.local(wi)),
+            None => (wo, wi),
         }
     }
 
@@ -89,6 +154,7 @@ impl Coat {
     /// The coat's BSDF |cos(theta_i)| (weight included; white).
     #[inline(always)]
     pub fn eval_cos(&self, t: &Tables, wo: Vec3A, wi: Vec3A) -> f32 {
+        let (wo, wi) = self.local(wo, wi);
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
@@ -105,6 +171,7 @@ impl Coat {
     /// The density of drawing `wi` by the coat's visible normals.
     #[inline(always)]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        let (wo, wi) = self.local(wo, wi);
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
@@ -115,8 +182,16 @@ impl Coat {
     /// A direction reflected about one of the coat's visible normals.
     #[inline(always)]
     pub fn sample(&self, wo: Vec3A, (u1, u2): (f32, f32)) -> Option<Vec3A> {
+        let Some(f) = &self.frame else {
+            let wi = reflect_about(wo, visible_normal(wo, self.alpha, u1, u2));
+            return (wi.z > 0.0).then_some(wi);
+        };
+        let wo = f.local(wo);
+        if !(wo.z > 0.0) {
+            return None;
+        }
         let wi = reflect_about(wo, visible_normal(wo, self.alpha, u1, u2));
-        (wi.z > 0.0).then_some(wi)
+        (wi.z > 0.0).then(|| f.base(wi))
     }
 }
 

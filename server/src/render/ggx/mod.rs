@@ -319,6 +319,18 @@ impl Lobes {
     /// (`entering`) or inside (which side the glass's index is on).
     #[inline(always)]
     pub fn new(t: &Tables, p: &Pbr, base: Vec3A, wo: Vec3A, entering: bool) -> Lobes {
+        Lobes::framed(t, p, base, (wo, entering), None)
+    }
+
+    /// [`Lobes::new`] with the coat's own frame (None: the base's).
+    #[inline(always)]
+    pub fn framed(
+        t: &Tables,
+        p: &Pbr,
+        base: Vec3A,
+        (wo, entering): (Vec3A, bool),
+        coat_frame: Option<coat::Frame>,
+    ) -> Lobes {
         let a_o = t.at(0, wo.z, p.roughness);
         let b_o = t.at(1, wo.z, p.roughness);
         let a_avg = t.avg(0, p.roughness);
@@ -366,7 +378,7 @@ impl Lobes {
         let coat = if p.coat > 0.0 && (entering || p_glass == 0.0 || p.thin) {
             let below = (spec + rest) * (1.0 - p_glass) + p_glass;
             let c = (p.coat, p.coat_roughness, p.coat_alpha);
-            coat::Coat::new(t, c, wo, below)
+            coat::Coat::framed(t, c, wo, below, coat_frame)
         } else {
             coat::Coat::NONE
         };

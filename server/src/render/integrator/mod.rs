@@ -22,7 +22,7 @@ use crate::render::features::{self, Guide};
 use crate::render::filter::Filter;
 use crate::render::ggx;
 use crate::render::isa::Isa;
-use crate::render::material::{scatter_with, Bsdf, SurfaceMaterial, NO_MAPS};
+use crate::render::material::{scatter_with, Bsdf, Lobes, SurfaceMaterial, NO_MAPS};
 use crate::render::math::{basis, max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
@@ -219,6 +219,8 @@ impl Path {
         } else {
             s.ns
         };
+        // A clear coat's own normal, on the same side.
+        let nc = (s.nc != Vec3A::ZERO).then(|| if s.nc.dot(nl) < 0.0 { -s.nc } else { s.nc });
         if settings.features && !self.guided {
             self.find_guide(m, ns);
         }
@@ -228,7 +230,8 @@ impl Path {
         let ray = &self.ray;
         let gathered = settings.nee && m.bsdf.gathers_light();
         // A `pbr` surface's lobes, built for NEE, serve the scatter too.
-        let mut lobes_built = None;
+        let mut lobes = Lobes::Build(nc);
+        let lobes_built;
         if gathered {
             let sampling = settings.light_sampling;
             if let Bsdf::Pbr(p) = &m.bsdf {
@@ -236,16 +239,18 @@ impl Path {
                 let local = |v: Vec3A| Vec3A::new(v.dot(t), v.dot(b), v.dot(ns));
                 let wo = -local(ray.dir);
                 let tables = ggx::tables();
-                let lobes = ggx::Lobes::new(tables, p, m.albedo, wo, entering);
-                lobes_built = Some(lobes);
+                let frame = nc.map(|n| ggx::coat::Frame::new(local(n)));
+                lobes_built = ggx::Lobes::framed(tables, p, m.albedo, (wo, entering), frame);
+                let built = &lobes_built;
                 let f = |dir: Vec3A, light_pdf: f32| {
                     let wi = local(dir);
-                    let bsdf_pdf = ggx::pdf(p, &lobes, wo, wi);
+                    let bsdf_pdf = ggx::pdf(p, built, wo, wi);
                     let w = mis::light_weight(settings.combine, light_pdf, bsdf_pdf);
-                    ggx::eval_cos(tables, p, m.albedo, &lobes, wo, wi) * w
+                    ggx::eval_cos(tables, p, m.albedo, built, wo, wi) * w
                 };
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
                 self.l += self.beta * direct;
+                lobes = Lobes::Built(built);
             } else if world.diffuse_mis() {
                 let f = |dir: Vec3A, light_pdf: f32| {
                     let cos = ns.dot(dir);
@@ -268,14 +273,7 @@ impl Path {
                 }
             }
         }
-        let sc = scatter_with(
-            m,
-            ray.dir,
-            entering,
-            ns,
-            &mut self.sampler,
-            lobes_built.as_ref(),
-        );
+        let sc = scatter_with(m, ray.dir, entering, ns, &mut self.sampler, lobes);
         // A shading normal can send a direction to the wrong side of the
         // actual surface: such a sample has no contribution (the same
         // integral NEE estimates, so NEE on and off still agree).

@@ -225,6 +225,10 @@ pub struct PbrJson {
     pub emission: Option<ColorInput>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal: Option<NormalJson>,
+    /// The clear coat's own normal map (without one it follows the
+    /// surface's unmapped normal).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clearcoat_normal: Option<NormalJson>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha: Option<AlphaJson>,
 }

@@ -40,8 +40,13 @@ pub struct Maps {
     pub clearcoat_roughness: Option<MapSlot>,
     pub specular: Option<MapSlot>,
     pub specular_color: Option<MapSlot>,
-    /// The normal map's x and y scale (glTF `normalTexture.scale`).
+    /// The clear coat's own normal map (glTF's `clearcoatNormalTexture`;
+    /// without one the coat follows the surface's unmapped normal).
+    pub clearcoat_normal: Option<MapSlot>,
+    /// The normal maps' x and y scale (glTF `normalTexture.scale`,
+    /// `clearcoatNormalTexture.scale`).
     pub normal_scale: f64,
+    pub clearcoat_normal_scale: f64,
     /// glTF's `alphaMode` (meshes only: `render::alpha`), and the base
     /// colour factor's alpha, which the base colour texture's alpha channel
     /// multiplies.
@@ -62,7 +67,9 @@ impl Default for Maps {
             clearcoat_roughness: None,
             specular: None,
             specular_color: None,
+            clearcoat_normal: None,
             normal_scale: 1.0,
+            clearcoat_normal_scale: 1.0,
             alpha_mode: AlphaMode::Opaque,
             alpha: 1.0,
         }
@@ -87,6 +94,7 @@ impl Maps {
             self.clearcoat_roughness.as_ref(),
             self.specular.as_ref(),
             self.specular_color.as_ref(),
+            self.clearcoat_normal.as_ref(),
         ]
     }
 

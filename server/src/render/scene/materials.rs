@@ -81,6 +81,7 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 specular_color,
                 emission,
                 normal,
+                clearcoat_normal,
                 alpha: _,
             } = &**pbr;
             attenuation = absorbs
@@ -132,6 +133,11 @@ pub(super) fn material(name: &str, m: &MaterialJson, resolver: &dyn Resolver) ->
                 specular_color.texture().map(|t| t.source()),
                 resolver,
             )?;
+            if let Some(n) = clearcoat_normal {
+                let at = at("clearcoat_normal");
+                maps.clearcoat_normal_scale = finite(&format!("{at}.scale"), n.scale)?;
+                maps.clearcoat_normal = texture(&at, Some(n.source()), resolver)?;
+            }
             (kind, base_color, emission, normal)
         }
     };
@@ -427,6 +433,8 @@ pub(super) fn to_json(m: &Material) -> MaterialJson {
             specular_color: color(DVec3::from_array(specular_color), &m.maps.specular_color),
             emission,
             normal,
+            clearcoat_normal: source(&m.maps.clearcoat_normal)
+                .map(|src| NormalJson::of(src, m.maps.clearcoat_normal_scale)),
             alpha,
         })),
     }

@@ -191,6 +191,7 @@ impl Instance {
             p: self.cam_from_obj.transform_point3a(p_obj),
             ng,
             ns,
+            nc: Vec3A::ZERO,
             smooth,
             material: self.materials[mesh.materials[hit.prim as usize] as usize],
             object: hit.object,

@@ -121,6 +121,9 @@ pub struct Surface {
     pub ng: Vec3A,
     /// Unit shading normal: `ng`, or the mesh's interpolated normal.
     pub ns: Vec3A,
+    /// A clear coat's own unit normal where its maps make it differ from
+    /// `ns` ([`World::shade`]); zero: the coat lies on `ns`.
+    pub nc: Vec3A,
     /// Whether `ns` differs from `ng` (a mesh with vertex normals): then a
     /// scattered direction must also be on the right side of `ng`.
     pub smooth: bool,
@@ -353,6 +356,7 @@ impl World {
             p,
             ng: n,
             ns: n,
+            nc: Vec3A::ZERO,
             smooth: false,
             material: o.material,
             object: hit.object,
@@ -388,7 +392,8 @@ impl World {
     }
 
     /// Material `m` as it is at `hit` on surface `s`: its maps read (if it
-    /// has any), `s`'s shading normal turned by its normal map, the base
+    /// has any), `s`'s shading normal turned by its normal map (and its
+    /// coat's normal set where that differs), the base
     /// colour times the mesh's vertex colour (if it has them). Not inlined:
     /// its lookups would crowd the path loop of every scene, textured or
     /// not (a call costs little next to four bilinear reads).
@@ -398,8 +403,12 @@ impl World {
         if m.maps != NO_MAPS {
             let maps = &self.maps[m.maps as usize];
             let tc = self.texcoords(hit, s);
-            let mut ns = s.ns;
-            out = crate::render::maps::shade(&self.textures, maps, m, &tc, &mut ns);
+            let (mut ns, mut nc) = (s.ns, Vec3A::ZERO);
+            out = crate::render::maps::shade(&self.textures, maps, m, &tc, (&mut ns, &mut nc));
+            if nc != ns && nc != Vec3A::ZERO {
+                s.nc = nc;
+                s.smooth = true;
+            }
             if ns != s.ns {
                 s.ns = ns;
                 s.smooth = true;

@@ -58,6 +58,7 @@ pub(super) fn world_maps(
             w.slots[map as usize] = slot(s);
         }
         w.normal_scale = m.maps.normal_scale as f32;
+        w.clearcoat_normal_scale = m.maps.clearcoat_normal_scale as f32;
         w.shared_mr = w.slot(Map::Metallic) == w.slot(Map::Roughness);
         if let MaterialKind::Pbr {
             metallic,

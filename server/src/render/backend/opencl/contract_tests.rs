@@ -282,6 +282,7 @@ fn every_upper_case_name_in_the_kernels_is_defined_somewhere() {
         transmission: true,
         volume: true,
         coat: true,
+        coat_normal: true,
         vertex_colors: true,
         schlick: true,
         exact: true,

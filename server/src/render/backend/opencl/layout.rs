@@ -53,7 +53,7 @@ pub const NO_OBJECT: u32 = u32::MAX;
 /// goes as its bits, named `NAME_BITS`, and the kernel reads it with
 /// `as_float`, so both sides hold the same float bit for bit (a decimal
 /// literal in C would be a second definition, rounded by another compiler).
-pub const SHARED_CONSTANTS: [(&str, u32); 50] = [
+pub const SHARED_CONSTANTS: [(&str, u32); 51] = [
     ("KIND_SPHERE", KIND_SPHERE),
     ("KIND_QUAD", KIND_QUAD),
     ("KIND_INSTANCE", KIND_INSTANCE),
@@ -121,6 +121,7 @@ pub const SHARED_CONSTANTS: [(&str, u32); 50] = [
     ("MAP_CLEARCOAT_ROUGHNESS", Map::ClearcoatRoughness as u32),
     ("MAP_SPECULAR", Map::Specular as u32),
     ("MAP_SPECULAR_COLOR", Map::SpecularColor as u32),
+    ("MAP_CLEARCOAT_NORMAL", Map::ClearcoatNormal as u32),
 ];
 
 /// The metallic-roughness albedo tables where a material uses the model,

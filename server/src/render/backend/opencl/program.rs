@@ -12,6 +12,7 @@ use crate::render::light::EmitterShape;
 use crate::render::material::{Bsdf, NO_MAPS};
 use crate::render::math::Vec3A;
 use crate::render::sampler::SamplerKind;
+use crate::render::texture::Map;
 use crate::render::world::Geometry;
 use crate::render::Filter;
 use opencl3::context::Context;
@@ -53,6 +54,8 @@ pub struct Features {
     pub volume: bool,
     /// A `MAT_PBR` material has a clear coat.
     pub coat: bool,
+    /// A coated material's maps can give its coat a normal of its own.
+    pub coat_normal: bool,
     /// A placed mesh has vertex colours.
     pub vertex_colors: bool,
     pub schlick: bool,
@@ -158,6 +161,13 @@ impl Features {
             coat: used
                 .iter()
                 .any(|m| matches!(m.bsdf, Bsdf::Pbr(p) if p.coat > 0.0)),
+            coat_normal: used.iter().any(|m| {
+                matches!(m.bsdf, Bsdf::Pbr(p) if p.coat > 0.0)
+                    && m.maps != NO_MAPS
+                    && [Map::Normal, Map::ClearcoatNormal]
+                        .into_iter()
+                        .any(|n| w.maps[m.maps as usize].has(n))
+            }),
             vertex_colors: w.vertex_colors,
             schlick: glass_with(true),
             exact: glass_with(false),
@@ -209,7 +219,7 @@ impl Features {
              -D NEE={} -D BOX_FILTER={} -D SOBOL={} -D NUM_OBJECTS={}u -D NUM_LIGHTS={}u -D MAX_DEPTH_VALUE={}u \
              -D HAS_BVH={} -D BVH_STACK={} -D HAS_MESHES={} -D MESH_STACK={} -D HAS_TRI_LIGHTS={} -D HAS_ENV={} -D HAS_ENV_MAP={} -D HAS_SUN={} -D HAS_LENS={} \
              -D PROJECTION={}u -D FEATURES={} -D HAS_TEXTURES={} -D HAS_ALPHA={} -D HAS_TRANSMISSION={} -D HAS_VOLUME={} -D HAS_COAT={} \
-             -D HAS_VERTEX_COLORS={}",
+             -D HAS_COAT_NORMAL={} -D HAS_VERTEX_COLORS={}",
             b(self.spheres),
             b(self.quads),
             b(self.diffuse),
@@ -242,6 +252,7 @@ impl Features {
             b(self.transmission),
             b(self.volume),
             b(self.coat),
+            b(self.coat_normal),
             b(self.vertex_colors),
         );
         if let Some(n) = self.inject_nan_every {

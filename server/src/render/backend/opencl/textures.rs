@@ -32,7 +32,7 @@ pub struct MaterialMaps {
     pub factors: [f32; 4],
     /// transmission, clear coat weight, clear coat roughness, specular.
     pub layers: [f32; 4],
-    /// The specular colour factor (w unused).
+    /// The specular colour factor, the clear coat normal map's scale.
     pub spec_color: [f32; 4],
 }
 
@@ -47,7 +47,7 @@ pub struct TexImage {
 }
 
 const _: () = assert!(std::mem::size_of::<MapSlot>() == 48);
-const _: () = assert!(std::mem::size_of::<MaterialMaps>() == 528);
+const _: () = assert!(std::mem::size_of::<MaterialMaps>() == 576);
 const _: () = assert!(std::mem::size_of::<TexImage>() == 16);
 
 /// A world's maps and textures as the kernel reads them (all empty when
@@ -111,7 +111,7 @@ fn maps(m: &WorldMaps) -> MaterialMaps {
             m.clearcoat_roughness_factor,
             m.specular_factor,
         ],
-        spec_color: [c.x, c.y, c.z, 0.0],
+        spec_color: [c.x, c.y, c.z, m.clearcoat_normal_scale],
     }
 }
 
