@@ -67,10 +67,14 @@ static inline float3 ggx_visible_normal(float3 wo, float alpha, float2 u) {
 
 #if HAS_TRANSMISSION
 /* The rough dielectric lobe (ggx/glass.rs, Glass): alpha, eta (the far
- * side's index over wo's side's), scale = 1 / E(mu_o). */
+ * side's index over wo's side's), scale = 1 / E(mu_o); where tinted,
+ * KHR_materials_specular's Tint (f0, spec_f0, spec_f90). */
 typedef struct {
     float alpha, eta, scale;
     int thin; /* a thin wall: transmission is the reflection mirrored */
+    int tinted;
+    float f0, spec_f90;
+    float3 spec_f0;
 } GgxGlass;
 
 /* Table::albedo: E(mu) of the glass table G at roughness and ior, for
@@ -106,6 +110,30 @@ static inline float glass_fresnel(float c, float eta, float *cos_t) {
     return fresnel_exact(c, ct, 1.0f, eta);
 }
 
+/* glass.rs, tinted: *r the reflectance per channel of exact Fresnel
+ * reflectance f under the glass's tint; returns the probability of
+ * reflecting (its largest channel). */
+static inline float glass_tinted(const GgxGlass *g, float f, float3 *r) {
+    if (!g->tinted) {
+        *r = (float3)(f);
+        return f;
+    }
+    if (f >= 1.0f) { /* total internal reflection: all is reflected */
+        *r = (float3)(1.0f);
+        return 1.0f;
+    }
+    float s = fmin(fmax((f - g->f0) / (1.0f - g->f0), 0.0f), 1.0f);
+    *r = g->spec_f0 + ((float3)(g->spec_f90) - g->spec_f0) * s;
+    return fmax(fmax(r->x, r->y), r->z);
+}
+
+/* Glass::split_at: the reflectance per channel at a microfacet seen at
+ * cosine c, and the probability of reflecting. */
+static inline float glass_split_at(const GgxGlass *g, float c, float3 *r) {
+    float cos_t;
+    return glass_tinted(g, glass_fresnel(c, g->eta, &cos_t), r);
+}
+
 /* The refraction's half vector facing wo's side; 0 where no microfacet
  * refracts wo to wi. */
 static inline int glass_refraction_half(const GgxGlass *g, float3 wo, float3 wi, float3 *h) {
@@ -119,61 +147,62 @@ static inline int glass_refraction_half(const GgxGlass *g, float3 wo, float3 wi,
 }
 
 /* Glass::thin_eval_cos. */
-static inline float2 glass_thin_eval_cos(const GgxGlass *g, float3 wo, float3 wi) {
+static inline float4 glass_thin_eval_cos(const GgxGlass *g, float3 wo, float3 wi) {
     float3 w = (float3)(wi.x, wi.y, fabs(wi.z));
     float a = g->alpha;
     float ro = ggx_smith_r(wo, a);
     float ri = ggx_smith_r(w, a);
     float3 h = normalize3(wo + w);
-    float cos_t;
-    float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+    float3 f;
+    float m = glass_split_at(g, fmax(dot3(wo, h), 0.0f), &f);
     float spec = ggx_d(h, a) / (2.0f * (ro * w.z + ri * wo.z)) * w.z * g->scale;
-    return wi.z > 0.0f ? (float2)(f * spec, 0.0f) : (float2)(0.0f, (1.0f - f) * spec);
+    return wi.z > 0.0f ? (float4)(f * spec, 0.0f) : (float4)(0.0f, 0.0f, 0.0f, (1.0f - m) * spec);
 }
 
-/* Glass::eval_cos: (reflected, transmitted) BSDF |cos_i|, white. */
-static inline float2 glass_eval_cos(const GgxGlass *g, float3 wo, float3 wi) {
+/* Glass::eval_cos: reflected BSDF |cos_i| per channel (xyz), transmitted
+ * (w, white). */
+static inline float4 glass_eval_cos(const GgxGlass *g, float3 wo, float3 wi) {
     if (g->thin) {
         return glass_thin_eval_cos(g, wo, wi);
     }
     float a = g->alpha;
     float ro = ggx_smith_r(wo, a);
     float ri = ggx_smith_r(wi, a);
-    float cos_t;
+    float3 f;
     if (wi.z > 0.0f) {
         float3 h = normalize3(wo + wi);
-        float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+        glass_split_at(g, fmax(dot3(wo, h), 0.0f), &f);
         float spec = ggx_d(h, a) / (2.0f * (ro * wi.z + ri * wo.z));
-        return (float2)(f * spec * wi.z * g->scale, 0.0f);
+        return (float4)(f * (spec * wi.z * g->scale), 0.0f);
     }
     float3 h;
     if (!glass_refraction_half(g, wo, wi, &h)) {
-        return (float2)(0.0f);
+        return (float4)(0.0f);
     }
     float oh = dot3(wo, h);
     float ih = -dot3(wi, h);
-    float f = glass_fresnel(oh, g->eta, &cos_t);
+    float m = glass_split_at(g, oh, &f);
     float ci = -wi.z;
     float denom = oh - g->eta * ih;
-    float t = (1.0f - f) * ggx_d(h, a) * g->eta * g->eta * oh * ih * 2.0f * ci / ((ro * ci + ri * wo.z) * (denom * denom));
-    return (float2)(0.0f, t * g->scale);
+    float t = (1.0f - m) * ggx_d(h, a) * g->eta * g->eta * oh * ih * 2.0f * ci / ((ro * ci + ri * wo.z) * (denom * denom));
+    return (float4)(0.0f, 0.0f, 0.0f, t * g->scale);
 }
 
 /* Glass::pdf. */
 static inline float glass_pdf(const GgxGlass *g, float3 wo, float3 wi) {
     float a = g->alpha;
     float ro = ggx_smith_r(wo, a);
-    float cos_t;
+    float3 r;
     if (g->thin) {
         float3 w = (float3)(wi.x, wi.y, fabs(wi.z));
         float3 h = normalize3(wo + w);
-        float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+        float f = glass_split_at(g, fmax(dot3(wo, h), 0.0f), &r);
         float vndf = ggx_d(h, a) / (2.0f * (wo.z + ro));
         return (wi.z > 0.0f ? f : 1.0f - f) * vndf;
     }
     if (wi.z > 0.0f) {
         float3 h = normalize3(wo + wi);
-        float f = glass_fresnel(fmax(dot3(wo, h), 0.0f), g->eta, &cos_t);
+        float f = glass_split_at(g, fmax(dot3(wo, h), 0.0f), &r);
         return f * ggx_d(h, a) / (2.0f * (wo.z + ro));
     }
     float3 h;
@@ -182,7 +211,7 @@ static inline float glass_pdf(const GgxGlass *g, float3 wo, float3 wi) {
     }
     float oh = dot3(wo, h);
     float ih = -dot3(wi, h);
-    float f = glass_fresnel(oh, g->eta, &cos_t);
+    float f = glass_split_at(g, oh, &r);
     float denom = oh - g->eta * ih;
     return (1.0f - f) * 2.0f * ggx_d(h, a) * oh * g->eta * g->eta * ih / ((wo.z + ro) * (denom * denom));
 }
@@ -192,7 +221,8 @@ static inline int glass_sample(const GgxGlass *g, float3 wo, float choice, float
     float3 h = ggx_visible_normal(wo, g->alpha, u);
     float c = fmax(dot3(wo, h), 0.0f);
     float cos_t;
-    float f = glass_fresnel(c, g->eta, &cos_t);
+    float3 r;
+    float f = glass_tinted(g, glass_fresnel(c, g->eta, &cos_t), &r);
     if (g->thin) {
         float3 wr = ggx_reflect(wo, h);
         *wi = choice < f ? wr : (float3)(wr.x, wr.y, -wr.z);
@@ -357,11 +387,21 @@ static inline GgxLobes ggx_lobes(__global const float *T, float4 p, float4 g, fl
     L.glass.eta = 1.0f;
     L.glass.scale = 0.0f;
     L.glass.thin = g.z != 0.0f;
+    /* KHR_materials_specular's tint (glass.rs, Tint::new). */
+    L.glass.f0 = p.w;
+    L.glass.spec_f0 = f0;
+    L.glass.spec_f90 = f90;
+    L.glass.tinted = f90 != 1.0f || f0.x != p.w || f0.y != p.w || f0.z != p.w;
     if (L.p_glass > 0.0f && L.glass.thin) {
         L.glass.eta = g.y;
         L.glass.scale = 1.0f / fmax(L.e_o, 0.05f);
     } else if (L.p_glass > 0.0f) {
         float e = glass_albedo(T + GGX_TABLE_LEN, wo.z, p.z, g.y, entering);
+        if (L.glass.tinted) { /* Glass::with_tint: towards the clear glass's */
+            uint part = 2u * GLASS_IOR_N * GGX_TABLE_N * GGX_TABLE_N;
+            float e0 = glass_albedo(T + GGX_TABLE_LEN + part, wo.z, p.z, g.y, entering);
+            e = e0 + (e - e0) * f90;
+        }
         L.glass.eta = entering ? g.y : 1.0f / g.y;
         L.glass.scale = 1.0f / fmax(e, 0.05f);
     }
@@ -428,8 +468,8 @@ static inline float3 ggx_eval_cos(__global const float *T, float4 p, float4 g, f
     float3 out = (float3)(0.0f);
 #if HAS_TRANSMISSION
     if (L->p_glass > 0.0f && wo.z > 0.0f) {
-        float2 rt = glass_eval_cos(&L->glass, wo, wi);
-        out = ((float3)(rt.x) + base * rt.y) * L->p_glass;
+        float4 rt = glass_eval_cos(&L->glass, wo, wi);
+        out = (rt.xyz + base * rt.w) * L->p_glass;
     }
 #endif
     out += ggx_eval_reflection(T, p, g, base, L, wo, wi);

@@ -5,7 +5,9 @@
 //! mean weight of `N` samples (default 400,000) drawn as the renderer draws
 //! them; then the same for rough glass (transmission 1, ior 1.5), light
 //! arriving from outside and from inside: E of the single-scattering
-//! dielectric (its table), and the whole lobe with the compensation.
+//! dielectric (its table), and the whole lobe with the compensation;
+//! and rough glass under `KHR_materials_specular` (specular 0, and a
+//! tinted half-strength reflection).
 //! Everything should read 1 but the single-scattering blocks.
 //!
 //!   cargo run --release --example ggx_energy [-- N]
@@ -36,6 +38,12 @@ fn main() {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(400_000);
+    let start = std::time::Instant::now();
+    glass::table();
+    println!(
+        "Rough glass table (both parts): {:.2} s\n",
+        start.elapsed().as_secs_f64()
+    );
     let header = || {
         let cols: Vec<String> = MU.iter().map(|m| format!("cos {m}")).collect();
         println!("| roughness | {} |", cols.join(" | "));
@@ -84,6 +92,30 @@ fn main() {
                 .map(|&m| format!("{:.4}", albedo(&p, m, entering, n)))
                 .collect();
             println!("| {r} | {} |", row.join(" | "));
+        }
+        // KHR_materials_specular on the glass: the clear glass (specular
+        // 0), and a half-strength reflection (its strongest channel, red,
+        // which reflects as the untinted glass would at that strength).
+        for (what, factor, color) in [
+            ("specular 0", 0.0, Vec3A::ONE),
+            (
+                "specular 0.5, colour (1, 0.5, 0.25)",
+                0.5,
+                Vec3A::new(1.0, 0.5, 0.25),
+            ),
+        ] {
+            println!("\nRough glass with {what} (ior 1.5), from {side}, whole lobe:\n");
+            header();
+            for r in ROUGHNESS {
+                let p = Pbr::new(0.0, r, 1.5)
+                    .transmitting(1.0)
+                    .specular(factor, color);
+                let row: Vec<String> = MU
+                    .iter()
+                    .map(|&m| format!("{:.4}", albedo(&p, m, entering, n)))
+                    .collect();
+                println!("| {r} | {} |", row.join(" | "));
+            }
         }
     }
 }

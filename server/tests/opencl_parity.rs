@@ -403,6 +403,8 @@ const PBR_SCENE: &str = r#"{
     "coated": {"type": "pbr", "base_color": [0.6, 0.1, 0.1], "metallic": 0.3, "roughness": 0.6, "clearcoat": 0.8, "clearcoat_roughness": 0.1},
     "lacquer": {"type": "pbr", "metallic": 0, "roughness": 0.3, "transmission": 1, "clearcoat": 1, "clearcoat_roughness": 0.3},
     "tinted": {"type": "pbr", "base_color": [0.3, 0.6, 0.3], "metallic": 0.1, "roughness": 0.4, "specular": 0.6, "specular_color": [3, 1, 0.2]},
+    "frosted": {"type": "pbr", "base_color": [0.8, 0.9, 1], "metallic": 0, "roughness": 0.35, "transmission": 1, "ior": 1.6, "specular": 0.7, "specular_color": [1.5, 0.8, 0.3]},
+    "veil": {"type": "pbr", "metallic": 0, "roughness": 0.2, "transmission": 0.8, "thin": true, "specular": 0.4},
     "light": {"type": "diffuse", "albedo": [0, 0, 0], "emission": [4, 4, 4]}
   },
   "objects": [
@@ -417,6 +419,8 @@ const PBR_SCENE: &str = r#"{
     {"type": "sphere", "center": [-1, -1, 0], "radius": 0.4, "material": "coated"},
     {"type": "sphere", "center": [1, -1, 0], "radius": 0.4, "material": "lacquer"},
     {"type": "sphere", "center": [2, -1, 0], "radius": 0.4, "material": "tinted"},
+    {"type": "sphere", "center": [-2, -1, 0], "radius": 0.4, "material": "frosted"},
+    {"type": "sphere", "center": [-2, 1, 0], "radius": 0.4, "material": "veil"},
     {"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "material": "light"}
   ]
 }"#;
@@ -535,7 +539,7 @@ fn scattering_agrees_for_every_material() {
             );
         }
     }
-    assert_eq!(seen.len(), 15, "every material kind was checked: {seen:?}");
+    assert_eq!(seen.len(), 16, "every material kind was checked: {seen:?}");
 }
 
 #[test]

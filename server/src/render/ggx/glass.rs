@@ -12,6 +12,21 @@
 //! entry and exit scalings cancel), so the BTDF obeys f(wo, wi) = eta^2
 //! f(wi, wo).
 //!
+//! `KHR_materials_specular` ([`Tint`]): glTF mixes the dielectric's
+//! reflection and transmission by F' = specular (F0' + (1 - F0') S) per
+//! channel, F0' = min(F0 colour, 1), S Schlick's (1 - cos)^5, and what is
+//! transmitted by 1 - max(F'). Here the exact Fresnel curve F takes S's
+//! place, rescaled to run from 0 at F0 to 1 at grazing incidence (and
+//! total internal reflection): F' = F0s + (F90s - F0s) (F - F0) / (1 -
+//! F0), with the material's F0s = min(F0 colour, 1) specular and F90s =
+//! specular; without the extension F' is F itself (the exact Fresnel,
+//! untouched). Where nothing can cross (total internal reflection)
+//! everything is reflected, whatever the tint. Reflection is drawn with probability max(F'), so each
+//! channel's weight is F' / max(F') <= 1. The compensation stays the white
+//! glass's: the split between reflection and transmission moves only
+//! where the two directions lose different shares to masking, and the
+//! furnace test bounds that.
+//!
 //! A thin wall (glTF's transmission without `KHR_materials_volume`) has
 //! air on both sides: what it transmits is its reflection mirrored through
 //! the surface (rough but unrefracted), F from the index either way, so its
@@ -37,13 +52,20 @@ use std::sync::OnceLock;
 /// 1 / [`IOR_SCALE`] = 0.8 (ior 1 to 9; larger indices read the last).
 pub const IOR_N: usize = 17;
 pub const IOR_SCALE: f32 = 1.25;
-/// Floats in [`Table::data`]: by side (0: arriving from outside, eta =
-/// ior; 1: from inside, eta = 1 / ior), index, roughness, cos(theta_o).
-pub const TABLE_LEN: usize = 2 * IOR_N * TABLE_N * TABLE_N;
+/// Floats in one part of [`Table::data`]: by side (0: arriving from
+/// outside, eta = ior; 1: from inside, eta = 1 / ior), index, roughness,
+/// cos(theta_o).
+pub const PART_LEN: usize = 2 * IOR_N * TABLE_N * TABLE_N;
+/// Floats in [`Table::data`]: the white glass's part, then the clear
+/// glass's (one that reflects only where nothing can cross).
+pub const TABLE_LEN: usize = 2 * PART_LEN;
 /// Points per table entry (a Sobol (0,2)-sequence).
 const TABLE_POINTS: u32 = 512;
 
-/// The white albedo of the single-scattering lobe.
+/// The white albedo of the single-scattering lobe, and of the lobe of a
+/// glass with specular 0 (`KHR_materials_specular`: transmission alone,
+/// but for total internal reflection), between which a tinted glass's
+/// compensation interpolates.
 pub struct Table {
     pub data: Box<[f32]>,
 }
@@ -74,7 +96,8 @@ impl Table {
         data.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
             let j = row % n;
             let k = (row / n) % IOR_N;
-            let side = row / (n * IOR_N);
+            let side = (row / (n * IOR_N)) % 2;
+            let clear = row >= 2 * n * IOR_N;
             let x = k as f32 / (IOR_N - 1) as f32 / IOR_SCALE;
             let ior = (1.0 + x) / (1.0 - x);
             let eta = if side == 0 { ior } else { 1.0 / ior };
@@ -87,8 +110,10 @@ impl Table {
                 for &(u1, u2) in &points {
                     let h = visible_normal(wo, alpha, u1, u2);
                     let (f, wt) = split(wo, h, eta);
+                    // The clear glass reflects only where nothing crosses.
+                    let f = if clear && f < 1.0 { 0.0 } else { f };
                     let wr = reflect_about(wo, h);
-                    if wr.z > 0.0 {
+                    if f > 0.0 && wr.z > 0.0 {
                         sum += f64::from(f * masking_ratio(wo, wr, alpha));
                     }
                     if f < 1.0 && wt.z < 0.0 {
@@ -107,6 +132,17 @@ impl Table {
     /// (`entering`) or inside: trilinear.
     #[inline(always)]
     pub fn albedo(&self, mu: f32, roughness: f32, ior: f32, entering: bool) -> f32 {
+        self.part(0, (mu, roughness, ior), entering)
+    }
+
+    /// [`albedo`](Self::albedo) of the clear glass (specular 0).
+    #[inline(always)]
+    pub fn clear_albedo(&self, mu: f32, roughness: f32, ior: f32, entering: bool) -> f32 {
+        self.part(PART_LEN, (mu, roughness, ior), entering)
+    }
+
+    #[inline(always)]
+    fn part(&self, at: usize, (mu, roughness, ior): (f32, f32, f32), entering: bool) -> f32 {
         let n = TABLE_N;
         let (i, tx) = super::cell(mu);
         let (j, ty) = super::cell(roughness);
@@ -115,7 +151,7 @@ impl Table {
         let tz = s - k as f32;
         let side = usize::from(!entering);
         let plane = |k: usize| {
-            let t = &self.data[(side * IOR_N + k) * n * n..];
+            let t = &self.data[at + (side * IOR_N + k) * n * n..];
             let row0 = t[j * n + i] * (1.0 - tx) + t[j * n + i + 1] * tx;
             let row1 = t[(j + 1) * n + i] * (1.0 - tx) + t[(j + 1) * n + i + 1] * tx;
             row0 * (1.0 - ty) + row1 * ty
@@ -146,6 +182,45 @@ fn split(wo: Vec3A, h: Vec3A, eta: f32) -> (f32, Vec3A) {
 /// ([`Glass::matched`]): its Fresnel reflectance is below 3e-7 there.
 pub const MATCHED: f32 = 1e-3;
 
+/// `KHR_materials_specular` on the glass: the untinted F0 of its index and
+/// the material's tinted, scaled F0s and F90s ([`super::Pbr`]'s
+/// `spec_f0`, `spec_f90`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tint {
+    pub f0: f32,
+    pub spec_f0: Vec3A,
+    pub spec_f90: f32,
+}
+
+impl Tint {
+    /// The tint of `KHR_materials_specular`'s F0s, F90s over a dielectric of
+    /// reflectance `f0`; None where they are the index's own (no tint).
+    #[inline(always)]
+    pub fn new(f0: f32, spec_f0: Vec3A, spec_f90: f32) -> Option<Tint> {
+        (spec_f90 != 1.0 || spec_f0 != Vec3A::splat(f0)).then_some(Tint {
+            f0,
+            spec_f0,
+            spec_f90,
+        })
+    }
+}
+
+/// The reflectance per channel of exact Fresnel reflectance `f` under
+/// `tint`, and the probability of reflecting (its largest channel).
+#[inline(always)]
+fn tinted(tint: &Option<Tint>, f: f32) -> (Vec3A, f32) {
+    match tint {
+        None => (Vec3A::splat(f), f),
+        // Total internal reflection: nothing can cross, all is reflected.
+        Some(_) if f >= 1.0 => (Vec3A::ONE, 1.0),
+        Some(t) => {
+            let s = ((f - t.f0) / (1.0 - t.f0)).clamp(0.0, 1.0);
+            let r = t.spec_f0 + (Vec3A::splat(t.spec_f90) - t.spec_f0) * s;
+            (r, r.max_element())
+        }
+    }
+}
+
 /// The lobe at one shading point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Glass {
@@ -156,6 +231,8 @@ pub struct Glass {
     pub scale: f32,
     /// A thin wall: transmission is the reflection mirrored.
     pub thin: bool,
+    /// `KHR_materials_specular`'s change to the Fresnel mix (None: exact).
+    pub tint: Option<Tint>,
 }
 
 impl Glass {
@@ -164,12 +241,32 @@ impl Glass {
     /// outside (`entering`) or inside.
     #[inline(always)]
     pub fn new(alpha: f32, roughness: f32, ior: f32, wo: Vec3A, entering: bool) -> Glass {
-        let e = table().albedo(wo.z, roughness, ior, entering);
+        Glass::with_tint(alpha, roughness, ior, (wo, entering), None)
+    }
+
+    /// [`Glass::new`] under `KHR_materials_specular`'s `tint`: its
+    /// compensation interpolates between the white glass's albedo and the
+    /// clear glass's by the specular factor (F90s).
+    #[inline(always)]
+    pub fn with_tint(
+        alpha: f32,
+        roughness: f32,
+        ior: f32,
+        (wo, entering): (Vec3A, bool),
+        tint: Option<Tint>,
+    ) -> Glass {
+        let t = table();
+        let mut e = t.albedo(wo.z, roughness, ior, entering);
+        if let Some(tint) = &tint {
+            let e0 = t.clear_albedo(wo.z, roughness, ior, entering);
+            e = e0 + (e - e0) * tint.spec_f90;
+        }
         Glass {
             alpha,
             eta: if entering { ior } else { 1.0 / ior },
             scale: 1.0 / e.max(0.05),
             thin: false,
+            tint,
         }
     }
 
@@ -182,7 +279,23 @@ impl Glass {
             eta: ior,
             scale,
             thin: true,
+            tint: None,
         }
+    }
+
+    /// The same lobe with `KHR_materials_specular`'s [`Tint`] (a thin
+    /// wall's compensation holds for any: its reflection and transmission
+    /// are mirror images, masked alike).
+    #[inline(always)]
+    pub fn tinted(self, tint: Option<Tint>) -> Glass {
+        Glass { tint, ..self }
+    }
+
+    /// Reflectance per channel and probability of reflecting at a
+    /// microfacet seen at cosine `c`.
+    #[inline(always)]
+    fn split_at(&self, c: f32) -> (Vec3A, f32) {
+        tinted(&self.tint, fresnel::exact(c, 1.0, self.eta).reflectance)
     }
 
     /// Index-matched (a solid within [`MATCHED`] of its surroundings'
@@ -195,16 +308,16 @@ impl Glass {
 
     /// [`eval_cos`](Self::eval_cos) of a thin wall.
     #[inline(always)]
-    fn thin_eval_cos(&self, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
+    fn thin_eval_cos(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
         let w = Vec3A::new(wi.x, wi.y, wi.z.abs());
         let a = self.alpha;
         let (ro, ri) = (smith_r(wo, a), smith_r(w, a));
         let h = (wo + w).normalize();
-        let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+        let (f, m) = self.split_at(wo.dot(h).max(0.0));
         let spec = distribution(h, a) / (2.0 * (ro * w.z + ri * wo.z)) * w.z * self.scale;
         match wi.z > 0.0 {
             true => (f * spec, 0.0),
-            false => (0.0, (1.0 - f) * spec),
+            false => (Vec3A::ZERO, (1.0 - m) * spec),
         }
     }
 
@@ -221,10 +334,11 @@ impl Glass {
         (wo.dot(h) > 0.0 && wi.dot(h) < 0.0).then_some(h)
     }
 
-    /// BSDF |cos(theta_i)| from `wo` to `wi`: (reflected, transmitted),
-    /// white (the caller tints what is transmitted), compensation included.
+    /// BSDF |cos(theta_i)| from `wo` to `wi`: (reflected per channel,
+    /// transmitted; the caller tints what is transmitted), compensation
+    /// included.
     #[inline(always)]
-    pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
+    pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
         if self.thin {
             return self.thin_eval_cos(wo, wi);
         }
@@ -232,20 +346,20 @@ impl Glass {
         let (ro, ri) = (smith_r(wo, a), smith_r(wi, a));
         if wi.z > 0.0 {
             let h = (wo + wi).normalize();
-            let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+            let (f, _) = self.split_at(wo.dot(h).max(0.0));
             let spec = distribution(h, a) / (2.0 * (ro * wi.z + ri * wo.z));
-            return (f * spec * wi.z * self.scale, 0.0);
+            return (f * (spec * wi.z * self.scale), 0.0);
         }
         let Some(h) = self.refraction_half(wo, wi) else {
-            return (0.0, 0.0);
+            return (Vec3A::ZERO, 0.0);
         };
         let (oh, ih) = (wo.dot(h), -wi.dot(h));
-        let f = fresnel::exact(oh, 1.0, self.eta).reflectance;
+        let (_, f) = self.split_at(oh);
         let ci = -wi.z;
         let denom = oh - self.eta * ih;
         let t = (1.0 - f) * distribution(h, a) * self.eta * self.eta * oh * ih * 2.0 * ci
             / ((ro * ci + ri * wo.z) * (denom * denom));
-        (0.0, t * self.scale)
+        (Vec3A::ZERO, t * self.scale)
     }
 
     /// The density of drawing `wi` from `wo` (solid angle).
@@ -256,20 +370,20 @@ impl Glass {
         if self.thin {
             let w = Vec3A::new(wi.x, wi.y, wi.z.abs());
             let h = (wo + w).normalize();
-            let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+            let (_, f) = self.split_at(wo.dot(h).max(0.0));
             let vndf = distribution(h, a) / (2.0 * (wo.z + ro));
             return if wi.z > 0.0 { f } else { 1.0 - f } * vndf;
         }
         if wi.z > 0.0 {
             let h = (wo + wi).normalize();
-            let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+            let (_, f) = self.split_at(wo.dot(h).max(0.0));
             return f * distribution(h, a) / (2.0 * (wo.z + ro));
         }
         let Some(h) = self.refraction_half(wo, wi) else {
             return 0.0;
         };
         let (oh, ih) = (wo.dot(h), -wi.dot(h));
-        let f = fresnel::exact(oh, 1.0, self.eta).reflectance;
+        let (_, f) = self.split_at(oh);
         let denom = oh - self.eta * ih;
         (1.0 - f) * 2.0 * distribution(h, a) * oh * self.eta * self.eta * ih
             / ((wo.z + ro) * (denom * denom))
@@ -281,7 +395,7 @@ impl Glass {
     pub fn sample(&self, wo: Vec3A, choice: f32, (u1, u2): (f32, f32)) -> Option<Vec3A> {
         let h = visible_normal(wo, self.alpha, u1, u2);
         if self.thin {
-            let f = fresnel::exact(wo.dot(h).max(0.0), 1.0, self.eta).reflectance;
+            let (_, f) = self.split_at(wo.dot(h).max(0.0));
             let wr = reflect_about(wo, h);
             return match (wr.z > 0.0, choice < f) {
                 (false, _) => None,
@@ -290,6 +404,7 @@ impl Glass {
             };
         }
         let (f, wt) = split(wo, h, self.eta);
+        let (_, f) = tinted(&self.tint, f);
         if choice < f {
             let wr = reflect_about(wo, h);
             (wr.z > 0.0).then_some(wr)

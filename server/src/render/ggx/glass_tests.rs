@@ -27,7 +27,7 @@ fn albedo(g: &Glass, wo: Vec3A, n: u64) -> f64 {
         let choice = s.next_f32();
         if let Some(wi) = g.sample(wo, choice, s.next_2d()) {
             let (r, t) = g.eval_cos(wo, wi);
-            sum += f64::from((r + t) / g.pdf(wo, wi));
+            sum += f64::from((r.x + t) / g.pdf(wo, wi));
         }
     }
     sum / n as f64
@@ -126,7 +126,7 @@ fn the_table_is_what_a_plain_quadrature_of_eval_gives() {
         g.scale = 1.0;
         let e = over_sphere(|wi| {
             let (a, b) = g.eval_cos(wo, wi);
-            f64::from(a + b)
+            f64::from(a.x + b)
         });
         let table = f64::from(table().albedo(mu, r, ior, entering));
         assert!(
@@ -181,6 +181,7 @@ fn the_btdf_is_reciprocal_up_to_eta_squared() {
                 eta: 1.5,
                 scale: 1.0,
                 thin: false,
+                tint: None,
             };
             let back = Glass {
                 eta: 1.0 / 1.5,
@@ -222,5 +223,67 @@ fn sampling_follows_the_pdf_chi_square() {
             "roughness {r} ior {ior} entering {entering} thin {thin} mu {mu}: \
              chi2 {chi2:.1} with {dof} bins, p = {tail:.2e}"
         );
+    }
+}
+
+/// `KHR_materials_specular` on rough glass: a material transmitting all
+/// its dielectric, with specular `factor` and `color`.
+fn specular_glass(roughness: f32, factor: f32, color: Vec3A, thin: bool) -> super::super::Pbr {
+    super::super::Pbr::new(0.0, roughness, 1.5)
+        .transmitting(1.0)
+        .thin_walled(thin)
+        .specular(factor, color)
+}
+
+#[test]
+fn specular_tints_and_scales_the_glass_reflection_and_keeps_energy() {
+    use super::super::tests::albedo_from;
+    // Untinted, the glass keeps its exact Fresnel: no tint at all.
+    let plain = specular_glass(0.3, 1.0, Vec3A::ONE, false);
+    assert_eq!(Tint::new(plain.f0, plain.spec_f0, plain.spec_f90), None);
+    let color = Vec3A::new(1.0, 0.5, 0.25);
+    for r in [0.05f32, 0.3] {
+        for thin in [false, true] {
+            for entering in [true, false] {
+                for mu in [0.2f32, 0.7, 1.0] {
+                    let wo = dir(mu, 0.3);
+                    // The strongest channel reflects as much as untinted
+                    // glass and transmits the rest: the furnace's value; the
+                    // others reflect less and never gain.
+                    let p = specular_glass(r, 1.0, color, thin);
+                    let a = albedo_from(&p, Vec3A::ONE, (wo, entering), 100_000);
+                    let what = format!("roughness {r} thin {thin} entering {entering} mu {mu}");
+                    assert!((a.x - 1.0).abs() < 0.02, "{what}: tinted albedo {a}");
+                    assert!(
+                        a.max_element() < 1.02 && a.y <= a.x + 1e-3 && a.z <= a.y + 1e-3,
+                        "{what}: {a}"
+                    );
+                    // Specular 0: nothing reflected from outside, everything
+                    // through (inside, total internal reflection stays).
+                    let p = specular_glass(r, 0.0, Vec3A::ONE, thin);
+                    let t = super::super::tables();
+                    let lobes = super::super::Lobes::new(t, &p, Vec3A::ONE, wo, entering);
+                    let up = super::super::eval_cos(t, &p, Vec3A::ONE, &lobes, wo, dir(mu, 3.4));
+                    if entering {
+                        assert_eq!(up, Vec3A::ZERO, "{what}: specular 0 reflects {up}");
+                    }
+                    let a = albedo_from(&p, Vec3A::ONE, (wo, entering), 100_000);
+                    assert!(
+                        (a - Vec3A::ONE).abs().max_element() < 0.03,
+                        "{what}: specular 0 albedo {a}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn tinted_glass_samples_follow_the_pdf_chi_square() {
+    let t = super::super::tables();
+    for (r, thin, mu) in [(0.3f32, false, 0.6f32), (0.5, true, 0.4)] {
+        let p = specular_glass(r, 0.6, Vec3A::new(0.3, 1.0, 0.6), thin);
+        let what = format!("tinted glass roughness {r} thin {thin} mu {mu}");
+        super::super::tests::assert_samples_follow_the_pdf(t, &p, dir(mu, 0.7), 29, &what);
     }
 }

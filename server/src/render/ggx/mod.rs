@@ -361,9 +361,12 @@ impl Lobes {
         let p_spec = (spec / (spec + rest)).clamp(0.05, 0.95);
         let p_glass = (1.0 - p.metallic) * p.transmission;
         let glass = if p_glass > 0.0 {
+            let tint = glass::Tint::new(p.f0, p.spec_f0, p.spec_f90);
             match p.thin {
-                true => glass::Glass::thin(p.alpha, p.ior, 1.0 / (a_o + b_o).max(0.05)),
-                false => glass::Glass::new(p.alpha, p.roughness, p.ior, wo, entering),
+                true => {
+                    glass::Glass::thin(p.alpha, p.ior, 1.0 / (a_o + b_o).max(0.05)).tinted(tint)
+                }
+                false => glass::Glass::with_tint(p.alpha, p.roughness, p.ior, (wo, entering), tint),
             }
         } else {
             glass::Glass {
@@ -371,6 +374,7 @@ impl Lobes {
                 eta: 1.0,
                 scale: 0.0,
                 thin: false,
+                tint: None,
             }
         };
         // The coat faces outwards: on both sides of an opaque surface or a
@@ -406,7 +410,7 @@ pub fn eval_cos(t: &Tables, p: &Pbr, base: Vec3A, lobes: &Lobes, wo: Vec3A, wi: 
     let mut out = Vec3A::ZERO;
     if lobes.p_glass > 0.0 && wo.z > 0.0 {
         let (r, tr) = lobes.glass.eval_cos(wo, wi);
-        out = (Vec3A::splat(r) + base * tr) * lobes.p_glass;
+        out = (r + base * tr) * lobes.p_glass;
     }
     out += eval_reflection(t, p, base, lobes, wo, wi);
     match lobes.coat.on() {
