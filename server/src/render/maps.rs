@@ -284,14 +284,8 @@ mod tests {
             ..maps(&[(Map::BaseColor, 0), (Map::Metallic, 1), (Map::Roughness, 1)])
         };
         let tc = TexCoords::default();
-        let mut ns = Vec3A::Z;
-        let out = shade(
-            &textures,
-            &m,
-            &pbr(),
-            &tc,
-            (&mut ns, &mut Vec3A::splat(0.0)),
-        );
+        let (mut ns, mut nc) = (Vec3A::Z, Vec3A::ZERO);
+        let out = shade(&textures, &m, &pbr(), &tc, (&mut ns, &mut nc));
         let t = texture::srgb_table();
         assert_eq!(out.albedo, Vec3A::new(0.5, t[128], 0.0));
         let Bsdf::Pbr(p) = out.bsdf else {
@@ -303,6 +297,13 @@ mod tests {
         assert_eq!(ns, Vec3A::Z);
     }
 
+    /// The shading normal (z before) that `maps` give a `pbr` hit at `tc`.
+    fn shaded_normal(textures: &[Arc<Texture>], maps: &WorldMaps, tc: &TexCoords) -> Vec3A {
+        let (mut ns, mut nc) = (Vec3A::Z, Vec3A::ZERO);
+        shade(textures, maps, &pbr(), tc, (&mut ns, &mut nc));
+        ns
+    }
+
     #[test]
     fn a_flat_normal_map_changes_nothing_and_a_tilted_one_tilts() {
         // (128, 128, 255) is (0.0039, 0.0039, 1): flat to within a byte.
@@ -312,41 +313,18 @@ mod tests {
             tangent: Vec3A::new(2.0, 0.0, 0.5),
             sign: 1.0,
         };
-        let m = maps(&[(Map::Normal, 0)]);
-        let mut ns = Vec3A::Z;
-        shade(
-            &textures,
-            &m,
-            &pbr(),
-            &tc,
-            (&mut ns, &mut Vec3A::splat(0.0)),
-        );
+        let ns = shaded_normal(&textures, &maps(&[(Map::Normal, 0)]), &tc);
         assert!((ns - Vec3A::Z).length() < 0.01, "{ns}");
         // Red full: tilted all the way towards the tangent.
         let m = maps(&[(Map::Normal, 1)]);
-        let mut ns = Vec3A::Z;
-        shade(
-            &textures,
-            &m,
-            &pbr(),
-            &tc,
-            (&mut ns, &mut Vec3A::splat(0.0)),
-        );
+        let ns = shaded_normal(&textures, &m, &tc);
         assert!(ns.x > 0.99 && (ns.length() - 1.0).abs() < 1e-6, "{ns}");
         // No tangent: the normal stays.
-        let mut ns = Vec3A::Z;
         let flat = TexCoords {
             tangent: Vec3A::ZERO,
             ..tc
         };
-        shade(
-            &textures,
-            &m,
-            &pbr(),
-            &flat,
-            (&mut ns, &mut Vec3A::splat(0.0)),
-        );
-        assert_eq!(ns, Vec3A::Z);
+        assert_eq!(shaded_normal(&textures, &m, &flat), Vec3A::Z);
     }
 
     #[test]
