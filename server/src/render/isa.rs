@@ -7,11 +7,13 @@
 //! made by [`Avx2::detect`], on a CPU that has AVX2 and FMA; holding one is
 //! what makes calling its kernels sound.
 
+use crate::render::bvh::{self, BoxRay, WideNode, WideTest, WIDTH};
 use crate::render::ray::Ray;
 use crate::render::shape::{Leaving, SphereBatch};
 
-/// The wide kernels of one instruction set.
-pub trait Isa: Copy + Send + Sync {
+/// The wide kernels of one instruction set
+/// (and the test of a wide BVH node's eight boxes, [`WideTest`]).
+pub trait Isa: Copy + Send + Sync + WideTest {
     /// Nearest sphere hit over `batches`: (distance, object index as f32),
     /// distance infinity when there is none. Same result on every `Isa`.
     fn nearest_sphere(self, batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32);
@@ -20,6 +22,13 @@ pub trait Isa: Copy + Send + Sync {
 /// Four-lane code that every CPU runs.
 #[derive(Clone, Copy, Debug)]
 pub struct Portable;
+
+impl WideTest for Portable {
+    #[inline(always)]
+    fn wide_test(self, ray: &BoxRay, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
+        bvh::test_portable(ray, node, t_max)
+    }
+}
 
 impl Isa for Portable {
     #[inline(always)]
@@ -38,6 +47,18 @@ impl Avx2 {
     /// The token, if this CPU has AVX2 and FMA.
     pub fn detect() -> Option<Self> {
         (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")).then_some(Self(()))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl WideTest for Avx2 {
+    #[inline(always)]
+    fn wide_test(self, ray: &BoxRay, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
+        // SAFETY: an `Avx2` exists only where `detect` found AVX2 and FMA.
+        #[allow(unsafe_code)]
+        unsafe {
+            bvh::test_avx2(ray, node, t_max)
+        }
     }
 }
 

@@ -288,9 +288,13 @@ fn hits_avx2(isa: Avx2, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit
 
 #[inline(always)]
 fn hits_with<I: Isa>(isa: I, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
-    rays.iter()
-        .map(|(r, from)| world.intersect(isa, r, *from))
-        .collect()
+    // A plain loop: an iterator's `collect` would put the traversal in a
+    // function of its own, compiled without the caller's AVX2.
+    let mut hits = Vec::with_capacity(rays.len());
+    for (r, from) in rays {
+        hits.push(world.intersect(isa, r, *from));
+    }
+    hits
 }
 
 /// The wide kernels this CPU can run, if any.

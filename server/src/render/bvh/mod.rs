@@ -7,6 +7,7 @@
 //!   depth first in one array of [`BvhNode`]s, the `#[repr(C)]` form that
 //!   the CPU traverses and the OpenCL kernel can read unchanged.
 //! - `traverse`: nearest-first traversal with a conservative box test.
+//! - `wide`: the same hierarchy eight children wide, which the CPU traverses.
 //!
 //! A BVH does not hold its primitives: a leaf is a range of slots, and
 //! `prims[slot]` is the index of the primitive in the caller's list (a mesh
@@ -17,11 +18,17 @@ mod aabb;
 mod build;
 mod flatten;
 mod traverse;
+mod wide;
+#[cfg(target_arch = "x86_64")]
+mod wide_avx2;
 
 pub use aabb::Aabb;
 pub use build::MAX_LEAF;
 pub(crate) use traverse::STACK;
-pub use traverse::{BoxRay, ROBUST};
+pub use traverse::{BoxRay, Nodes, Walk, Walk4, ROBUST};
+pub use wide::{test_portable, Walk8, WideBvh, WideNode, WideNodes, WideTest, WIDTH};
+#[cfg(target_arch = "x86_64")]
+pub use wide_avx2::test as test_avx2;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -113,13 +120,40 @@ impl Bvh {
         bvh
     }
 
+    /// A mesh's two hierarchies over the same leaves: the four-wide one with
+    /// aligned leaves ([`Bvh::aligned_leaves`]), which the OpenCL kernel
+    /// reads, and its eight-wide twin ([`WideBvh`]), which the CPU
+    /// traverses. At most [`Bvh::MAX_PRIMS`] / [`MAX_LEAF`] primitives.
+    pub fn build_pair(boxes: &[Aabb]) -> (Bvh, WideBvh) {
+        assert!(
+            boxes.len() <= Self::MAX_PRIMS,
+            "too many primitives for one BVH"
+        );
+        let (tree, prims) = build::build(boxes);
+        let mut bvh = flatten::flatten(tree.as_ref());
+        bvh.prims = prims;
+        let mut wide = WideBvh::from_tree(tree.as_ref());
+        let (bvh, firsts) = bvh.align();
+        wide.move_leaves(|first| {
+            let k = firsts.binary_search(&first).expect("a leaf of both trees");
+            (k * MAX_LEAF) as u32
+        });
+        (bvh, wide)
+    }
+
     /// Moves every leaf to slots `4k .. 4k + count` for its number k in
     /// slot order, the slots past its count holding its last primitive
     /// again (traversals read `count` slots: they never see them). A
     /// mesh's leaves are then numbered by `first / 4` (its SIMD packs).
     /// For at most [`Bvh::MAX_PRIMS`] / [`MAX_LEAF`] primitives (the padded
     /// slots stay within [`Bvh::MAX_PRIMS`]).
-    pub fn aligned_leaves(mut self) -> Bvh {
+    pub fn aligned_leaves(self) -> Bvh {
+        self.align().0
+    }
+
+    /// [`Bvh::aligned_leaves`], and the leaves' first slots before, in
+    /// slot order (leaf k's).
+    fn align(mut self) -> (Bvh, Vec<u32>) {
         let mut leaves: Vec<(u32, usize, usize)> = Vec::new(); // (first, node, child)
         for (n, node) in self.nodes.iter().enumerate() {
             for i in 0..4 {
@@ -142,7 +176,7 @@ impl Bvh {
             self.nodes[n].child[i] = (k * MAX_LEAF) as u32;
         }
         self.prims = prims;
-        self
+        (self, leaves.into_iter().map(|l| l.0).collect())
     }
 
     /// The one leaf of a hierarchy that is nothing else (a mesh of at most
@@ -166,3 +200,5 @@ impl Bvh {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod wide_tests;

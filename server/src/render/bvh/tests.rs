@@ -5,7 +5,7 @@ use super::*;
 use crate::render::math::Vec3A;
 use crate::render::sampler::Sampler;
 
-fn random_boxes(n: usize, seed: u64) -> Vec<Aabb> {
+pub(super) fn random_boxes(n: usize, seed: u64) -> Vec<Aabb> {
     (0..n as u64)
         .map(|i| {
             let mut s = Sampler::new(seed, i, 0);
@@ -103,7 +103,7 @@ fn empty_input_gives_an_empty_hierarchy_that_nothing_meets() {
 
 /// Exact slab test in f64 for comparison: does the segment [0, t_max] of
 /// the ray meet the box?
-fn meets(b: &Aabb, o: Vec3A, d: Vec3A, t_max: f64) -> bool {
+pub(super) fn meets(b: &Aabb, o: Vec3A, d: Vec3A, t_max: f64) -> bool {
     let (mut t0, mut t1) = (0.0f64, t_max);
     for a in 0..3 {
         let (o, d) = (f64::from(o[a]), f64::from(d[a]));

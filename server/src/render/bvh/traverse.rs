@@ -21,25 +21,21 @@ pub const ROBUST: f32 = 1.0 + 2.0 * gamma(3);
 /// Deepest node stack a traversal needs: three more children than it pops
 /// at each level, and trees are at most 64 levels deep (see `build`).
 pub(crate) const STACK: usize = 3 * 64 + 4;
-/// The stack of trees at most `SHALLOW_DEPTH` deep (nearly all): small
-/// enough that setting it up costs nothing.
-const SHALLOW_STACK: usize = 64;
-const SHALLOW_DEPTH: u32 = (SHALLOW_STACK as u32 - 1) / 3;
 /// A stack entry holds a child as `child << 3 | count` (leaves hold at most
 /// `MAX_LEAF` < 8 primitives) and its entry distance.
-const COUNT_BITS: u32 = 3;
+pub(super) const COUNT_BITS: u32 = 3;
 const _: () = assert!(super::MAX_LEAF < 1 << COUNT_BITS);
 
 /// A ray prepared for box tests: origin and reciprocal direction in every
 /// lane, and for each axis which bound (min or max) it meets first.
 #[derive(Clone, Copy, Debug)]
 pub struct BoxRay {
-    org: [Vec4; 3],
-    inv: [Vec4; 3],
+    pub(super) org: [Vec4; 3],
+    pub(super) inv: [Vec4; 3],
     /// Row of `BvhNode::bounds` with the near (entry) plane of each axis.
-    near: [usize; 3],
+    pub(super) near: [usize; 3],
     /// Row with the far (exit) plane of each axis.
-    far: [usize; 3],
+    pub(super) far: [usize; 3],
 }
 
 impl BoxRay {
@@ -67,18 +63,22 @@ impl BoxRay {
     /// the ray meets between 0 and `t_max` (bit i for child i).
     #[inline(always)]
     pub fn test(&self, node: &BvhNode, t_max: f32) -> (Vec4, u32) {
-        let b = &node.bounds;
-        let slab = |axis: usize| {
-            let near = Vec4::from_array(b[self.near[axis]]);
-            let far = Vec4::from_array(b[self.far[axis]]);
-            (
-                (near - self.org[axis]) * self.inv[axis],
-                (far - self.org[axis]) * self.inv[axis],
-            )
-        };
-        let (nx, fx) = slab(0);
-        let (ny, fy) = slab(1);
-        let (nz, fz) = slab(2);
+        self.test_rows(&node.bounds, t_max)
+    }
+
+    /// [`BoxRay::test`] on four boxes given by their bounds' rows (min x,
+    /// min y, min z, max x, max y, max z). No closures here or in the
+    /// other hot tests: in the render loop's large function the compiler
+    /// may leave one out of line, compiled without the loop's AVX2.
+    #[inline(always)]
+    pub(super) fn test_rows(&self, b: &[[f32; 4]; 6], t_max: f32) -> (Vec4, u32) {
+        let (near, far) = (self.near, self.far);
+        let nx = (Vec4::from_array(b[near[0]]) - self.org[0]) * self.inv[0];
+        let fx = (Vec4::from_array(b[far[0]]) - self.org[0]) * self.inv[0];
+        let ny = (Vec4::from_array(b[near[1]]) - self.org[1]) * self.inv[1];
+        let fy = (Vec4::from_array(b[far[1]]) - self.org[1]) * self.inv[1];
+        let nz = (Vec4::from_array(b[near[2]]) - self.org[2]) * self.inv[2];
+        let fz = (Vec4::from_array(b[far[2]]) - self.org[2]) * self.inv[2];
         let t_near = max_or(nz, max_or(ny, max_or(nx, Vec4::ZERO)));
         let t_far = min_or(fz, min_or(fy, min_or(fx, Vec4::splat(t_max)))) * ROBUST;
         (t_near, t_near.cmple(t_far).bitmask())
@@ -104,54 +104,80 @@ fn min_or(x: Vec4, acc: Vec4) -> Vec4 {
     return Vec4::select(x.cmplt(acc), x, acc);
 }
 
-impl Bvh {
-    /// Visits the leaves that `ray` may meet before `t_max`, nearest box
-    /// first. `leaf(first_slot, count, t_max)` tests a leaf's primitives
-    /// and returns the (possibly nearer) `t_max` to go on with; the last
-    /// one is returned.
+/// A hierarchy's nodes as the traversal sees them: `W` children each.
+pub trait Nodes<const W: usize> {
+    /// Entry distance of each child of node `index`, and which of them the
+    /// ray meets between 0 and `t_max` (bit i for child i).
+    fn test(&self, ray: &BoxRay, index: u32, t_max: f32) -> ([f32; W], u32);
+    /// Child `i` of node `index` as a stack entry: `child << 3 | count`.
+    fn entry(&self, index: u32, i: usize) -> u32;
+}
+
+impl Nodes<4> for &[BvhNode] {
     #[inline(always)]
-    pub fn traverse(
-        &self,
-        ray: &BoxRay,
-        t_max: f32,
-        leaf: impl FnMut(u32, u32, f32) -> f32,
-    ) -> f32 {
-        if self.depth <= SHALLOW_DEPTH {
-            self.traverse_with::<SHALLOW_STACK>(ray, t_max, leaf)
-        } else {
-            self.traverse_with::<STACK>(ray, t_max, leaf)
-        }
+    fn test(&self, ray: &BoxRay, index: u32, t_max: f32) -> ([f32; 4], u32) {
+        let (t, mask) = ray.test(&self[index as usize], t_max);
+        (t.to_array(), mask)
     }
 
     #[inline(always)]
-    fn traverse_with<const N: usize>(
-        &self,
-        ray: &BoxRay,
-        mut t_max: f32,
-        mut leaf: impl FnMut(u32, u32, f32) -> f32,
-    ) -> f32 {
-        if self.nodes.is_empty() {
-            return t_max;
+    fn entry(&self, index: u32, i: usize) -> u32 {
+        let node = &self[index as usize];
+        debug_assert_ne!(node.child[i], EMPTY);
+        node.child[i] << COUNT_BITS | node.count[i]
+    }
+}
+
+/// A nearest-first traversal in progress: [`Walk::next_leaf`] hands the
+/// caller one leaf at a time, so that the caller's leaf test is its own
+/// code (inlined with everything around it into the function compiled for
+/// the CPU's instruction set, which a callback was not). `N` stack entries
+/// are enough for any tree this code builds.
+pub struct Walk<T, const W: usize, const N: usize> {
+    nodes: T,
+    ray: BoxRay,
+    // Not zeroed: a deep tree's stack is kilobytes, and clearing it for
+    // every ray (and again for every instance it enters) cost the mesh
+    // scenes a tenth of their time in `memset`.
+    stack: [MaybeUninit<(u32, f32)>; N],
+    top: usize,
+    /// The nearest child hit goes on at once, without the stack.
+    next: Option<(u32, f32)>,
+}
+
+/// A walk of a four-wide [`Bvh`].
+pub type Walk4<'a> = Walk<&'a [BvhNode], 4, STACK>;
+
+impl<T: Nodes<W>, const W: usize, const N: usize> Walk<T, W, N> {
+    /// A walk from stack entry `start` (node 0: `Some(0)`; nothing to
+    /// visit: `None`).
+    #[inline(always)]
+    pub(super) fn new(nodes: T, ray: BoxRay, start: Option<u32>) -> Self {
+        Self {
+            nodes,
+            ray,
+            stack: [MaybeUninit::uninit(); N],
+            top: 0,
+            next: start.map(|e| (e, 0.0)),
         }
+    }
+
+    /// The next leaf the ray may meet before `t_max` (the caller's nearest
+    /// hit so far), as (first slot, count); `None` when there is none.
+    #[inline(always)]
+    pub fn next_leaf(&mut self, t_max: f32) -> Option<(u32, u32)> {
         const MASK: u32 = (1 << COUNT_BITS) - 1;
-        // Not zeroed: a deep tree's stack is 1.5 KB, and clearing it for
-        // every ray (and again for every instance it enters) cost the mesh
-        // scenes a tenth of their time in `memset`.
-        let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); N];
-        let mut top = 0;
-        // The nearest child hit goes on at once, without the stack.
-        let mut next = Some((0u32, 0.0f32));
         loop {
-            let (entry, t_near) = match next.take() {
+            let (entry, t_near) = match self.next.take() {
                 Some(e) => e,
-                None if top == 0 => break,
+                None if self.top == 0 => return None,
                 None => {
-                    top -= 1;
+                    self.top -= 1;
                     // SAFETY: entries below `top` were all written (pushes
                     // write `stack[top..top + n - 1]` before raising `top`).
                     #[allow(unsafe_code)]
                     unsafe {
-                        stack[top].assume_init()
+                        self.stack[self.top].assume_init()
                     }
                 }
             };
@@ -160,20 +186,16 @@ impl Bvh {
             }
             let (child, count) = (entry >> COUNT_BITS, entry & MASK);
             if count > 0 {
-                t_max = leaf(child, count, t_max);
-                continue;
+                return Some((child, count));
             }
-            let node = &self.nodes[child as usize];
-            let (t, mut mask) = ray.test(node, t_max);
-            let t = t.to_array();
+            let (t, mut mask) = self.nodes.test(&self.ray, child, t_max);
             // The children hit, sorted by entry distance, nearest last.
-            let mut hits = [(0u32, 0.0f32); 4];
+            let mut hits = [(0u32, 0.0f32); W];
             let mut n = 0;
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                debug_assert_ne!(node.child[i], EMPTY);
-                let entry = (node.child[i] << COUNT_BITS | node.count[i], t[i]);
+                let entry = (self.nodes.entry(child, i), t[i]);
                 let mut j = n;
                 while j > 0 && hits[j - 1].1 < entry.1 {
                     hits[j] = hits[j - 1];
@@ -183,12 +205,39 @@ impl Bvh {
                 n += 1;
             }
             if n > 0 {
-                next = Some(hits[n - 1]);
-                for (slot, hit) in stack[top..top + n - 1].iter_mut().zip(&hits[..n - 1]) {
+                self.next = Some(hits[n - 1]);
+                let top = self.top;
+                for (slot, hit) in self.stack[top..top + n - 1].iter_mut().zip(&hits[..n - 1]) {
                     *slot = MaybeUninit::new(*hit);
                 }
-                top += n - 1;
+                self.top += n - 1;
             }
+        }
+    }
+}
+
+impl Bvh {
+    /// A nearest-first walk of the leaves `ray` may meet.
+    #[inline(always)]
+    pub fn walk(&self, ray: BoxRay) -> Walk4<'_> {
+        let start = (!self.nodes.is_empty()).then_some(0);
+        Walk::new(self.nodes.as_slice(), ray, start)
+    }
+
+    /// Visits the leaves that `ray` may meet before `t_max`, nearest box
+    /// first. `leaf(first_slot, count, t_max)` tests a leaf's primitives
+    /// and returns the (possibly nearer) `t_max` to go on with; the last
+    /// one is returned.
+    #[inline(always)]
+    pub fn traverse(
+        &self,
+        ray: &BoxRay,
+        mut t_max: f32,
+        mut leaf: impl FnMut(u32, u32, f32) -> f32,
+    ) -> f32 {
+        let mut walk = self.walk(*ray);
+        while let Some((first, count)) = walk.next_leaf(t_max) {
+            t_max = leaf(first, count, t_max);
         }
         t_max
     }

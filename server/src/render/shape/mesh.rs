@@ -7,7 +7,7 @@
 //! OpenCL kernel reads too), so that a leaf reads its triangles in sequence;
 //! the indexed form stays for shading normals and materials.
 
-use crate::render::bvh::{Aabb, Bvh, MAX_LEAF};
+use crate::render::bvh::{Aabb, Bvh, WideBvh, MAX_LEAF};
 use crate::render::math::Vec3A;
 use crate::render::shape::{TriPack, TriVerts};
 use rayon::prelude::*;
@@ -51,6 +51,9 @@ pub struct Mesh {
     /// Number of material slots (one more than the largest in `materials`).
     pub material_slots: u32,
     pub bvh: Bvh,
+    /// The same hierarchy eight wide, which the CPU traverses (the kernel
+    /// reads `bvh`).
+    pub wide: WideBvh,
     /// The triangles in leaf-slot order.
     pub tris: Vec<TriVerts>,
     /// Each leaf's triangles packed for the CPU's four-wide test: the
@@ -158,7 +161,7 @@ impl Mesh {
         if boxes.len() > Bvh::MAX_PRIMS / MAX_LEAF {
             return Err(MeshError::TooMany(boxes.len()));
         }
-        let bvh = Bvh::build(&boxes).aligned_leaves();
+        let (bvh, wide) = Bvh::build_pair(&boxes);
         let tris: Vec<TriVerts> = bvh
             .prims
             .par_iter()
@@ -178,6 +181,7 @@ impl Mesh {
             materials,
             material_slots,
             bvh,
+            wide,
             tris,
             packs,
         })
@@ -252,6 +256,7 @@ impl Mesh {
             + self.colors.as_ref().map_or(0, |c| c.len() * 12)
             + self.triangles.len() * 16
             + self.bvh.memory_bytes()
+            + self.wide.memory_bytes()
             + self.tris.len() * std::mem::size_of::<TriVerts>()
             + self.packs.len() * std::mem::size_of::<TriPack>()
     }

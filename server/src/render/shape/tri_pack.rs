@@ -80,19 +80,10 @@ impl TriRay {
     /// [`TriRay::intersect`] for the pack's four triangles at once.
     #[inline(always)]
     pub fn intersect4(&self, pack: &TriPack, t_max: f32) -> PackHits {
+        // Plain functions, no closures: in the render loop's large function
+        // the compiler may leave a closure out of line, without its AVX2.
         let o = self.origin;
-        let row = |k: usize| Vec4::from_array(pack.p[k]);
-        let rel = |v: usize| {
-            (
-                row(3 * v) - Vec4::splat(o.x),
-                row(3 * v + 1) - Vec4::splat(o.y),
-                row(3 * v + 2) - Vec4::splat(o.z),
-            )
-        };
-        let dot = |r: Vec3A, (x, y, z): (Vec4, Vec4, Vec4)| {
-            Vec4::splat(r.x) * x + Vec4::splat(r.y) * y + Vec4::splat(r.z) * z
-        };
-        let (a, b, c) = (rel(0), rel(1), rel(2));
+        let (a, b, c) = (rel(pack, 0, o), rel(pack, 1, o), rel(pack, 2, o));
         let (ax, ay) = (dot(self.row_x, a), dot(self.row_y, a));
         let (bx, by) = (dot(self.row_x, b), dot(self.row_y, b));
         let (cx, cy) = (dot(self.row_x, c), dot(self.row_y, c));
@@ -122,6 +113,23 @@ impl TriRay {
             scalar,
         }
     }
+}
+
+/// Vertex `v` of the pack's four triangles, relative to `o`.
+#[inline(always)]
+fn rel(pack: &TriPack, v: usize, o: Vec3A) -> (Vec4, Vec4, Vec4) {
+    let p = &pack.p;
+    (
+        Vec4::from_array(p[3 * v]) - Vec4::splat(o.x),
+        Vec4::from_array(p[3 * v + 1]) - Vec4::splat(o.y),
+        Vec4::from_array(p[3 * v + 2]) - Vec4::splat(o.z),
+    )
+}
+
+/// `r` dotted with each lane's (x, y, z).
+#[inline(always)]
+fn dot(r: Vec3A, (x, y, z): (Vec4, Vec4, Vec4)) -> Vec4 {
+    Vec4::splat(r.x) * x + Vec4::splat(r.y) * y + Vec4::splat(r.z) * z
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@
 use super::{Hit, Surface};
 use crate::render::alpha::AlphaTest;
 use crate::render::bvh::{BoxRay, MAX_LEAF};
+use crate::render::isa::Isa;
 use crate::render::math::{gamma, Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::shape::{hit_point, Mesh, TriRay};
@@ -94,8 +95,9 @@ impl Instance {
     /// Offers this instance's nearest triangle hit (other than triangle
     /// `skip`) to `best`; `BRUTE` tests every triangle instead of the BVH.
     #[inline(always)]
-    pub(super) fn offer<const BRUTE: bool>(
+    pub(super) fn offer<const BRUTE: bool, I: Isa>(
         &self,
+        isa: I,
         id: u32,
         (ray, tri): (&Ray, Option<&TriRay>),
         skip: u32,
@@ -138,8 +140,8 @@ impl Instance {
         }
         // A leaf's triangles four at a time, offered in slot order as the
         // scalar loop above offers them (see `shape::tri_pack`).
-        let t_max = best.t;
-        let mut leaf = |first: u32, _: u32, _: f32| {
+        let mut walk = mesh.wide.walk(BoxRay::new(o, d), isa);
+        while let Some((first, _)) = walk.next_leaf(best.t) {
             let pack = &mesh.packs[first as usize / MAX_LEAF];
             let found = tri_ray.intersect4(pack, best.t);
             let mut lanes = (found.hits | found.scalar) & pack.lanes();
@@ -156,17 +158,6 @@ impl Instance {
                 } else if found.t[lane] < best.t && stops(index, found.bary(lane)) {
                     best.offer(found.t[lane], id, index, found.bary(lane));
                 }
-            }
-            best.t
-        };
-        // A mesh of one leaf (a wall's two triangles) skips its node: the
-        // world's BVH already tested the same box, and the triangles decide.
-        match mesh.bvh.single_leaf() {
-            Some((first, count)) => {
-                leaf(first, count, f32::INFINITY);
-            }
-            None => {
-                mesh.bvh.traverse(&BoxRay::new(o, d), t_max, leaf);
             }
         }
     }

@@ -28,7 +28,7 @@ pub use build::{scan_cost, AccelChoice, SCAN_MAX_COST};
 pub use instance::Instance;
 
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
-use crate::render::isa::Isa;
+use crate::render::isa::{Isa, Portable};
 use crate::render::light::{EnvLight, Lights, Receiver};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::{DVec3, Vec3A};
@@ -283,21 +283,18 @@ impl World {
                 let tri = self
                     .translated_meshes
                     .then(|| TriRay::new(ray.origin, ray.dir));
-                bvh.traverse(
-                    &BoxRay::new(ray.origin, ray.dir),
-                    best.t,
-                    |first, count, _| {
-                        for slot in first..first + count {
-                            self.offer_object::<false>(
-                                bvh.prims[slot as usize],
-                                (ray, tri.as_ref()),
-                                from,
-                                &mut best,
-                            );
-                        }
-                        best.t
-                    },
-                );
+                let mut walk = bvh.walk(BoxRay::new(ray.origin, ray.dir));
+                while let Some((first, count)) = walk.next_leaf(best.t) {
+                    for slot in first..first + count {
+                        self.offer_object::<false, I>(
+                            isa,
+                            bvh.prims[slot as usize],
+                            (ray, tri.as_ref()),
+                            from,
+                            &mut best,
+                        );
+                    }
+                }
                 best
             }
         };
@@ -310,14 +307,15 @@ impl World {
         let mut best = Hit::NONE;
         let tri = TriRay::new(ray.origin, ray.dir);
         for id in 0..self.objects.len() as u32 {
-            self.offer_object::<true>(id, (ray, Some(&tri)), from, &mut best);
+            self.offer_object::<true, _>(Portable, id, (ray, Some(&tri)), from, &mut best);
         }
         (best.t < f32::INFINITY).then_some(best)
     }
 
     #[inline(always)]
-    fn offer_object<const BRUTE: bool>(
+    fn offer_object<const BRUTE: bool, I: Isa>(
         &self,
+        isa: I,
         id: u32,
         (ray, tri): (&Ray, Option<&TriRay>),
         from: Origin,
@@ -343,7 +341,7 @@ impl World {
                 } else {
                     NO_PRIM
                 };
-                self.instances[*i as usize].offer::<BRUTE>(id, (ray, tri), skip, best);
+                self.instances[*i as usize].offer::<BRUTE, I>(isa, id, (ray, tri), skip, best);
             }
         }
     }
