@@ -124,20 +124,25 @@ pub(super) fn meets(b: &Aabb, o: Vec3A, d: Vec3A, t_max: f64) -> bool {
     t0 <= t1
 }
 
+/// Ray `i` of a set through `random_boxes`' space: origin, direction
+/// (every fourth axis-parallel: zero components) and segment length.
+pub(super) fn test_ray(seed: u64, i: u64) -> (Vec3A, Vec3A, f32) {
+    let mut s = Sampler::new(seed, i, 0);
+    let o = Vec3A::new(s.next_f32(), s.next_f32(), s.next_f32()) * 120.0 - 10.0;
+    let mut d = Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize();
+    if i.is_multiple_of(4) {
+        d = [Vec3A::X, -Vec3A::Y, Vec3A::Z, -Vec3A::X][(i / 4 % 4) as usize];
+    }
+    let t_max = if i.is_multiple_of(3) { 40.0 } else { f32::INFINITY };
+    (o, d, t_max)
+}
+
 #[test]
 fn traversal_visits_every_leaf_whose_primitive_the_ray_meets() {
     let boxes = random_boxes(5_000, 7);
     let bvh = Bvh::build(&boxes);
     for i in 0..2_000u64 {
-        let mut s = Sampler::new(99, i, 0);
-        let o = Vec3A::new(s.next_f32(), s.next_f32(), s.next_f32()) * 120.0 - 10.0;
-        let mut d =
-            Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize();
-        // Axis-parallel rays too: zero direction components.
-        if i % 4 == 0 {
-            d = [Vec3A::X, -Vec3A::Y, Vec3A::Z, -Vec3A::X][(i / 4 % 4) as usize];
-        }
-        let t_max = if i % 3 == 0 { 40.0 } else { f32::INFINITY };
+        let (o, d, t_max) = test_ray(99, i);
         let mut visited = vec![false; boxes.len()];
         bvh.traverse(&BoxRay::new(o, d), t_max, |first, count, t| {
             for slot in first..first + count {

@@ -39,7 +39,7 @@ const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 const _: () = assert!(super::MAX_LEAF < 1 << COUNT_BITS);
 
 impl WideNode {
-    const EMPTY_NODE: WideNode = WideNode {
+    pub(super) const EMPTY_NODE: WideNode = WideNode {
         bounds: [
             [f32::INFINITY; WIDTH],
             [f32::INFINITY; WIDTH],
@@ -52,7 +52,7 @@ impl WideNode {
         count: [0; WIDTH],
     };
 
-    fn set_child(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
+    pub(super) fn set_child(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
         for a in 0..3 {
             self.bounds[a][i] = bounds.min[a];
             self.bounds[a + 3][i] = bounds.max[a];
@@ -78,23 +78,7 @@ impl WideBvh {
     /// The binary tree collapsed to eight children a node (as `flatten`
     /// collapses it to four); leaves keep the tree's slots.
     pub(super) fn from_tree(root: Option<&Node2>) -> WideBvh {
-        let Some(root) = root else {
-            return WideBvh::default();
-        };
-        let mut nodes = Vec::new();
-        let depth = match root {
-            Node2::Leaf {
-                bounds,
-                start,
-                count,
-            } => {
-                let mut node = WideNode::EMPTY_NODE;
-                node.set_child(0, *bounds, *start, *count);
-                nodes.push(node);
-                1
-            }
-            Node2::Inner { .. } => emit(root, &mut nodes),
-        };
+        let (nodes, depth) = super::flatten::collapse::<WideNode>(root);
         let start = start_of(&nodes);
         WideBvh {
             nodes,
@@ -141,48 +125,6 @@ fn start_of(nodes: &[WideNode]) -> Option<u32> {
         }
         _ => Some(0),
     }
-}
-
-/// Appends the wide node for inner node `node` and its subtree; its depth.
-/// Like `flatten`: takes the two children, then opens the inner child with
-/// the largest surface (the one most rays would enter) until it holds eight.
-fn emit(node: &Node2, out: &mut Vec<WideNode>) -> u32 {
-    let Node2::Inner { children, .. } = node else {
-        unreachable!("emit is only called on inner nodes");
-    };
-    let mut kids: Vec<&Node2> = vec![&children[0], &children[1]];
-    while kids.len() < WIDTH {
-        let widest = kids
-            .iter()
-            .enumerate()
-            .filter(|(_, k)| matches!(k, Node2::Inner { .. }))
-            .max_by(|(_, a), (_, b)| a.bounds().half_area().total_cmp(&b.bounds().half_area()))
-            .map(|(i, _)| i);
-        let Some(i) = widest else { break };
-        let Node2::Inner { children, .. } = kids[i] else {
-            break;
-        };
-        kids[i] = &children[0];
-        kids.push(&children[1]);
-    }
-    let at = out.len();
-    out.push(WideNode::EMPTY_NODE);
-    let mut depth = 0;
-    for (slot, kid) in kids.into_iter().enumerate() {
-        match kid {
-            Node2::Leaf {
-                bounds,
-                start,
-                count,
-            } => out[at].set_child(slot, *bounds, *start, *count),
-            Node2::Inner { bounds, .. } => {
-                let child = out.len() as u32;
-                depth = depth.max(emit(kid, out));
-                out[at].set_child(slot, *bounds, child, 0);
-            }
-        }
-    }
-    depth + 1
 }
 
 /// How this CPU tests a wide node's eight boxes against one ray: entry

@@ -2,7 +2,7 @@
 //! boxes that hold them, fuller nodes, traversals that meet every leaf a
 //! ray meets, and the AVX2 node test equal to the portable one bit for bit.
 
-use super::tests::{meets, random_boxes};
+use super::tests::{meets, random_boxes, test_ray};
 use super::*;
 use crate::render::math::Vec3A;
 use crate::render::sampler::Sampler;
@@ -140,14 +140,7 @@ fn wide_traversal_meets_every_box(test: impl WideTest) {
     let boxes = random_boxes(5_000, 7);
     let (bvh, wide) = Bvh::build_pair(&boxes);
     for i in 0..2_000u64 {
-        let mut s = Sampler::new(98, i, 0);
-        let o = Vec3A::new(s.next_f32(), s.next_f32(), s.next_f32()) * 120.0 - 10.0;
-        let mut d =
-            Vec3A::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize();
-        if i % 4 == 0 {
-            d = [Vec3A::X, -Vec3A::Y, Vec3A::Z, -Vec3A::X][(i / 4 % 4) as usize];
-        }
-        let t_max = if i % 3 == 0 { 40.0 } else { f32::INFINITY };
+        let (o, d, t_max) = test_ray(98, i);
         let seen = visited(&bvh, &wide, test, o, d, t_max);
         for (p, b) in boxes.iter().enumerate() {
             if meets(b, o, d, f64::from(t_max)) {
