@@ -79,12 +79,18 @@ impl BvhNode {
     }
 
     fn set_child(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
-        for a in 0..3 {
-            self.bounds[a][i] = bounds.min[a];
-            self.bounds[a + 3][i] = bounds.max[a];
-        }
+        set_slot(&mut self.bounds, i, bounds);
         self.child[i] = child;
         self.count[i] = count;
+    }
+}
+
+/// Writes `b` into slot `i` of a node's bounds rows (min x, y, z, max x,
+/// y, z), for nodes of any width.
+fn set_slot<const W: usize>(rows: &mut [[f32; W]; 6], i: usize, b: Aabb) {
+    for a in 0..3 {
+        rows[a][i] = b.min[a];
+        rows[a + 3][i] = b.max[a];
     }
 }
 
@@ -110,6 +116,11 @@ impl Bvh {
     /// primitive can never be hit: such boxes are placed but never split on).
     /// At most [`Bvh::MAX_PRIMS`] of them.
     pub fn build(boxes: &[Aabb]) -> Bvh {
+        Self::build_with_tree(boxes).0
+    }
+
+    /// [`Bvh::build`], and the binary tree it was collapsed from.
+    fn build_with_tree(boxes: &[Aabb]) -> (Bvh, Option<build::Node2>) {
         assert!(
             boxes.len() <= Self::MAX_PRIMS,
             "too many primitives for one BVH"
@@ -117,7 +128,7 @@ impl Bvh {
         let (tree, prims) = build::build(boxes);
         let mut bvh = flatten::flatten(tree.as_ref());
         bvh.prims = prims;
-        bvh
+        (bvh, tree)
     }
 
     /// A mesh's two hierarchies over the same leaves: the four-wide one with
@@ -125,13 +136,7 @@ impl Bvh {
     /// reads, and its eight-wide twin ([`WideBvh`]), which the CPU
     /// traverses. At most [`Bvh::MAX_PRIMS`] / [`MAX_LEAF`] primitives.
     pub fn build_pair(boxes: &[Aabb]) -> (Bvh, WideBvh) {
-        assert!(
-            boxes.len() <= Self::MAX_PRIMS,
-            "too many primitives for one BVH"
-        );
-        let (tree, prims) = build::build(boxes);
-        let mut bvh = flatten::flatten(tree.as_ref());
-        bvh.prims = prims;
+        let (bvh, tree) = Self::build_with_tree(boxes);
         let mut wide = WideBvh::from_tree(tree.as_ref());
         let (bvh, firsts) = bvh.align();
         wide.move_leaves(|first| {

@@ -133,7 +133,11 @@ pub(super) fn test_ray(seed: u64, i: u64) -> (Vec3A, Vec3A, f32) {
     if i.is_multiple_of(4) {
         d = [Vec3A::X, -Vec3A::Y, Vec3A::Z, -Vec3A::X][(i / 4 % 4) as usize];
     }
-    let t_max = if i.is_multiple_of(3) { 40.0 } else { f32::INFINITY };
+    let t_max = if i.is_multiple_of(3) {
+        40.0
+    } else {
+        f32::INFINITY
+    };
     (o, d, t_max)
 }
 

@@ -53,10 +53,7 @@ impl WideNode {
     };
 
     pub(super) fn set_child(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
-        for a in 0..3 {
-            self.bounds[a][i] = bounds.min[a];
-            self.bounds[a + 3][i] = bounds.max[a];
-        }
+        super::set_slot(&mut self.bounds, i, bounds);
         self.child[i] = child;
         self.count[i] = count;
     }
