@@ -1,11 +1,11 @@
 //! The binary tree collapsed to `W` children per node (four for
-//! [`BvhNode`], eight for [`WideNode`]): each node takes its two children,
+//! [`BvhNode`], eight for `WideNode`): each node takes its two children,
 //! then repeatedly opens the inner child with the largest surface (the one
 //! most rays would have to enter) until it holds `W`. Nodes are laid out
 //! depth first, parents before children.
 
 use super::build::Node2;
-use super::{Aabb, Bvh, BvhNode, WideNode};
+use super::{Aabb, Bvh, BvhNode};
 
 /// A node of child slots, as collapsing fills it.
 pub(super) trait Slots: Sized {
@@ -18,14 +18,6 @@ pub(super) trait Slots: Sized {
 impl Slots for BvhNode {
     const WIDTH: usize = 4;
     const EMPTY: Self = BvhNode::EMPTY_NODE;
-    fn set(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
-        self.set_child(i, bounds, child, count);
-    }
-}
-
-impl Slots for WideNode {
-    const WIDTH: usize = super::wide::WIDTH;
-    const EMPTY: Self = WideNode::EMPTY_NODE;
     fn set(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
         self.set_child(i, bounds, child, count);
     }

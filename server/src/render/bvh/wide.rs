@@ -10,6 +10,7 @@
 //! them; the OpenCL kernel keeps reading the four-wide nodes.
 
 use super::build::Node2;
+use super::flatten::{collapse, Slots};
 use super::traverse::{BoxRay, Nodes, Walk, COUNT_BITS};
 use super::{Aabb, EMPTY};
 
@@ -59,6 +60,14 @@ impl WideNode {
     }
 }
 
+impl Slots for WideNode {
+    const WIDTH: usize = WIDTH;
+    const EMPTY: Self = WideNode::EMPTY_NODE;
+    fn set(&mut self, i: usize, bounds: Aabb, child: u32, count: u32) {
+        self.set_child(i, bounds, child, count);
+    }
+}
+
 /// The eight-wide hierarchy of a [`Bvh`]; node 0 is the root.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct WideBvh {
@@ -75,7 +84,7 @@ impl WideBvh {
     /// The binary tree collapsed to eight children a node (as `flatten`
     /// collapses it to four); leaves keep the tree's slots.
     pub(super) fn from_tree(root: Option<&Node2>) -> WideBvh {
-        let (nodes, depth) = super::flatten::collapse::<WideNode>(root);
+        let (nodes, depth) = collapse::<WideNode>(root);
         let start = start_of(&nodes);
         WideBvh {
             nodes,
