@@ -41,21 +41,25 @@ pub struct BoxRay {
 impl BoxRay {
     #[inline(always)]
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
-        let inv = |d: f32| 1.0 / d;
+        // One vector division: the same bits as three scalar ones.
+        let inv = Vec3A::ONE / dir;
         let neg = |d: f32| usize::from(d.is_sign_negative());
         Self {
-            org: [
-                Vec4::splat(origin.x),
-                Vec4::splat(origin.y),
-                Vec4::splat(origin.z),
-            ],
-            inv: [
-                Vec4::splat(inv(dir.x)),
-                Vec4::splat(inv(dir.y)),
-                Vec4::splat(inv(dir.z)),
-            ],
+            org: splat3(origin),
+            inv: splat3(inv),
             near: [3 * neg(dir.x), 1 + 3 * neg(dir.y), 2 + 3 * neg(dir.z)],
             far: [3 - 3 * neg(dir.x), 4 - 3 * neg(dir.y), 5 - 3 * neg(dir.z)],
+        }
+    }
+
+    /// The same ray (direction) from `origin`: what a ray becomes in the
+    /// space of a mesh placed by a translation alone, without redoing the
+    /// divisions. The same bits as `BoxRay::new(origin, dir)`.
+    #[inline(always)]
+    pub fn from_origin(&self, origin: Vec3A) -> Self {
+        Self {
+            org: splat3(origin),
+            ..*self
         }
     }
 
@@ -83,6 +87,12 @@ impl BoxRay {
         let t_far = min_or(fz, min_or(fy, min_or(fx, Vec4::splat(t_max)))) * ROBUST;
         (t_near, t_near.cmple(t_far).bitmask())
     }
+}
+
+/// Each of `v`'s three components in every lane.
+#[inline(always)]
+fn splat3(v: Vec3A) -> [Vec4; 3] {
+    [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)]
 }
 
 /// max(x, acc) per lane, or `acc` where x is NaN.

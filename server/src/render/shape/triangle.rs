@@ -88,17 +88,15 @@ impl TriRay {
         if dir[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let unit = |k: usize| {
-            Vec3A::from(std::array::from_fn::<f32, 3, _>(|i| {
-                f32::from(u8::from(i == k))
-            }))
-        };
-        let (sx, sy, sz) = (dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+        const UNIT: [Vec3A; 3] = [Vec3A::X, Vec3A::Y, Vec3A::Z];
+        // One vector division: the same bits as three scalar ones.
+        let d = dir.to_array();
+        let s = Vec3A::new(d[kx], d[ky], 1.0) / Vec3A::splat(d[kz]);
         Self {
             origin,
-            row_x: unit(kx) - unit(kz) * sx,
-            row_y: unit(ky) - unit(kz) * sy,
-            row_z: unit(kz) * sz,
+            row_x: UNIT[kx] - UNIT[kz] * s.x,
+            row_y: UNIT[ky] - UNIT[kz] * s.y,
+            row_z: UNIT[kz] * s.z,
         }
     }
 

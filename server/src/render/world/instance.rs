@@ -48,6 +48,27 @@ pub struct Instance {
     pub alpha: Option<Arc<[AlphaTest]>>,
 }
 
+/// A camera-space ray prepared once for every mesh placed by a translation
+/// alone (a wall, identity matrix): such a mesh keeps the ray's direction,
+/// so it reuses the direction's watertight set-up and box reciprocals and
+/// only moves the origin.
+#[derive(Clone, Copy, Debug)]
+pub struct Prepared {
+    tri: TriRay,
+    boxes: BoxRay,
+}
+
+impl Prepared {
+    /// `ray` prepared; `boxes` is `BoxRay::new(ray.origin, ray.dir)`.
+    #[inline(always)]
+    pub fn new(ray: &Ray, boxes: BoxRay) -> Self {
+        Self {
+            tri: TriRay::new(ray.origin, ray.dir),
+            boxes,
+        }
+    }
+}
+
 /// Where rays leaving a triangle start: in object space, off the plane.
 #[derive(Clone, Copy, Debug)]
 pub struct Offset {
@@ -99,20 +120,20 @@ impl Instance {
         &self,
         isa: I,
         id: u32,
-        (ray, tri): (&Ray, Option<&TriRay>),
+        (ray, pre): (&Ray, Option<&Prepared>),
         skip: u32,
         best: &mut Hit,
     ) {
-        // `tri` is `ray` prepared in camera space (there whenever some
+        // `pre` is `ray` prepared in camera space (there whenever some
         // instance is only translated): a mesh moved but not turned or
         // scaled (a wall, identity matrix) reuses its direction.
-        let (o, d, tri_ray) = if let (true, Some(tri)) = (self.translation_only, tri) {
+        let (tri_ray, box_ray) = if let (true, Some(pre)) = (self.translation_only, pre) {
             let o = ray.origin + self.obj_from_cam.translation;
-            (o, ray.dir, tri.from_origin(o))
+            (pre.tri.from_origin(o), pre.boxes.from_origin(o))
         } else {
             let o = self.obj_from_cam.transform_point3a(ray.origin);
             let d = self.obj_from_cam.transform_vector3a(ray.dir);
-            (o, d, TriRay::new(o, d))
+            (TriRay::new(o, d), BoxRay::new(o, d))
         };
         let mesh = &*self.mesh;
         // Whether the ray stops at a triangle it meets (alpha-tested slots).
@@ -140,7 +161,7 @@ impl Instance {
         }
         // A leaf's triangles four at a time, offered in slot order as the
         // scalar loop above offers them (see `shape::tri_pack`).
-        let mut walk = mesh.wide.walk(BoxRay::new(o, d), isa);
+        let mut walk = mesh.wide.walk(box_ray, isa);
         while let Some((first, _)) = walk.next_leaf(best.t) {
             let pack = &mesh.packs[first as usize / MAX_LEAF];
             let found = tri_ray.intersect4(pack, best.t);

@@ -33,7 +33,8 @@ use crate::render::light::{EnvLight, Lights, Receiver};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
 use crate::render::math::{DVec3, Vec3A};
 use crate::render::ray::Ray;
-use crate::render::shape::{Quad, Roots, Sphere, SphereBatch, TriRay};
+use crate::render::shape::{Quad, Roots, Sphere, SphereBatch};
+use instance::Prepared;
 
 /// `prim` of a hit or origin on an object that is not a mesh.
 pub const NO_PRIM: u32 = u32::MAX;
@@ -278,18 +279,19 @@ impl World {
                 } else {
                     scan::nearest(isa, big, &[], ray, from)
                 };
+                let boxes = BoxRay::new(ray.origin, ray.dir);
                 // Only where some instance shares it: scenes of spheres and
                 // quads alone keep their three divisions per ray.
-                let tri = self
+                let pre = self
                     .translated_meshes
-                    .then(|| TriRay::new(ray.origin, ray.dir));
-                let mut walk = bvh.walk(BoxRay::new(ray.origin, ray.dir));
+                    .then(|| Prepared::new(ray, boxes));
+                let mut walk = bvh.walk(boxes);
                 while let Some((first, count)) = walk.next_leaf(best.t) {
                     for slot in first..first + count {
                         self.offer_object::<false, I>(
                             isa,
                             bvh.prims[slot as usize],
-                            (ray, tri.as_ref()),
+                            (ray, pre.as_ref()),
                             from,
                             &mut best,
                         );
@@ -305,9 +307,9 @@ impl World {
     /// without any acceleration: what `intersect` must agree with.
     pub fn intersect_brute(&self, ray: &Ray, from: Origin) -> Option<Hit> {
         let mut best = Hit::NONE;
-        let tri = TriRay::new(ray.origin, ray.dir);
+        let pre = Prepared::new(ray, BoxRay::new(ray.origin, ray.dir));
         for id in 0..self.objects.len() as u32 {
-            self.offer_object::<true, _>(Portable, id, (ray, Some(&tri)), from, &mut best);
+            self.offer_object::<true, _>(Portable, id, (ray, Some(&pre)), from, &mut best);
         }
         (best.t < f32::INFINITY).then_some(best)
     }
@@ -317,7 +319,7 @@ impl World {
         &self,
         isa: I,
         id: u32,
-        (ray, tri): (&Ray, Option<&TriRay>),
+        (ray, pre): (&Ray, Option<&Prepared>),
         from: Origin,
         best: &mut Hit,
     ) {
@@ -341,7 +343,7 @@ impl World {
                 } else {
                     NO_PRIM
                 };
-                self.instances[*i as usize].offer::<BRUTE, I>(isa, id, (ray, tri), skip, best);
+                self.instances[*i as usize].offer::<BRUTE, I>(isa, id, (ray, pre), skip, best);
             }
         }
     }
