@@ -199,6 +199,28 @@ impl<T: Nodes<W>, const W: usize, const N: usize> Walk<T, W, N> {
                 return Some((child, count));
             }
             let (t, mut mask) = self.nodes.test(&self.ray, child, t_max);
+            // One or two children hit (most nodes): no sort loop, and the
+            // order the loop below would give (on a tie, the later child
+            // first).
+            if mask == 0 {
+                continue;
+            }
+            let i0 = mask.trailing_zeros() as usize;
+            let rest = mask & (mask - 1);
+            let a = (self.nodes.entry(child, i0), t[i0]);
+            if rest == 0 {
+                self.next = Some(a);
+                continue;
+            }
+            if rest & (rest - 1) == 0 {
+                let i1 = rest.trailing_zeros() as usize;
+                let b = (self.nodes.entry(child, i1), t[i1]);
+                let (near, far) = if b.1 <= a.1 { (b, a) } else { (a, b) };
+                self.stack[self.top] = MaybeUninit::new(far);
+                self.top += 1;
+                self.next = Some(near);
+                continue;
+            }
             // The children hit, sorted by entry distance, nearest last.
             let mut hits = [(0u32, 0.0f32); W];
             let mut n = 0;
