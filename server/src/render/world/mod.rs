@@ -281,10 +281,8 @@ impl World {
                 };
                 let boxes = BoxRay::new(ray.origin, ray.dir);
                 // Only where some instance shares it: scenes of spheres and
-                // quads alone keep their three divisions per ray.
-                let pre = self
-                    .translated_meshes
-                    .then(|| Prepared::new(ray, boxes));
+                // quads alone skip the triangle set-up.
+                let pre = self.translated_meshes.then(|| Prepared::new(ray, boxes));
                 let mut walk = bvh.walk(boxes);
                 while let Some((first, count)) = walk.next_leaf(best.t) {
                     for slot in first..first + count {
