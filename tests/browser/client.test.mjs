@@ -13,7 +13,7 @@ import path from "node:path";
 import { after, before, describe, it } from "node:test";
 import {
   ARTIFACTS, STATIC_DIR, api, blockDiff, bodyData, canvasStats, compareWithServerFrame, describeDiff,
-  freePort, haltShown, launchBrowser, resume, session, showsRate, sleep, startServer, unreachableControls,
+  freePort, haltShown, launchBrowser, pinFormat, resume, session, showsRate, sleep, startServer, unreachableControls,
   waitFor, waitFrame, watchConsole,
 } from "./harness.mjs";
 
@@ -67,7 +67,9 @@ describe("browser client", { timeout: 600000 }, () => {
     // Halted, the frame shown stays: the canvas must be the server's own
     // frame.png of it, block for block (PNG both ways: exact), and the HUD
     // must say what the status says of it.
+    await pinFormat(page, "png");
     const halted = await haltShown(page, server.base, await id(), 8);
+    assert.equal(await page.$eval("body", (b) => b.dataset.frameFormat), "png");
     const c = await compareWithServerFrame(page, server.base, await id());
     t.diagnostic(describeDiff(c));
     assert.deepEqual([c.width, c.height, c.frameWidth, c.frameHeight], [128, 96, 128, 96]);
@@ -83,6 +85,7 @@ describe("browser client", { timeout: 600000 }, () => {
     assert.equal(Number(err), halted.error_estimate);
     assert.equal(errText, `${(100 * halted.error_estimate).toPrecision(3)} %`);
     await resume(server.base, await id());
+    await pinFormat(page, "auto");
     const d = await bodyData(page);
     assert.match(d.sessionId, /^[0-9a-f]{16}$/);
     assert.equal(d.conn, "live");
@@ -454,13 +457,12 @@ describe("browser client", { timeout: 600000 }, () => {
     // What it shows is the new session's frames. PNG pinned: on a loaded
     // machine the link measured just after the restart can be slow enough
     // that auto picks a lossy format, and this check is exact.
-    await page.selectOption("#stream-format", "png");
-    await page.waitForFunction(() => document.body.dataset.frameFormat === "png", null, { timeout: 20000 });
+    await pinFormat(page, "png");
     await haltShown(page, server.base, newId, 8);
     assert.equal(await page.$eval("body", (b) => b.dataset.frameFormat), "png");
     const c = await compareWithServerFrame(page, server.base, newId);
     assert.ok(c.sentStd > 5 && c.worst <= 1, `renders again: ${describeDiff(c)}`);
-    await page.selectOption("#stream-format", "auto");
+    await pinFormat(page, "auto");
     // Only the connection failures while the server was down were logged.
     const unexpected = errors.filter((e) => !/ERR_CONNECTION_REFUSED|WebSocket connection to .* failed|Failed to load resource/.test(e));
     assert.deepEqual(unexpected, []);

@@ -10,7 +10,7 @@
 
 import assert from "node:assert/strict";
 import { after, before, describe, it } from "node:test";
-import { UNDER_CI, api, openPage, session, waitFor } from "./harness.mjs";
+import { UNDER_CI, api, openPage, pinFormat, session, waitFor } from "./harness.mjs";
 
 /** Mean absolute luminance difference of horizontally adjacent pixels on
  *  the canvas (0..255): the image's pixel noise; the spp shown and whether
@@ -60,7 +60,7 @@ describe("denoising in the browser", { timeout: 180000 }, () => {
     const id = await waitFor("a session", () => page.evaluate(() => window.pathstream.sessionId));
     // PNG pinned: on a loaded machine auto may switch to a lossy format
     // between the frames compared, and lossy coding changes roughness.
-    await page.selectOption("#stream-format", "png");
+    await pinFormat(page, "png");
     assert.equal(await page.inputValue("#q-denoise"), "off");
     assert.ok(await page.isHidden("#hud-denoise-row"), "no image row while the session does not denoise");
 

@@ -172,6 +172,16 @@ export async function bodyData(page) {
   return page.evaluate(() => ({ ...document.body.dataset }));
 }
 
+/** Pins the stream format in the page's panel and, unless it is "auto",
+ *  waits for a frame drawn in it. Exact comparisons pin "png": on a loaded
+ *  machine auto may measure a slow link and switch to a lossy format
+ *  between the frames a test compares. */
+export async function pinFormat(page, format, { timeout = 20000 } = {}) {
+  await page.selectOption("#stream-format", format);
+  if (format === "auto") return;
+  await page.waitForFunction((f) => document.body.dataset.frameFormat === f, format, { timeout, polling: 50 });
+}
+
 /** Waits until the canvas shows a frame of at least `spp` samples, from a
  *  generation above `after` when given. Returns {spp, generation}. */
 export async function waitFrame(page, { spp = 1, after = -1, timeout = 30000 } = {}) {
