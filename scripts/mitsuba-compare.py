@@ -29,49 +29,19 @@ Mitsuba's `independent`, its `sobol` (Owen-scrambled) against Mitsuba's
 """
 
 import argparse
-import json
 import os
-import re
-import subprocess
-import sys
 import time
 
 import numpy as np
 
-
-def run(cmd):
-    out = subprocess.run(cmd, capture_output=True, text=True)
-    if out.returncode != 0:
-        sys.exit(f"{' '.join(cmd)} failed:\n{out.stderr}")
-    return out.stdout + out.stderr
-
-
-def pathstream_render(exe, scene, args, spp, sampler, seed, path):
-    text = run([
-        exe, "render", "--scene", scene, "--width", str(args.size),
-        "--height", str(args.size), "--spp", str(spp),
-        "--max-depth", str(args.max_depth), "--rr-depth", "5",
-        "--filter", "box", "--sampler", sampler, "--adaptive", "off",
-        "--backend", "cpu", "--seed", str(seed), "--out", path,
-    ])
-    m = re.search(r"in ([0-9.]+) s,", text)
-    if not m:
-        sys.exit(f"no render time in: {text}")
-    return float(m.group(1))
-
-
-def rel_error(exe, reference, image):
-    text = run([exe, "diff", reference, image])
-    m = re.search(r"relative RMS error ([0-9.]+)%", text)
-    if not m:
-        sys.exit(f"no error in: {text}")
-    return float(m.group(1)) / 100.0
+from compare_common import (
+    diffuse_meshes, pathstream_render, print_summary, rel_error, scene_and_reference,
+)
 
 
 def mitsuba_scene(mi, scene, args, out_dir):
     """The scene JSON as a Mitsuba scene: meshes through PLY files written
     by Mitsuba itself, so that both read the same f32 data."""
-    mats = scene["materials"]
     d = {
         "type": "scene",
         "integrator": {
@@ -98,15 +68,10 @@ def mitsuba_scene(mi, scene, args, out_dir):
         },
         "sampler": {"type": "independent"},
     }
-    for i, obj in enumerate(scene["objects"]):
-        if obj["type"] != "mesh":
-            sys.exit(f"object {i}: only meshes are compared (this is {obj['type']})")
+    for i, obj, mat in diffuse_meshes(scene):
         data = obj["data"]
         pos = np.array(data["positions"], dtype=np.float32)
         tri = np.array(data["triangles"], dtype=np.uint32)
-        mat = mats[obj["material"]]
-        if mat["type"] != "diffuse":
-            sys.exit(f"object {i}: only diffuse materials are compared")
         emitting = any(c > 0 for c in mat.get("emission", [0, 0, 0]))
         if emitting:
             # Mitsuba's area lights emit on the front side only; the lamp
@@ -143,8 +108,6 @@ def mitsuba_scene(mi, scene, args, out_dir):
         }
         t = obj.get("transform")
         if t:
-            if set(t) - {"translate", "scale"}:
-                sys.exit(f"object {i}: only translate and scale transforms are compared")
             m = mi.ScalarTransform4f().translate(t.get("translate", [0, 0, 0]))
             s = t.get("scale", 1.0)
             shape["to_world"] = m @ mi.ScalarTransform4f().scale(
@@ -179,17 +142,6 @@ def mitsuba_render(mi, dr, scene_dict, args, spp, sampler, seed, path):
     return seconds
 
 
-def time_to(target, rows):
-    """Seconds to reach `target` error from the renders (spp, s, error):
-    the cheapest render that reached it, else the last one extrapolated by
-    error ~ 1/sqrt(time)."""
-    for spp, s, err in rows:
-        if err <= target:
-            return s * (err / target) ** 2, spp
-    spp, s, err = rows[-1]
-    return s * (err / target) ** 2, None
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scene", default="cornell-mesh")
@@ -203,7 +155,6 @@ def main():
     ap.add_argument("--out", default="target/mitsuba-compare")
     args = ap.parse_args()
     spps = [int(s) for s in args.spp.split(",")]
-    os.makedirs(args.out, exist_ok=True)
     os.environ["RAYON_NUM_THREADS"] = str(args.threads)
 
     import drjit as dr
@@ -212,18 +163,7 @@ def main():
     mi.set_variant(args.variant)
     dr.set_thread_count(args.threads)
 
-    scene_file = os.path.join(args.out, f"{args.scene}.json")
-    with open(scene_file, "w") as f:
-        f.write(run([args.exe, "scenes", "--json", args.scene]))
-    with open(scene_file) as f:
-        scene = json.load(f)
-
-    reference = os.path.join(
-        args.out, f"{args.scene}-{args.size}-d{args.max_depth}-ref{args.reference_spp}.pfm"
-    )
-    if not os.path.exists(reference):
-        print(f"reference: pathstream, {args.reference_spp} spp ...", flush=True)
-        pathstream_render(args.exe, scene_file, args, args.reference_spp, "sobol", 7, reference)
+    scene_file, scene, reference = scene_and_reference(args)
 
     d = mitsuba_scene(mi, scene, args, args.out)
     runs = [
@@ -257,14 +197,7 @@ def main():
                 flush=True,
             )
         summary.append((who, sampler, rows))
-    print("\n| renderer | sampler | M samples/s (median) | seconds to 1% error |")
-    print("| --- | --- | ---: | ---: |")
-    for who, sampler, rows in summary:
-        rate = np.median([spp * pixels / s / 1e6 for spp, s, _ in rows])
-        t, reached = time_to(0.01, rows)
-        how = f"at {reached} spp" if reached else "extrapolated"
-        print(f"| {who} | {sampler} | {rate:.2f} | {t:.2f} ({how}) |")
-
+    print_summary(summary, pixels)
 
 if __name__ == "__main__":
     main()

@@ -1,0 +1,109 @@
+"""What the side-by-side comparison scripts share (`mitsuba-compare.py`,
+`cycles-luxcore-compare.py`): pathstream's renders and error measure, the
+scene and its long reference, PFM output, and the time-to-error summary."""
+
+import json
+import os
+import re
+import subprocess
+import sys
+
+import numpy as np
+
+
+def run(cmd):
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{out.stderr}")
+    return out.stdout + out.stderr
+
+
+def pathstream_render(exe, scene, args, spp, sampler, seed, path):
+    """Renders `scene` (a JSON file) to `path`; the render's own seconds."""
+    text = run([
+        exe, "render", "--scene", scene, "--width", str(args.size),
+        "--height", str(args.size), "--spp", str(spp),
+        "--max-depth", str(args.max_depth), "--rr-depth", "5",
+        "--filter", "box", "--sampler", sampler, "--adaptive", "off",
+        "--backend", "cpu", "--seed", str(seed), "--out", path,
+    ])
+    m = re.search(r"in ([0-9.]+) s,", text)
+    if not m:
+        sys.exit(f"no render time in: {text}")
+    return float(m.group(1))
+
+
+def rel_error(exe, reference, image):
+    """Relative RMS error of `image` against `reference` (`pathstream diff`)."""
+    text = run([exe, "diff", reference, image])
+    m = re.search(r"relative RMS error ([0-9.]+)%", text)
+    if not m:
+        sys.exit(f"no error in: {text}")
+    return float(m.group(1)) / 100.0
+
+
+def write_pfm(path, rgb_bottom_up):
+    """A (height, width, 3) float array, its first row the image's bottom
+    (PFM's own order), as a little-endian PFM file."""
+    h, w, _ = rgb_bottom_up.shape
+    with open(path, "wb") as f:
+        f.write(f"PF\n{w} {h}\n-1.0\n".encode())
+        f.write(np.ascontiguousarray(rgb_bottom_up, dtype="<f4").tobytes())
+
+
+def scene_and_reference(args):
+    """pathstream's JSON of `args.scene` (written to `args.out`), parsed,
+    and the path of its long pathstream reference (rendered once)."""
+    os.makedirs(args.out, exist_ok=True)
+    scene_file = os.path.join(args.out, f"{args.scene}.json")
+    with open(scene_file, "w") as f:
+        f.write(run([args.exe, "scenes", "--json", args.scene]))
+    with open(scene_file) as f:
+        scene = json.load(f)
+    reference = os.path.join(
+        args.out, f"{args.scene}-{args.size}-d{args.max_depth}-ref{args.reference_spp}.pfm"
+    )
+    if not os.path.exists(reference):
+        print(f"reference: pathstream, {args.reference_spp} spp ...", flush=True)
+        pathstream_render(args.exe, scene_file, args, args.reference_spp, "sobol", 7, reference)
+    return scene_file, scene, reference
+
+
+def diffuse_meshes(scene):
+    """The scene's objects as (index, object, material), after checking that
+    every one is a mesh with a diffuse material (what the scripts compare)."""
+    out = []
+    for i, obj in enumerate(scene["objects"]):
+        if obj["type"] != "mesh":
+            sys.exit(f"object {i}: only meshes are compared (this is {obj['type']})")
+        mat = scene["materials"][obj["material"]]
+        if mat["type"] != "diffuse":
+            sys.exit(f"object {i}: only diffuse materials are compared")
+        t = obj.get("transform")
+        if t and set(t) - {"translate", "scale"}:
+            sys.exit(f"object {i}: only translate and scale transforms are compared")
+        out.append((i, obj, mat))
+    return out
+
+
+def time_to(target, rows):
+    """Seconds to reach `target` error from the renders (spp, s, error):
+    the cheapest render that reached it, else the last one extrapolated by
+    error ~ 1/sqrt(time)."""
+    for spp, s, err in rows:
+        if err <= target:
+            return s * (err / target) ** 2, spp
+    spp, s, err = rows[-1]
+    return s * (err / target) ** 2, None
+
+
+def print_summary(summary, pixels):
+    """Per renderer and sampler: samples/s (median over its renders), the
+    error at each spp and the time to 1% error."""
+    print("\n| renderer | sampler | M samples/s (median) | seconds to 1% error |")
+    print("| --- | --- | ---: | ---: |")
+    for who, sampler, rows in summary:
+        rate = np.median([spp * pixels / s / 1e6 for spp, s, _ in rows])
+        t, reached = time_to(0.01, rows)
+        how = f"at {reached} spp" if reached else "extrapolated"
+        print(f"| {who} | {sampler} | {rate:.2f} | {t:.2f} ({how}) |")
