@@ -107,3 +107,53 @@ def print_summary(summary, pixels):
         t, reached = time_to(0.01, rows)
         how = f"at {reached} spp" if reached else "extrapolated"
         print(f"| {who} | {sampler} | {rate:.2f} | {t:.2f} ({how}) |")
+
+
+def add_arguments(ap, out, spp, reference_spp):
+    """The options every comparison takes (defaults: `out`, `spp`,
+    `reference_spp`)."""
+    ap.add_argument("--scene", default="cornell-mesh")
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--spp", default=spp)
+    ap.add_argument("--max-depth", type=int, default=6)
+    ap.add_argument("--threads", type=int, default=os.cpu_count())
+    ap.add_argument("--reference-spp", type=int, default=reference_spp)
+    ap.add_argument("--exe", default="target/release/pathstream")
+    ap.add_argument("--out", default=out)
+
+
+def pathstream_runs(args, scene_file):
+    """pathstream's two samplers as runs for `measure`."""
+    def run_with(sampler):
+        return lambda spp, path: pathstream_render(
+            args.exe, scene_file, args, spp, sampler, 1, path)
+    return [("pathstream", s, run_with(s)) for s in ("random", "sobol")]
+
+
+def measure(args, reference, runs):
+    """Renders each run, (renderer, sampler, render(spp, path) -> seconds),
+    at every spp of `args.spp`; prints a row per render, then the summary."""
+    spps = [int(s) for s in args.spp.split(",")]
+    pixels = args.size * args.size
+    print(
+        f"\n{args.scene}, {args.size}x{args.size}, max depth {args.max_depth}, box filter, "
+        f"{args.threads} threads; error against pathstream at {args.reference_spp} spp\n"
+    )
+    print("| renderer | sampler | spp | seconds | M samples/s | error |")
+    print("| --- | --- | ---: | ---: | ---: | ---: |")
+    summary = []
+    for who, sampler, render in runs:
+        rows = []
+        for spp in spps:
+            name = f"{who.split()[0].lower()}-{sampler}-{spp}.pfm"
+            path = os.path.abspath(os.path.join(args.out, name))
+            s = render(spp, path)
+            err = rel_error(args.exe, reference, path)
+            rows.append((spp, s, err))
+            print(
+                f"| {who} | {sampler} | {spp} | {s:.3f} | {spp * pixels / s / 1e6:.2f} "
+                f"| {err * 100:.2f}% |",
+                flush=True,
+            )
+        summary.append((who, sampler, rows))
+    print_summary(summary, pixels)

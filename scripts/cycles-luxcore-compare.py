@@ -45,7 +45,7 @@ import time
 import numpy as np
 
 from compare_common import (
-    diffuse_meshes, pathstream_render, print_summary, rel_error, scene_and_reference, write_pfm,
+    add_arguments, diffuse_meshes, measure, pathstream_runs, scene_and_reference, write_pfm,
 )
 
 
@@ -270,30 +270,17 @@ def luxcore_render(lux, lscene, args, spp, sampler, seed, path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--scene", default="cornell-mesh")
-    ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--spp", default="64,256")
-    ap.add_argument("--max-depth", type=int, default=6)
-    ap.add_argument("--threads", type=int, default=os.cpu_count())
-    ap.add_argument("--reference-spp", type=int, default=4096)
-    ap.add_argument("--exe", default="target/release/pathstream")
-    ap.add_argument("--out", default="target/cycles-luxcore-compare")
+    add_arguments(ap, "target/cycles-luxcore-compare", "64,256", 4096)
     ap.add_argument("--only", default="pathstream,cycles,luxcore",
                     help="renderers to run, comma-separated")
     args = ap.parse_args()
-    spps = [int(s) for s in args.spp.split(",")]
-    if min(spps) < 2 or args.max_depth < 1:
+    if min(int(s) for s in args.spp.split(",")) < 2 or args.max_depth < 1:
         ap.error("every spp must be at least 2 and --max-depth at least 1")
     only = set(args.only.split(","))
     os.environ["RAYON_NUM_THREADS"] = str(args.threads)
     scene_file, scene, reference = scene_and_reference(args)
 
-    runs = []
-    if "pathstream" in only:
-        def ps(sampler):
-            return lambda spp, path: pathstream_render(
-                args.exe, scene_file, args, spp, sampler, 1, path)
-        runs += [("pathstream", "random", ps("random")), ("pathstream", "sobol", ps("sobol"))]
+    runs = pathstream_runs(args, scene_file) if "pathstream" in only else []
     if "cycles" in only:
         import bpy
 
@@ -314,29 +301,7 @@ def main():
             runs.append(("LuxCore", sampler.lower(),
                          lambda spp, path, s=sampler: luxcore_render(
                              lux, lscene, args, spp, s, 1, path)))
-
-    pixels = args.size * args.size
-    print(
-        f"\n{args.scene}, {args.size}x{args.size}, max depth {args.max_depth}, box filter, "
-        f"{args.threads} threads; error against pathstream at {args.reference_spp} spp\n"
-    )
-    print("| renderer | sampler | spp | seconds | M samples/s | error |")
-    print("| --- | --- | ---: | ---: | ---: | ---: |")
-    summary = []
-    for who, sampler, render in runs:
-        rows = []
-        for spp in spps:
-            path = os.path.abspath(os.path.join(args.out, f"{who.lower()}-{sampler}-{spp}.pfm"))
-            s = render(spp, path)
-            err = rel_error(args.exe, reference, path)
-            rows.append((spp, s, err))
-            print(
-                f"| {who} | {sampler} | {spp} | {s:.3f} | {spp * pixels / s / 1e6:.2f} "
-                f"| {err * 100:.2f}% |",
-                flush=True,
-            )
-        summary.append((who, sampler, rows))
-    print_summary(summary, pixels)
+    measure(args, reference, runs)
     sys.stdout.flush()
     if "luxcore" in only:
         # pyluxcore's log callback crashes the interpreter's shutdown.

@@ -35,7 +35,7 @@ import time
 import numpy as np
 
 from compare_common import (
-    diffuse_meshes, pathstream_render, print_summary, rel_error, scene_and_reference,
+    add_arguments, diffuse_meshes, measure, pathstream_runs, scene_and_reference,
 )
 
 
@@ -144,17 +144,9 @@ def mitsuba_render(mi, dr, scene_dict, args, spp, sampler, seed, path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--scene", default="cornell-mesh")
-    ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--spp", default="64,256,1024")
-    ap.add_argument("--max-depth", type=int, default=6)
-    ap.add_argument("--threads", type=int, default=os.cpu_count())
-    ap.add_argument("--reference-spp", type=int, default=8192)
+    add_arguments(ap, "target/mitsuba-compare", "64,256,1024", 8192)
     ap.add_argument("--variant", default="llvm_ad_rgb")
-    ap.add_argument("--exe", default="target/release/pathstream")
-    ap.add_argument("--out", default="target/mitsuba-compare")
     args = ap.parse_args()
-    spps = [int(s) for s in args.spp.split(",")]
     os.environ["RAYON_NUM_THREADS"] = str(args.threads)
 
     import drjit as dr
@@ -164,40 +156,17 @@ def main():
     dr.set_thread_count(args.threads)
 
     scene_file, scene, reference = scene_and_reference(args)
-
     d = mitsuba_scene(mi, scene, args, args.out)
-    runs = [
-        ("pathstream", "random"),
-        ("pathstream", "sobol"),
-        (f"mitsuba {args.variant}", "independent"),
-        (f"mitsuba {args.variant}", "multijitter"),
-        (f"mitsuba {args.variant}", "ldsampler"),
+
+    def with_mitsuba(sampler):
+        return lambda spp, path: mitsuba_render(mi, dr, d, args, spp, sampler, 1, path)
+
+    runs = pathstream_runs(args, scene_file) + [
+        (f"mitsuba {args.variant}", s, with_mitsuba(s))
+        for s in ("independent", "multijitter", "ldsampler")
     ]
-    pixels = args.size * args.size
-    print(
-        f"\n{args.scene}, {args.size}x{args.size}, max depth {args.max_depth}, box filter, "
-        f"{args.threads} threads; error against pathstream at {args.reference_spp} spp\n"
-    )
-    print("| renderer | sampler | spp | seconds | M samples/s | error |")
-    print("| --- | --- | ---: | ---: | ---: | ---: |")
-    summary = []
-    for who, sampler in runs:
-        rows = []
-        for spp in spps:
-            path = os.path.join(args.out, f"{who.split()[0]}-{sampler}-{spp}.pfm")
-            if who == "pathstream":
-                s = pathstream_render(args.exe, scene_file, args, spp, sampler, 1, path)
-            else:
-                s = mitsuba_render(mi, dr, d, args, spp, sampler, 1, path)
-            err = rel_error(args.exe, reference, path)
-            rows.append((spp, s, err))
-            print(
-                f"| {who} | {sampler} | {spp} | {s:.3f} | {spp * pixels / s / 1e6:.2f} "
-                f"| {err * 100:.2f}% |",
-                flush=True,
-            )
-        summary.append((who, sampler, rows))
-    print_summary(summary, pixels)
+    measure(args, reference, runs)
+
 
 if __name__ == "__main__":
     main()
