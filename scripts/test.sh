@@ -10,6 +10,9 @@
 #   - Open Image Denoise 2.x for the denoising tests (from PyPI's pyoidn
 #     wheel into target/oidn when the machine has none, see oidn-env.sh);
 #     where CI is set, those tests fail without it;
+#   - Embree 3 (Debian's libembree3-3) for the CPU's Embree rays
+#     (server/tests/embree.rs and every mesh test's third backend); where CI
+#     is set, those tests fail without it;
 #   - Chromium and playwright-core for the browser client's tests
 #     (scripts/browser-tests.sh), which run after the Rust tests.
 set -euo pipefail
@@ -43,6 +46,16 @@ if [ ! -x /usr/sbin/nginx ]; then
     export DEBIAN_FRONTEND=noninteractive
     $sudo apt-get update -qq
     $sudo apt-get install -y -qq nginx >/dev/null
+fi
+
+# Embree 3, which the CPU backend loads at run time for large meshes.
+if ! ldconfig -p 2>/dev/null | grep -q 'libembree3\.so\.3'; then
+    echo "test.sh: installing Embree 3 (libembree3-3)" >&2
+    sudo=""
+    if [ "$(id -u)" != 0 ]; then sudo="sudo"; fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq libembree3-3 >/dev/null
 fi
 
 # Node 20+ for the npm packages and the browser tests (from PyPI when the

@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{assert_agree, backends, pooled, regions, render_on};
+use common::{assert_agree, mesh_backends, pooled, regions, render_on};
 use pathstream::model::write_glb::{glb, GlbMaterial, GlbTexture};
 use pathstream::model::{MeshData, Wrap};
 use pathstream::render::{Film, Quality, Scene};
@@ -118,7 +118,7 @@ fn a_mask_cutout_shadows_with_its_opaque_part_only() {
         "whole.glb",
         Some(glb(&quad(-1.0), &black(1.0, "OPAQUE"))),
     );
-    for (name, mut backend) in backends() {
+    for (name, mut backend) in mesh_backends() {
         let what = format!("{name}: cutout");
         assert_cuts_out(&mut backend, [&cutout, &half, &whole], &what);
     }
@@ -159,7 +159,7 @@ fn a_blended_quad_lets_through_its_share_of_light() {
         "shut.glb",
         Some(glb(&quad(-1.0), &black(1.0, "OPAQUE"))),
     );
-    for (name, mut backend) in backends() {
+    for (name, mut backend) in mesh_backends() {
         let stats = |s: &Scene, backend: &mut pathstream::render::Backend| {
             let r = pooled(&regions(&render_on(backend, s, 24, 24, &quality(), 128), 6));
             (r.mean[0], r.var[0])
@@ -229,7 +229,7 @@ fn a_scene_json_quad_cuts_out_and_blends_as_a_model_file_does() {
         vec![json_quad("black")],
         json!({"black": {"type": "diffuse", "albedo": [0, 0, 0]}}),
     );
-    for (name, mut backend) in backends() {
+    for (name, mut backend) in mesh_backends() {
         let what = format!("{name}: JSON cutout");
         let c = assert_cuts_out(&mut backend, [&cutout, &half, &whole], &what);
         let mc = mean(&c);

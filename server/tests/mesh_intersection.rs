@@ -2,9 +2,9 @@
 
 mod common;
 
-use common::{mesh_object, scene, scene_json};
+use common::meshes::{leaving, mixed_scene, ray_in, unit};
+use common::{mesh_object, scene};
 use pathstream::model::generate::icosphere;
-use pathstream::model::MeshData;
 use pathstream::render::isa::Portable;
 use pathstream::render::math::{DVec3, Vec3A};
 use pathstream::render::ray::Ray;
@@ -14,77 +14,6 @@ use pathstream::render::world::{AccelChoice, Origin, World};
 use pathstream::render::Scene;
 use serde_json::json;
 
-fn unit(s: &mut Sampler) -> Vec3A {
-    let z = 1.0 - 2.0 * s.next_f32();
-    let phi = std::f32::consts::TAU * s.next_f32();
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-/// Random triangles (a soup, some sharing vertices) inside a box.
-fn soup(n: usize, seed: u64) -> MeshData {
-    let mut s = Sampler::new(seed, 0, 0);
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for i in 0..n {
-        let c = [
-            s.next_f32() * 80.0 + 10.0,
-            s.next_f32() * 60.0 + 10.0,
-            s.next_f32() * 120.0 + 20.0,
-        ];
-        let base = positions.len() as u32;
-        for _ in 0..3 {
-            positions.push([
-                c[0] + s.next_f32() * 12.0 - 6.0,
-                c[1] + s.next_f32() * 12.0 - 6.0,
-                c[2] + s.next_f32() * 12.0 - 6.0,
-            ]);
-        }
-        // Every fourth triangle reuses two vertices of the one before.
-        if i % 4 == 3 {
-            triangles.push([base - 3, base - 2, base]);
-        } else {
-            triangles.push([base, base + 1, base + 2]);
-        }
-    }
-    MeshData {
-        name: "soup".into(),
-        positions,
-        normals: None,
-        triangles,
-        materials: vec![0; n],
-        ..Default::default()
-    }
-}
-
-/// cornell-glass with a soup of triangles and an icosphere placed twice
-/// (rotated, unevenly scaled): spheres, quads-free walls and meshes together.
-fn mixed_scene() -> Scene {
-    let mut j = scene_json("cornell-glass");
-    let objects = j["objects"].as_array_mut().expect("objects");
-    objects.push(mesh_object(
-        &soup(300, 1),
-        "white",
-        serde_json::Value::Null,
-        false,
-    ));
-    let ball = icosphere(2);
-    objects.push(mesh_object(
-        &ball,
-        "mirror",
-        json!({"translate": [30, 50, 100], "scale": [8, 5, 11],
-        "rotate": {"axis": [1, 2, 3], "deg": 40}}),
-        true,
-    ));
-    objects.push(mesh_object(
-        &ball,
-        "white",
-        json!({"translate": [70, 60, 40], "scale": 6}),
-        false,
-    ));
-    Scene::from_json_value(j).expect("valid")
-}
-
 /// Asserts that the BVH (or scan) and brute force agree on `rays`, also for
 /// rays that start on the surfaces the first rays hit.
 /// Ray origins are drawn in the box (lo, hi) of world space.
@@ -92,14 +21,7 @@ fn agree(world: &World, (lo, hi): (DVec3, DVec3), rays: u64, seed: u64, what: &s
     let (mut hits, mut on_surface) = (0u64, 0u64);
     for i in 0..rays {
         let mut s = Sampler::new(seed, i, 0);
-        let u = DVec3::new(
-            f64::from(s.next_f32()),
-            f64::from(s.next_f32()),
-            f64::from(s.next_f32()),
-        );
-        let world_point = lo + (hi - lo) * u;
-        let o = Vec3A::from((world_point - world.origin).as_vec3());
-        let ray = Ray::new(o, unit(&mut s));
+        let ray = ray_in(world, (lo, hi), &mut s);
         let fast = world.intersect(Portable, &ray, Origin::NONE);
         let slow = world.intersect_brute(&ray, Origin::NONE);
         assert_eq!(fast, slow, "{what}: ray {i}");
@@ -108,11 +30,7 @@ fn agree(world: &World, (lo, hi): (DVec3, DVec3), rays: u64, seed: u64, what: &s
         // A ray leaving that surface, into a random direction.
         let surface = world.surface(&hit, &ray);
         let dir = unit(&mut s);
-        let from = Origin {
-            object: hit.object,
-            prim: hit.prim,
-            entering: dir.dot(surface.ng) < 0.0,
-        };
+        let from = leaving(&hit, surface.ng, dir);
         let next = world.spawn(&surface, dir);
         let fast = world.intersect(Portable, &next, from);
         let slow = world.intersect_brute(&next, from);

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_agree, backends, mesh_object, scene_json};
+use common::{assert_agree, mesh_backends, mesh_object, scene_json};
 use pathstream::model::generate::icosphere;
 use pathstream::render::isa::Portable;
 use pathstream::render::math::{DVec3, Vec3A};
@@ -167,7 +167,7 @@ fn every_backend_renders_the_merged_world_as_the_unmerged_one() {
     let mut cpu = common::backends().remove(0).1;
     let mut expected = Film::new(w, h);
     cpu.render(&reference, &mut expected, 512).expect("render");
-    for (name, mut backend) in backends() {
+    for (name, mut backend) in mesh_backends() {
         let job = RenderJob::new(&s, w, h, &q(2));
         assert_eq!(job.world.instances.len(), 3);
         let mut film = Film::new(w, h);

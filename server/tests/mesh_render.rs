@@ -6,8 +6,8 @@
 mod common;
 
 use common::{
-    assert_agree, assert_clean, assert_mean, backends, mesh_object, regions, render, render_on,
-    scene, scene_json,
+    assert_agree, assert_clean, assert_mean, mesh_backends, mesh_object, regions, render,
+    render_on, scene, scene_json,
 };
 use pathstream::model::generate::icosphere;
 use pathstream::model::MeshData;
@@ -37,7 +37,7 @@ fn triangle_furnace(levels: u32, scale: f64, smooth: bool) -> Scene {
 fn a_closed_triangle_furnace_is_exact_at_every_depth_without_nee() {
     // No path may leak out: every bounce meets the shell, so each sample is
     // E (1 - a^(D+1)) / (1 - a) exactly, at every scale.
-    for (backend, mut b) in backends() {
+    for (backend, mut b) in mesh_backends() {
         for scale in [1e-3, 1.0, 1e3] {
             let s = triangle_furnace(3, scale, false);
             for depth in [1u32, 4, 9] {
@@ -63,7 +63,7 @@ fn a_closed_triangle_furnace_is_exact_at_every_depth_without_nee() {
 
 #[test]
 fn a_closed_triangle_furnace_has_radiance_one_with_and_without_shading_normals() {
-    for (backend, mut b) in backends() {
+    for (backend, mut b) in mesh_backends() {
         for scale in [1e-3, 1e3] {
             for smooth in [false, true] {
                 let s = triangle_furnace(4, scale, smooth);
@@ -119,7 +119,7 @@ fn a_finely_tessellated_sphere_renders_as_the_analytic_sphere() {
     };
     let analytic = render(&scene("cornell"), 32, 32, &qq, 512);
     let tessellated = tessellated_cornell();
-    for (backend, mut b) in backends() {
+    for (backend, mut b) in mesh_backends() {
         let mesh = render_on(
             &mut b,
             &tessellated,
@@ -168,7 +168,7 @@ fn a_quad_as_two_triangles_renders_as_the_quad() {
         ..q(4)
     };
     let a = render(&scene("cornell-quads"), 32, 32, &qq, 256);
-    for (backend, mut b) in backends() {
+    for (backend, mut b) in mesh_backends() {
         let mesh = render_on(&mut b, &two, 32, 32, &Quality { seed: 14, ..qq }, 256);
         assert_agree(
             &a,
@@ -223,7 +223,7 @@ fn an_emissive_mesh_converges_to_the_same_image_with_and_without_nee() {
         },
         4096,
     );
-    for (backend, mut b) in backends() {
+    for (backend, mut b) in mesh_backends() {
         let with_nee = Quality {
             max_depth: 3,
             nee: true,
@@ -285,7 +285,7 @@ fn ball_under_the_sky(mesh: Option<&MeshData>) -> Scene {
 
 #[test]
 fn a_convex_ball_under_a_uniform_sky_reflects_albedo_times_sky() {
-    for (backend, mut b) in backends() {
+    for (backend, mut b) in mesh_backends() {
         for (what, s) in [
             ("sphere", ball_under_the_sky(None)),
             ("icosphere", ball_under_the_sky(Some(&icosphere(3)))),
@@ -347,7 +347,7 @@ fn a_mesh_without_emitters_or_camera_is_framed_and_lit_by_default() {
     // the image and lit: the centre block is the ball (0.5), not the sky (1).
     let d = s.camera.look_at - glam::DVec3::new(10.0, 20.0, 30.0);
     assert!(d.length() < 0.5, "look_at {:?}", s.camera.look_at);
-    for (backend, mut b) in backends() {
+    for (backend, mut b) in mesh_backends() {
         let qq = Quality {
             max_depth: 0,
             ..q(9)

@@ -7,93 +7,27 @@ use pathstream::render::world::{Hit, Origin};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// The part of Embree 3's C API (rtcore.h, 3.13) that this example needs.
+/// Embree 3's C API (rtcore.h, 3.13): the structures and constants the
+/// library's run-time binding defines, and the functions this example
+/// links (the service resolves its own at run time instead).
 #[allow(unsafe_code, non_camel_case_types, dead_code)]
 pub mod ffi {
+    pub use pathstream::render::embree::ffi::{
+        Context as RTCIntersectContext, Hit as RTCHit, Ray as RTCRay, RayHit as RTCRayHit,
+        BUFFER_TYPE_INDEX as RTC_BUFFER_TYPE_INDEX, BUFFER_TYPE_VERTEX as RTC_BUFFER_TYPE_VERTEX,
+        BUILD_QUALITY_HIGH as RTC_BUILD_QUALITY_HIGH,
+        BUILD_QUALITY_MEDIUM as RTC_BUILD_QUALITY_MEDIUM,
+        DEVICE_PROPERTY_VERSION as RTC_DEVICE_PROPERTY_VERSION, ERROR_NONE as RTC_ERROR_NONE,
+        FORMAT_FLOAT3 as RTC_FORMAT_FLOAT3, FORMAT_UINT3 as RTC_FORMAT_UINT3,
+        GEOMETRY_TYPE_TRIANGLE as RTC_GEOMETRY_TYPE_TRIANGLE,
+        INVALID_ID as RTC_INVALID_GEOMETRY_ID, SCENE_FLAG_ROBUST as RTC_SCENE_FLAG_ROBUST,
+    };
     use std::ffi::{c_char, c_uint, c_void};
 
     pub type RTCDevice = *mut c_void;
     pub type RTCScene = *mut c_void;
     pub type RTCGeometry = *mut c_void;
-
-    pub const RTC_GEOMETRY_TYPE_TRIANGLE: c_uint = 0;
-    pub const RTC_BUFFER_TYPE_INDEX: c_uint = 0;
-    pub const RTC_BUFFER_TYPE_VERTEX: c_uint = 1;
-    pub const RTC_FORMAT_UINT3: c_uint = 0x5003;
-    pub const RTC_FORMAT_FLOAT3: c_uint = 0x9003;
     pub const RTC_SCENE_FLAG_NONE: c_uint = 0;
-    pub const RTC_SCENE_FLAG_ROBUST: c_uint = 1 << 2;
-    pub const RTC_BUILD_QUALITY_MEDIUM: c_uint = 1;
-    pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
-    pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
-    pub const RTC_INVALID_GEOMETRY_ID: c_uint = c_uint::MAX;
-    pub const RTC_DEVICE_PROPERTY_VERSION: c_uint = 0;
-    pub const RTC_ERROR_NONE: c_uint = 0;
-
-    /// `struct RTCRay` (16-byte aligned, 48 bytes).
-    #[repr(C, align(16))]
-    #[derive(Clone, Copy, Debug)]
-    pub struct RTCRay {
-        pub org_x: f32,
-        pub org_y: f32,
-        pub org_z: f32,
-        pub tnear: f32,
-        pub dir_x: f32,
-        pub dir_y: f32,
-        pub dir_z: f32,
-        pub time: f32,
-        pub tfar: f32,
-        pub mask: c_uint,
-        pub id: c_uint,
-        pub flags: c_uint,
-    }
-
-    /// `struct RTCHit` with RTC_MAX_INSTANCE_LEVEL_COUNT = 1 (as Debian
-    /// builds it).
-    #[repr(C, align(16))]
-    #[derive(Clone, Copy, Debug)]
-    pub struct RTCHit {
-        pub ng_x: f32,
-        pub ng_y: f32,
-        pub ng_z: f32,
-        pub u: f32,
-        pub v: f32,
-        pub prim_id: c_uint,
-        pub geom_id: c_uint,
-        pub inst_id: [c_uint; 1],
-    }
-
-    #[repr(C)]
-    #[derive(Clone, Copy, Debug)]
-    pub struct RTCRayHit {
-        pub ray: RTCRay,
-        pub hit: RTCHit,
-    }
-
-    /// `struct RTCIntersectContext` (RTC_MAX_INSTANCE_LEVEL_COUNT = 1,
-    /// RTC_MIN_WIDTH = 0).
-    #[repr(C)]
-    pub struct RTCIntersectContext {
-        pub flags: c_uint,
-        pub filter: Option<unsafe extern "C" fn(*const c_void)>,
-        pub inst_id: [c_uint; 1],
-    }
-
-    const _: () = assert!(std::mem::size_of::<RTCRay>() == 48);
-    const _: () = assert!(std::mem::size_of::<RTCHit>() == 32);
-    const _: () = assert!(std::mem::size_of::<RTCRayHit>() == 80);
-    const _: () = assert!(std::mem::size_of::<RTCIntersectContext>() == 24);
-
-    impl RTCIntersectContext {
-        /// What the header's inline `rtcInitIntersectContext` does.
-        pub fn new() -> Self {
-            Self {
-                flags: RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
-                filter: None,
-                inst_id: [RTC_INVALID_GEOMETRY_ID],
-            }
-        }
-    }
 
     #[link(name = "embree3")]
     extern "C" {
@@ -254,13 +188,9 @@ impl EmbreeScene {
         let d = map.transform_vector3a(ray.dir);
         let mut rh = ffi::RTCRayHit {
             ray: ffi::RTCRay {
-                org_x: o.x,
-                org_y: o.y,
-                org_z: o.z,
+                org: o.to_array(),
                 tnear: 0.0,
-                dir_x: d.x,
-                dir_y: d.y,
-                dir_z: d.z,
+                dir: d.to_array(),
                 time: 0.0,
                 tfar: f32::INFINITY,
                 mask: u32::MAX,
@@ -268,9 +198,7 @@ impl EmbreeScene {
                 flags: 0,
             },
             hit: ffi::RTCHit {
-                ng_x: 0.0,
-                ng_y: 0.0,
-                ng_z: 0.0,
+                ng: [0.0; 3],
                 u: 0.0,
                 v: 0.0,
                 prim_id: ffi::RTC_INVALID_GEOMETRY_ID,
@@ -278,7 +206,7 @@ impl EmbreeScene {
                 inst_id: [ffi::RTC_INVALID_GEOMETRY_ID],
             },
         };
-        let mut context = ffi::RTCIntersectContext::new();
+        let mut context = ffi::RTCIntersectContext::new(None);
         // SAFETY: the scene is committed and live; `context` and `rh` are
         // valid, aligned, and exclusively ours for the call.
         #[allow(unsafe_code)]

@@ -11,6 +11,8 @@
 //! - `film`, `features`, `tonemap`, `output`: accumulation, error estimate,
 //!   what a denoiser is guided by, image files
 //! - `denoise`: Open Image Denoise, loaded at run time
+//! - `embree`: Intel Embree, loaded at run time: the CPU's mesh rays
+//! - `native`: how those two libraries are loaded
 //! - `quality`, `preset`, `job`, `pass`, `progressive`, `backend`: what to
 //!   render, in which passes, and where
 //! - `split`: one render on several devices at once
@@ -22,6 +24,7 @@ pub mod backend;
 pub mod bvh;
 pub mod camera;
 pub mod denoise;
+pub mod embree;
 pub mod envmap;
 pub mod features;
 pub mod film;
@@ -36,6 +39,7 @@ pub mod light;
 pub mod maps;
 pub mod material;
 pub mod math;
+pub mod native;
 pub mod output;
 pub mod pass;
 pub mod pick;

@@ -2,6 +2,8 @@
 //! reduce films to region means with their standard errors, and compare.
 #![allow(dead_code)]
 
+pub mod meshes;
+
 use pathstream::render::scene::{MaterialJson, SurfaceJson};
 use pathstream::render::{Backend, BackendChoice, Film, Quality, RenderJob, Scene};
 
@@ -48,6 +50,32 @@ pub fn backends() -> Vec<(&'static str, Backend)> {
                 fallback: false,
             },
         ));
+    }
+    all
+}
+
+/// Whether Embree loads (where `CI` is set, not loading is a failure).
+pub fn embree() -> bool {
+    match pathstream::render::embree::embree() {
+        Ok(_) => true,
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("CI is set but {e} (scripts/test.sh installs it)")
+        }
+        Err(e) => {
+            eprintln!("skipping Embree: {e}");
+            false
+        }
+    }
+}
+
+/// What mesh checks must pass on: [`backends`], and the CPU tracing every
+/// mesh through Embree where Embree loads (as [`embree`]).
+pub fn mesh_backends() -> Vec<(&'static str, Backend)> {
+    let mut all = backends();
+    if embree() {
+        use pathstream::render::backend::{CpuBackend, EmbreeUse};
+        let cpu = CpuBackend::default().with_embree(EmbreeUse::AllMeshes);
+        all.push(("cpu-embree", Backend::Cpu(cpu)));
     }
     all
 }

@@ -13,7 +13,7 @@ use crate::render::isa::Avx2;
 use crate::render::isa::{Isa, Portable};
 use crate::render::job::RenderJob;
 use crate::render::ray::Ray;
-use crate::render::world::{Hit, Origin, World};
+use crate::render::world::{Hit, Origin, World, EMBREE_MIN_TRIANGLES};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -26,6 +26,20 @@ pub struct CpuBackend {
     pool: Option<Arc<rayon::ThreadPool>>,
     /// Never use the wide kernels, even where the CPU has them.
     portable_only: bool,
+    /// Where meshes are traced through Embree (where it is installed).
+    embree: EmbreeUse,
+}
+
+/// Where the CPU traces meshes through Embree rather than its own BVH.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EmbreeUse {
+    /// In worlds of at least [`EMBREE_MIN_TRIANGLES`] triangles.
+    #[default]
+    LargeMeshes,
+    /// In every world with meshes (to compare the two).
+    AllMeshes,
+    /// Never.
+    Never,
 }
 
 impl CpuBackend {
@@ -65,15 +79,37 @@ impl CpuBackend {
         }
     }
 
+    /// This backend tracing meshes through Embree where `embree` says.
+    pub fn with_embree(self, embree: EmbreeUse) -> Self {
+        Self { embree, ..self }
+    }
+
     pub fn device(&self) -> String {
         let threads = self
             .pool
             .as_ref()
             .map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
+        let embree = match (self.embree, crate::render::embree::embree()) {
+            (EmbreeUse::Never, _) | (_, Err(_)) => String::new(),
+            (EmbreeUse::LargeMeshes, Ok(e)) => {
+                format!(", large meshes through Embree {}", e.version)
+            }
+            (EmbreeUse::AllMeshes, Ok(e)) => format!(", meshes through Embree {}", e.version),
+        };
         match &self.fallback_reason {
-            Some(why) => format!("rayon, {threads} threads; {why}"),
-            None => format!("rayon, {threads} threads"),
+            Some(why) => format!("rayon, {threads} threads{embree}; {why}"),
+            None => format!("rayon, {threads} threads{embree}"),
         }
+    }
+
+    /// Lets `job`'s world trace through Embree where this backend may and
+    /// the world can (built once per world).
+    fn prepare(&self, job: &RenderJob) {
+        match self.embree {
+            EmbreeUse::LargeMeshes => job.world.use_embree(EMBREE_MIN_TRIANGLES),
+            EmbreeUse::AllMeshes => job.world.use_embree(0),
+            EmbreeUse::Never => false,
+        };
     }
 
     /// Runs `work` on this backend's pool (or rayon's global one).
@@ -99,6 +135,7 @@ impl CpuBackend {
         count: u64,
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
+        self.prepare(job);
         let first = film.next_sample();
         let width = film.width() as usize;
         let wide = if self.portable_only { None } else { wide_isa() };
@@ -139,6 +176,7 @@ impl CpuBackend {
         end: usize,
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
+        self.prepare(job);
         let (start, sample) = (film.slice_start(), film.next_sample());
         let wide = if self.portable_only { None } else { wide_isa() };
         let work = |film: &mut Film| -> Option<u64> {
@@ -175,6 +213,7 @@ impl CpuBackend {
         let (Some(first), Some(last)) = (work.first(), work.last()) else {
             return true;
         };
+        self.prepare(job);
         let tiles = *film.tiles();
         let width = film.width() as usize;
         // Each entry with the sample its tile is at; entries by tile row.

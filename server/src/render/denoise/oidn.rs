@@ -13,6 +13,8 @@ use std::ffi::{c_char, c_int, c_void, CStr};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::render::native::{open, symbols};
+
 type Handle = *mut c_void;
 /// A denoiser's guides: the albedo and the normal image.
 pub type Guides<'a> = (&'a [[f32; 3]], &'a [[f32; 3]]);
@@ -91,38 +93,16 @@ pub struct PhysicalDevice {
     pub name: String,
 }
 
-macro_rules! symbols {
-    ($lib:expr, $path:expr, $($field:ident = $name:literal),* $(,)?) => {
-        Api {
-            $($field: {
-                // SAFETY: the symbol is OIDN 2.x's C function of this name,
-                // whose signature the field's type copies from oidn.h; the
-                // pointer is used only while `_lib` keeps the library loaded.
-                let s = unsafe { $lib.get(concat!($name, "\0").as_bytes()) }.map_err(|e| {
-                    format!("{} lacks {}: {e} (Open Image Denoise 2.x is needed)", $path.display(), $name)
-                })?;
-                *s
-            },)*
-        }
-    };
-}
-
 impl Library {
     /// Loads the library at `path` (a file name alone searches the
     /// system's library path).
     pub fn load(path: &Path) -> Result<Library, String> {
-        // SAFETY: loading runs the library's initialisers; OIDN's only set
-        // up its own state.
-        let lib = unsafe { libloading::Library::new(path) }.map_err(|e| {
-            // libloading's message is "dlopen failed"; the loader's own is
-            // its source.
-            let why =
-                std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
-            format!("cannot load {}: {why}", path.display())
-        })?;
+        let lib = open(path)?;
         let api = symbols!(
+            Api,
             lib,
             path,
+            "Open Image Denoise 2.x",
             num_physical_devices = "oidnGetNumPhysicalDevices",
             physical_device_int = "oidnGetPhysicalDeviceInt",
             physical_device_string = "oidnGetPhysicalDeviceString",

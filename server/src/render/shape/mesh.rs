@@ -8,9 +8,11 @@
 //! the indexed form stays for shading normals and materials.
 
 use crate::render::bvh::{Aabb, Bvh, WideBvh, MAX_LEAF};
+use crate::render::embree::{Embree, MeshScene};
 use crate::render::math::Vec3A;
 use crate::render::shape::{TriPack, TriVerts};
 use rayon::prelude::*;
+use std::sync::{Arc, OnceLock};
 
 /// A mesh's data as it arrives (from a model file or inline scene JSON),
 /// before [`Mesh::new`] checks it.
@@ -60,6 +62,9 @@ pub struct Mesh {
     /// leaf at slot `first` is pack `first / 4` (the BVH's leaves are
     /// aligned, [`Bvh::aligned_leaves`]).
     pub packs: Vec<TriPack>,
+    /// The mesh as an Embree scene, built on first use by a CPU that
+    /// traces with Embree (None: Embree refused it).
+    embree: OnceLock<Option<Arc<MeshScene>>>,
 }
 
 /// Why mesh data cannot be used; the caller adds where it came from.
@@ -184,7 +189,22 @@ impl Mesh {
             wide,
             tris,
             packs,
+            embree: OnceLock::new(),
         })
+    }
+
+    /// The mesh as a scene of `embree`'s, built on first use.
+    pub fn embree_scene(&self, embree: &'static Embree) -> Result<Arc<MeshScene>, String> {
+        let built = self.embree.get_or_init(|| {
+            embree
+                .mesh(&self.positions, &self.triangles)
+                .map_err(|e| tracing::warn!(mesh = %self.name, "Embree refused the mesh: {e}"))
+                .ok()
+                .map(Arc::new)
+        });
+        built
+            .clone()
+            .ok_or_else(|| format!("Embree refused mesh {}", self.name))
     }
 
     /// The vertices of triangle `i`.

@@ -248,6 +248,7 @@ impl World {
             sun,
             accel,
             accel_choice: choice,
+            embree: std::sync::OnceLock::new(),
         }
     }
 }

@@ -18,6 +18,7 @@
 
 mod build;
 pub mod cutout;
+mod embree_rays;
 mod emitters;
 mod instance;
 mod merge;
@@ -25,6 +26,7 @@ mod scan;
 mod textures;
 
 pub use build::{scan_cost, AccelChoice, SCAN_MAX_COST};
+pub use embree_rays::EMBREE_MIN_TRIANGLES;
 pub use instance::Instance;
 
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
@@ -202,6 +204,9 @@ pub struct World {
     /// What the world was asked for: `Auto` lets each backend choose by
     /// its own measurement; `Bvh` and `Scan` hold for every backend.
     pub accel_choice: AccelChoice,
+    /// The meshes in Embree, once a CPU backend has asked for them
+    /// ([`World::use_embree`]); None inside: Embree does not serve.
+    embree: std::sync::OnceLock<Option<std::sync::Arc<embree_rays::EmbreeRays>>>,
 }
 
 impl World {
@@ -267,6 +272,10 @@ impl World {
     /// spheres of a scan are tested with `isa`'s kernel.
     #[inline(always)]
     pub fn intersect<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
+        if let Some(Some(embree)) = self.embree.get() {
+            let hit = embree.nearest(self, isa, ray, from);
+            return (hit.t < f32::INFINITY).then_some(hit);
+        }
         let hit = match &self.accel {
             Accel::Scan {
                 sphere_batches,

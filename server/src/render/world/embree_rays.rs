@@ -1,0 +1,182 @@
+//! Nearest hits through Embree (`render::embree`), where the CPU has the
+//! library and the world has meshes: every placed mesh is an instance of
+//! an Embree scene of its own (built once per mesh, kept with it), and the
+//! few spheres and quads beside them are scanned first, as the scan
+//! accelerator scans them, their nearest hit bounding Embree's search.
+//!
+//! What the world's own search does and Embree is told through a filter:
+//! a ray never meets the triangle it leaves, and an alpha-tested texel
+//! that does not stop a ray is passed through. Hits are the same surfaces
+//! as the world's own BVH finds, up to rounding: Embree's watertight test
+//! is not pathstream's, so a ray through a shared edge may name the other
+//! triangle, and distances differ in their last bits
+//! (`tests/embree.rs` measures both).
+
+use super::build::{scan_cost, SCAN_MAX_COST};
+use super::{scan, Geometry, Hit, Origin, World, NO_PRIM};
+use crate::render::embree::{embree, HitFilter, InstanceScene};
+use crate::render::isa::Isa;
+use crate::render::ray::Ray;
+use crate::render::shape::{Quad, SphereBatch, SPHERE_BATCH_LANES};
+use std::sync::Arc;
+
+/// The world's meshes in Embree, and what is scanned beside them.
+pub(super) struct EmbreeRays {
+    scene: InstanceScene,
+    sphere_batches: Vec<SphereBatch>,
+    quads: Vec<(u32, Quad)>,
+    /// Whether some placed mesh has alpha-tested triangles.
+    alpha: bool,
+}
+
+impl std::fmt::Debug for EmbreeRays {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EmbreeRays")
+            .field("scene", &self.scene)
+            .field("spheres", &self.sphere_batches.len())
+            .field("quads", &self.quads.len())
+            .field("alpha", &self.alpha)
+            .finish()
+    }
+}
+
+/// The rays' filter: the triangle a ray leaves, and alpha tests.
+struct Refuse<'a> {
+    world: &'a World,
+    from: Origin,
+    ray: &'a Ray,
+}
+
+impl HitFilter for Refuse<'_> {
+    #[inline(always)]
+    fn accepts(&self, id: u32, prim: u32, u: f32, v: f32) -> bool {
+        if id == self.from.object && prim == self.from.prim {
+            return false;
+        }
+        let Some(Geometry::Instance(i)) = self.world.objects.get(id as usize).map(|o| o.geometry)
+        else {
+            return true;
+        };
+        let instance = &self.world.instances[i as usize];
+        match &instance.alpha {
+            None => true,
+            Some(tests) => {
+                let mesh = &*instance.mesh;
+                let Some(&slot) = mesh.materials.get(prim as usize) else {
+                    return true;
+                };
+                let bary = [1.0 - u - v, u, v];
+                tests[slot as usize].passes(mesh, prim, bary, self.ray.origin, self.ray.dir)
+            }
+        }
+    }
+}
+
+impl EmbreeRays {
+    /// The world's meshes in Embree, or why not: no library, no meshes,
+    /// or too many other objects to scan beside them (then the world's own
+    /// BVH serves).
+    pub(super) fn build(world: &World, min_triangles: usize) -> Result<EmbreeRays, String> {
+        let triangles: usize = world.instances.iter().map(|i| i.triangles()).sum();
+        if triangles == 0 || triangles < min_triangles {
+            return Err(format!("{triangles} triangles, fewer than {min_triangles}"));
+        }
+        let mut spheres = Vec::new();
+        let mut quads = Vec::new();
+        let mut placed = Vec::new();
+        let embree = embree()?;
+        for (id, o) in world.objects.iter().enumerate() {
+            let id = id as u32;
+            match o.geometry {
+                Geometry::Sphere(s) => spheres.push((id, s)),
+                Geometry::Quad(q) => quads.push((id, q)),
+                Geometry::Instance(i) => {
+                    let instance = &world.instances[i as usize];
+                    let mesh = instance.mesh.embree_scene(embree)?;
+                    let m = &instance.cam_from_obj;
+                    let (x, y, z, t) = (
+                        m.matrix3.x_axis,
+                        m.matrix3.y_axis,
+                        m.matrix3.z_axis,
+                        m.translation,
+                    );
+                    let columns = [x.x, x.y, x.z, y.x, y.y, y.z, z.x, z.y, z.z, t.x, t.y, t.z];
+                    placed.push((id, mesh, columns));
+                }
+            }
+        }
+        if scan_cost(spheres.len(), quads.len()) > SCAN_MAX_COST {
+            return Err(format!(
+                "{} spheres and {} quads beside the meshes are more than a scan serves",
+                spheres.len(),
+                quads.len()
+            ));
+        }
+        Ok(EmbreeRays {
+            scene: embree.instances(&placed)?,
+            sphere_batches: spheres
+                .chunks(SPHERE_BATCH_LANES)
+                .map(SphereBatch::new)
+                .collect(),
+            quads,
+            alpha: world.instances.iter().any(|i| i.alpha.is_some()),
+        })
+    }
+
+    /// The nearest hit along `ray` in `world`, never the surface the ray
+    /// starts on (t infinite: none).
+    #[inline(always)]
+    pub(super) fn nearest<I: Isa>(&self, world: &World, isa: I, ray: &Ray, from: Origin) -> Hit {
+        let mut best = match self.sphere_batches.is_empty() && self.quads.is_empty() {
+            true => Hit::NONE,
+            false => scan::nearest(isa, &self.sphere_batches, &self.quads, ray, from),
+        };
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let refuse = Refuse { world, from, ray };
+        let hit = match from.prim != NO_PRIM || self.alpha {
+            true => self.scene.intersect(o, d, best.t, Some(&refuse)),
+            false => self.scene.intersect::<Refuse<'_>>(o, d, best.t, None),
+        };
+        if let Some(h) = hit {
+            if h.t < best.t {
+                best = Hit {
+                    t: h.t,
+                    object: h.id,
+                    prim: h.prim,
+                    bary: [1.0 - h.u - h.v, h.u, h.v],
+                };
+            }
+        }
+        best
+    }
+}
+
+/// Placed triangles from which the CPU backend traces through Embree
+/// where it can: below, its own BVH is as fast (docs/BENCHMARKS.md,
+/// "Embree as the CPU's tracer").
+pub const EMBREE_MIN_TRIANGLES: usize = 100_000;
+
+impl World {
+    /// Whether this world's rays go through Embree on the CPU: on the
+    /// first call, where the library loads and the world places at least
+    /// `min_triangles` triangles, builds the Embree scenes (else says why
+    /// not, once, in the log); from then on [`World::intersect`] uses them.
+    /// Later calls return the first one's answer.
+    pub fn use_embree(&self, min_triangles: usize) -> bool {
+        let built = self
+            .embree
+            .get_or_init(|| match EmbreeRays::build(self, min_triangles) {
+                Ok(rays) => Some(Arc::new(rays)),
+                Err(why) => {
+                    tracing::debug!("meshes traced by the CPU's own BVH: {why}");
+                    None
+                }
+            });
+        built.is_some()
+    }
+
+    /// Whether [`World::use_embree`] has made rays go through Embree.
+    pub fn traced_by_embree(&self) -> bool {
+        matches!(self.embree.get(), Some(Some(_)))
+    }
+}

@@ -1,0 +1,213 @@
+//! The CPU's rays through Embree (`render::embree`, `world::embree_rays`),
+//! checked against the world's own brute-force search: the same surfaces
+//! for rays from anywhere and for rays leaving the surfaces they hit,
+//! never the triangle a ray leaves, in a world of meshes (placed rotated,
+//! scaled, merged) beside spheres, near the origin and 4e4 away. Renders
+//! through Embree pass every mesh check (`mesh_render.rs`, `alpha.rs`,
+//! `mesh_merge.rs` run on `common::mesh_backends`).
+//!
+//! Embree's watertight test is not the CPU's own, so hits may differ by
+//! rounding: distances in their last bits, and a ray through a shared edge
+//! may name the other triangle (counted, and bounded here).
+
+mod common;
+
+use common::meshes::{leaving, mixed_scene, ray_in, unit};
+use pathstream::render::isa::Portable;
+use pathstream::render::math::{DVec3, Vec3A};
+use pathstream::render::ray::Ray;
+use pathstream::render::sampler::Sampler;
+use pathstream::render::world::{Hit, Origin, World, NO_PRIM};
+use pathstream::render::Scene;
+
+/// `scene`'s world with its meshes in Embree (None: Embree is not
+/// installed, outside CI).
+fn embree_world(scene: &Scene) -> Option<World> {
+    if !common::embree() {
+        return None;
+    }
+    let world = World::new(scene, scene.camera.position);
+    assert!(world.use_embree(0), "Embree takes the world's meshes");
+    assert!(world.traced_by_embree());
+    Some(world)
+}
+
+#[derive(Default, Debug)]
+struct Tally {
+    rays: u64,
+    hits: u64,
+    /// Hit by one search and missed by the other.
+    missed: u64,
+    /// The same distance, another triangle (a shared edge).
+    other_triangle: u64,
+    /// The largest distance across the surface between the two hits,
+    /// relative to the coordinates' size.
+    worst_apart: f32,
+}
+
+impl Tally {
+    /// Compares Embree's hit with the brute-force one, which `ray` meets
+    /// at `cos` (the cosine of its angle to the surface's normal).
+    fn add(
+        &mut self,
+        embree: Option<Hit>,
+        brute: Option<Hit>,
+        (ray, cos): (&Ray, f32),
+        what: &str,
+    ) {
+        self.rays += 1;
+        match (embree, brute) {
+            (Some(a), Some(b)) => {
+                self.hits += 1;
+                // How far apart the two points are across the surface, for
+                // the size of the numbers involved (a grazing ray's
+                // distance itself is ill-conditioned).
+                let scale = ray.origin.abs().max_element() + b.t + 1.0;
+                let apart = (a.t - b.t).abs() * cos / scale;
+                self.worst_apart = self.worst_apart.max(apart);
+                assert!(
+                    apart < 1e-5,
+                    "{what}: Embree's hit at {a:?}, brute force's at {b:?}, cosine {cos}"
+                );
+                if (a.object, a.prim) != (b.object, b.prim) {
+                    self.other_triangle += 1;
+                }
+                let sum: f32 = a.bary.iter().sum();
+                let on_triangle = a.prim == NO_PRIM || (sum - 1.0).abs() < 1e-4;
+                assert!(on_triangle, "{what}: {a:?} vs {b:?}");
+            }
+            (None, None) => {}
+            _ => self.missed += 1,
+        }
+    }
+}
+
+/// Asserts that a ray leaving triangle `left` did not meet it again.
+fn not_again(next: Option<Hit>, left: &Hit, what: &str) {
+    if let Some(h) = next {
+        assert!(
+            (h.object, h.prim) != (left.object, left.prim),
+            "{what}: met triangle {} of object {} again at t = {}",
+            left.prim,
+            left.object,
+            h.t
+        );
+    }
+}
+
+/// Rays from points drawn in (lo, hi) of world space in random directions,
+/// and from each surface they hit onwards (spawned as the integrator
+/// spawns them): Embree agrees with brute force, and never names the
+/// triangle a ray leaves.
+fn agree(world: &World, (lo, hi): (DVec3, DVec3), rays: u64, seed: u64, what: &str) -> Tally {
+    let mut tally = Tally::default();
+    for i in 0..rays {
+        let mut s = Sampler::new(seed, i, 0);
+        let ray = ray_in(world, (lo, hi), &mut s);
+        let cos = |hit: Option<Hit>, ray: &Ray| {
+            hit.map_or(1.0, |h| world.surface(&h, ray).ng.dot(ray.dir).abs())
+        };
+        let hit = world.intersect(Portable, &ray, Origin::NONE);
+        let brute = world.intersect_brute(&ray, Origin::NONE);
+        tally.add(hit, brute, (&ray, cos(brute, &ray)), what);
+        let Some(hit) = hit else { continue };
+        let surface = world.surface(&hit, &ray);
+        let dir = unit(&mut s);
+        let from = leaving(&hit, surface.ng, dir);
+        let next = world.spawn(&surface, dir);
+        let onward = world.intersect(Portable, &next, from);
+        if hit.prim != NO_PRIM {
+            not_again(onward, &hit, &format!("{what}: ray {i}"));
+        }
+        let brute = world.intersect_brute(&next, from);
+        tally.add(onward, brute, (&next, cos(brute, &next)), what);
+    }
+    eprintln!("{what}: {tally:?}");
+    assert!(tally.hits > rays / 4, "{what}: few hits: {tally:?}");
+    // Measured: none of either kind in 2 x 600,000 rays.
+    assert!(tally.missed * 20_000 <= tally.rays, "{what}: {tally:?}");
+    assert!(
+        tally.other_triangle * 5_000 <= tally.rays,
+        "{what}: {tally:?}"
+    );
+    tally
+}
+
+#[test]
+fn embree_finds_the_surfaces_brute_force_finds() {
+    let s = mixed_scene();
+    let Some(world) = embree_world(&s) else {
+        return;
+    };
+    let the_box = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(99.0, 81.6, 170.0));
+    agree(&world, the_box, 100_000, 1, "mixed scene");
+    let offset = DVec3::new(1e4, -3e4, 2e4);
+    let far = s.translated(offset);
+    let world = embree_world(&far).expect("Embree loaded a moment ago");
+    agree(
+        &world,
+        (the_box.0 + offset, the_box.1 + offset),
+        50_000,
+        2,
+        "mixed scene moved 4e4 away",
+    );
+}
+
+/// A ray that starts exactly on a triangle (not moved off it) and leaves it
+/// meets other surfaces, never that triangle: the filter refuses it.
+#[test]
+fn a_ray_from_a_triangle_never_meets_that_triangle() {
+    let s = mixed_scene();
+    let Some(world) = embree_world(&s) else {
+        return;
+    };
+    let (mut tried, mut onward) = (0u64, 0u64);
+    for i in 0..200_000u64 {
+        let mut s = Sampler::new(9, i, 0);
+        let o = Vec3A::new(
+            1.0 + 98.0 * s.next_f32(),
+            81.6 * s.next_f32(),
+            170.0 * s.next_f32(),
+        ) - Vec3A::from(world.origin.as_vec3());
+        let ray = Ray::new(o, unit(&mut s));
+        let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else {
+            continue;
+        };
+        if hit.prim == NO_PRIM {
+            continue;
+        }
+        let surface = world.surface(&hit, &ray);
+        // Grazing the plane both ways: the directions most likely to meet
+        // the triangle again at t = 0.
+        let v = unit(&mut s);
+        let tangent = (v - surface.ng * v.dot(surface.ng)).normalize();
+        for lift in [1e-3f32, -1e-3] {
+            let dir = (tangent + surface.ng * lift).normalize();
+            let from = leaving(&hit, surface.ng, dir);
+            tried += 1;
+            let next = world.intersect(Portable, &Ray::new(surface.p, dir), from);
+            onward += u64::from(next.is_some());
+            not_again(next, &hit, &format!("ray {i}"));
+        }
+    }
+    eprintln!("{tried} rays from triangles, {onward} met something else");
+    assert!(
+        tried > 50_000 && onward > tried / 4,
+        "{tried} tried, {onward} hit"
+    );
+}
+
+/// Worlds the CPU leaves to its own BVH: no meshes, or too few triangles
+/// for the backend's default.
+#[test]
+fn embree_takes_only_worlds_with_enough_triangles() {
+    let s = common::scene("cornell");
+    let world = World::new(&s, s.camera.position);
+    assert!(!world.use_embree(0), "no meshes");
+    assert!(!world.traced_by_embree());
+    let s = mixed_scene();
+    let world = World::new(&s, s.camera.position);
+    let min = pathstream::render::world::EMBREE_MIN_TRIANGLES;
+    assert!(!world.use_embree(min), "a few thousand triangles");
+    assert!(!world.traced_by_embree());
+}
