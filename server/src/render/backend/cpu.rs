@@ -89,12 +89,13 @@ impl CpuBackend {
             .pool
             .as_ref()
             .map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
-        let embree = match (self.embree, crate::render::embree::embree()) {
-            (EmbreeUse::Never, _) | (_, Err(_)) => String::new(),
-            (EmbreeUse::LargeMeshes, Ok(e)) => {
+        // Only once a world has loaded it: asking must not start Embree.
+        let embree = match (self.embree, crate::render::embree::loaded()) {
+            (EmbreeUse::Never, _) | (_, None) => String::new(),
+            (EmbreeUse::LargeMeshes, Some(e)) => {
                 format!(", large meshes through Embree {}", e.version)
             }
-            (EmbreeUse::AllMeshes, Ok(e)) => format!(", meshes through Embree {}", e.version),
+            (EmbreeUse::AllMeshes, Some(e)) => format!(", meshes through Embree {}", e.version),
         };
         match &self.fallback_reason {
             Some(why) => format!("rayon, {threads} threads{embree}; {why}"),

@@ -52,9 +52,17 @@ impl std::fmt::Debug for Embree {
     }
 }
 
+static STATE: OnceLock<Result<Embree, String>> = OnceLock::new();
+
+/// The library if a world has loaded it already (loads nothing: for
+/// reports, which should not start Embree's threads in a process that may
+/// never trace a large mesh).
+pub fn loaded() -> Option<&'static Embree> {
+    STATE.get().and_then(|s| s.as_ref().ok())
+}
+
 /// The library, loaded and started on first use, or why it is not there.
 pub fn embree() -> Result<&'static Embree, &'static str> {
-    static STATE: OnceLock<Result<Embree, String>> = OnceLock::new();
     let state = STATE.get_or_init(|| {
         let state = start();
         match &state {
