@@ -210,4 +210,23 @@ fn embree_takes_only_worlds_with_enough_triangles() {
     let min = pathstream::render::world::EMBREE_MIN_TRIANGLES;
     assert!(!world.use_embree(min), "a few thousand triangles");
     assert!(!world.traced_by_embree());
+    // A mesh beside more spheres than a scan beside Embree serves.
+    let mut j = common::scene_json("cornell-glass");
+    let objects = j["objects"].as_array_mut().expect("objects");
+    for k in 0..300 {
+        objects.push(
+            serde_json::json!({"type": "sphere", "center": [k as f64 * 0.3, 40, 80],
+            "radius": 0.1, "material": "white"}),
+        );
+    }
+    objects.push(common::mesh_object(
+        &common::meshes::soup(50, 2),
+        "white",
+        serde_json::Value::Null,
+        false,
+    ));
+    let s = Scene::from_json_value(j).expect("valid");
+    let world = World::new(&s, s.camera.position);
+    assert!(!world.use_embree(0), "300 spheres to scan beside the mesh");
+    assert!(!world.traced_by_embree());
 }

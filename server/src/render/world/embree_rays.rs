@@ -81,6 +81,18 @@ impl EmbreeRays {
         if triangles == 0 || triangles < min_triangles {
             return Err(format!("{triangles} triangles, fewer than {min_triangles}"));
         }
+        // What a scan beside Embree would cost, before any mesh is built.
+        let count =
+            |f: fn(&Geometry) -> bool| world.objects.iter().filter(|o| f(&o.geometry)).count();
+        let (n_spheres, n_quads) = (
+            count(|g| matches!(g, Geometry::Sphere(_))),
+            count(|g| matches!(g, Geometry::Quad(_))),
+        );
+        if scan_cost(n_spheres, n_quads) > SCAN_MAX_COST {
+            return Err(format!(
+                "{n_spheres} spheres and {n_quads} quads beside the meshes are more than a scan serves"
+            ));
+        }
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
         let mut placed = Vec::new();
@@ -104,13 +116,6 @@ impl EmbreeRays {
                     placed.push((id, mesh, columns));
                 }
             }
-        }
-        if scan_cost(spheres.len(), quads.len()) > SCAN_MAX_COST {
-            return Err(format!(
-                "{} spheres and {} quads beside the meshes are more than a scan serves",
-                spheres.len(),
-                quads.len()
-            ));
         }
         Ok(EmbreeRays {
             scene: embree.instances(&placed)?,
