@@ -67,7 +67,7 @@ static inline float2 next_2d(Sampler *s) {
     return (float2)((float)(bits >> 40), (float)((bits >> 16) & 0xFFFFFFUL)) * (1.0f / 16777216.0f);
 }
 
-/* Sobol points, as sampler/sobol.rs. */
+/* Sobol points, as sampler/sobol.rs: 2-D Owen-scrambled, 1-D shuffled. */
 static inline uint lk_hash(uint x, uint seed) {
     x ^= x * 0x3d20adeau;
     x += seed;
@@ -106,10 +106,10 @@ static inline uint sobol_index(const Sampler *s, ulong d, uint *sx, uint *sy) {
     return reverse32(lk_hash(s->rindex, (uint)h));
 }
 
+/* 1-D: the van der Corput point of the shuffled index, which is the
+ * shuffle's hash itself (sobol.rs, sample_1d). */
 static inline uint sobol_1d(const Sampler *s, ulong d) {
-    uint sx, sy;
-    uint i = sobol_index(s, d, &sx, &sy);
-    return reverse32(lk_hash(i, sx));
+    return lk_hash(s->rindex, (uint)mix64(s->key + d * 0x9E3779B97F4A7C15UL));
 }
 
 static inline float2 sobol_2d(const Sampler *s, ulong d) {

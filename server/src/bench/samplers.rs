@@ -33,7 +33,7 @@ pub fn pair() -> [Setting; 2] {
 pub fn markdown(w: &mut String, r: &Results) {
     let table = Table {
         title: "Samplers: random vs Sobol",
-        about: "The unbiased setting (unbounded, NEE) with independent random numbers and with Owen-scrambled Sobol points.",
+        about: "The unbiased setting (unbounded, NEE) with independent random numbers and with scrambled Sobol points.",
         names: ["random", "sobol"],
     };
     compare::markdown(w, &r.samplers, r.trade_size, &table);

@@ -4,8 +4,8 @@
 //! image depends only on scene, settings, seed and sample count.
 //!
 //! Two kinds ([`SamplerKind`], `quality.sampler`):
-//! - `sobol` (the default): low-discrepancy points, Owen-scrambled Sobol
-//!   padded in 2-D ([`sobol`]). Each use a path makes of random numbers has
+//! - `sobol` (the default): low-discrepancy points, scrambled Sobol
+//!   padded in 2-D and 1-D ([`sobol`]). Each use a path makes of random numbers has
 //!   its own dimension, chosen deliberately rather than by the order of
 //!   draws: the camera's pixel position (2-D) and lens point (2-D, a
 //!   dimension of its own far from the rest); at every vertex v, the light
@@ -203,6 +203,13 @@ impl Sampler {
         Seeds::from_bits(mix64(self.key.wrapping_add(d.wrapping_mul(GOLDEN))))
     }
 
+    /// The seed of 1-D Sobol dimension `d` (the index shuffle's of
+    /// [`Sampler::seeds`]).
+    #[inline(always)]
+    fn seed_1d(&self, d: u64) -> u32 {
+        mix64(self.key.wrapping_add(d.wrapping_mul(GOLDEN))) as u32
+    }
+
     #[inline(always)]
     fn sobol_2d(&self, d: u64) -> (f32, f32) {
         let (x, y) = sobol::sample_2d(self.rindex, self.seeds(d));
@@ -237,7 +244,7 @@ impl Sampler {
     #[inline(always)]
     fn number_1d(&self, d: u64, stratified: bool) -> f32 {
         if stratified {
-            sobol::unit_f32(sobol::sample_1d(self.rindex, self.seeds(d)))
+            sobol::unit_f32(sobol::sample_1d(self.rindex, self.seed_1d(d)))
         } else {
             (self.pad_bits(d) >> 40) as f32 * (1.0 / 16_777_216.0)
         }
@@ -289,7 +296,7 @@ impl Sampler {
         if !self.stratified() {
             return self.pad_bits(d);
         }
-        let hi = sobol::sample_1d(self.rindex, self.seeds(d));
+        let hi = sobol::sample_1d(self.rindex, self.seed_1d(d));
         (u64::from(hi) << 32) | u64::from((u64::from(hi) * n as u64) as u32)
     }
 

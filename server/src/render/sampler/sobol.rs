@@ -1,18 +1,29 @@
-//! Owen-scrambled Sobol points by hashing (Burley, "Practical Hash-based
-//! Owen Scrambling", JCGT 2020), padded in 2-D: every 1-D or 2-D sample of
-//! a path is its own Sobol (0,2)-sequence, whose index order is shuffled by
-//! a nested uniform scramble and whose values are Owen-scrambled, each with
-//! seeds hashed from (the path's key, the sample's dimension). The first
-//! 2^m indices of any such sequence form a (0,m,2)-net: every elementary
-//! interval of area 2^-m holds exactly one point, whatever the seeds.
+//! Scrambled Sobol points by hashing, padded: every 1-D or 2-D sample of
+//! a path is its own low-discrepancy sequence, with seeds hashed from (the
+//! path's key, the sample's dimension).
 //!
-//! Only Sobol's first two dimensions are used, and neither needs a table:
-//! the first is the bit-reversed index (van der Corput); the second is the
-//! bit-reversed superset-sum transform of the index (its generator matrix
-//! is Pascal's triangle mod 2: by Lucas' theorem, index bit k reaches value
-//! bit p exactly when p's bits are a subset of k's), five shift-and-xor
-//! steps. All arithmetic is on u32, so the kernel (`kernels/rng.h`) makes
-//! the same numbers bit for bit.
+//! - **2-D**: Sobol's first two dimensions, a (0,2)-sequence, Owen-scrambled
+//!   by hashing (Burley, "Practical Hash-based Owen Scrambling", JCGT
+//!   2020): the index order is shuffled by a nested uniform scramble and
+//!   the values are Owen-scrambled. The first 2^m indices of any such
+//!   sequence form a (0,m,2)-net: every elementary interval of area 2^-m
+//!   holds exactly one point, whatever the seeds.
+//! - **1-D**: the van der Corput sequence (Sobol's first dimension) with its
+//!   index order shuffled by the same nested uniform scramble, and no value
+//!   scramble: one hash, no bit reversal, where an Owen-scrambled point
+//!   costs two of each. The first 2^m points are a regular grid of step
+//!   2^-m, shifted by a random offset and visited in a random nested
+//!   order. Every 1-D use (roulette, the light pick and its coin, the
+//!   BSDF's lobe) is a step function of its number, where such a grid is as
+//!   good as Owen's jittered strata; measured by
+//!   `examples/sampler_variance.rs` (docs/RENDERER.md).
+//!
+//! Neither dimension needs a table: the first is the bit-reversed index
+//! (van der Corput); the second is the bit-reversed superset-sum transform
+//! of the index (its generator matrix is Pascal's triangle mod 2: by
+//! Lucas' theorem, index bit k reaches value bit p exactly when p's bits
+//! are a subset of k's), five shift-and-xor steps. All arithmetic is on
+//! u32, so the kernel (`kernels/rng.h`) makes the same numbers bit for bit.
 
 /// A permutation of u32 in which each output bit depends only on the input
 /// bits at or below it (Laine and Karras 2011, with the constants of
@@ -91,11 +102,12 @@ fn shuffled(rindex: u32, seed: u32) -> u32 {
     lk_hash(rindex, seed).reverse_bits()
 }
 
-/// Point `index` (given bit-reversed) of the 1-D sequence `seeds` name,
-/// 32-bit fixed point.
+/// Point `index` (given bit-reversed) of the 1-D sequence `seed` names,
+/// 32-bit fixed point: the van der Corput point of the shuffled index,
+/// which is the shuffle's hash itself (`reverse(shuffled(..))`).
 #[inline(always)]
-pub fn sample_1d(rindex: u32, seeds: Seeds) -> u32 {
-    lk_hash(shuffled(rindex, seeds.index), seeds.x).reverse_bits()
+pub fn sample_1d(rindex: u32, seed: u32) -> u32 {
+    lk_hash(rindex, seed)
 }
 
 /// Point `index` (given bit-reversed) of the 2-D sequence `seeds` name,
@@ -185,12 +197,29 @@ mod tests {
 
     #[test]
     fn one_dimension_is_stratified_and_values_are_in_range() {
-        let seeds = Seeds::from_bits(0xFEED_FACE_CAFE_BEEF);
-        let mut cells: Vec<u32> = (0..1024u32)
-            .map(|i| sample_1d(i.reverse_bits(), seeds) >> 22)
+        for seed in [0, 1, 0xFEED_FACE, u32::MAX] {
+            for m in 0..=10u32 {
+                let mut cells: Vec<u32> = (0..1u32 << m)
+                    .map(|i| {
+                        sample_1d(i.reverse_bits(), seed)
+                            .checked_shr(32 - m)
+                            .unwrap_or(0)
+                    })
+                    .collect();
+                cells.sort_unstable();
+                assert_eq!(
+                    cells,
+                    (0..1u32 << m).collect::<Vec<_>>(),
+                    "seed {seed}, 2^{m}"
+                );
+            }
+        }
+        // Each prefix is also a prefix of the same order: point 1 lies in
+        // the other half from point 0, points 2 and 3 in the other quarters.
+        let p: Vec<u32> = (0..4u32)
+            .map(|i| sample_1d(i.reverse_bits(), 7) >> 30)
             .collect();
-        cells.sort_unstable();
-        assert_eq!(cells, (0..1024).collect::<Vec<_>>());
+        assert_eq!(p[0] >> 1 ^ p[1] >> 1, 1, "{p:?}");
         for v in [0, 1, 255, 256, u32::MAX] {
             let u = unit_f32(v);
             assert!((0.0..1.0).contains(&u), "{v}: {u}");
@@ -205,5 +234,12 @@ mod tests {
         let pb: Vec<_> = (0..16u32).map(|i| sample_2d(i.reverse_bits(), b)).collect();
         assert_ne!(pa, pb);
         assert_ne!(a.x, a.y, "the two coordinates scramble apart");
+        let qa: Vec<_> = (0..16u32)
+            .map(|i| sample_1d(i.reverse_bits(), a.index))
+            .collect();
+        let qb: Vec<_> = (0..16u32)
+            .map(|i| sample_1d(i.reverse_bits(), b.index))
+            .collect();
+        assert_ne!(qa, qb);
     }
 }
