@@ -196,6 +196,27 @@ const TWO_D: [(&str, Integrand2); 4] = [
     }),
 ];
 
+/// The rows of one integrand: random's variance over each kind's at every
+/// count; `estimate(kind, key, rindex)` is one sample of the integrand.
+fn compare<K: Copy>(
+    trials: u64,
+    name: &str,
+    random: K,
+    kinds: &[(&str, K)],
+    estimate: impl Fn(K, u64, u32) -> f64,
+) {
+    let ratios: Vec<Vec<f64>> = COUNTS
+        .iter()
+        .map(|&n| {
+            let of = |kind: K| variance(trials, n, &|key, r| estimate(kind, key, r));
+            let random = of(random);
+            kinds.iter().map(|(_, k)| random / of(*k)).collect()
+        })
+        .collect();
+    let names: Vec<&str> = kinds.iter().map(|k| k.0).collect();
+    row(name, &names, &ratios);
+}
+
 /// One line per kind; `ratios[count][kind]`.
 fn row(name: &str, kinds: &[&str], ratios: &[Vec<f64>]) {
     for (k, kind) in kinds.iter().enumerate() {
@@ -227,35 +248,15 @@ fn main() {
     header("1-D integrand");
     let kinds1: [(&str, Kind1); 2] = [("Owen", owen_1d), ("shuffled (used)", shuffled_1d)];
     for (name, f) in ONE_D {
-        let ratios: Vec<Vec<f64>> = COUNTS
-            .iter()
-            .map(|&n| {
-                let of = |kind: Kind1| {
-                    variance(trials, n, &|key, r| {
-                        f(&[1, 2, 3, 4].map(|d| kind(key, r, d)))
-                    })
-                };
-                let random = of(random_1d);
-                kinds1.iter().map(|(_, k)| random / of(*k)).collect()
-            })
-            .collect();
-        let names: Vec<&str> = kinds1.iter().map(|k| k.0).collect();
-        row(name, &names, &ratios);
+        compare(trials, name, random_1d as Kind1, &kinds1, |kind, key, r| {
+            f(&[1, 2, 3, 4].map(|d| kind(key, r, d)))
+        });
     }
     header("2-D integrand");
     let kinds2: [(&str, Kind2); 2] = [("Owen (used)", owen_2d), ("digital shift", shifted_2d)];
     for (name, f) in TWO_D {
-        let ratios: Vec<Vec<f64>> = COUNTS
-            .iter()
-            .map(|&n| {
-                let of = |kind: Kind2| {
-                    variance(trials, n, &|key, r| f(&[1, 2].map(|d| kind(key, r, d))))
-                };
-                let random = of(random_2d);
-                kinds2.iter().map(|(_, k)| random / of(*k)).collect()
-            })
-            .collect();
-        let names: Vec<&str> = kinds2.iter().map(|k| k.0).collect();
-        row(name, &names, &ratios);
+        compare(trials, name, random_2d as Kind2, &kinds2, |kind, key, r| {
+            f(&[1, 2].map(|d| kind(key, r, d)))
+        });
     }
 }
