@@ -71,6 +71,18 @@ impl Tally {
                 );
                 if (a.object, a.prim) != (b.object, b.prim) {
                     self.other_triangle += 1;
+                } else if a.prim != NO_PRIM {
+                    // The same point of the triangle, which shading reads
+                    // (normals, texture coordinates) through these weights.
+                    let off = (0..3)
+                        .map(|k| (a.bary[k] - b.bary[k]).abs())
+                        .fold(0.0, f32::max);
+                    assert!(
+                        off < 1e-3,
+                        "{what}: barycentrics {:?} vs {:?}",
+                        a.bary,
+                        b.bary
+                    );
                 }
                 let sum: f32 = a.bary.iter().sum();
                 let on_triangle = a.prim == NO_PRIM || (sum - 1.0).abs() < 1e-4;
