@@ -18,7 +18,9 @@
 //! coordinates.
 
 use pathstream::render::sampler::mix64;
-use pathstream::render::sampler::sobol::{lk_hash, owen, sample_1d, sample_2d, unit_f32, Seeds};
+use pathstream::render::sampler::sobol::{
+    lk_hash, owen, sample_1d, sample_2d, sample_2d_x3, unit_f32, Seeds,
+};
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 const COUNTS: [u32; 8] = [1, 2, 3, 4, 8, 16, 64, 256];
@@ -77,8 +79,17 @@ fn shifted_2d(key: u64, rindex: u32, d: u64) -> (f64, f64) {
     (u(x ^ s.x), u(y ^ s.y))
 }
 
+/// Three 2-D Owen points of one index at once (the sampler's camera and
+/// first-vertex points), summed.
+fn owen_2d_x3(key: u64, rindex: u32) -> f64 {
+    let bits = [0, 2, 4].map(|d| bits(key, d));
+    let [a, b, c] = sample_2d_x3(rindex, bits);
+    [a, b, c].iter().map(|&(x, y)| u(x) + u(y)).sum()
+}
+
 /// Nanoseconds per point of each kind, one thread, median of 5 rounds of
 /// 10^7 points (each point's key and index differ, as a path's do).
+#[inline(always)]
 fn per(f: impl Fn(u64, u32) -> f64) -> f64 {
     use std::hint::black_box;
     let n = 10_000_000u64;
@@ -121,6 +132,30 @@ fn cost() {
     for (name, ns) in rows {
         println!("| {name} | {ns:.2} |");
     }
+    // The render loop is compiled for AVX2 where the CPU has it, which is
+    // where three points at once pay.
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has AVX2 and FMA (checked above).
+        #[allow(unsafe_code)]
+        let (one, three) = unsafe {
+            (
+                per_avx2(|k, r| pair_sum(owen_2d(k, r, 3))),
+                per_avx2(owen_2d_x3) / 3.0,
+            )
+        };
+        println!("| 2-D Owen, AVX2 | {one:.2} |");
+        println!("| 2-D Owen, three at once, AVX2 (per point) | {three:.2} |");
+    }
+    let three = per(owen_2d_x3) / 3.0;
+    println!("| 2-D Owen, three at once (per point) | {three:.2} |");
+}
+
+/// [`per`] compiled for AVX2 and FMA, as the render loop is.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn per_avx2(f: impl Fn(u64, u32) -> f64) -> f64 {
+    per(f)
 }
 
 fn pair_sum((x, y): (f64, f64)) -> f64 {

@@ -80,6 +80,20 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The 64 hashed bits of Sobol dimension `d` of the sequence `key` names:
+/// a 2-D dimension's seeds (`Seeds::from_bits`), whose low 32 bits are a
+/// 1-D dimension's.
+#[inline(always)]
+fn dim_bits(key: u64, d: u64) -> u64 {
+    mix64(key.wrapping_add(d.wrapping_mul(GOLDEN)))
+}
+
+/// A 2-D point in 32-bit fixed point as f32s in [0, 1).
+#[inline(always)]
+fn unit_2d((x, y): (u32, u32)) -> (f32, f32) {
+    (sobol::unit_f32(x), sobol::unit_f32(y))
+}
+
 /// What a path uses a vertex's numbers for: each its own Sobol dimension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u64)]
@@ -119,7 +133,20 @@ pub struct Sampler {
     /// Sobol: the vertex whose numbers are drawn (see [`Sampler::at_vertex`]).
     vertex: u32,
     sobol: bool,
+    /// Sobol: the camera's point and the first vertex's light position and
+    /// BSDF direction ([`FIRST_DIMENSIONS`]), computed together when the
+    /// sampler is made (`sobol::sample_2d_x3`); every path draws the first
+    /// and most draw the other two.
+    first: [(f32, f32); 3],
 }
+
+/// The 2-D dimensions of [`Sampler::first`]: the camera's (0), and vertex
+/// 0's light position and BSDF direction (`Sampler::vertex_dim`).
+const FIRST_DIMENSIONS: [u64; 3] = [
+    0,
+    1 + Use::LightPosition as u64,
+    1 + Use::BsdfDirection as u64,
+];
 
 impl Sampler {
     /// The `random` numbers of sample `sample` of pixel `pixel` under `seed`.
@@ -133,6 +160,7 @@ impl Sampler {
             rindex: 0,
             vertex: 0,
             sobol: false,
+            first: [(0.0, 0.0); 3],
         }
     }
 
@@ -149,6 +177,7 @@ impl Sampler {
                         ^ 0xA076_1D64_78BD_642F,
                 );
                 let rindex = ((sample >> 1) as u32).reverse_bits();
+                let bits = FIRST_DIMENSIONS.map(|d| dim_bits(key, d));
                 Self {
                     key,
                     rkey: mix64(key ^ u64::from(rindex)),
@@ -156,6 +185,7 @@ impl Sampler {
                     rindex,
                     vertex: 0,
                     sobol: true,
+                    first: sobol::sample_2d_x3(rindex, bits).map(unit_2d),
                 }
             }
         }
@@ -188,7 +218,7 @@ impl Sampler {
     #[inline(always)]
     fn next_bits(&mut self) -> u64 {
         self.dim += 1;
-        mix64(self.key.wrapping_add(self.dim.wrapping_mul(GOLDEN)))
+        dim_bits(self.key, self.dim)
     }
 
     /// Whether the numbers are Sobol points.
@@ -197,23 +227,17 @@ impl Sampler {
         self.sobol
     }
 
-    /// The seeds of Sobol dimension `d`.
-    #[inline(always)]
-    fn seeds(&self, d: u64) -> Seeds {
-        Seeds::from_bits(mix64(self.key.wrapping_add(d.wrapping_mul(GOLDEN))))
-    }
-
-    /// The seed of 1-D Sobol dimension `d` (the index shuffle's of
-    /// [`Sampler::seeds`]).
+    /// The seed of 1-D Sobol dimension `d` (the index shuffle's of the
+    /// 2-D dimension `d`'s seeds).
     #[inline(always)]
     fn seed_1d(&self, d: u64) -> u32 {
-        mix64(self.key.wrapping_add(d.wrapping_mul(GOLDEN))) as u32
+        dim_bits(self.key, d) as u32
     }
 
     #[inline(always)]
     fn sobol_2d(&self, d: u64) -> (f32, f32) {
-        let (x, y) = sobol::sample_2d(self.rindex, self.seeds(d));
-        (sobol::unit_f32(x), sobol::unit_f32(y))
+        let seeds = Seeds::from_bits(dim_bits(self.key, d));
+        unit_2d(sobol::sample_2d(self.rindex, seeds))
     }
 
     /// Whether this vertex's light and BSDF numbers are Sobol points.
@@ -225,7 +249,7 @@ impl Sampler {
     /// 64 independent bits for dimension `d` of this sample.
     #[inline(always)]
     fn pad_bits(&self, d: u64) -> u64 {
-        mix64(self.rkey.wrapping_add(d.wrapping_mul(GOLDEN)))
+        dim_bits(self.rkey, d)
     }
 
     /// Two independent numbers for dimension `d` (as [`Sampler::next_2d`]).
@@ -259,7 +283,7 @@ impl Sampler {
     #[inline(always)]
     pub fn camera_2d(&mut self) -> (f32, f32) {
         if self.sobol {
-            self.sobol_2d(0)
+            self.first[0]
         } else {
             self.next_2d()
         }
@@ -312,6 +336,7 @@ impl Sampler {
             _ => EXTRA_LIGHTS | (u64::from(self.vertex) << 32) | u64::from(k),
         };
         match self.stratified() {
+            true if self.vertex == 0 && k == 0 => self.first[1],
             true => self.sobol_2d(d),
             false => self.pad_2d(d),
         }
@@ -334,6 +359,7 @@ impl Sampler {
         }
         let d = self.vertex_dim(Use::BsdfDirection);
         match self.stratified() {
+            true if self.vertex == 0 => self.first[2],
             true => self.sobol_2d(d),
             false => self.pad_2d(d),
         }
@@ -408,5 +434,18 @@ mod tests {
         let cov = sxy / nf - (sx / nf) * (sy / nf);
         // Standard error of the covariance is about 1/12/sqrt(n) ~ 6e-4.
         assert!(cov.abs() < 4e-3, "covariance {cov}");
+    }
+
+    #[test]
+    fn points_made_ahead_are_those_of_their_dimensions() {
+        for (seed, pixel, sample) in [(0, 0, 0), (3, 17, 5), (9, 4095, 1000), (1, 2, 65_537)] {
+            let mut s = Sampler::of_kind(SamplerKind::Sobol, seed, pixel, sample);
+            let alone = |s: &Sampler, u| s.sobol_2d(s.vertex_dim(u));
+            assert_eq!(s.camera_2d(), s.sobol_2d(0));
+            s.at_vertex(0);
+            assert_eq!(s.light_2d(0), alone(&s, Use::LightPosition));
+            assert_eq!(s.bsdf_2d(), alone(&s, Use::BsdfDirection));
+            assert_ne!(s.light_2d(1), s.light_2d(0), "other emitters' dimensions");
+        }
     }
 }
