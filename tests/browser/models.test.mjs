@@ -121,7 +121,8 @@ describe("model files in the browser", { timeout: 300000 }, () => {
     await waitFor("the map's upload", async () => (await session(server.base, sid)).environment_name === "sunset-64.hdr");
     const uploaded = (await session(server.base, sid)).environment.map;
     assert.match(uploaded, /^[0-9a-f]{64}$/);
-    assert.equal(await page.textContent("#hud-env"), "sunset-64.hdr");
+    // The HUD follows the session's next state message, not the upload's reply.
+    await waitFor("the HUD names the map", async () => (await page.textContent("#hud-env")) === "sunset-64.hdr");
     assert.equal((await session(server.base, sid)).scene, "custom", "the model stays");
 
     // A built-in map from the menu.
