@@ -127,8 +127,9 @@ pub fn sample_2d(rindex: u32, seeds: Seeds) -> (u32, u32) {
 /// [`sample_2d`] of three sequences at the same index, each named by the
 /// 64 bits [`Seeds::from_bits`] takes: the same numbers, computed lane for
 /// lane over arrays, so that the compiler evaluates the three points'
-/// hashes and bit reversals in SIMD registers (in the AVX2 render loop
-/// about half the time of three calls: docs/RENDERER.md).
+/// hashes and bit reversals in SIMD registers (about a quarter less time
+/// per point than three calls, `examples/sampler_variance.rs`;
+/// docs/RENDERER.md).
 #[inline(always)]
 pub fn sample_2d_x3(rindex: u32, bits: [u64; 3]) -> [(u32, u32); 3] {
     // Four lanes (the last repeats the third) and eight: register widths.
