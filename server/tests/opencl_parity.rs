@@ -11,7 +11,7 @@ use common::opencl_device as device;
 use parity::{checks, ray_input, rays_around, ulps, uniform, unit};
 use pathstream::render::backend::nearest_hits;
 use pathstream::render::backend::opencl::{
-    device_uses_bvh, pack, CheckArg, KernelParams, OpenClBackend, Packed,
+    device_uses_bvh, pack, CheckArg, Checks, KernelParams, OpenClBackend, Packed,
 };
 use pathstream::render::material::{scatter, Bsdf};
 use pathstream::render::math::{sincos_turns, Vec3A};
@@ -52,9 +52,18 @@ fn the_sampler_is_bit_exact() {
     }
 }
 
+/// Both ways the kernel may make a Sobol path's first points: lazily, where
+/// each is used (GPUs), and ahead, with the sampler (CPU devices).
 #[test]
 fn every_use_of_either_sampler_gives_the_same_bits() {
     let Some(d) = device() else { return };
+    for ahead in ["-D SAMPLER_AHEAD=0", "-D SAMPLER_AHEAD=1"] {
+        let c = d.checks(ahead).expect("the check program builds");
+        sampler_uses_agree(&c, ahead);
+    }
+}
+
+fn sampler_uses_agree(c: &Checks<'_>, options: &str) {
     let n = 1u64 << 12;
     let input: Vec<u64> = (0..n)
         .flat_map(|i| {
@@ -66,7 +75,7 @@ fn every_use_of_either_sampler_gives_the_same_bits() {
             ]
         })
         .collect();
-    let out: Vec<u32> = checks(&d)
+    let out: Vec<u32> = c
         .run(
             "check_sampler_uses",
             n as usize,
@@ -97,7 +106,11 @@ fn every_use_of_either_sampler_gives_the_same_bits() {
             ]);
             cpu.extend([l0.0, l0.1, l2.0, l2.1, b, d.0, d.1, r].map(f32::to_bits));
         }
-        assert_eq!(&out[28 * i..28 * i + 28], &cpu[..], "item {i} ({kind:?})");
+        assert_eq!(
+            &out[28 * i..28 * i + 28],
+            &cpu[..],
+            "item {i} ({kind:?}, {options})"
+        );
     }
 }
 

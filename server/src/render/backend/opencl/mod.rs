@@ -353,14 +353,21 @@ impl OpenClBackend {
 
     /// Options this device's programs are built with on top of the
     /// program's own: division and sqrt correctly rounded where the device
-    /// can, as on the CPU, and `PATHSTREAM_OPENCL_OPTIONS` (to measure a
-    /// compiler option; docs/OPENCL.md has what each costs).
+    /// can, as on the CPU, a Sobol path's first points made ahead on CPU
+    /// devices (`SAMPLER_AHEAD`), and `PATHSTREAM_OPENCL_OPTIONS` (to measure
+    /// a compiler option; docs/OPENCL.md has what each costs).
     pub fn device_options(&self) -> String {
         let mut o = String::new();
         if self.info.correctly_rounded_divide_sqrt {
             o.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
         }
-        if let Ok(extra) = std::env::var("PATHSTREAM_OPENCL_OPTIONS") {
+        let extra = std::env::var("PATHSTREAM_OPENCL_OPTIONS").unwrap_or_default();
+        // A CPU device makes a Sobol path's first points ahead, side by side
+        // (kernels/rng.h); GPUs keep them lazy unless the options say.
+        if self.info.kind == "cpu" && !extra.contains("SAMPLER_AHEAD") {
+            o.push_str(" -D SAMPLER_AHEAD=1");
+        }
+        if !extra.is_empty() {
             o.push(' ');
             o.push_str(&extra);
         }
