@@ -60,6 +60,11 @@ static inline Sampler sampler_new(ulong seed, ulong pixel, ulong sample) {
 
 static inline float2 sobol_2d(const Sampler *s, ulong d);
 
+/* The dimension of one use of the sampler at its vertex. */
+static inline ulong vertex_dim(const Sampler *s, ulong use) {
+    return 1UL + (ulong)s->vertex * VERTEX_USES + use;
+}
+
 /* A sample's numbers of either kind (Sampler::of_kind). With
  * SAMPLER_AHEAD (the host sets it for CPU devices), a Sobol sampler makes
  * the three 2-D points every path draws first together, as the CPU does:
@@ -80,8 +85,8 @@ static inline Sampler sampler_of_kind(int sobol, ulong seed, ulong pixel, ulong 
     s.sobol = 1;
 #if SAMPLER_AHEAD
     s.ahead[0] = sobol_2d(&s, 0UL);
-    s.ahead[1] = sobol_2d(&s, 1UL + USE_LIGHT_POSITION);
-    s.ahead[2] = sobol_2d(&s, 1UL + USE_BSDF_DIRECTION);
+    s.ahead[1] = sobol_2d(&s, vertex_dim(&s, USE_LIGHT_POSITION));
+    s.ahead[2] = sobol_2d(&s, vertex_dim(&s, USE_BSDF_DIRECTION));
 #endif
     return s;
 }
@@ -149,10 +154,6 @@ static inline float2 sobol_2d(const Sampler *s, ulong d) {
     uint sx, sy;
     uint i = sobol_index(s, d, &sx, &sy);
     return (float2)(unit_f32(reverse32(lk_hash(i, sx))), unit_f32(reverse32(lk_hash(superset_sum(i), sy))));
-}
-
-static inline ulong vertex_dim(const Sampler *s, ulong use) {
-    return 1UL + (ulong)s->vertex * VERTEX_USES + use;
 }
 
 static inline int stratified(const Sampler *s) {
