@@ -20,6 +20,10 @@ Run (from the repository root):
     /tmp/mi/bin/python scripts/mitsuba-compare.py [--scene cornell-mesh]
         [--size 128] [--spp 64,256,1024] [--max-depth 6] [--threads 2]
         [--reference-spp 8192] [--out target/mitsuba-compare]
+        [--variant llvm_ad_rgb|scalar_rgb]
+
+`llvm_ad_rgb` (the default) traces wide batches of paths; `scalar_rgb`
+one path at a time, which shows what the batches are worth.
 
 Depths: pathstream's --max-depth counts scattering events, Mitsuba's
 max_depth path vertices, so Mitsuba gets max_depth + 1. Russian roulette
@@ -42,6 +46,8 @@ from compare_common import (
 def mitsuba_scene(mi, scene, args, out_dir):
     """The scene JSON as a Mitsuba scene: meshes through PLY files written
     by Mitsuba itself, so that both read the same f32 data."""
+    import drjit as dr
+
     d = {
         "type": "scene",
         "integrator": {
@@ -85,10 +91,16 @@ def mitsuba_scene(mi, scene, args, out_dir):
             f"mesh{i}", len(pos), len(tri), has_vertex_normals=normals is not None
         )
         params = mi.traverse(mesh)
-        params["vertex_positions"] = mi.Float(pos.ravel())
-        params["faces"] = mi.UInt32(tri.ravel())
+        # Scalar variants hold a mesh's buffers as dynamic scalar arrays.
+        floats, ints = (
+            (dr.scalar.ArrayXf, dr.scalar.ArrayXu)
+            if mi.variant().startswith("scalar")
+            else (mi.Float, mi.UInt32)
+        )
+        params["vertex_positions"] = floats(pos.ravel())
+        params["faces"] = ints(tri.ravel())
         if normals is not None:
-            params["vertex_normals"] = mi.Float(np.array(normals, dtype=np.float32).ravel())
+            params["vertex_normals"] = floats(np.array(normals, dtype=np.float32).ravel())
         params.update()
         ply = os.path.join(out_dir, f"mesh{i}.ply")
         mesh.write_ply(ply)

@@ -28,6 +28,10 @@
 //! pathstream's test). `--quality` adds Embree with `RTC_BUILD_QUALITY_HIGH`
 //! (the default is MEDIUM). `--verbose` turns on Embree's own report
 //! (`verbose=3`: its ISA, the BVH it builds, the intersectors it picks).
+//! `--packets` adds Embree tracing the same rays in packets of sixteen
+//! neighbouring rays (`rtcIntersect16`, as a wavefront of sixteen lanes
+//! would hand them over), default build, checked to give the single
+//! rays' hits.
 //!
 //! Embree is bound by the small `extern "C"` block in `embree.rs` (Embree 3's C API,
 //! `libembree3`); only this example uses it, behind the `embree` feature.
@@ -133,6 +137,9 @@ struct Row {
     agree_bounce: Agreement,
     agree_camera_robust: Agreement,
     agree_bounce_robust: Agreement,
+    /// With `--packets`: Embree's rays/s in packets of sixteen (camera,
+    /// bounce), and how many rays' hits differ from its single rays'.
+    packets: Option<([f64; 2], usize)>,
 }
 
 struct Args {
@@ -141,6 +148,7 @@ struct Args {
     repeats: u32,
     quality: bool,
     verbose: bool,
+    packets: bool,
 }
 
 fn parse_args() -> Args {
@@ -150,6 +158,7 @@ fn parse_args() -> Args {
         repeats: 3,
         quality: false,
         verbose: false,
+        packets: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -160,8 +169,9 @@ fn parse_args() -> Args {
             }
             "--quality" => args.quality = true,
             "--verbose" => args.verbose = true,
+            "--packets" => args.packets = true,
             "-h" | "--help" => {
-                println!("embree_compare [TRIANGLES...] [--out FILE.csv] [--repeats N] [--quality] [--verbose]");
+                println!("embree_compare [TRIANGLES...] [--out FILE.csv] [--repeats N] [--quality] [--verbose] [--packets]");
                 std::process::exit(0);
             }
             n => args
@@ -245,14 +255,29 @@ fn measure(device: &Device, n: usize, args: &Args) -> Row {
     drop((ours_camera, ours_bounce));
 
     // Speed: the tracers take turns, pass by pass; best pass of each.
+    let differ = |a: &[Option<Hit>], b: &[Option<Hit>]| {
+        a.iter()
+            .zip(b)
+            .filter(|(a, b)| a.map(|h| (h.prim, h.t)) != b.map(|h| (h.prim, h.t)))
+            .count()
+    };
+    let packets_differ = args.packets.then(|| {
+        differ(&medium.hits(&map, &camera), &medium.hits16(&map, &camera))
+            + differ(&medium.hits(&map, &bounce), &medium.hits16(&map, &bounce))
+    });
     let time = |rays: &[(Ray, Origin)]| {
-        let mut best = [0.0f64; 4];
+        let mut best = [0.0f64; 5];
         for _ in 0..args.repeats.max(1) {
             let mut pass = [
                 rays_per_sec(&world, rays, 1),
                 medium.rays_per_sec(&map, rays),
                 robust.rays_per_sec(&map, rays),
                 high.as_ref().map_or(0.0, |h| h.rays_per_sec(&map, rays)),
+                if args.packets {
+                    medium.rays_per_sec16(&map, rays)
+                } else {
+                    0.0
+                },
             ];
             for (b, p) in best.iter_mut().zip(&mut pass) {
                 *b = b.max(*p);
@@ -266,7 +291,23 @@ fn measure(device: &Device, n: usize, args: &Args) -> Row {
     let others = CpuTicks::now()
         .zip(before)
         .map(|(after, before)| after.others_share(&before));
+    let packets = packets_differ.map(|d| ([camera_speed[4], bounce_speed[4]], d));
+    let (camera_speed, bounce_speed) = (
+        [
+            camera_speed[0],
+            camera_speed[1],
+            camera_speed[2],
+            camera_speed[3],
+        ],
+        [
+            bounce_speed[0],
+            bounce_speed[1],
+            bounce_speed[2],
+            bounce_speed[3],
+        ],
+    );
     Row {
+        packets,
         triangles: triangles.len(),
         build_scene: build_seconds,
         build_mesh,
@@ -354,6 +395,26 @@ fn table(rows: &[Row], quality: bool) -> String {
             mrays(r.bounce[2]),
             ratio(&r.bounce),
         );
+    }
+    if rows.iter().any(|r| r.packets.is_some()) {
+        s.push_str("\nEmbree single rays (rtcIntersect1) vs packets of 16 (rtcIntersect16), default build:\n\n");
+        s.push_str("| triangles | camera Mrays/s: single / packets | bounce Mrays/s: single / packets | rays whose hit differs |\n");
+        s.push_str("| ---: | ---: | ---: | ---: |\n");
+        for r in rows {
+            let Some(([camera, bounce], differ)) = r.packets else {
+                continue;
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} / {} | {} / {} | {} |",
+                r.triangles,
+                mrays(r.camera[1]),
+                mrays(camera),
+                mrays(r.bounce[1]),
+                mrays(bounce),
+                differ,
+            );
+        }
     }
     if quality {
         s.push_str("\nEmbree build quality MEDIUM (default) vs HIGH:\n\n");
