@@ -6,6 +6,8 @@
 
 pub use glam::{Affine3A, BVec4A, DAffine3, DMat3, DVec3, Mat3A, Vec3, Vec3A, Vec4};
 
+use crate::render::lanes::{Bits, Real};
+
 /// Largest of the three components.
 #[inline(always)]
 pub fn max_component(v: Vec3A) -> f32 {
@@ -30,28 +32,31 @@ pub fn basis(n: Vec3A) -> (Vec3A, Vec3A) {
 /// around pi/4 (error below 4e-7). Sampling directions needs no more, and the
 /// hot loop avoids a call that spills every vector register.
 #[inline(always)]
-pub fn sincos_turns(u: f32) -> (f32, f32) {
-    let x = u * 4.0;
+pub fn sincos_turns<R: Real>(u: R) -> (R, R) {
+    let c = R::splat;
+    let x = u * c(4.0);
     let quarter = x.floor();
-    let a = (x - quarter - 0.5) * std::f32::consts::FRAC_PI_2;
+    let a = (x - quarter - c(0.5)) * c(std::f32::consts::FRAC_PI_2);
     let a2 = a * a;
-    let s = a * (1.0 + a2 * (-1.0 / 6.0 + a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0))));
-    let c = 1.0 + a2 * (-0.5 + a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0))));
+    let s = a * (c(1.0) + a2 * (c(-1.0 / 6.0) + a2 * (c(1.0 / 120.0) + a2 * c(-1.0 / 5040.0))));
+    let cos = c(1.0)
+        + a2 * (c(-0.5) + a2 * (c(1.0 / 24.0) + a2 * (c(-1.0 / 720.0) + a2 * c(1.0 / 40320.0))));
     // sin and cos of (a + pi/4), the angle within the quarter turn.
     let (sin_q, cos_q) = (
-        (s + c) * std::f32::consts::FRAC_1_SQRT_2,
-        (c - s) * std::f32::consts::FRAC_1_SQRT_2,
+        (s + cos) * c(std::f32::consts::FRAC_1_SQRT_2),
+        (cos - s) * c(std::f32::consts::FRAC_1_SQRT_2),
     );
     // The quarter turn by sign and swap, on the bits: the quadrant is random,
     // so branches on it would be mispredicted half the time. Same values as
     // (sin, cos) = odd ? (cos_q, -sin_q) : (sin_q, cos_q), negated if q >= 2.
-    let q = (quarter as i32 as u32) & 3;
-    let swap = 0u32.wrapping_sub(q & 1);
+    let b = <R::Bits as Bits>::splat;
+    let q = quarter.to_int_bits() & b(3);
+    let swap = b(0).wrapping_sub(q & b(1));
     let neg = (q >> 1) << 31;
     let (s_bits, c_bits) = (sin_q.to_bits(), cos_q.to_bits());
     let sin = (c_bits & swap) | (s_bits & !swap);
-    let cos = ((s_bits ^ (1 << 31)) & swap) | (c_bits & !swap);
-    (f32::from_bits(sin ^ neg), f32::from_bits(cos ^ neg))
+    let cos = ((s_bits ^ b(1 << 31)) & swap) | (c_bits & !swap);
+    (R::from_bits(sin ^ neg), R::from_bits(cos ^ neg))
 }
 
 /// atan2(y, x) in turns, in [-1/2, 1/2], without a libm call, so that the

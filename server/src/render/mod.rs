@@ -35,6 +35,7 @@ pub mod integrator;
 pub mod isa;
 pub mod job;
 pub mod jpeg_strips;
+pub mod lanes;
 pub mod light;
 pub mod maps;
 pub mod material;

@@ -25,18 +25,20 @@
 //! are a subset of k's), five shift-and-xor steps. All arithmetic is on
 //! u32, so the kernel (`kernels/rng.h`) makes the same numbers bit for bit.
 
+use crate::render::lanes::{Bits, U32s};
+
 /// A permutation of u32 in which each output bit depends only on the input
 /// bits at or below it (Laine and Karras 2011, with the constants of
 /// Vegdahl's 2021 improvement). On bit-reversed values that is a nested
 /// uniform (Owen) scramble in base 2.
 #[inline(always)]
-pub fn lk_hash(mut x: u32, seed: u32) -> u32 {
-    x ^= x.wrapping_mul(0x3d20_adea);
+pub fn lk_hash<B: Bits>(x: B, seed: B) -> B {
+    let c = B::splat;
+    let mut x = x ^ x.wrapping_mul(c(0x3d20_adea));
     x = x.wrapping_add(seed);
-    x = x.wrapping_mul((seed >> 16) | 1);
-    x ^= x.wrapping_mul(0x0552_6c56);
-    x ^= x.wrapping_mul(0x53a2_2864);
-    x
+    x = x.wrapping_mul((seed >> 16) | c(1));
+    x = x ^ x.wrapping_mul(c(0x0552_6c56));
+    x ^ x.wrapping_mul(c(0x53a2_2864))
 }
 
 /// Owen scrambling of a 32-bit fixed-point value in [0, 1).
@@ -49,13 +51,13 @@ pub fn owen(v: u32, seed: u32) -> u32 {
 /// include p's: Sobol's second generator matrix applied to `i`, before the
 /// bit reversal.
 #[inline(always)]
-fn superset_sum(mut y: u32) -> u32 {
-    y ^= (y >> 1) & 0x5555_5555;
-    y ^= (y >> 2) & 0x3333_3333;
-    y ^= (y >> 4) & 0x0F0F_0F0F;
-    y ^= (y >> 8) & 0x00FF_00FF;
-    y ^= (y >> 16) & 0x0000_FFFF;
-    y
+fn superset_sum<B: Bits>(mut y: B) -> B {
+    let c = B::splat;
+    y = y ^ ((y >> 1) & c(0x5555_5555));
+    y = y ^ ((y >> 2) & c(0x3333_3333));
+    y = y ^ ((y >> 4) & c(0x0F0F_0F0F));
+    y = y ^ ((y >> 8) & c(0x00FF_00FF));
+    y ^ ((y >> 16) & c(0x0000_FFFF))
 }
 
 /// Sobol point `i`, dimensions 0 and 1, unscrambled (32-bit fixed point).
@@ -89,11 +91,12 @@ impl Seeds {
 
 /// A 32-bit integer hash (Wellons' lowbias32).
 #[inline(always)]
-pub fn hash32(mut x: u32) -> u32 {
-    x ^= x >> 16;
-    x = x.wrapping_mul(0x7feb_352d);
-    x ^= x >> 15;
-    x = x.wrapping_mul(0x846c_a68b);
+pub fn hash32<B: Bits>(mut x: B) -> B {
+    let c = B::splat;
+    x = x ^ (x >> 16);
+    x = x.wrapping_mul(c(0x7feb_352d));
+    x = x ^ (x >> 15);
+    x = x.wrapping_mul(c(0x846c_a68b));
     x ^ (x >> 16)
 }
 
@@ -101,7 +104,7 @@ pub fn hash32(mut x: u32) -> u32 {
 /// uniform scramble of the index, so that the first 2^m points are a
 /// scrambled aligned block of the sequence.
 #[inline(always)]
-fn shuffled(rindex: u32, seed: u32) -> u32 {
+fn shuffled<B: Bits>(rindex: B, seed: B) -> B {
     lk_hash(rindex, seed).reverse_bits()
 }
 
@@ -117,10 +120,17 @@ pub fn sample_1d(rindex: u32, seed: u32) -> u32 {
 /// 32-bit fixed point.
 #[inline(always)]
 pub fn sample_2d(rindex: u32, seeds: Seeds) -> (u32, u32) {
-    let i = shuffled(rindex, seeds.index);
+    sample_2d_lanes(rindex, [seeds.index, seeds.x, seeds.y])
+}
+
+/// [`sample_2d`] in every lane: the index and the seeds (index's, x's,
+/// y's) per lane.
+#[inline(always)]
+pub fn sample_2d_lanes<B: Bits>(rindex: B, [index, x, y]: [B; 3]) -> (B, B) {
+    let i = shuffled(rindex, index);
     (
-        lk_hash(i, seeds.x).reverse_bits(),
-        lk_hash(superset_sum(i), seeds.y).reverse_bits(),
+        lk_hash(i, x).reverse_bits(),
+        lk_hash(superset_sum(i), y).reverse_bits(),
     )
 }
 
@@ -134,22 +144,19 @@ pub fn sample_2d(rindex: u32, seeds: Seeds) -> (u32, u32) {
 pub fn sample_2d_x3(rindex: u32, bits: [u64; 3]) -> [(u32, u32); 3] {
     // Four lanes (the last repeats the third) and eight: register widths.
     let bits = [bits[0], bits[1], bits[2], bits[2]];
-    let mut seed = [0u32; 8];
-    let mut i = [0u32; 4];
-    for k in 0..4 {
-        seed[k] = (bits[k] >> 32) as u32;
-        seed[4 + k] = hash32(seed[k] ^ Y_SEED);
-        i[k] = shuffled(rindex, bits[k] as u32);
-    }
-    let mut v = [0u32; 8];
-    for k in 0..4 {
-        v[k] = i[k];
-        v[4 + k] = superset_sum(i[k]);
-    }
-    for k in 0..8 {
-        v[k] = lk_hash(v[k], seed[k]).reverse_bits();
-    }
-    [(v[0], v[4]), (v[1], v[5]), (v[2], v[6])]
+    let x = U32s(bits.map(|b| (b >> 32) as u32));
+    let y = hash32(x ^ U32s::splat(Y_SEED));
+    let i = shuffled(U32s::splat(rindex), U32s(bits.map(|b| b as u32)));
+    let j = superset_sum(i);
+    // The x values' hashes in lanes 0-3, the y values' in 4-7.
+    let v = U32s::<8>(std::array::from_fn(
+        |k| if k < 4 { i.0[k] } else { j.0[k - 4] },
+    ));
+    let seed = U32s::<8>(std::array::from_fn(
+        |k| if k < 4 { x.0[k] } else { y.0[k - 4] },
+    ));
+    let v = lk_hash(v, seed).reverse_bits();
+    [(v.0[0], v.0[4]), (v.0[1], v.0[5]), (v.0[2], v.0[6])]
 }
 
 /// A 32-bit fixed-point value as f32 in [0, 1) (its top 24 bits).

@@ -1,0 +1,221 @@
+//! Lane types: the renderer's numerics written once, for one path (`f32`,
+//! `u32`) and for several paths at once (`F32s`, `U32s`: arrays whose
+//! element-wise operations the compiler turns into SIMD instructions of the
+//! instruction set the render loop is compiled for).
+//!
+//! A function generic over [`Real`] or [`Bits`] does the same IEEE and
+//! integer operations in every lane that its `f32`/`u32` instance does on
+//! one value, so each lane's result is the scalar result bit for bit (the
+//! tests below hold every generic routine to it). Rust never contracts a
+//! multiply and an add into a fused one, so nothing differs by width.
+//! docs/RENDERER.md ("Wide paths on the CPU") says where this leads.
+
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Shl, Shr, Sub};
+
+/// 32 bits per lane: hashes, masks and the bits of floats.
+pub trait Bits:
+    Copy
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + BitXor<Output = Self>
+    + Not<Output = Self>
+    + Shl<u32, Output = Self>
+    + Shr<u32, Output = Self>
+{
+    fn splat(x: u32) -> Self;
+    fn wrapping_add(self, o: Self) -> Self;
+    fn wrapping_sub(self, o: Self) -> Self;
+    fn wrapping_mul(self, o: Self) -> Self;
+    fn reverse_bits(self) -> Self;
+}
+
+/// An f32 per lane.
+pub trait Real:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    type Bits: Bits;
+    fn splat(x: f32) -> Self;
+    fn floor(self) -> Self;
+    fn sqrt(self) -> Self;
+    /// `f32::max` in every lane.
+    fn max(self, o: Self) -> Self;
+    fn to_bits(self) -> Self::Bits;
+    fn from_bits(b: Self::Bits) -> Self;
+    /// `x as i32 as u32` in every lane (saturating, as Rust converts).
+    fn to_int_bits(self) -> Self::Bits;
+}
+
+impl Bits for u32 {
+    #[inline(always)]
+    fn splat(x: u32) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: Self) -> Self {
+        u32::wrapping_add(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_sub(self, o: Self) -> Self {
+        u32::wrapping_sub(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: Self) -> Self {
+        u32::wrapping_mul(self, o)
+    }
+    #[inline(always)]
+    fn reverse_bits(self) -> Self {
+        u32::reverse_bits(self)
+    }
+}
+
+impl Real for f32 {
+    type Bits = u32;
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        f32::floor(self)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        f32::max(self, o)
+    }
+    #[inline(always)]
+    fn to_bits(self) -> u32 {
+        f32::to_bits(self)
+    }
+    #[inline(always)]
+    fn from_bits(b: u32) -> Self {
+        f32::from_bits(b)
+    }
+    #[inline(always)]
+    fn to_int_bits(self) -> u32 {
+        self as i32 as u32
+    }
+}
+
+/// `N` u32 lanes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct U32s<const N: usize>(pub [u32; N]);
+
+/// `N` f32 lanes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct F32s<const N: usize>(pub [f32; N]);
+
+/// Element-wise binary operators of a lane array type.
+macro_rules! lanewise {
+    ($t:ident, $($trait:ident $f:ident),*) => {$(
+        impl<const N: usize> $trait for $t<N> {
+            type Output = Self;
+            #[inline(always)]
+            fn $f(self, o: Self) -> Self {
+                Self(std::array::from_fn(|k| $trait::$f(self.0[k], o.0[k])))
+            }
+        }
+    )*};
+}
+
+lanewise!(U32s, BitAnd bitand, BitOr bitor, BitXor bitxor);
+lanewise!(F32s, Add add, Sub sub, Mul mul, Div div);
+
+impl<const N: usize> Not for U32s<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        Self(self.0.map(|x| !x))
+    }
+}
+
+impl<const N: usize> Shl<u32> for U32s<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn shl(self, s: u32) -> Self {
+        Self(self.0.map(|x| x << s))
+    }
+}
+
+impl<const N: usize> Shr<u32> for U32s<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn shr(self, s: u32) -> Self {
+        Self(self.0.map(|x| x >> s))
+    }
+}
+
+impl<const N: usize> Neg for F32s<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self(self.0.map(|x| -x))
+    }
+}
+
+impl<const N: usize> Bits for U32s<N> {
+    #[inline(always)]
+    fn splat(x: u32) -> Self {
+        Self([x; N])
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: Self) -> Self {
+        Self(std::array::from_fn(|k| self.0[k].wrapping_add(o.0[k])))
+    }
+    #[inline(always)]
+    fn wrapping_sub(self, o: Self) -> Self {
+        Self(std::array::from_fn(|k| self.0[k].wrapping_sub(o.0[k])))
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: Self) -> Self {
+        Self(std::array::from_fn(|k| self.0[k].wrapping_mul(o.0[k])))
+    }
+    #[inline(always)]
+    fn reverse_bits(self) -> Self {
+        Self(self.0.map(u32::reverse_bits))
+    }
+}
+
+impl<const N: usize> Real for F32s<N> {
+    type Bits = U32s<N>;
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Self([x; N])
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        Self(self.0.map(f32::floor))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Self(self.0.map(f32::sqrt))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Self(std::array::from_fn(|k| self.0[k].max(o.0[k])))
+    }
+    #[inline(always)]
+    fn to_bits(self) -> U32s<N> {
+        U32s(self.0.map(f32::to_bits))
+    }
+    #[inline(always)]
+    fn from_bits(b: U32s<N>) -> Self {
+        Self(b.0.map(f32::from_bits))
+    }
+    #[inline(always)]
+    fn to_int_bits(self) -> U32s<N> {
+        U32s(self.0.map(|x| x as i32 as u32))
+    }
+}
+
+#[cfg(test)]
+#[path = "lanes_tests.rs"]
+mod tests;
