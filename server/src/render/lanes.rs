@@ -10,6 +10,7 @@
 //! multiply and an add into a fused one, so nothing differs by width.
 //! docs/RENDERER.md ("Wide paths on the CPU") says where this leads.
 
+use glam::Vec3A;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Shl, Shr, Sub};
 
 /// 32 bits per lane: hashes, masks and the bits of floats.
@@ -44,6 +45,8 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// `f32::max` in every lane.
     fn max(self, o: Self) -> Self;
+    /// `f32::copysign` in every lane.
+    fn copysign(self, sign: Self) -> Self;
     fn to_bits(self) -> Self::Bits;
     fn from_bits(b: Self::Bits) -> Self;
     /// `x as i32 as u32` in every lane (saturating, as Rust converts).
@@ -90,6 +93,10 @@ impl Real for f32 {
     #[inline(always)]
     fn max(self, o: Self) -> Self {
         f32::max(self, o)
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        f32::copysign(self, sign)
     }
     #[inline(always)]
     fn to_bits(self) -> u32 {
@@ -203,6 +210,10 @@ impl<const N: usize> Real for F32s<N> {
         Self(std::array::from_fn(|k| self.0[k].max(o.0[k])))
     }
     #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        Self(std::array::from_fn(|k| self.0[k].copysign(sign.0[k])))
+    }
+    #[inline(always)]
     fn to_bits(self) -> U32s<N> {
         U32s(self.0.map(f32::to_bits))
     }
@@ -213,6 +224,115 @@ impl<const N: usize> Real for F32s<N> {
     #[inline(always)]
     fn to_int_bits(self) -> U32s<N> {
         U32s(self.0.map(|x| x as i32 as u32))
+    }
+}
+
+/// A three-component vector: glam's `Vec3A` for one path (the scalar
+/// loop's own type, so its code is what it was), [`V3`] of lane arrays for
+/// several. Each component's operations are the same IEEE operations.
+pub trait Vector:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Neg<Output = Self> + Mul<Self::R, Output = Self>
+{
+    type R: Real;
+    fn new(x: Self::R, y: Self::R, z: Self::R) -> Self;
+    fn x(self) -> Self::R;
+    fn y(self) -> Self::R;
+    fn z(self) -> Self::R;
+}
+
+impl Vector for Vec3A {
+    type R = f32;
+    #[inline(always)]
+    fn new(x: f32, y: f32, z: f32) -> Self {
+        Vec3A::new(x, y, z)
+    }
+    #[inline(always)]
+    fn x(self) -> f32 {
+        self.x
+    }
+    #[inline(always)]
+    fn y(self) -> f32 {
+        self.y
+    }
+    #[inline(always)]
+    fn z(self) -> f32 {
+        self.z
+    }
+}
+
+/// A vector per lane, a component at a time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V3<R> {
+    pub x: R,
+    pub y: R,
+    pub z: R,
+}
+
+impl<R: Real> Add for V3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        V3 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+
+impl<R: Real> Sub for V3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        V3 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+
+impl<R: Real> Neg for V3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        V3 {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
+    }
+}
+
+impl<R: Real> Mul<R> for V3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, s: R) -> Self {
+        V3 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+}
+
+impl<R: Real> Vector for V3<R> {
+    type R = R;
+    #[inline(always)]
+    fn new(x: R, y: R, z: R) -> Self {
+        V3 { x, y, z }
+    }
+    #[inline(always)]
+    fn x(self) -> R {
+        self.x
+    }
+    #[inline(always)]
+    fn y(self) -> R {
+        self.y
+    }
+    #[inline(always)]
+    fn z(self) -> R {
+        self.z
     }
 }
 

@@ -64,12 +64,13 @@ fn every_lane_of_the_float_operations_is_the_scalar_one() {
     let mut b = CORNERS;
     b.rotate_left(5);
     let b = F32s(b);
-    let ops: [Op; 8] = [
+    let ops: [Op; 9] = [
         ("add", a + b, |x, y| x + y),
         ("sub", a - b, |x, y| x - y),
         ("mul", a * b, |x, y| x * y),
         ("div", a / b, |x, y| x / y),
         ("max", a.max(b), f32::max),
+        ("copysign", a.copysign(b), f32::copysign),
         ("neg", -a, |x, _| -x),
         ("floor", a.floor(), |x, _| x.floor()),
         ("sqrt", a.sqrt(), |x, _| x.sqrt()),
@@ -127,5 +128,59 @@ fn every_lane_of_the_hashes_and_sobol_points_is_the_scalar_one() {
         assert_eq!((a & b).0[k], x & y);
         assert_eq!((a | b).0[k], x | y);
         assert_eq!((a ^ b).0[k], x ^ y);
+    }
+}
+
+#[test]
+fn every_lane_of_the_basis_and_cosine_sampling_is_the_scalar_one() {
+    use crate::render::material::cosine_hemisphere;
+    use crate::render::math::{basis, Vec3A};
+    type L = F32s<8>;
+    let same = |w: V3<L>, k: usize, v: Vec3A| {
+        same_bits(w.x.0[k], v.x) && same_bits(w.y.0[k], v.y) && same_bits(w.z.0[k], v.z)
+    };
+    // Normals all round, the poles and the equator (n.z = +-0) included.
+    let corners = [
+        Vec3A::Z,
+        -Vec3A::Z,
+        Vec3A::X,
+        Vec3A::new(0.0, -1.0, -0.0),
+        Vec3A::new(0.6, 0.0, 0.8),
+        Vec3A::new(0.0, 0.6, -0.8),
+    ];
+    for key in 0..20_000u64 {
+        let mut s = Sampler::new(5, key, 0);
+        let n: [Vec3A; 8] = std::array::from_fn(|k| match corners.get(k) {
+            Some(&c) if key == 0 => c,
+            _ => {
+                let z = 1.0 - 2.0 * s.next_f32();
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let (sin, cos) = sincos_turns(s.next_f32());
+                Vec3A::new(r * cos, r * sin, z)
+            }
+        });
+        let (u1, u2): ([f32; 8], [f32; 8]) = (
+            std::array::from_fn(|_| s.next_f32()),
+            std::array::from_fn(|_| s.next_f32()),
+        );
+        let wide = V3 {
+            x: F32s(n.map(|v| v.x)),
+            y: F32s(n.map(|v| v.y)),
+            z: F32s(n.map(|v| v.z)),
+        };
+        let (t, b) = basis(wide);
+        let d = cosine_hemisphere(wide, F32s(u1), F32s(u2));
+        for k in 0..8 {
+            let (t1, b1) = basis(n[k]);
+            assert!(same(t, k, t1) && same(b, k, b1), "basis of {:?}", n[k]);
+            let d1 = cosine_hemisphere(n[k], u1[k], u2[k]);
+            assert!(
+                same(d, k, d1),
+                "direction about {:?}, u {} {}",
+                n[k],
+                u1[k],
+                u2[k]
+            );
+        }
     }
 }

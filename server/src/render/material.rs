@@ -3,6 +3,7 @@
 
 use crate::render::fresnel;
 use crate::render::ggx::{self, Pbr};
+use crate::render::lanes::{Real, Vector};
 use crate::render::math::{basis, sincos_turns, DVec3, Vec3A};
 use crate::render::sampler::Sampler;
 use crate::render::scene::{Fresnel, Material, MaterialKind};
@@ -113,10 +114,11 @@ pub fn reflect(d: Vec3A, n: Vec3A) -> Vec3A {
 
 /// Cosine-weighted direction about unit `n`.
 #[inline(always)]
-pub fn cosine_hemisphere(n: Vec3A, u1: f32, u2: f32) -> Vec3A {
+pub fn cosine_hemisphere<V: Vector>(n: V, u1: V::R, u2: V::R) -> V {
+    let c = <V::R as Real>::splat;
     let (sin, cos) = sincos_turns(u1);
     let r = u2.sqrt();
-    let z = (1.0 - u2).max(0.0).sqrt();
+    let z = (c(1.0) - u2).max(c(0.0)).sqrt();
     let (t, b) = basis(n);
     t * (r * cos) + b * (r * sin) + n * z
 }

@@ -6,7 +6,7 @@
 
 pub use glam::{Affine3A, BVec4A, DAffine3, DMat3, DVec3, Mat3A, Vec3, Vec3A, Vec4};
 
-use crate::render::lanes::{Bits, Real};
+use crate::render::lanes::{Bits, Real, Vector};
 
 /// Largest of the three components.
 #[inline(always)]
@@ -17,13 +17,15 @@ pub fn max_component(v: Vec3A) -> f32 {
 /// An orthonormal basis around unit `n` (Duff et al. 2017, branchless and
 /// continuous except at n.z = -0), returned as (tangent, bitangent).
 #[inline(always)]
-pub fn basis(n: Vec3A) -> (Vec3A, Vec3A) {
-    let sign = 1.0f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
+pub fn basis<V: Vector>(n: V) -> (V, V) {
+    let c = <V::R as Real>::splat;
+    let (x, y, z) = (n.x(), n.y(), n.z());
+    let sign = c(1.0).copysign(z);
+    let a = c(-1.0) / (sign + z);
+    let b = x * y * a;
     (
-        Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3A::new(b, sign + n.y * n.y * a, -n.y),
+        V::new(c(1.0) + sign * x * x * a, sign * b, -sign * x),
+        V::new(b, sign + y * y * a, -y),
     )
 }
 
