@@ -310,15 +310,6 @@ impl EmbreeScene {
             .collect()
     }
 
-    /// Rays per second of one pass in packets of sixteen.
-    pub fn rays_per_sec16(&self, map: &Affine3A, rays: &[(Ray, Origin)]) -> f64 {
-        let start = Instant::now();
-        let hits = self.hits16(map, rays);
-        let seconds = start.elapsed().as_secs_f64();
-        std::hint::black_box(hits);
-        rays.len() as f64 / seconds.max(1e-9)
-    }
-
     /// Every ray's nearest hit, on rayon's threads, in chunks as
     /// `nearest_hits` does.
     pub fn hits(&self, map: &Affine3A, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
@@ -327,10 +318,13 @@ impl EmbreeScene {
             .collect()
     }
 
-    /// Rays per second of one pass.
-    pub fn rays_per_sec(&self, map: &Affine3A, rays: &[(Ray, Origin)]) -> f64 {
+    /// Rays per second of one pass, in packets of sixteen if `packets`.
+    pub fn rays_per_sec(&self, map: &Affine3A, rays: &[(Ray, Origin)], packets: bool) -> f64 {
         let start = Instant::now();
-        let hits = self.hits(map, rays);
+        let hits = match packets {
+            true => self.hits16(map, rays),
+            false => self.hits(map, rays),
+        };
         let seconds = start.elapsed().as_secs_f64();
         std::hint::black_box(hits);
         rays.len() as f64 / seconds.max(1e-9)

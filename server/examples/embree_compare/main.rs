@@ -270,11 +270,12 @@ fn measure(device: &Device, n: usize, args: &Args) -> Row {
         for _ in 0..args.repeats.max(1) {
             let mut pass = [
                 rays_per_sec(&world, rays, 1),
-                medium.rays_per_sec(&map, rays),
-                robust.rays_per_sec(&map, rays),
-                high.as_ref().map_or(0.0, |h| h.rays_per_sec(&map, rays)),
+                medium.rays_per_sec(&map, rays, false),
+                robust.rays_per_sec(&map, rays, false),
+                high.as_ref()
+                    .map_or(0.0, |h| h.rays_per_sec(&map, rays, false)),
                 if args.packets {
-                    medium.rays_per_sec16(&map, rays)
+                    medium.rays_per_sec(&map, rays, true)
                 } else {
                     0.0
                 },
