@@ -84,9 +84,15 @@ impl Seeds {
         Seeds {
             index,
             x,
-            y: hash32(x ^ Y_SEED),
+            y: y_seed(x),
         }
     }
+}
+
+/// The y value's seed, from the x value's.
+#[inline(always)]
+fn y_seed<B: Bits>(x: B) -> B {
+    hash32(x ^ B::splat(Y_SEED))
 }
 
 /// A 32-bit integer hash (Wellons' lowbias32).
@@ -145,7 +151,7 @@ pub fn sample_2d_x3(rindex: u32, bits: [u64; 3]) -> [(u32, u32); 3] {
     // Four lanes (the last repeats the third) and eight: register widths.
     let bits = [bits[0], bits[1], bits[2], bits[2]];
     let x = U32s(bits.map(|b| (b >> 32) as u32));
-    let y = hash32(x ^ U32s::splat(Y_SEED));
+    let y = y_seed(x);
     let i = shuffled(U32s::splat(rindex), U32s(bits.map(|b| b as u32)));
     let j = superset_sum(i);
     // The x values' hashes in lanes 0-3, the y values' in 4-7.
