@@ -13,7 +13,8 @@
 //! the nearest hit is the one the scalar loop finds, ties included.
 //!
 //! The OpenCL kernel keeps reading the leaf-ordered [`TriVerts`]; packs are
-//! the CPU's own copy (160 bytes per leaf).
+//! the CPU's own copy (160 bytes per leaf), with the triangles' indices, so
+//! that a hit is offered without loading its [`TriVerts`] too.
 
 use super::triangle::{TriRay, TriVerts};
 use crate::render::math::{Vec3A, Vec4};
@@ -26,9 +27,16 @@ pub struct TriPack {
     /// x, y, z of vertex 0, of vertex 1, of vertex 2: one row per
     /// coordinate, one lane per triangle.
     p: [[f32; 4]; 9],
-    /// Triangles in the leaf.
-    pub count: u32,
+    /// Each lane's triangle index in its mesh; [`NO_LANE`] past the
+    /// leaf's count.
+    pub index: [u32; 4],
 }
+
+/// `TriPack::index` of a lane that holds none of the leaf's triangles (no
+/// mesh has that many: it is the world's `NO_PRIM`).
+pub const NO_LANE: u32 = u32::MAX;
+
+const _: () = assert!(std::mem::size_of::<TriPack>() == 160);
 
 /// What a packed test found, per lane.
 #[derive(Clone, Copy, Debug)]
@@ -58,21 +66,29 @@ impl TriPack {
     pub fn new(tris: &[TriVerts], first: u32, count: u32) -> Self {
         debug_assert!((1..=4).contains(&count));
         let mut p = [[0.0; 4]; 9];
+        let mut index = [NO_LANE; 4];
         for lane in 0..4 {
             let t = &tris[(first + lane.min(count - 1)) as usize];
+            if lane < count {
+                index[lane as usize] = t.index();
+            }
             for (v, vertex) in [&t.v0, &t.v1, &t.v2].into_iter().enumerate() {
                 for c in 0..3 {
                     p[3 * v + c][lane as usize] = vertex[c];
                 }
             }
         }
-        Self { p, count }
+        Self { p, index }
     }
 
     /// Lanes that hold the leaf's triangles.
     #[inline(always)]
     pub fn lanes(&self) -> u32 {
-        (1 << self.count) - 1
+        let mut lanes = 0;
+        for (lane, &i) in self.index.iter().enumerate() {
+            lanes |= u32::from(i != NO_LANE) << lane;
+        }
+        lanes
     }
 }
 
@@ -157,6 +173,10 @@ mod tests {
             ];
             let count = 1 + case % 4;
             let pack = TriPack::new(&tris, 0, count);
+            assert_eq!(pack.lanes(), (1 << count) - 1, "case {case}");
+            for (lane, tri) in tris.iter().enumerate().take(count as usize) {
+                assert_eq!(pack.index[lane], tri.index(), "case {case}, lane {lane}");
+            }
             let origin = Vec3A::new(f(), f(), f()) * scale * 3.0;
             // Aim at a point of triangle 0's edge b-c every other time.
             let dir = match case % 2 {

@@ -169,13 +169,15 @@ impl Instance {
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let tri = &mesh.tris[first as usize + lane];
-                let index = tri.index();
+                let index = pack.index[lane];
                 if index == skip {
                     continue;
                 }
                 if found.scalar & (1 << lane) != 0 {
-                    test(std::slice::from_ref(tri), best);
+                    test(
+                        std::slice::from_ref(&mesh.tris[first as usize + lane]),
+                        best,
+                    );
                 } else if found.t[lane] < best.t && stops(index, found.bary(lane)) {
                     best.offer(found.t[lane], id, index, found.bary(lane));
                 }
