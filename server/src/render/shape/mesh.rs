@@ -207,6 +207,24 @@ impl Mesh {
             .ok_or_else(|| format!("Embree refused mesh {}", self.name))
     }
 
+    /// Asks the processor to start loading what shading triangle `i`
+    /// reads (its vertices, normals and material slot), without waiting
+    /// for it: a caller with a second path to shade first hides the loads'
+    /// latency behind that work.
+    #[inline(always)]
+    pub fn prefetch_surface(&self, i: u32) {
+        let Some(tri) = self.triangles.get(i as usize) else {
+            return;
+        };
+        prefetch(self.materials.as_ptr().wrapping_add(i as usize));
+        for &v in tri {
+            prefetch(self.positions.as_ptr().wrapping_add(v as usize));
+            if let Some(n) = &self.normals {
+                prefetch(n.as_ptr().wrapping_add(v as usize));
+            }
+        }
+    }
+
     /// The vertices of triangle `i`.
     #[inline(always)]
     pub fn vertices(&self, i: u32) -> [Vec3A; 3] {
@@ -312,4 +330,19 @@ fn leaf_counts(bvh: &Bvh) -> Vec<u32> {
         }
     }
     counts
+}
+
+/// Starts loading the cache line at `p` into every level of cache (a hint:
+/// no fault, whatever `p` is).
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads nothing and cannot fault.
+    #[allow(unsafe_code, unused_unsafe)]
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }

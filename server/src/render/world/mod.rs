@@ -380,6 +380,18 @@ impl World {
         }
     }
 
+    /// Starts loading what [`World::surface`] will read for `hit` (a
+    /// mesh's vertices and normals; nothing for spheres and quads, whose
+    /// surfaces need no lookup).
+    #[inline(always)]
+    pub fn prefetch_surface(&self, hit: &Hit) {
+        if let Some(o) = self.objects.get(hit.object as usize) {
+            if let Geometry::Instance(i) = o.geometry {
+                self.instances[i as usize].mesh.prefetch_surface(hit.prim);
+            }
+        }
+    }
+
     /// A ray from surface `s` along `dir`, starting where it cannot meet
     /// `s` again by rounding.
     #[inline(always)]
