@@ -51,6 +51,11 @@ pub trait Real:
     fn from_bits(b: Self::Bits) -> Self;
     /// `x as i32 as u32` in every lane (saturating, as Rust converts).
     fn to_int_bits(self) -> Self::Bits;
+    fn abs(self) -> Self;
+    /// All ones in the lanes where `self > o` (false for NaN), else zero.
+    fn gt(self, o: Self) -> Self::Bits;
+    /// `a` in the lanes where `mask` is all ones, else `b`.
+    fn select(mask: Self::Bits, a: Self, b: Self) -> Self;
 }
 
 impl Bits for u32 {
@@ -109,6 +114,26 @@ impl Real for f32 {
     #[inline(always)]
     fn to_int_bits(self) -> u32 {
         self as i32 as u32
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> u32 {
+        if self > o {
+            u32::MAX
+        } else {
+            0
+        }
+    }
+    #[inline(always)]
+    fn select(mask: u32, a: Self, b: Self) -> Self {
+        if mask != 0 {
+            a
+        } else {
+            b
+        }
     }
 }
 
@@ -225,19 +250,50 @@ impl<const N: usize> Real for F32s<N> {
     fn to_int_bits(self) -> U32s<N> {
         U32s(self.0.map(|x| x as i32 as u32))
     }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Self(self.0.map(f32::abs))
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> U32s<N> {
+        U32s(std::array::from_fn(|k| {
+            if self.0[k] > o.0[k] {
+                u32::MAX
+            } else {
+                0
+            }
+        }))
+    }
+    #[inline(always)]
+    fn select(mask: U32s<N>, a: Self, b: Self) -> Self {
+        Self(std::array::from_fn(|k| {
+            f32::from_bits((a.0[k].to_bits() & mask.0[k]) | (b.0[k].to_bits() & !mask.0[k]))
+        }))
+    }
 }
 
 /// A three-component vector: glam's `Vec3A` for one path (the scalar
 /// loop's own type, so its code is what it was), [`V3`] of lane arrays for
 /// several. Each component's operations are the same IEEE operations.
 pub trait Vector:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Neg<Output = Self> + Mul<Self::R, Output = Self>
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Neg<Output = Self>
+    + Mul<Self::R, Output = Self>
+    + Div<Self::R, Output = Self>
 {
     type R: Real;
     fn new(x: Self::R, y: Self::R, z: Self::R) -> Self;
     fn x(self) -> Self::R;
     fn y(self) -> Self::R;
     fn z(self) -> Self::R;
+    /// The dot product, summed x, then y, then z (as glam's).
+    fn dot(self, o: Self) -> Self::R;
+    #[inline(always)]
+    fn length_squared(self) -> Self::R {
+        self.dot(self)
+    }
 }
 
 impl Vector for Vec3A {
@@ -257,6 +313,10 @@ impl Vector for Vec3A {
     #[inline(always)]
     fn z(self) -> f32 {
         self.z
+    }
+    #[inline(always)]
+    fn dot(self, o: Self) -> f32 {
+        Vec3A::dot(self, o)
     }
 }
 
@@ -316,6 +376,18 @@ impl<R: Real> Mul<R> for V3<R> {
     }
 }
 
+impl<R: Real> Div<R> for V3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, s: R) -> Self {
+        V3 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+}
+
 impl<R: Real> Vector for V3<R> {
     type R = R;
     #[inline(always)]
@@ -333,6 +405,10 @@ impl<R: Real> Vector for V3<R> {
     #[inline(always)]
     fn z(self) -> R {
         self.z
+    }
+    #[inline(always)]
+    fn dot(self, o: Self) -> R {
+        self.x * o.x + self.y * o.y + self.z * o.z
     }
 }
 

@@ -26,9 +26,10 @@
 //!    (`tests/opencl_parity_meshes.rs`).
 
 use super::alias::AliasTable;
+use super::points::{in_cone, quad_point, toward_point, toward_sphere_point, triangle_point};
 use super::sky::EnvLight;
 use crate::render::material::cosine_hemisphere;
-use crate::render::math::{basis, sincos_turns, Vec3A};
+use crate::render::math::Vec3A;
 use crate::render::shape::{Quad, Sphere};
 use std::f32::consts::{PI, TAU};
 
@@ -93,13 +94,10 @@ impl SunLight {
     /// A direction uniformly in the disc's cone, and 1/pdf (its solid angle).
     #[inline(always)]
     pub fn sample(&self, u1: f32, u2: f32) -> (Vec3A, f32) {
-        let a = u1 * self.one_minus_cos;
-        let cos_t = 1.0 - a;
-        let sin_t = (a * (2.0 - a)).max(0.0).sqrt();
-        let (sin, cos) = sincos_turns(u2);
-        let (t, b) = basis(self.dir);
-        let dir = t * (sin_t * cos) + b * (sin_t * sin) + self.dir * cos_t;
-        (dir, self.solid_angle())
+        (
+            in_cone(self.dir, self.one_minus_cos, u1, u2),
+            self.solid_angle(),
+        )
     }
 }
 
@@ -295,15 +293,14 @@ impl Emitter {
                 if on_self {
                     return None;
                 }
-                toward_point(s.p, q.point(u1, u2), q.normal, q.area)
+                let at = quad_point(q.corner, q.edge_u, q.edge_v, u1, u2);
+                toward(s.p, at, q.normal, q.area)
             }
             EmitterShape::Triangle(t) => {
                 if on_self {
                     return None;
                 }
-                let r = u1.sqrt();
-                let (b1, b2) = (1.0 - r, u2 * r);
-                toward_point(s.p, t.p0 + t.e1 * b1 + t.e2 * b2, t.n, t.area)
+                toward(s.p, triangle_point(t.p0, t.e1, t.e2, u1, u2), t.n, t.area)
             }
             EmitterShape::Environment => {
                 let dir = cosine_hemisphere(ns, u1, u2);
@@ -368,17 +365,12 @@ impl Emitter {
     }
 }
 
-/// The direction from `p` to `q` on a flat emitter of unit normal `n` and
-/// area `area` sampled uniformly, and 1/pdf in solid angle.
+/// The direction from `p` towards `q`, a point drawn uniformly on a surface
+/// of unit normal `n` and area `area`, and 1/pdf of it (solid angle).
 #[inline(always)]
-fn toward_point(p: Vec3A, q: Vec3A, n: Vec3A, area: f32) -> Option<(Vec3A, f32)> {
-    let w = q - p;
-    let dist2 = w.length_squared();
-    if !(dist2 > 0.0) {
-        return None;
-    }
-    let dir = w / dist2.sqrt();
-    Some((dir, n.dot(dir).abs() * area / dist2))
+fn toward(p: Vec3A, q: Vec3A, n: Vec3A, area: f32) -> Option<(Vec3A, f32)> {
+    let (dir, weight, found) = toward_point(p, q, n, area);
+    (found != 0).then_some((dir, weight))
 }
 
 /// A sphere as seen from a point: which way its centre lies, and whether
@@ -433,27 +425,12 @@ fn sample_sphere(
 ) -> Option<(Vec3A, f32)> {
     let v = SphereView::new(s, p, nl, on_self)?;
     if v.inside {
-        let z = 1.0 - 2.0 * u1;
-        let rxy = (1.0 - z * z).max(0.0).sqrt();
-        let (sin, cos) = sincos_turns(u2);
-        let m = Vec3A::new(rxy * cos, rxy * sin, z);
-        let w = s.center + m * s.radius - p;
-        let dist2 = w.length_squared();
-        if !(dist2 > 0.0) {
-            return None;
-        }
-        let dir = w / dist2.sqrt();
-        let cos_l = m.dot(dir).abs();
-        Some((dir, cos_l * 4.0 * PI * v.r2 / dist2))
+        let (dir, weight, found) = toward_sphere_point((s.center, s.radius, v.r2), p, u1, u2);
+        (found != 0).then_some((dir, weight))
     } else {
         let one_minus_cos_max = v.one_minus_cos_max();
-        let a = u1 * one_minus_cos_max;
-        let cos_t = 1.0 - a;
-        let sin_t = (a * (2.0 - a)).max(0.0).sqrt();
-        let (sin, cos) = sincos_turns(u2);
         let axis = v.to_center / v.d2.sqrt();
-        let (t, b) = basis(axis);
-        let dir = t * (sin_t * cos) + b * (sin_t * sin) + axis * cos_t;
+        let dir = in_cone(axis, one_minus_cos_max, u1, u2);
         Some((dir, TAU * one_minus_cos_max))
     }
 }

@@ -5,6 +5,7 @@
 
 use super::*;
 use crate::render::math::DVec3;
+use crate::render::math::{basis, sincos_turns};
 use crate::render::sampler::mix64;
 
 fn u(i: u64, k: u64) -> f32 {

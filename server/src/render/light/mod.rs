@@ -7,6 +7,7 @@
 
 mod alias;
 mod emitter;
+pub mod points;
 pub mod sky;
 
 pub use alias::AliasTable;

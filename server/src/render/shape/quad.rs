@@ -55,12 +55,6 @@ impl Quad {
             f32::INFINITY
         }
     }
-
-    /// The point at parameters (a, b) in [0, 1]^2.
-    #[inline(always)]
-    pub fn point(&self, a: f32, b: f32) -> Vec3A {
-        self.corner + self.edge_u * a + self.edge_v * b
-    }
 }
 
 #[cfg(test)]
