@@ -25,6 +25,7 @@
 //! vectors here): its centre column looks along `forward`, its top row up.
 
 use crate::render::envmap::map_direction;
+use crate::render::lanes::{Real, Vector};
 use crate::render::math::{sincos_turns, DVec3, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::scene::{Camera, Projection};
@@ -112,10 +113,32 @@ impl CameraRays {
     /// The pinhole's direction (not unit) through raster (`x`, `y`): its
     /// component along `forward` is 1.
     #[inline(always)]
-    fn through(&self, x: f32, y: f32) -> Vec3A {
-        self.forward
-            + self.right * (x * self.inv_width - 0.5)
-            + self.up * (0.5 - y * self.inv_height)
+    fn through<V: Vector>(&self, x: V::R, y: V::R) -> V {
+        let c = <V::R as Real>::splat;
+        V::splat_vec(self.forward)
+            + V::splat_vec(self.right) * (x * c(self.inv_width) - c(0.5))
+            + V::splat_vec(self.up) * (c(0.5) - y * c(self.inv_height))
+    }
+
+    /// A perspective camera's ray through raster (`x`, `y`) and its
+    /// pinhole: (origin, unit direction), for one path or for lanes.
+    #[inline(always)]
+    pub fn pinhole<V: Vector>(&self, x: V::R, y: V::R) -> (V, V) {
+        let d = self.through::<V>(x, y).normalize();
+        (d * <V::R as Real>::splat(self.near_clip), d)
+    }
+
+    /// A perspective camera's ray through raster (`x`, `y`) from the lens
+    /// point drawn with (`u1`, `u2`) in [0, 1): (origin, unit direction).
+    #[inline(always)]
+    pub fn through_lens<V: Vector>(&self, x: V::R, y: V::R, u1: V::R, u2: V::R) -> (V, V) {
+        let c = <V::R as Real>::splat;
+        let r = u1.sqrt();
+        let (sin, cos) = sincos_turns(u2);
+        let o = V::splat_vec(self.right) * (c(self.lens_x) * (r * cos))
+            + V::splat_vec(self.up) * (c(self.lens_y) * (r * sin));
+        let d = (self.through::<V>(x, y) * c(self.focus) - o).normalize();
+        (o + d * c(self.near_clip), d)
     }
 
     /// The ray through raster position (`x`, `y`) (a perspective
@@ -124,8 +147,8 @@ impl CameraRays {
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         match self.projection {
             RayProjection::Perspective => {
-                let d = self.through(x, y).normalize();
-                Ray::new(d * self.near_clip, d)
+                let (o, d) = self.pinhole(x, y);
+                Ray::new(o, d)
             }
             RayProjection::Orthographic => {
                 let o =
@@ -147,17 +170,57 @@ impl CameraRays {
         if !self.has_lens() {
             return self.ray(x, y);
         }
-        let r = u1.sqrt();
-        let (sin, cos) = sincos_turns(u2);
-        let o = self.right * (self.lens_x * (r * cos)) + self.up * (self.lens_y * (r * sin));
-        let d = (self.through(x, y) * self.focus - o).normalize();
-        Ray::new(o + d * self.near_clip, d)
+        let (o, d) = self.through_lens(x, y, u1, u2);
+        Ray::new(o, d)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::lanes::{F32s, V3};
+    use crate::render::sampler::Sampler;
+
+    /// Every lane of the perspective rays (pinhole and lens) is the scalar
+    /// ray, bit for bit, for cameras looking every way.
+    #[test]
+    fn every_lane_of_the_camera_rays_is_the_scalar_one() {
+        fn check<const N: usize>(rays: &CameraRays, s: &mut Sampler) {
+            let mut lanes = || F32s::<N>(std::array::from_fn(|_| s.next_f32()));
+            let (x, y) = (lanes() * F32s([640.0; N]), lanes() * F32s([480.0; N]));
+            let (u1, u2) = (lanes(), lanes());
+            let (o, d): (V3<F32s<N>>, V3<F32s<N>>) = rays.pinhole(x, y);
+            let (lo, ld): (V3<F32s<N>>, V3<F32s<N>>) = rays.through_lens(x, y, u1, u2);
+            let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+            let lane = |v: V3<F32s<N>>, k: usize| bits(Vec3A::new(v.x.0[k], v.y.0[k], v.z.0[k]));
+            for k in 0..N {
+                let one = rays.ray(x.0[k], y.0[k]);
+                assert_eq!((lane(o, k), lane(d, k)), (bits(one.origin), bits(one.dir)));
+                let (o1, d1) = rays.through_lens(x.0[k], y.0[k], u1.0[k], u2.0[k]);
+                assert_eq!((lane(lo, k), lane(ld, k)), (bits(o1), bits(d1)), "lane {k}");
+            }
+        }
+        let mut s = Sampler::new(11, 0, 0);
+        for _ in 0..2_000 {
+            let mut v = || {
+                DVec3::new(
+                    s.next_f32().into(),
+                    s.next_f32().into(),
+                    s.next_f32().into(),
+                ) * 20.0
+                    - 10.0
+            };
+            let cam = Camera {
+                aperture: 0.2,
+                near_clip: 0.5,
+                focus_distance: Some(4.0),
+                ..Camera::pinhole(v(), v(), 20.0 + 100.0 * f64::from(s.next_f32()))
+            };
+            let rays = CameraRays::new(&cam, 640, 480);
+            check::<8>(&rays, &mut s);
+            check::<16>(&rays, &mut s);
+        }
+    }
 
     #[test]
     fn centre_and_corners_follow_the_field_of_view() {

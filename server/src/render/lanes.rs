@@ -288,11 +288,18 @@ pub trait Vector:
     fn x(self) -> Self::R;
     fn y(self) -> Self::R;
     fn z(self) -> Self::R;
+    /// `v` in every lane.
+    fn splat_vec(v: Vec3A) -> Self;
     /// The dot product, summed x, then y, then z (as glam's).
     fn dot(self, o: Self) -> Self::R;
     #[inline(always)]
     fn length_squared(self) -> Self::R {
         self.dot(self)
+    }
+    /// Divided by its length (as glam's: each component by the length).
+    #[inline(always)]
+    fn normalize(self) -> Self {
+        self / self.length_squared().sqrt()
     }
 }
 
@@ -315,8 +322,16 @@ impl Vector for Vec3A {
         self.z
     }
     #[inline(always)]
+    fn splat_vec(v: Vec3A) -> Self {
+        v
+    }
+    #[inline(always)]
     fn dot(self, o: Self) -> f32 {
         Vec3A::dot(self, o)
+    }
+    #[inline(always)]
+    fn normalize(self) -> Self {
+        Vec3A::normalize(self)
     }
 }
 
@@ -405,6 +420,14 @@ impl<R: Real> Vector for V3<R> {
     #[inline(always)]
     fn z(self) -> R {
         self.z
+    }
+    #[inline(always)]
+    fn splat_vec(v: Vec3A) -> Self {
+        V3 {
+            x: R::splat(v.x),
+            y: R::splat(v.y),
+            z: R::splat(v.z),
+        }
     }
     #[inline(always)]
     fn dot(self, o: Self) -> R {
