@@ -26,7 +26,10 @@
 //!    (`tests/opencl_parity_meshes.rs`).
 
 use super::alias::AliasTable;
-use super::points::{in_cone, quad_point, toward_point, toward_sphere_point, triangle_point};
+use super::points::{
+    flat_weight, in_cone, quad_point, sphere_weight, toward_point, toward_sphere_point,
+    triangle_point,
+};
 use super::sky::EnvLight;
 use crate::render::material::cosine_hemisphere;
 use crate::render::math::Vec3A;
@@ -331,17 +334,16 @@ impl Emitter {
                 };
                 if v.inside {
                     let m = (q - s.center) * (1.0 / s.radius);
-                    let dist2 = (q - r.p).length_squared();
-                    m.dot(dir).abs() * 4.0 * PI * v.r2 / dist2
+                    sphere_weight(m, dir, v.r2, (q - r.p).length_squared())
                 } else {
                     TAU * v.one_minus_cos_max()
                 }
             }
             EmitterShape::Quad(quad) if !on_self => {
-                quad.normal.dot(dir).abs() * quad.area / (q - r.p).length_squared()
+                flat_weight(quad.normal, dir, quad.area, (q - r.p).length_squared())
             }
             EmitterShape::Triangle(t) if !on_self => {
-                t.n.dot(dir).abs() * t.area / (q - r.p).length_squared()
+                flat_weight(t.n, dir, t.area, (q - r.p).length_squared())
             }
             EmitterShape::Quad(_) | EmitterShape::Triangle(_) => return 0.0,
             EmitterShape::Environment => {

@@ -35,9 +35,26 @@ pub fn toward_point<V: Vector>(p: V, q: V, n: V, area: V::R) -> (V, V::R, <V::R 
     let dir = w / dist2.sqrt();
     (
         dir,
-        n.dot(dir).abs() * area / dist2,
+        flat_weight(n, dir, area, dist2),
         dist2.gt(<V::R as Real>::splat(0.0)),
     )
+}
+
+/// 1/pdf in solid angle of unit direction `dir` towards a point `dist2`
+/// (squared) away, drawn uniformly by area on a flat emitter of unit
+/// normal `n` and area `area`: what sampling returns and what the density
+/// for MIS (`Emitter::pdf_direction`) inverts.
+#[inline(always)]
+pub fn flat_weight<V: Vector>(n: V, dir: V, area: V::R, dist2: V::R) -> V::R {
+    n.dot(dir).abs() * area / dist2
+}
+
+/// [`flat_weight`] for a point drawn uniformly on a sphere of squared
+/// radius `r2`, `m` its unit normal there.
+#[inline(always)]
+pub fn sphere_weight<V: Vector>(m: V, dir: V, r2: V::R, dist2: V::R) -> V::R {
+    let c = <V::R as Real>::splat;
+    m.dot(dir).abs() * c(4.0) * c(PI) * r2 / dist2
 }
 
 /// A unit direction uniformly within the cone about unit `axis` whose
