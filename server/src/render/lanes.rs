@@ -54,8 +54,6 @@ pub trait Real:
     fn abs(self) -> Self;
     /// All ones in the lanes where `self > o` (false for NaN), else zero.
     fn gt(self, o: Self) -> Self::Bits;
-    /// `a` in the lanes where `mask` is all ones, else `b`.
-    fn select(mask: Self::Bits, a: Self, b: Self) -> Self;
 }
 
 impl Bits for u32 {
@@ -125,14 +123,6 @@ impl Real for f32 {
             u32::MAX
         } else {
             0
-        }
-    }
-    #[inline(always)]
-    fn select(mask: u32, a: Self, b: Self) -> Self {
-        if mask != 0 {
-            a
-        } else {
-            b
         }
     }
 }
@@ -262,12 +252,6 @@ impl<const N: usize> Real for F32s<N> {
             } else {
                 0
             }
-        }))
-    }
-    #[inline(always)]
-    fn select(mask: U32s<N>, a: Self, b: Self) -> Self {
-        Self(std::array::from_fn(|k| {
-            f32::from_bits((a.0[k].to_bits() & mask.0[k]) | (b.0[k].to_bits() & !mask.0[k]))
         }))
     }
 }

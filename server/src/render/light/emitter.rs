@@ -371,8 +371,13 @@ impl Emitter {
 /// of unit normal `n` and area `area`, and 1/pdf of it (solid angle).
 #[inline(always)]
 fn toward(p: Vec3A, q: Vec3A, n: Vec3A, area: f32) -> Option<(Vec3A, f32)> {
-    let (dir, weight, found) = toward_point(p, q, n, area);
-    (found != 0).then_some((dir, weight))
+    found(toward_point(p, q, n, area))
+}
+
+/// A direction and its weight where the mask says there is one.
+#[inline(always)]
+fn found((dir, weight, mask): (Vec3A, f32, u32)) -> Option<(Vec3A, f32)> {
+    (mask != 0).then_some((dir, weight))
 }
 
 /// A sphere as seen from a point: which way its centre lies, and whether
@@ -427,8 +432,7 @@ fn sample_sphere(
 ) -> Option<(Vec3A, f32)> {
     let v = SphereView::new(s, p, nl, on_self)?;
     if v.inside {
-        let (dir, weight, found) = toward_sphere_point((s.center, s.radius, v.r2), p, u1, u2);
-        (found != 0).then_some((dir, weight))
+        found(toward_sphere_point((s.center, s.radius, v.r2), p, u1, u2))
     } else {
         let one_minus_cos_max = v.one_minus_cos_max();
         let axis = v.to_center / v.d2.sqrt();

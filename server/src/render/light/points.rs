@@ -89,8 +89,7 @@ pub fn toward_sphere_point<V: Vector>(
     let w = center + m * radius - p;
     let dist2 = w.length_squared();
     let dir = w / dist2.sqrt();
-    let cos_l = m.dot(dir).abs();
-    (dir, cos_l * c(4.0) * c(PI) * r2 / dist2, dist2.gt(c(0.0)))
+    (dir, sphere_weight(m, dir, r2, dist2), dist2.gt(c(0.0)))
 }
 
 #[cfg(test)]
