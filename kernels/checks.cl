@@ -20,9 +20,9 @@ __kernel void check_rng(__global ulong *out, uint n, __global const ulong *in) {
 
 /* A path's numbers by use from sampler_of_kind(sobol, seed, pixel, sample)
  * (4 ulongs per item: sobol, seed, pixel, sample): at vertices 0 and 3,
- * the camera's 2-D, the lens's 2-D, a light pick among 7, light 2-D for
+ * the camera's 2-D, the lens's 2-D, the light pick's 2-D, light 2-D for
  * emitters 0 and 2, the BSDF's choice and 2-D, the roulette: 14 floats per
- * vertex as bits (the pick as its two halves), 28 per item. */
+ * vertex as bits (the pick's x as it is), 28 per item. */
 __kernel void check_sampler_uses(__global uint *out, uint n, __global const ulong *in) {
     uint i = (uint)get_global_id(0);
     if (i >= n) {
@@ -34,15 +34,16 @@ __kernel void check_sampler_uses(__global uint *out, uint n, __global const ulon
         at_vertex(&s, 3u * k);
         float2 c = camera_2d(&s);
         float2 lens = lens_2d(&s);
-        ulong pick = light_pick(&s, 7u);
+        uint pick;
+        float pick_y = light_pick_2d(&s, &pick);
         float2 l0 = light_2d(&s, 0u);
         float2 l2 = light_2d(&s, 2u);
         float b = bsdf_choice(&s);
         float2 d = bsdf_2d(&s);
         float r = roulette(&s);
-        uint v[14] = {as_uint(c.x),  as_uint(c.y),  as_uint(lens.x), as_uint(lens.y), (uint)(pick >> 32),
-                      (uint)pick,    as_uint(l0.x), as_uint(l0.y),   as_uint(l2.x),   as_uint(l2.y),
-                      as_uint(b),    as_uint(d.x),  as_uint(d.y),    as_uint(r)};
+        uint v[14] = {as_uint(c.x),  as_uint(c.y),    as_uint(lens.x), as_uint(lens.y), pick,
+                      as_uint(pick_y), as_uint(l0.x), as_uint(l0.y),   as_uint(l2.x),   as_uint(l2.y),
+                      as_uint(b),    as_uint(d.x),    as_uint(d.y),    as_uint(r)};
         for (uint j = 0; j < 14u; ++j) {
             o[14 * k + j] = v[j];
         }
@@ -194,22 +195,19 @@ __kernel void check_triangle(__global float *out, uint n, __global const float4 
     }
 }
 
-/* The power pick from 64 bits bits[i] among P->num_lights emitters:
- * (index, pmf as float bits). */
-__kernel void check_light_pick(__global uint *out, uint n, __global const ulong *bits, __global const Params *P,
+/* The power pick from x[i] among P->num_lights emitters: (index, pmf and
+ * what x leaves, as float bits). */
+__kernel void check_light_pick(__global uint *out, uint n, __global const uint *x, __global const Params *P,
                                __global const Light *lights) {
     uint i = (uint)get_global_id(0);
     if (i >= n) {
         return;
     }
-    ulong b = bits[i];
-    uint count = P->num_lights;
-    uint column = (uint)(((b >> 32) * (ulong)count) >> 32);
-    uint threshold = lights[column].threshold;
-    int keep = (uint)b < threshold || threshold == 0xFFFFFFFFu;
-    uint j = keep ? column : lights[column].alias;
-    out[2 * i] = j;
-    out[2 * i + 1] = as_uint(lights[j].pmf);
+    float u;
+    uint j = pick_light(lights, P->num_lights, x[i], &u);
+    out[3 * i] = j;
+    out[3 * i + 1] = as_uint(lights[j].pmf);
+    out[3 * i + 2] = as_uint(u);
 }
 
 /* sample_emitter for emitter light[i] from the point in[3i] (xyz; w: the

@@ -282,18 +282,22 @@ static inline float3 radiance(const Scene *sc, float3 o, float3 d, Sampler *s, G
         if (gathered) {
             float3 direct = (float3)(0.0f);
             if (LIGHT_COUNT > 0u) {
-                /* One emitter, picked in proportion to its power
-                 * (light/mod.rs): no random number when there is one. */
+                /* One emitter, picked in proportion to its power by the
+                 * light position's x (integrator/nee.rs): no pick when
+                 * there is one. */
                 uint j = 0u;
+                float2 u;
                 if (LIGHT_COUNT > 1u) {
-                    ulong bits = light_pick(s, LIGHT_COUNT);
-                    uint column = (uint)(((bits >> 32) * (ulong)LIGHT_COUNT) >> 32);
-                    uint threshold = lights[column].threshold;
-                    int keep = (uint)bits < threshold || threshold == 0xFFFFFFFFu;
-                    j = keep ? column : lights[column].alias;
+                    uint x;
+                    float left;
+                    u.y = light_pick_2d(s, &x);
+                    j = pick_light(lights, LIGHT_COUNT, x, &left);
+                    u.x = left;
+                } else {
+                    u = light_2d(s, 0u);
                 }
                 float pmf = LIGHT_COUNT > 1u ? lights[j].pmf : 1.0f;
-                direct = direct_from(sc, &lights[j], pmf, &sf, nl, ns, light_2d(s, 0u), &ne);
+                direct = direct_from(sc, &lights[j], pmf, &sf, nl, ns, u, &ne);
                 if (LIGHT_COUNT > 1u) {
                     direct = direct / pmf;
                 }

@@ -1,3 +1,18 @@
+/* The emitter the power table picks from x, and in *u what x leaves,
+ * stretched to [0, 1) (light/pick.rs, PickTable::pick_point): from the
+ * guide entry of x's column on to the emitter whose interval holds x's
+ * top 31 bits (the last with weight ends at 2^31, past every x). */
+static inline uint pick_light(__global const Light *lights, uint count, uint x, float *u) {
+    x >>= 1;
+    uint i = lights[(uint)(((ulong)x * (ulong)count) >> 31)].guide;
+    while (x >= lights[i].upper) {
+        i += 1u;
+    }
+    uint lower = lights[i].lower;
+    *u = fmin((float)(x - lower) / (float)(lights[i].upper - lower), 0x1.fffffep-1f);
+    return i;
+}
+
 #if HAS_SUN
 /* Whether unit direction d looks into the sun's disc (SunLight::covers). */
 static inline int sun_covers(__global const Params *P, float3 d) {

@@ -3,11 +3,11 @@
  * is `random` (independent numbers drawn in order) or `sobol` (padded,
  * Owen-scrambled Sobol points, one dimension per use of a vertex). */
 
-/* A path's numbers by use (Sampler::camera_2d, light_pick, ...): random
+/* A path's numbers by use (Sampler::camera_2d, light_pick_2d, ...): random
  * draws in order, Sobol takes the use's own dimension at the vertex: Sobol
  * points for the camera, the first SOBOL_VERTICES vertices and every
  * roulette, independent numbers (pad_bits) for the rest. */
-#define USE_LIGHT_PICK 0UL
+/* 0 is unused: it was the light pick's (now light_pick_2d's x). */
 #define USE_LIGHT_POSITION 1UL
 #define USE_BSDF_CHOICE 2UL
 #define USE_BSDF_DIRECTION 3UL
@@ -33,8 +33,9 @@ typedef struct {
     int sobol;
 #if SAMPLER_AHEAD
     /* sobol: the camera's point and vertex 0's light position and BSDF
-     * direction (dimensions 0, 2 and 4), made with the sampler. */
-    float2 ahead[3];
+     * direction (dimensions 0, 2 and 4), made with the sampler (32-bit
+     * fixed point: the light pick reads all of the light's x). */
+    uint2 ahead[3];
 #endif
 } Sampler;
 
@@ -58,7 +59,7 @@ static inline Sampler sampler_new(ulong seed, ulong pixel, ulong sample) {
     return s;
 }
 
-static inline float2 sobol_2d(const Sampler *s, ulong d);
+static inline uint2 sobol_2d_bits(const Sampler *s, ulong d);
 
 /* The dimension of one use of the sampler at its vertex. */
 static inline ulong vertex_dim(const Sampler *s, ulong use) {
@@ -84,9 +85,9 @@ static inline Sampler sampler_of_kind(int sobol, ulong seed, ulong pixel, ulong 
     s.vertex = 0u;
     s.sobol = 1;
 #if SAMPLER_AHEAD
-    s.ahead[0] = sobol_2d(&s, 0UL);
-    s.ahead[1] = sobol_2d(&s, vertex_dim(&s, USE_LIGHT_POSITION));
-    s.ahead[2] = sobol_2d(&s, vertex_dim(&s, USE_BSDF_DIRECTION));
+    s.ahead[0] = sobol_2d_bits(&s, 0UL);
+    s.ahead[1] = sobol_2d_bits(&s, vertex_dim(&s, USE_LIGHT_POSITION));
+    s.ahead[2] = sobol_2d_bits(&s, vertex_dim(&s, USE_BSDF_DIRECTION));
 #endif
     return s;
 }
@@ -150,10 +151,18 @@ static inline uint sobol_1d(const Sampler *s, ulong d) {
     return lk_hash(s->rindex, (uint)mix64(s->key + d * 0x9E3779B97F4A7C15UL));
 }
 
-static inline float2 sobol_2d(const Sampler *s, ulong d) {
+static inline uint2 sobol_2d_bits(const Sampler *s, ulong d) {
     uint sx, sy;
     uint i = sobol_index(s, d, &sx, &sy);
-    return (float2)(unit_f32(reverse32(lk_hash(i, sx))), unit_f32(reverse32(lk_hash(superset_sum(i), sy))));
+    return (uint2)(reverse32(lk_hash(i, sx)), reverse32(lk_hash(superset_sum(i), sy)));
+}
+
+static inline float2 unit_2d(uint2 v) {
+    return (float2)(unit_f32(v.x), unit_f32(v.y));
+}
+
+static inline float2 sobol_2d(const Sampler *s, ulong d) {
+    return unit_2d(sobol_2d_bits(s, d));
 }
 
 static inline int stratified(const Sampler *s) {
@@ -179,7 +188,7 @@ static inline void at_vertex(Sampler *s, uint v) {
 
 static inline float2 camera_2d(Sampler *s) {
 #if SAMPLER_AHEAD
-    return s->sobol ? s->ahead[0] : next_2d(s);
+    return s->sobol ? unit_2d(s->ahead[0]) : next_2d(s);
 #else
     return s->sobol ? sobol_2d(s, 0UL) : next_2d(s);
 #endif
@@ -190,16 +199,31 @@ static inline float2 lens_2d(Sampler *s) {
     return s->sobol ? sobol_2d(s, (ulong)LENS_DIMENSION_HI << 32) : next_2d(s);
 }
 
-static inline ulong light_pick(Sampler *s, uint n) {
+/* Independent numbers for light_pick_2d: x the top 32 bits, the second
+ * number the low 24. */
+static inline float pad_second(ulong bits, uint *x) {
+    *x = (uint)(bits >> 32);
+    return (float)(bits & 0xFFFFFFUL) * (1.0f / 16777216.0f);
+}
+
+/* One of several emitters picked and a point on it from one 2-D sample
+ * (Sampler::light_pick_2d): *x gets all 32 bits of the light position's
+ * first coordinate (pick_light's input), the second comes back in [0, 1). */
+static inline float light_pick_2d(Sampler *s, uint *x) {
     if (!s->sobol) {
-        return next_bits(s);
+        return pad_second(next_bits(s), x);
     }
-    ulong d = vertex_dim(s, USE_LIGHT_PICK);
+    ulong d = vertex_dim(s, USE_LIGHT_POSITION);
     if (!stratified(s)) {
-        return pad_bits(s, d);
+        return pad_second(pad_bits(s, d), x);
     }
-    ulong hi = (ulong)sobol_1d(s, d);
-    return (hi << 32) | (ulong)(uint)(hi * (ulong)n);
+#if SAMPLER_AHEAD
+    uint2 v = s->vertex == 0u ? s->ahead[1] : sobol_2d_bits(s, d);
+#else
+    uint2 v = sobol_2d_bits(s, d);
+#endif
+    *x = v.x;
+    return unit_f32(v.y);
 }
 
 static inline float2 light_2d(Sampler *s, uint k) {
@@ -208,7 +232,7 @@ static inline float2 light_2d(Sampler *s, uint k) {
     }
 #if SAMPLER_AHEAD
     if (k == 0u && s->vertex == 0u) {
-        return s->ahead[1];
+        return unit_2d(s->ahead[1]);
     }
 #endif
     ulong d = k == 0u ? vertex_dim(s, USE_LIGHT_POSITION) : (0x8000000000000000UL | ((ulong)s->vertex << 32) | (ulong)k);
@@ -225,7 +249,7 @@ static inline float2 bsdf_2d(Sampler *s) {
     }
 #if SAMPLER_AHEAD
     if (s->vertex == 0u) {
-        return s->ahead[2];
+        return unit_2d(s->ahead[2]);
     }
 #endif
     ulong d = vertex_dim(s, USE_BSDF_DIRECTION);

@@ -141,18 +141,18 @@ typedef struct {
     uint count[4];
 } BvhNode;
 
-/* An emitter and its column of the power alias table (layout.rs, Light;
- * render/light/alias.rs): index column kept when the low 32 bits of the
- * pick are below threshold (or threshold is all ones), else alias. */
+/* An emitter and its entries of the power pick table (layout.rs, Light;
+ * render/light/pick.rs): it owns the 31-bit x in [lower, upper); guide is
+ * the table's guide entry i, the emitter owning column i's first x. */
 typedef struct {
     uint object;     /* the object a shadow ray must hit to see it */
     uint prim;       /* and its triangle, or NO_PRIM */
-    uint threshold;
-    uint alias;
+    uint lower;
+    uint upper;
     float pmf;
     uint kind;       /* LIGHT_OBJECT (its Object), LIGHT_TRIANGLE, LIGHT_ENVIRONMENT, LIGHT_ENV_MAP, LIGHT_SUN */
     uint maps;       /* its material's maps where they have an emission map, else NO_MAPS */
-    uint pad1;
+    uint guide;
     float4 emission;
     float4 p0;       /* a triangle in camera space: p0 + e1 b1 + e2 b2 */
     float4 e1;

@@ -91,7 +91,7 @@ fn sampler_uses_agree(c: &Checks<'_>, options: &str) {
             s.at_vertex(3 * k);
             let c = s.camera_2d();
             let lens = s.lens_2d();
-            let pick = s.light_pick(7);
+            let pick = s.light_pick_2d();
             let (l0, l2) = (s.light_2d(0), s.light_2d(2));
             let b = s.bsdf_choice();
             let d = s.bsdf_2d();
@@ -101,8 +101,8 @@ fn sampler_uses_agree(c: &Checks<'_>, options: &str) {
                 c.1.to_bits(),
                 lens.0.to_bits(),
                 lens.1.to_bits(),
-                (pick >> 32) as u32,
-                pick as u32,
+                pick.0,
+                pick.1.to_bits(),
             ]);
             cpu.extend([l0.0, l0.1, l2.0, l2.1, b, d.0, d.1, r].map(f32::to_bits));
         }

@@ -340,9 +340,10 @@ fn every_emitter() -> Scene {
 }
 
 /// Light selection and light sampling, routine by routine: the emitter the
-/// power table picks from 1e5 random 64-bit numbers, and the direction and
-/// 1/pdf towards every kind of emitter from 1e5 random points, normals and
-/// numbers (a quarter of them on the emitter's own object), bit for bit.
+/// power table picks from 1e5 random 32-bit numbers (and what each leaves
+/// for the point), and the direction and 1/pdf towards every kind of
+/// emitter from 1e5 random points, normals and numbers (a quarter of them
+/// on the emitter's own object), bit for bit.
 #[test]
 fn light_picks_and_light_samples_agree_bit_for_bit() {
     use pathstream::render::sampler::mix64;
@@ -357,12 +358,14 @@ fn light_picks_and_light_samples_agree_bit_for_bit() {
     );
     let packed = pack(&job);
     let n = 100_000usize;
-    let bits: Vec<u64> = (0..n as u64).map(|i| mix64(i ^ 0xABCD)).collect();
+    let bits: Vec<u32> = (0..n as u64)
+        .map(|i| (mix64(i ^ 0xABCD) >> 32) as u32)
+        .collect();
     let picks: Vec<u32> = checks(&d)
         .run(
             "check_light_pick",
             n,
-            2,
+            3,
             &[
                 CheckArg::Buffer(bytemuck::cast_slice(&bits)),
                 CheckArg::Buffer(bytemuck::bytes_of::<KernelParams>(&packed.params)),
@@ -370,11 +373,11 @@ fn light_picks_and_light_samples_agree_bit_for_bit() {
             ],
         )
         .expect("run");
-    for (i, &b) in bits.iter().enumerate() {
-        let (j, pmf) = table.pick(b);
+    for (i, &x) in bits.iter().enumerate() {
+        let (j, pmf, u) = table.pick_point(x);
         assert_eq!(
-            (picks[2 * i], picks[2 * i + 1]),
-            (j as u32, pmf.to_bits()),
+            &picks[3 * i..3 * i + 3],
+            &[j as u32, pmf.to_bits(), u.to_bits()],
             "pick {i}"
         );
     }

@@ -4,9 +4,10 @@
 //! every emitter. Both are unbiased and converge to the same image; the
 //! first costs one ray however many emitters there are.
 //!
-//! Random numbers: the pick and each emitter's point are the sampler's
-//! light uses of this vertex (`Sampler::light_pick`, `light_2d`); with one
-//! emitter there is no pick.
+//! Random numbers: the sampler's light position of this vertex, a 2-D
+//! sample (`Sampler::light_2d`); among several emitters, its first
+//! coordinate picks one and what is left of it places the point with the
+//! second (`Sampler::light_pick_2d`, `PickTable::pick_point`).
 
 use crate::render::isa::Isa;
 use crate::render::light::Emitter;
@@ -55,17 +56,10 @@ pub fn direct<I: Isa>(
                 let Some(table) = &lights.table else {
                     return Vec3A::ZERO;
                 };
-                let (i, pmf) = table.pick(sampler.light_pick(lights.emitters.len()));
-                one(
-                    isa,
-                    world,
-                    (&lights.emitters[i], pmf),
-                    s,
-                    nl,
-                    ns,
-                    sampler.light_2d(0),
-                    &f,
-                ) / pmf
+                let (x, u2) = sampler.light_pick_2d();
+                let (i, pmf, u1) = table.pick_point(x);
+                let e = (&lights.emitters[i], pmf);
+                one(isa, world, e, s, nl, ns, (u1, u2), &f) / pmf
             }
         },
         LightSampling::All => {

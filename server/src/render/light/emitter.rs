@@ -25,7 +25,7 @@
 //!    case in the light-sampling parity tests
 //!    (`tests/opencl_parity_meshes.rs`).
 
-use super::alias::AliasTable;
+use super::pick::PickTable;
 use super::points::{
     flat_weight, in_cone, quad_point, sphere_weight, toward_point, toward_sphere_point,
     triangle_point,
@@ -138,7 +138,7 @@ pub struct Emitter {
 #[derive(Clone, Debug, Default)]
 pub struct Lights {
     pub emitters: Vec<Emitter>,
-    pub table: Option<AliasTable>,
+    pub table: Option<PickTable>,
     /// Each emitter's weight in the table (its power, up to a factor).
     power: Vec<f64>,
 }
@@ -161,7 +161,7 @@ impl Lights {
         );
         let power: Vec<f64> = emitters.iter().map(|e| e.power(radius)).collect();
         Self {
-            table: AliasTable::new(&power),
+            table: PickTable::new(&power),
             emitters,
             power,
         }
@@ -172,7 +172,7 @@ impl Lights {
     /// probability, so images stay unbiased.
     pub fn scale_power(&mut self, i: usize, factor: f64) {
         self.power[i] *= factor;
-        self.table = AliasTable::new(&self.power);
+        self.table = PickTable::new(&self.power);
     }
 
     /// Gives emitter `i` the weight that makes its pick probability
@@ -183,7 +183,7 @@ impl Lights {
             .map(|(_, p)| p)
             .sum();
         self.power[i] = others * share / (1.0 - share);
-        self.table = AliasTable::new(&self.power);
+        self.table = PickTable::new(&self.power);
     }
 
     pub fn is_empty(&self) -> bool {

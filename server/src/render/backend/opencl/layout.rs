@@ -244,8 +244,8 @@ pub struct Params {
     pub sun_radiance: [f32; 4],
 }
 
-/// An emitter for next-event estimation and its column of the power alias
-/// table (render/light/alias.rs): the kernel picks one as the CPU does.
+/// An emitter for next-event estimation and its entries of the power pick
+/// table (render/light/pick.rs): the kernel picks one as the CPU does.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
@@ -253,15 +253,17 @@ pub struct Light {
     pub object: u32,
     /// The triangle of that object, or `NO_PRIM`.
     pub prim: u32,
-    pub threshold: u32,
-    pub alias: u32,
+    /// The 31-bit x it owns, [lower, upper).
+    pub lower: u32,
+    pub upper: u32,
     pub pmf: f32,
     /// `LIGHT_OBJECT` (a sphere or quad: its `Object`), `LIGHT_TRIANGLE`
     /// (below), `LIGHT_ENVIRONMENT`.
     pub kind: u32,
     /// Its material's maps where they have an emission map, else `NO_MAPS`.
     pub maps: u32,
-    pub pad1: u32,
+    /// The pick's guide entry i (not this emitter's own: the table's row i).
+    pub guide: u32,
     pub emission: [f32; 4],
     /// A triangle in camera space: p0 + e1 b1 + e2 b2; n.w its area.
     pub p0: [f32; 4],
@@ -327,13 +329,14 @@ pub fn kernel_lights(w: &World) -> Vec<Light> {
         .iter()
         .enumerate()
         .map(|(i, e)| {
-            let (threshold, alias, pmf) = table.map_or((u32::MAX, 0, 1.0), |t| t.column(i));
+            let (lower, upper, guide, pmf) = table.map_or((0, 1 << 31, 0, 1.0), |t| t.column(i));
             let mut l = Light {
                 object: e.object,
                 prim: e.prim,
-                threshold,
-                alias,
+                lower,
+                upper,
                 pmf,
+                guide,
                 kind: LIGHT_OBJECT,
                 maps: e.maps,
                 emission: v4(e.emission, 0.0),
