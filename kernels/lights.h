@@ -9,7 +9,7 @@ static inline uint pick_light(__global const Light *lights, uint count, uint x, 
         i += 1u;
     }
     uint lower = lights[i].lower;
-    *u = fmin((float)(x - lower) / (float)(lights[i].upper - lower), 0x1.fffffep-1f);
+    *u = fmin((float)(x - lower) / (float)(lights[i].upper - lower), as_float(ONE_BELOW_BITS));
     return i;
 }
 

@@ -8,6 +8,10 @@ pub use glam::{Affine3A, BVec4A, DAffine3, DMat3, DVec3, Mat3A, Vec3, Vec3A, Vec
 
 use crate::render::lanes::{Bits, Real, Vector};
 
+/// The largest f32 below 1: where a number stretched from a part of
+/// [0, 1) back to all of it rounds up to 1, it becomes this.
+pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// Largest of the three components.
 #[inline(always)]
 pub fn max_component(v: Vec3A) -> f32 {

@@ -8,6 +8,7 @@
 //! twins (`kernels/envmap.h`) repeat bit for bit: a binary search over a
 //! cumulative table, one division to place the point inside its cell.
 
+use crate::render::math::ONE_BELOW;
 use rayon::prelude::*;
 
 /// The density of `height` rows of `width` cells each. Its tables are one
@@ -73,9 +74,6 @@ pub fn invert(cdf: &[f32], u: f32) -> (usize, f32) {
     };
     (lo, du.clamp(0.0, ONE_BELOW))
 }
-
-/// The largest f32 below 1.
-pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 impl Distribution2D {
     /// The density proportional to `weights` (row by row, finite and

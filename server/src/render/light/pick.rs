@@ -17,6 +17,8 @@
 //! more error at 64 spp than with a pick of its own dimension
 //! (docs/RENDERER.md, "Sampler").
 
+use crate::render::math::ONE_BELOW;
+
 /// x's top 31 bits are the pick's fixed point: 2^31 fits in u32.
 const ONE: u64 = 1 << 31;
 
@@ -146,9 +148,6 @@ fn settle(width: &mut [u64]) {
         }
     }
 }
-
-/// The largest f32 below 1.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[cfg(test)]
 mod tests {

@@ -99,10 +99,7 @@ pub const SHARED_CONSTANTS: [(&str, u32); 51] = [
     ("MAX_BVH_STACK", crate::render::bvh::STACK as u32),
     ("FILM_FLOATS", super::FILM_FLOATS as u32),
     ("GUIDE_FLOATS", super::guides::GUIDE_FLOATS as u32),
-    (
-        "ONE_BELOW_BITS",
-        crate::render::envmap::distribution::ONE_BELOW.to_bits(),
-    ),
+    ("ONE_BELOW_BITS", crate::render::math::ONE_BELOW.to_bits()),
     ("TWO_PI2_BITS", crate::render::envmap::TWO_PI2.to_bits()),
     ("PROJ_PERSPECTIVE", RayProjection::Perspective as u32),
     ("PROJ_ORTHOGRAPHIC", RayProjection::Orthographic as u32),
