@@ -90,7 +90,7 @@ def main():
     keys = [k for k in counts if k[0] in addr]
     chains = frames(args.binary, [addr[s] + off for s, off in keys])
     total = sum(counts.values())
-    by_file, by_line, kind, around = (collections.Counter() for _ in range(4))
+    by_file, by_line, kind, around, split = (collections.Counter() for _ in range(5))
     for key, chain in zip(keys, chains):
         n = counts[key]
         ours = [(f, loc) for f, loc in chain if "/server/src/" in loc]
@@ -100,6 +100,10 @@ def main():
         by_file[loc.split(":")[0]] += n
         rays = any("World::intersect" in f for f, _ in chain)
         kind["rays (World::intersect)" if rays else "around the rays"] += n
+        if rays:
+            # A shadow ray's query is inlined into next-event estimation.
+            shadow = any("integrator::nee::" in f for f, _ in chain)
+            split["rays: shadow (integrator::nee)" if shadow else "rays: path"] += n
         if not rays:
             around[loc.split(":")[0]] += n
     unattributed = total - sum(kind.values())
@@ -114,6 +118,7 @@ def main():
 
     print(f"{total} samples\n")
     table("part", kind)
+    table("rays by kind", split)
     table("file", by_file)
     table("file (around the rays only)", around)
     table("line", by_line, args.lines)

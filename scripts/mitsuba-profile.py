@@ -1,0 +1,179 @@
+#!/usr/bin/env python3
+"""Where Mitsuba 3's time goes on the comparison scene, and pathstream's.
+
+`mitsuba-compare.py` says how fast each renderer is; this says what each
+spends its time on, per sample and thread: Mitsuba's rays (Embree's
+nearest-hit queries, `intersect`, and its shadow queries, `occluded`) and
+everything else (its JIT-compiled shading for the `llvm` variants, its
+plugins for `scalar_rgb`), and pathstream's rays (`World::intersect`) and
+the rest, by `scripts/profile-lines.py`.
+
+Mitsuba renders the scene of `mitsuba-compare.py` (the same vertices,
+albedos, lamp, camera, depth and filter) once to compile its kernels, then
+`--renders` times while `perf record` samples the process; pathstream
+renders it under `perf record` too. Each time is divided by the samples
+traced, then split by the sampled shares. Not part of the test suite.
+Needs what `mitsuba-compare.py` needs, plus perf and binutils
+(`apt-get install linux-perf binutils`) and a pathstream built with line
+tables (`cargo build --profile profiling -p pathstream`). Run from the
+repository root:
+
+    /tmp/mi/bin/python scripts/mitsuba-profile.py [--variant llvm_ad_rgb]
+        [--spp 256] [--renders 3] [--scene cornell-mesh] [--size 128]
+        [--max-depth 6] [--threads 2]
+        [--profiling target/profiling/pathstream] [--exe target/release/pathstream]
+"""
+
+import argparse
+import importlib.util
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+from compare_common import add_arguments, run  # noqa: E402
+
+
+def load_compare():
+    """`mitsuba-compare.py` as a module (its file name has a dash)."""
+    spec = importlib.util.spec_from_file_location(
+        "mitsuba_compare", os.path.join(HERE, "mitsuba-compare.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def perf_report(data, sort):
+    """(share in per cent, shared object, symbol) per line of a `perf
+    report` of `data` sorted by `sort`."""
+    out = subprocess.run(
+        ["perf", "report", "-i", data, "--sort", sort, "--stdio"],
+        capture_output=True, text=True, check=True).stdout
+    for line in out.splitlines():
+        m = re.match(r"\s*([0-9.]+)%\s+(.+?)(?:\s+\[[.k]\]\s+(.*))?$", line)
+        if m:
+            dso = m.group(2).strip()
+            dso = "JIT-compiled code" if dso.startswith("[JIT]") else dso
+            yield float(m.group(1)), dso, (m.group(3) or "").rstrip()
+
+
+def perf_shares(data):
+    """(share by shared object, share of each Embree query kind) of a
+    `perf record` file, in per cent."""
+    dsos = {}
+    for share, dso, _ in perf_report(data, "dso"):
+        dsos[dso] = dsos.get(dso, 0.0) + share
+    queries = {"intersect": 0.0, "occluded": 0.0}
+    for share, dso, sym in perf_report(data, "dso,sym"):
+        for kind in queries:
+            if "embree" in dso and sym.endswith("::" + kind):
+                queries[kind] += share
+    return dsos, queries
+
+
+def profile_mitsuba(args, scene):
+    """Mitsuba's M samples/s over `args.renders` renders and the perf file
+    sampled during them."""
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    dr.set_thread_count(args.threads)
+    mc = load_compare()
+    d = mc.mitsuba_scene(mi, scene, args, args.out)
+    sensor = dict(d["sensor"])
+    sensor["sampler"] = {"type": "multijitter", "sample_count": args.spp}
+    d = dict(d, sensor=sensor)
+    loaded = mi.load_dict(d)
+    img = mi.render(loaded, spp=args.spp, seed=1000)  # compiles, untimed
+    dr.eval(img)
+    dr.sync_thread()
+    data = os.path.join(args.out, "mitsuba.perf")
+    perf = subprocess.Popen(
+        ["perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-p",
+         str(os.getpid()), "-o", data],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(1.0)  # perf attaches
+    start = time.perf_counter()
+    for seed in range(args.renders):
+        img = mi.render(loaded, spp=args.spp, seed=seed)
+        dr.eval(img)
+        dr.sync_thread()
+    seconds = time.perf_counter() - start
+    perf.send_signal(2)
+    perf.wait()
+    samples = args.renders * args.spp * args.size * args.size
+    return samples / seconds / 1e6, data
+
+
+def profile_pathstream(args, scene_file):
+    """pathstream's M samples/s and its path and shadow rays' shares
+    (profile-lines.py)."""
+    data = os.path.join(args.out, "pathstream.perf")
+    text = run([
+        "perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-o", data,
+        args.profiling, "render", "--scene", scene_file,
+        "--width", str(args.size), "--height", str(args.size),
+        "--spp", str(args.spp), "--max-depth", str(args.max_depth),
+        "--rr-depth", "5", "--filter", "box", "--adaptive", "off",
+        "--backend", "cpu", "--out", os.path.join(args.out, "p.pfm"),
+    ])
+    rate = float(re.search(r"([0-9.]+) M paths/s", text).group(1))
+    lines = run([sys.executable, os.path.join(HERE, "profile-lines.py"),
+                 args.profiling, data])
+    share = lambda what: float(re.search(what + r"[^|]*\| ([0-9.]+)% \|", lines).group(1))
+    return rate, share(r"\| rays: path"), share(r"\| rays: shadow")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    add_arguments(ap, os.path.join(tempfile.gettempdir(), "mitsuba-profile"),
+                  "256", 0)
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--renders", type=int, default=3)
+    ap.add_argument("--profiling", default="target/profiling/pathstream")
+    args = ap.parse_args()
+    args.spp = int(args.spp)
+    os.environ["RAYON_NUM_THREADS"] = str(args.threads)
+    os.makedirs(args.out, exist_ok=True)
+    scene_file = os.path.join(args.out, f"{args.scene}.json")
+    with open(scene_file, "w") as f:
+        f.write(run([args.exe, "scenes", "--json", args.scene]))
+    with open(scene_file) as f:
+        scene = json.load(f)
+
+    rate, data = profile_mitsuba(args, scene)
+    dsos, queries = perf_shares(data)
+    per_sample = args.threads / rate  # microseconds of one thread
+    print(f"\n{args.scene}, {args.size}x{args.size}, {args.spp} spp, "
+          f"{args.threads} threads; per sample: microseconds of one thread\n")
+    print("| renderer | M samples/s | part | share | us per sample |")
+    print("| --- | ---: | --- | ---: | ---: |")
+    rows = [(f"Embree `{k}`", v) for k, v in queries.items()]
+    rest = 100.0 - sum(queries.values())
+    top = sorted(((k, v) for k, v in dsos.items() if "embree" not in k),
+                 key=lambda kv: -kv[1])
+    rows += [(k, v) for k, v in top[:4]]
+    for part, share in rows:
+        print(f"| Mitsuba `{args.variant}` | {rate:.2f} | {part} | "
+              f"{share:.1f}% | {share / 100 * per_sample:.3f} |")
+    print(f"| Mitsuba `{args.variant}` | {rate:.2f} | everything but Embree | "
+          f"{rest:.1f}% | {rest / 100 * per_sample:.3f} |")
+    if os.path.exists(args.profiling):
+        rate, path, shadow = profile_pathstream(args, scene_file)
+        per_sample = args.threads / rate
+        rows = (("path rays (nearest hit)", path), ("shadow rays (nearest hit)", shadow),
+                ("around the rays", 100 - path - shadow))
+        for part, share in rows:
+            print(f"| pathstream (profiling build) | {rate:.2f} | {part} | "
+                  f"{share:.1f}% | {share / 100 * per_sample:.3f} |")
+
+
+if __name__ == "__main__":
+    main()
