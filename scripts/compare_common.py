@@ -51,15 +51,21 @@ def write_pfm(path, rgb_bottom_up):
         f.write(np.ascontiguousarray(rgb_bottom_up, dtype="<f4").tobytes())
 
 
-def scene_and_reference(args):
-    """pathstream's JSON of `args.scene` (written to `args.out`), parsed,
-    and the path of its long pathstream reference (rendered once)."""
+def scene_json(args):
+    """pathstream's JSON of `args.scene`, written to `args.out`: the file
+    and the parsed scene."""
     os.makedirs(args.out, exist_ok=True)
     scene_file = os.path.join(args.out, f"{args.scene}.json")
     with open(scene_file, "w") as f:
         f.write(run([args.exe, "scenes", "--json", args.scene]))
     with open(scene_file) as f:
-        scene = json.load(f)
+        return scene_file, json.load(f)
+
+
+def scene_and_reference(args):
+    """pathstream's JSON of `args.scene` (written to `args.out`), parsed,
+    and the path of its long pathstream reference (rendered once)."""
+    scene_file, scene = scene_json(args)
     reference = os.path.join(
         args.out, f"{args.scene}-{args.size}-d{args.max_depth}-ref{args.reference_spp}.pfm"
     )

@@ -26,7 +26,6 @@ repository root:
 
 import argparse
 import importlib.util
-import json
 import os
 import re
 import subprocess
@@ -37,7 +36,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-from compare_common import add_arguments, run  # noqa: E402
+from compare_common import add_arguments, run, scene_json  # noqa: E402
 
 
 def load_compare():
@@ -141,12 +140,7 @@ def main():
     args = ap.parse_args()
     args.spp = int(args.spp)
     os.environ["RAYON_NUM_THREADS"] = str(args.threads)
-    os.makedirs(args.out, exist_ok=True)
-    scene_file = os.path.join(args.out, f"{args.scene}.json")
-    with open(scene_file, "w") as f:
-        f.write(run([args.exe, "scenes", "--json", args.scene]))
-    with open(scene_file) as f:
-        scene = json.load(f)
+    scene_file, scene = scene_json(args)
 
     rate, data = profile_mitsuba(args, scene)
     dsos, queries = perf_shares(data)
