@@ -5,8 +5,9 @@
 spends its time on, per sample and thread: Mitsuba's rays (Embree's
 nearest-hit queries, `intersect`, and its shadow queries, `occluded`) and
 everything else (its JIT-compiled shading for the `llvm` variants, its
-plugins for `scalar_rgb`), and pathstream's rays (`World::intersect`) and
-the rest, by `scripts/profile-lines.py`.
+plugins for `scalar_rgb`), and pathstream's path rays, shadow rays (its
+`World::intersect` queries from next-event estimation) and the rest, by
+`scripts/profile-lines.py`.
 
 Mitsuba renders the scene of `mitsuba-compare.py` (the same vertices,
 albedos, lamp, camera, depth and filter) once to compile its kernels, then

@@ -7,7 +7,8 @@ reads perf's samples, asks addr2line for each sample's chain of inlined
 frames, and charges the sample to the innermost frame in `server/src/`:
 a table by file and by line. A sample whose chain passes through
 `World::intersect` counts as a nearest-hit query ("rays"), any other as
-the work around the rays (camera, shading, light sampling, film).
+the work around the rays (camera, shading, light sampling, film); a query
+inlined into `integrator::nee` is a shadow ray, any other a path ray.
 
 Needs perf and binutils (`apt-get install linux-perf binutils`), and a
 binary with line tables:
