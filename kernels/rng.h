@@ -97,13 +97,22 @@ static inline ulong next_bits(Sampler *s) {
     return mix64(s->key + s->dim * 0x9E3779B97F4A7C15UL);
 }
 
+/* 24 bits as a number in [0, 1) (sampler/mod.rs, unit_24). */
+static inline float unit_24(ulong bits) {
+    return (float)(bits & 0xFFFFFFUL) * (1.0f / 16777216.0f);
+}
+
+/* A random 2-D sample from 64 bits: the top 24 and the next 24 (pair_24). */
+static inline float2 pair_24(ulong bits) {
+    return (float2)(unit_24(bits >> 40), unit_24(bits >> 16));
+}
+
 static inline float next_f32(Sampler *s) {
-    return (float)(next_bits(s) >> 40) * (1.0f / 16777216.0f);
+    return unit_24(next_bits(s) >> 40);
 }
 
 static inline float2 next_2d(Sampler *s) {
-    ulong bits = next_bits(s);
-    return (float2)((float)(bits >> 40), (float)((bits >> 16) & 0xFFFFFFUL)) * (1.0f / 16777216.0f);
+    return pair_24(next_bits(s));
 }
 
 /* Sobol points, as sampler/sobol.rs: 2-D Owen-scrambled, 1-D shuffled. */
@@ -174,12 +183,11 @@ static inline ulong pad_bits(const Sampler *s, ulong d) {
 }
 
 static inline float2 pad_2d(const Sampler *s, ulong d) {
-    ulong bits = pad_bits(s, d);
-    return (float2)((float)(bits >> 40), (float)((bits >> 16) & 0xFFFFFFUL)) * (1.0f / 16777216.0f);
+    return pair_24(pad_bits(s, d));
 }
 
 static inline float number_1d(const Sampler *s, ulong d, int strat) {
-    return strat ? unit_f32(sobol_1d(s, d)) : (float)(pad_bits(s, d) >> 40) * (1.0f / 16777216.0f);
+    return strat ? unit_f32(sobol_1d(s, d)) : unit_24(pad_bits(s, d) >> 40);
 }
 
 static inline void at_vertex(Sampler *s, uint v) {
@@ -203,7 +211,7 @@ static inline float2 lens_2d(Sampler *s) {
  * number the low 24. */
 static inline float pad_second(ulong bits, uint *x) {
     *x = (uint)(bits >> 32);
-    return (float)(bits & 0xFFFFFFUL) * (1.0f / 16777216.0f);
+    return unit_24(bits);
 }
 
 /* One of several emitters picked and a point on it from one 2-D sample

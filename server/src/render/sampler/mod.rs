@@ -95,14 +95,24 @@ fn unit_2d((x, y): (u32, u32)) -> (f32, f32) {
     (sobol::unit_f32(x), sobol::unit_f32(y))
 }
 
+/// 24 bits as a number in [0, 1): the resolution of an f32 there.
+#[inline(always)]
+fn unit_24(bits: u64) -> f32 {
+    (bits & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Two numbers from 64 independent bits (a random 2-D sample): the top 24
+/// bits and the next 24.
+#[inline(always)]
+fn pair_24(bits: u64) -> (f32, f32) {
+    (unit_24(bits >> 40), unit_24(bits >> 16))
+}
+
 /// [`Sampler::light_pick_2d`]'s numbers from 64 independent bits: the top
 /// 32 as they are, the low 24 as a number in [0, 1).
 #[inline(always)]
 fn pick_bits(bits: u64) -> (u32, f32) {
-    (
-        (bits >> 32) as u32,
-        (bits & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0),
-    )
+    ((bits >> 32) as u32, unit_24(bits))
 }
 
 /// What a path uses a vertex's numbers for: each its own Sobol dimension.
@@ -208,19 +218,14 @@ impl Sampler {
     /// The next dimension's number, uniform in [0, 1) with 24 bits (random).
     #[inline(always)]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_bits() >> 40) as f32 * (1.0 / 16_777_216.0)
+        unit_24(self.next_bits() >> 40)
     }
 
     /// Two numbers from one dimension's 64 bits (a 2-D sample): the top
     /// and the next 24 bits (random).
     #[inline(always)]
     pub fn next_2d(&mut self) -> (f32, f32) {
-        let bits = self.next_bits();
-        const SCALE: f32 = 1.0 / 16_777_216.0;
-        (
-            (bits >> 40) as f32 * SCALE,
-            ((bits >> 16) & 0xFF_FFFF) as f32 * SCALE,
-        )
+        pair_24(self.next_bits())
     }
 
     /// The next dimension's full 64 bits (random).
@@ -274,12 +279,7 @@ impl Sampler {
     /// Two independent numbers for dimension `d` (as [`Sampler::next_2d`]).
     #[inline(always)]
     fn pad_2d(&self, d: u64) -> (f32, f32) {
-        let bits = self.pad_bits(d);
-        const SCALE: f32 = 1.0 / 16_777_216.0;
-        (
-            (bits >> 40) as f32 * SCALE,
-            ((bits >> 16) & 0xFF_FFFF) as f32 * SCALE,
-        )
+        pair_24(self.pad_bits(d))
     }
 
     /// A number for 1-D dimension `d`: a Sobol point where `stratified`,
@@ -289,7 +289,7 @@ impl Sampler {
         if stratified {
             sobol::unit_f32(sobol::sample_1d(self.rindex, self.seed_1d(d)))
         } else {
-            (self.pad_bits(d) >> 40) as f32 * (1.0 / 16_777_216.0)
+            unit_24(self.pad_bits(d) >> 40)
         }
     }
 
