@@ -3,6 +3,7 @@
 scene and its long reference, PFM output, and the time-to-error summary."""
 
 import json
+import math
 import os
 import re
 import subprocess
@@ -93,14 +94,24 @@ def diffuse_meshes(scene):
 
 
 def time_to(target, rows):
-    """Seconds to reach `target` error from the renders (spp, s, error):
-    the cheapest render that reached it, else the last one extrapolated by
-    error ~ 1/sqrt(time)."""
-    for spp, s, err in rows:
-        if err <= target:
-            return s * (err / target) ** 2, spp
+    """Seconds to reach `target` error from the renders (spp, s, error), in
+    order of spp, and how it was found. Between the last render above the
+    target and the first at or below it, time is interpolated in log-log
+    (each sampler's own rate of convergence between the two); outside
+    them, the nearest render is extrapolated by error ~ 1/sqrt(time),
+    which flatters a sampler that converges faster than that when it is
+    the first render that is already below the target."""
+    for i, (spp, s, err) in enumerate(rows):
+        if err > target:
+            continue
+        if i == 0:
+            return s * (err / target) ** 2, f"below {spp} spp, extrapolated"
+        spp0, s0, err0 = rows[i - 1]
+        slope = (math.log(s) - math.log(s0)) / (math.log(err) - math.log(err0))
+        t = s0 * math.exp((math.log(target) - math.log(err0)) * slope)
+        return t, f"between {spp0} and {spp} spp"
     spp, s, err = rows[-1]
-    return s * (err / target) ** 2, None
+    return s * (err / target) ** 2, "extrapolated"
 
 
 def print_summary(summary, pixels):
@@ -110,8 +121,7 @@ def print_summary(summary, pixels):
     print("| --- | --- | ---: | ---: |")
     for who, sampler, rows in summary:
         rate = np.median([spp * pixels / s / 1e6 for spp, s, _ in rows])
-        t, reached = time_to(0.01, rows)
-        how = f"at {reached} spp" if reached else "extrapolated"
+        t, how = time_to(0.01, rows)
         print(f"| {who} | {sampler} | {rate:.2f} | {t:.2f} ({how}) |")
 
 
@@ -137,8 +147,10 @@ def pathstream_runs(args, scene_file):
 
 
 def measure(args, reference, runs):
-    """Renders each run, (renderer, sampler, render(spp, path) -> seconds),
-    at every spp of `args.spp`; prints a row per render, then the summary."""
+    """Renders each run, (renderer, sampler, render(spp, path) -> seconds,
+    or (seconds, the samples per pixel it took) where a sampler rounds the
+    count it is asked for), at every spp of `args.spp`; prints a row per
+    render, then the summary. Rows, rates and times use the spp taken."""
     spps = [int(s) for s in args.spp.split(",")]
     pixels = args.size * args.size
     print(
@@ -154,6 +166,7 @@ def measure(args, reference, runs):
             name = f"{who.split()[0].lower()}-{sampler}-{spp}.pfm"
             path = os.path.abspath(os.path.join(args.out, name))
             s = render(spp, path)
+            s, spp = s if isinstance(s, tuple) else (s, spp)
             err = rel_error(args.exe, reference, path)
             rows.append((spp, s, err))
             print(

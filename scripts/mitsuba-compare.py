@@ -27,7 +27,9 @@ one path at a time, which shows what the batches are worth.
 
 Depths: pathstream's --max-depth counts scattering events, Mitsuba's
 max_depth path vertices, so Mitsuba gets max_depth + 1. Russian roulette
-starts after 5 bounces in both. Samplers: pathstream's `random` against
+starts after 5 bounces in both: pathstream's --rr-depth 5, Mitsuba's
+rr_depth 6 (it counts vertices too; its rr_depth 5 would let roulette end
+paths a bounce earlier, trading fewer rays for more noise). Samplers: pathstream's `random` against
 Mitsuba's `independent`, its `sobol` (Owen-scrambled) against Mitsuba's
 `multijitter` and `ldsampler`.
 """
@@ -53,7 +55,10 @@ def mitsuba_scene(mi, scene, args, out_dir):
         "integrator": {
             "type": "path",
             "max_depth": args.max_depth + 1,
-            "rr_depth": 5,
+            # pathstream's roulette may end paths after 5 bounces (it
+            # decides the 6th); Mitsuba's rr_depth counts vertices, and 6
+            # decides the same bounce.
+            "rr_depth": 6,
         },
     }
     cam = scene["camera"]
@@ -151,7 +156,9 @@ def mitsuba_render(mi, dr, scene_dict, args, spp, sampler, seed, path):
     dr.sync_thread()
     seconds = time.perf_counter() - start
     mi.Bitmap(img).write(path)
-    return seconds
+    # multijitter and ldsampler round the count up (to a product of two
+    # close integers, or a power of four): the samples actually taken.
+    return seconds, scene.sensors()[0].sampler().sample_count()
 
 
 def main():
