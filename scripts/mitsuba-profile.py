@@ -23,12 +23,17 @@ repository root:
         [--spp 256] [--renders 3] [--scene cornell-mesh] [--size 128]
         [--max-depth 6] [--threads 2]
         [--profiling target/profiling/pathstream] [--exe target/release/pathstream]
+        [--depths 1,2,3,4,6 [--repeats 3]]
+
+`--depths` profiles both at each depth and prints what each further
+vertex adds: which rays and which shading Mitsuba's lead is made of.
 """
 
 import argparse
 import importlib.util
 import os
 import re
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -131,6 +136,55 @@ def profile_pathstream(args, scene_file):
     return rate, share(r"\| rays: path"), share(r"\| rays: shadow")
 
 
+def parts(args, scene, scene_file):
+    """Per sample, microseconds of one thread: {renderer: (M samples/s,
+    path rays, shadow rays, the rest)} at `args.max_depth`."""
+    out = {}
+    rate, data = profile_mitsuba(args, scene)
+    dsos, queries = perf_shares(data)
+    us = args.threads / rate / 100
+    rest = 100.0 - sum(queries.values())
+    out["mitsuba"] = (rate, queries["intersect"] * us, queries["occluded"] * us, rest * us)
+    out["mitsuba-dsos"] = dsos
+    if os.path.exists(args.profiling):
+        rate, path, shadow = profile_pathstream(args, scene_file)
+        us = args.threads / rate / 100
+        out["pathstream"] = (rate, path * us, shadow * us, (100 - path - shadow) * us)
+    return out
+
+
+def by_depth(args, scene, scene_file):
+    """`--depths`: each part's median over `--repeats` runs at each depth,
+    then what each further vertex adds. Mitsuba at depth d traces path rays
+    1..d+1 (the last for its emission's MIS weight), pathstream 1..d; both
+    trace shadow rays and shade at vertices 1..d."""
+    depths = [int(d) for d in args.depths.split(",")]
+    table = {}
+    for d in depths:
+        args.max_depth = d
+        runs = [parts(args, scene, scene_file) for _ in range(args.repeats)]
+        for who in ("mitsuba", "pathstream"):
+            if who in runs[0]:
+                cols = list(zip(*(r[who] for r in runs)))
+                table[(who, d)] = [statistics.median(c) for c in cols]
+    print(f"\n{args.scene}, {args.size}x{args.size}, {args.spp} spp, {args.threads} threads, "
+          f"median of {args.repeats}; per sample: microseconds of one thread\n")
+    print("| depth | renderer | M samples/s | path rays | shadow rays | the rest |")
+    print("| ---: | --- | ---: | ---: | ---: | ---: |")
+    for (who, d), (rate, path, shadow, rest) in sorted(table.items(), key=lambda kv: kv[0][1]):
+        print(f"| {d} | {who} | {rate:.2f} | {path:.3f} | {shadow:.3f} | {rest:.3f} |")
+    print("\nWhat each depth adds to the one before (path rays: Mitsuba's ray d+1, "
+          "pathstream's ray d):\n")
+    print("| depths | renderer | path rays | shadow rays | the rest |")
+    print("| --- | --- | ---: | ---: | ---: |")
+    for a, b in zip(depths, depths[1:]):
+        for who in ("mitsuba", "pathstream"):
+            if (who, a) in table:
+                x, y = table[(who, a)], table[(who, b)]
+                print(f"| {a} to {b} | {who} | {y[1] - x[1]:.3f} | {y[2] - x[2]:.3f} | "
+                      f"{y[3] - x[3]:.3f} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     add_arguments(ap, os.path.join(tempfile.gettempdir(), "mitsuba-profile"),
@@ -138,36 +192,39 @@ def main():
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--renders", type=int, default=3)
     ap.add_argument("--profiling", default="target/profiling/pathstream")
+    ap.add_argument("--depths", help="a list of depths (1,2,3,4,6): each part by depth")
+    ap.add_argument("--repeats", type=int, default=3, help="runs per depth for --depths")
     args = ap.parse_args()
     args.spp = int(args.spp)
     os.environ["RAYON_NUM_THREADS"] = str(args.threads)
     scene_file, scene = scene_json(args)
+    if args.depths:
+        by_depth(args, scene, scene_file)
+        return
 
-    rate, data = profile_mitsuba(args, scene)
-    dsos, queries = perf_shares(data)
+    got = parts(args, scene, scene_file)
+    rate, path, shadow, rest = got["mitsuba"]
     per_sample = args.threads / rate  # microseconds of one thread
     print(f"\n{args.scene}, {args.size}x{args.size}, {args.spp} spp, "
           f"{args.threads} threads; per sample: microseconds of one thread\n")
     print("| renderer | M samples/s | part | share | us per sample |")
     print("| --- | ---: | --- | ---: | ---: |")
-    rows = [(f"Embree `{k}`", v) for k, v in queries.items()]
-    rest = 100.0 - sum(queries.values())
-    top = sorted(((k, v) for k, v in dsos.items() if "embree" not in k),
+    rows = [("Embree `intersect`", path), ("Embree `occluded`", shadow)]
+    top = sorted(((k, v) for k, v in got["mitsuba-dsos"].items() if "embree" not in k),
                  key=lambda kv: -kv[1])
-    rows += [(k, v) for k, v in top[:4]]
-    for part, share in rows:
+    rows += [(k, v / 100 * per_sample) for k, v in top[:4]]
+    rows.append(("everything but Embree", rest))
+    for part, us in rows:
         print(f"| Mitsuba `{args.variant}` | {rate:.2f} | {part} | "
-              f"{share:.1f}% | {share / 100 * per_sample:.3f} |")
-    print(f"| Mitsuba `{args.variant}` | {rate:.2f} | everything but Embree | "
-          f"{rest:.1f}% | {rest / 100 * per_sample:.3f} |")
-    if os.path.exists(args.profiling):
-        rate, path, shadow = profile_pathstream(args, scene_file)
+              f"{us / per_sample * 100:.1f}% | {us:.3f} |")
+    if "pathstream" in got:
+        rate, path, shadow, rest = got["pathstream"]
         per_sample = args.threads / rate
         rows = (("path rays (nearest hit)", path), ("shadow rays (nearest hit)", shadow),
-                ("around the rays", 100 - path - shadow))
-        for part, share in rows:
+                ("around the rays", rest))
+        for part, us in rows:
             print(f"| pathstream (profiling build) | {rate:.2f} | {part} | "
-                  f"{share:.1f}% | {share / 100 * per_sample:.3f} |")
+                  f"{us / per_sample * 100:.1f}% | {us:.3f} |")
 
 
 if __name__ == "__main__":
