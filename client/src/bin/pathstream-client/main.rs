@@ -2,6 +2,7 @@
 //! Exit codes: 0 success, 2 bad arguments, 3 server error (message shown),
 //! 4 server unreachable.
 
+mod cli;
 mod environment;
 mod fanout;
 mod focus;
@@ -9,7 +10,8 @@ mod guard;
 mod quality;
 mod scene;
 
-use clap::{Args, Parser, Subcommand};
+use clap::Parser;
+use cli::{vec3, Cli, Command, CreateArgs, RenderArgs};
 use futures_util::StreamExt;
 use guard::{create_guarded, owning, Interrupt};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -17,220 +19,11 @@ use pathstream_client::{
     CameraPatch, Client, ClientError, CreateSession, LightPatch, QualityPatch, SceneSpec,
     SessionStatus,
 };
-use quality::{spp_summary, QualityArgs};
+use quality::spp_summary;
 use scene::{scene_spec, upload};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
-
-#[derive(Parser, Debug)]
-#[command(
-    name = "pathstream-client",
-    version,
-    about = "Drive a pathstream render server over HTTP and WebSocket"
-)]
-struct Cli {
-    /// Server URL. Given more than once (or as a comma-separated list),
-    /// `render` renders one image on all the servers and merges it.
-    #[arg(
-        long,
-        global = true,
-        env = "PATHSTREAM_URL",
-        default_value = "http://127.0.0.1:8080"
-    )]
-    server: Vec<String>,
-    /// Bearer token, when the server requires one.
-    #[arg(long, global = true, env = "PATHSTREAM_TOKEN", hide_env_values = true)]
-    token: Option<String>,
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand, Debug)]
-enum Command {
-    /// Render a scene to a file: create a session, wait for its halt, save,
-    /// delete it. With several --server: one session on each, merged.
-    Render(RenderArgs),
-    /// List sessions.
-    Sessions,
-    /// Create a session and print its status.
-    Create(CreateArgs),
-    /// Print a session's status.
-    Status { id: String },
-    /// Move or turn a session's camera.
-    Camera(CameraArgs),
-    /// Focus a session's lens on the surface under a pixel of its image.
-    Focus(focus::FocusArgs),
-    /// Replace a session's environment: a map (a file, uploaded; a
-    /// built-in map's name; an asset id) or a uniform colour.
-    Environment(environment::EnvironmentArgs),
-    /// Move, recolour or rescale a session's light.
-    Light(LightArgs),
-    /// Change a session's quality settings.
-    Quality {
-        id: String,
-        #[command(flatten)]
-        quality: QualityArgs,
-    },
-    /// Save a session's current frame (.png or .pfm).
-    Frame {
-        id: String,
-        /// Wait until the image has this many samples per pixel.
-        #[arg(long)]
-        min_spp: Option<u64>,
-        /// The denoised image (whatever the session's quality says).
-        #[arg(long, conflicts_with = "raw")]
-        denoise: bool,
-        /// The raw image (where the session denoises its frames).
-        #[arg(long)]
-        raw: bool,
-        #[arg(short, long)]
-        out: PathBuf,
-    },
-    /// Delete a session.
-    Delete { id: String },
-    /// Upload a model file (.obj, .gltf, .glb, .ply) and print its asset id,
-    /// which scenes name as `{"type": "model", "asset": ID}`.
-    Upload { file: PathBuf },
-    /// List uploaded assets.
-    Assets,
-    /// Delete an uploaded asset.
-    DeleteAsset { id: String },
-    /// Save frames from a session's stream as they arrive.
-    Stream {
-        id: String,
-        #[arg(long, default_value_t = 10)]
-        frames: usize,
-        #[arg(long)]
-        out_dir: PathBuf,
-    },
-    /// Render a turntable animation: the camera circles the scene's look-at
-    /// point (or --center) about its up axis.
-    Orbit {
-        #[arg(long, default_value = "cornell-glass")]
-        scene: String,
-        /// Centre of the orbit, x,y,z (default: the camera's look-at point).
-        #[arg(long, value_parser = vec3)]
-        center: Option<[f64; 3]>,
-        #[arg(long, default_value_t = 24)]
-        frames: usize,
-        /// Samples per pixel of each frame.
-        #[arg(long, default_value_t = 16)]
-        spp: u64,
-        #[arg(long, default_value_t = 256)]
-        width: u32,
-        #[arg(long, default_value_t = 256)]
-        height: u32,
-        #[arg(long)]
-        out_dir: PathBuf,
-    },
-}
-
-#[derive(Args, Debug)]
-struct CreateArgs {
-    /// Built-in scene name, a scene JSON file (its model files are uploaded),
-    /// or a model file (.obj, .gltf, .glb, .ply), uploaded and framed.
-    #[arg(long, default_value = "cornell-glass")]
-    scene: String,
-    #[arg(long, default_value_t = 512)]
-    width: u32,
-    #[arg(long, default_value_t = 512)]
-    height: u32,
-    /// auto, opencl, cpu or all (every device of the server at once).
-    #[arg(long)]
-    backend: Option<String>,
-    /// An equirectangular HDR environment map (.hdr or .exr), uploaded and
-    /// lighting the scene in place of its own environment (a scene JSON or
-    /// model file: built-in scenes are sent by name).
-    #[arg(long, value_name = "FILE")]
-    environment: Option<PathBuf>,
-    /// Scales the --environment map's radiance.
-    #[arg(
-        long,
-        value_name = "S",
-        default_value_t = 1.0,
-        requires = "environment"
-    )]
-    env_intensity: f64,
-    /// Turns the --environment map about +y, in degrees.
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 0.0,
-        requires = "environment"
-    )]
-    env_rotation: f64,
-    #[command(flatten)]
-    quality: QualityArgs,
-}
-
-#[derive(Args, Debug)]
-struct RenderArgs {
-    #[command(flatten)]
-    create: CreateArgs,
-    /// Output file: .png or .pfm.
-    #[arg(short, long)]
-    out: PathBuf,
-}
-
-#[derive(Args, Debug)]
-struct CameraArgs {
-    id: String,
-    /// x,y,z
-    #[arg(long, value_parser = vec3)]
-    position: Option<[f64; 3]>,
-    /// x,y,z
-    #[arg(long, value_parser = vec3)]
-    look_at: Option<[f64; 3]>,
-    /// x,y,z
-    #[arg(long, value_parser = vec3)]
-    up: Option<[f64; 3]>,
-    #[arg(long)]
-    vfov_deg: Option<f64>,
-    /// Thin-lens radius in scene units (depth of field); 0: a pinhole.
-    #[arg(long, conflicts_with = "f_number")]
-    aperture: Option<f64>,
-    /// The lens as an f-number instead (full-frame focal length of the
-    /// field of view; scene units read as metres).
-    #[arg(long)]
-    f_number: Option<f64>,
-    /// Distance along the view axis that stays sharp.
-    #[arg(long)]
-    focus_distance: Option<f64>,
-    /// perspective, orthographic or panorama (equirectangular 360 degrees).
-    #[arg(long, value_parser = projection)]
-    projection: Option<pathstream_client::Projection>,
-    /// An orthographic view's height in scene units.
-    #[arg(long)]
-    ortho_height: Option<f64>,
-}
-
-fn projection(s: &str) -> Result<pathstream_client::Projection, String> {
-    serde_json::from_value(serde_json::Value::String(s.to_owned()))
-        .map_err(|_| format!("'{s}': expected perspective, orthographic or panorama"))
-}
-
-#[derive(Args, Debug)]
-struct LightArgs {
-    id: String,
-    /// x,y,z
-    #[arg(long, value_parser = vec3)]
-    position: Option<[f64; 3]>,
-    /// r,g,b in [0, 1]
-    #[arg(long, value_parser = vec3)]
-    color: Option<[f64; 3]>,
-    #[arg(long)]
-    intensity: Option<f64>,
-}
-
-fn vec3(s: &str) -> Result<[f64; 3], String> {
-    let parts: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("'{p}': {e}")))
-        .collect::<Result<_, _>>()?;
-    <[f64; 3]>::try_from(parts)
-        .map_err(|_| "expected three comma-separated numbers, e.g. 50,52,295.6".into())
-}
 
 /// A failure with its exit code.
 struct Failure(u8, String);
