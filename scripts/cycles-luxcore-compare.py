@@ -35,6 +35,11 @@ Mitsuba's max_depth does, and gets max_depth + 1. Measured: at max_depth it
 lost 1.6% of the reference's mean, at max_depth + 1 it is within 0.1%. Samplers: pathstream's `random` and
 `sobol`, Cycles' default (tabulated Sobol-Burley), and LuxCore's `RANDOM`
 and `SOBOL`. Adaptive sampling, denoising and clamping are off everywhere.
+Russian roulette first decides the 6th bounce in all three (pathstream's
+--rr-depth 5, Cycles' min_light_bounces 4, LuxCore's
+path.russianroulette.depth 6); before 2026-11-30 Cycles' acted from the
+first bounce and LuxCore's a bounce early, each tracing fewer rays per
+sample than pathstream.
 """
 
 import argparse
@@ -142,6 +147,10 @@ def cycles_scene(bpy, scene, args):
     c.pixel_filter_type = "BOX"
     c.filter_width = 1.0
     c.max_bounces = c.diffuse_bounces = args.max_depth - 1
+    # Cycles' roulette acts from the start unless told otherwise (with
+    # probability sqrt(throughput)); pathstream's --rr-depth 5 decides the
+    # 6th bounce first, which Cycles counts as bounce 5.
+    c.min_light_bounces = 4
     c.caustics_reflective = c.caustics_refractive = True
     c.blur_glossy = 0.0
     sc.view_settings.view_transform = "Standard"
@@ -237,7 +246,9 @@ def luxcore_render(lux, lscene, args, spp, sampler, seed, path):
             ("film.outputs.0.filename", "unused.exr"),
             ("path.pathdepth.total", args.max_depth + 1),
             ("path.pathdepth.diffuse", args.max_depth + 1),
-            ("path.russianroulette.depth", 5),
+            # Counted in path vertices, as pathdepth.total is: 6 decides
+            # the bounce pathstream's --rr-depth 5 decides first.
+            ("path.russianroulette.depth", 6),
             ("path.clamping.variance.maxvalue", 0.0),
             ("batch.haltspp", n),
             ("native.threads.count", args.threads),
