@@ -19,15 +19,28 @@ def run(cmd):
     return out.stdout + out.stderr
 
 
-def pathstream_render(exe, scene, args, spp, sampler, seed, path):
-    """Renders `scene` (a JSON file) to `path`; the render's own seconds."""
-    text = run([
+# Russian roulette may end pathstream's paths after this many bounces (it
+# decides the next one). Renderers that count path vertices (Mitsuba,
+# LuxCore) get RR_DEPTH + 1 for the same bounce; Cycles, which counts the
+# bounces before the one decided, RR_DEPTH - 1.
+RR_DEPTH = 5
+
+
+def render_args(exe, scene, args, spp, path):
+    """A pathstream `render` of `scene` (a JSON file) to `path` with the
+    comparison's settings, less the sampler and seed."""
+    return [
         exe, "render", "--scene", scene, "--width", str(args.size),
         "--height", str(args.size), "--spp", str(spp),
-        "--max-depth", str(args.max_depth), "--rr-depth", "5",
-        "--filter", "box", "--sampler", sampler, "--adaptive", "off",
-        "--backend", "cpu", "--seed", str(seed), "--out", path,
-    ])
+        "--max-depth", str(args.max_depth), "--rr-depth", str(RR_DEPTH),
+        "--filter", "box", "--adaptive", "off", "--backend", "cpu", "--out", path,
+    ]
+
+
+def pathstream_render(exe, scene, args, spp, sampler, seed, path):
+    """Renders `scene` (a JSON file) to `path`; the render's own seconds."""
+    text = run(render_args(exe, scene, args, spp, path)
+               + ["--sampler", sampler, "--seed", str(seed)])
     m = re.search(r"in ([0-9.]+) s,", text)
     if not m:
         sys.exit(f"no render time in: {text}")

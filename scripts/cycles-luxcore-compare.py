@@ -50,7 +50,8 @@ import time
 import numpy as np
 
 from compare_common import (
-    add_arguments, diffuse_meshes, measure, pathstream_runs, scene_and_reference, write_pfm,
+    RR_DEPTH, add_arguments, diffuse_meshes, measure, pathstream_runs, scene_and_reference,
+    write_pfm,
 )
 
 
@@ -148,9 +149,9 @@ def cycles_scene(bpy, scene, args):
     c.filter_width = 1.0
     c.max_bounces = c.diffuse_bounces = args.max_depth - 1
     # Cycles' roulette acts from the start unless told otherwise (with
-    # probability sqrt(throughput)); pathstream's --rr-depth 5 decides the
-    # 6th bounce first, which Cycles counts as bounce 5.
-    c.min_light_bounces = 4
+    # probability sqrt(throughput)); the bounce pathstream's --rr-depth
+    # decides first is Cycles' bounce RR_DEPTH, past min_light_bounces.
+    c.min_light_bounces = RR_DEPTH - 1
     c.caustics_reflective = c.caustics_refractive = True
     c.blur_glossy = 0.0
     sc.view_settings.view_transform = "Standard"
@@ -246,9 +247,9 @@ def luxcore_render(lux, lscene, args, spp, sampler, seed, path):
             ("film.outputs.0.filename", "unused.exr"),
             ("path.pathdepth.total", args.max_depth + 1),
             ("path.pathdepth.diffuse", args.max_depth + 1),
-            # Counted in path vertices, as pathdepth.total is: 6 decides
-            # the bounce pathstream's --rr-depth 5 decides first.
-            ("path.russianroulette.depth", 6),
+            # Counted in path vertices, as pathdepth.total is: one more
+            # decides the bounce pathstream's --rr-depth decides first.
+            ("path.russianroulette.depth", RR_DEPTH + 1),
             ("path.clamping.variance.maxvalue", 0.0),
             ("batch.haltspp", n),
             ("native.threads.count", args.threads),

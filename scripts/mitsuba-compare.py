@@ -41,7 +41,7 @@ import time
 import numpy as np
 
 from compare_common import (
-    add_arguments, diffuse_meshes, measure, pathstream_runs, scene_and_reference,
+    RR_DEPTH, add_arguments, diffuse_meshes, measure, pathstream_runs, scene_and_reference,
 )
 
 
@@ -55,10 +55,9 @@ def mitsuba_scene(mi, scene, args, out_dir):
         "integrator": {
             "type": "path",
             "max_depth": args.max_depth + 1,
-            # pathstream's roulette may end paths after 5 bounces (it
-            # decides the 6th); Mitsuba's rr_depth counts vertices, and 6
-            # decides the same bounce.
-            "rr_depth": 6,
+            # Mitsuba's rr_depth counts vertices: one more decides the
+            # bounce pathstream's --rr-depth decides first.
+            "rr_depth": RR_DEPTH + 1,
         },
     }
     cam = scene["camera"]

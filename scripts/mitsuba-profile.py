@@ -42,7 +42,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-from compare_common import add_arguments, run, scene_json  # noqa: E402
+from compare_common import add_arguments, render_args, run, scene_json  # noqa: E402
 
 
 def load_compare():
@@ -121,14 +121,10 @@ def profile_pathstream(args, scene_file):
     """pathstream's M samples/s and its path and shadow rays' shares
     (profile-lines.py)."""
     data = os.path.join(args.out, "pathstream.perf")
-    text = run([
-        "perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-o", data,
-        args.profiling, "render", "--scene", scene_file,
-        "--width", str(args.size), "--height", str(args.size),
-        "--spp", str(args.spp), "--max-depth", str(args.max_depth),
-        "--rr-depth", "5", "--filter", "box", "--adaptive", "off",
-        "--backend", "cpu", "--out", os.path.join(args.out, "p.pfm"),
-    ])
+    text = run(
+        ["perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-o", data]
+        + render_args(args.profiling, scene_file, args, args.spp,
+                      os.path.join(args.out, "p.pfm")))
     rate = float(re.search(r"([0-9.]+) M paths/s", text).group(1))
     lines = run([sys.executable, os.path.join(HERE, "profile-lines.py"),
                  args.profiling, data])
@@ -137,20 +133,20 @@ def profile_pathstream(args, scene_file):
 
 
 def parts(args, scene, scene_file):
-    """Per sample, microseconds of one thread: {renderer: (M samples/s,
-    path rays, shadow rays, the rest)} at `args.max_depth`."""
+    """Per sample, microseconds of one thread at `args.max_depth`:
+    {renderer: (M samples/s, path rays, shadow rays, the rest)}, and
+    Mitsuba's shares by shared object (per cent)."""
     out = {}
     rate, data = profile_mitsuba(args, scene)
     dsos, queries = perf_shares(data)
     us = args.threads / rate / 100
     rest = 100.0 - sum(queries.values())
     out["mitsuba"] = (rate, queries["intersect"] * us, queries["occluded"] * us, rest * us)
-    out["mitsuba-dsos"] = dsos
     if os.path.exists(args.profiling):
         rate, path, shadow = profile_pathstream(args, scene_file)
         us = args.threads / rate / 100
         out["pathstream"] = (rate, path * us, shadow * us, (100 - path - shadow) * us)
-    return out
+    return out, dsos
 
 
 def by_depth(args, scene, scene_file):
@@ -162,7 +158,7 @@ def by_depth(args, scene, scene_file):
     table = {}
     for d in depths:
         args.max_depth = d
-        runs = [parts(args, scene, scene_file) for _ in range(args.repeats)]
+        runs = [parts(args, scene, scene_file)[0] for _ in range(args.repeats)]
         for who in ("mitsuba", "pathstream"):
             if who in runs[0]:
                 cols = list(zip(*(r[who] for r in runs)))
@@ -202,7 +198,7 @@ def main():
         by_depth(args, scene, scene_file)
         return
 
-    got = parts(args, scene, scene_file)
+    got, dsos = parts(args, scene, scene_file)
     rate, path, shadow, rest = got["mitsuba"]
     per_sample = args.threads / rate  # microseconds of one thread
     print(f"\n{args.scene}, {args.size}x{args.size}, {args.spp} spp, "
@@ -210,8 +206,7 @@ def main():
     print("| renderer | M samples/s | part | share | us per sample |")
     print("| --- | ---: | --- | ---: | ---: |")
     rows = [("Embree `intersect`", path), ("Embree `occluded`", shadow)]
-    top = sorted(((k, v) for k, v in got["mitsuba-dsos"].items() if "embree" not in k),
-                 key=lambda kv: -kv[1])
+    top = sorted(((k, v) for k, v in dsos.items() if "embree" not in k), key=lambda kv: -kv[1])
     rows += [(k, v / 100 * per_sample) for k, v in top[:4]]
     rows.append(("everything but Embree", rest))
     for part, us in rows:
