@@ -5,6 +5,7 @@
 //! mutated files that must fail cleanly, never panic.
 
 mod gltf;
+mod gltf_variants;
 mod obj;
 mod ply;
 mod robust;
