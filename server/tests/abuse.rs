@@ -6,7 +6,7 @@
 mod http;
 
 use futures_util::{SinkExt, StreamExt};
-use http::{client, config, create, metric, metrics, raw, server, status, ws_connect};
+use http::{client, config, create, delete, get, metric, metrics, raw, server, status, ws_connect};
 use serde_json::{json, Value};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -106,11 +106,8 @@ async fn bodies_a_web_page_could_send_cross_site_are_refused() {
             "{message}"
         );
     }
-    let list: Value = client()
-        .get(format!("{base}/api/sessions"))
-        .send()
+    let list: Value = get(format!("{base}/api/sessions"))
         .await
-        .expect("list")
         .json()
         .await
         .expect("json");
@@ -240,7 +237,7 @@ async fn a_delete_answers_every_waiter_and_closes_every_socket_at_once() {
             let url =
                 format!("{base}/api/sessions/{id}/frame.png?min_spp=1000000&timeout_ms=600000");
             tokio::spawn(async move {
-                let r = client().get(url).send().await.expect("an answer");
+                let r = get(url).await;
                 (r.status().as_u16(), r.text().await.unwrap_or_default())
             })
         })
@@ -248,11 +245,7 @@ async fn a_delete_answers_every_waiter_and_closes_every_socket_at_once() {
     let mut ws = ws_connect(&base, &id).await;
     tokio::time::sleep(Duration::from_millis(300)).await;
     let deleted_at = std::time::Instant::now();
-    let r = client()
-        .delete(format!("{base}/api/sessions/{id}"))
-        .send()
-        .await
-        .expect("delete");
+    let r = delete(format!("{base}/api/sessions/{id}")).await;
     assert_eq!(r.status().as_u16(), 204);
     for w in waiters {
         let (code, body) = tokio::time::timeout(Duration::from_secs(10), w)
@@ -281,11 +274,7 @@ async fn a_delete_answers_every_waiter_and_closes_every_socket_at_once() {
     assert!(close.reason.contains("deleted"), "{}", close.reason);
     // Seconds, not the waiters' ten minutes (a loaded machine keeps this).
     assert!(deleted_at.elapsed() < Duration::from_secs(10));
-    let r = client()
-        .get(format!("{base}/api/sessions/{id}/frame.png"))
-        .send()
-        .await
-        .expect("get");
+    let r = get(format!("{base}/api/sessions/{id}/frame.png")).await;
     assert_eq!(r.status().as_u16(), 404);
     running.shutdown().await.expect("shutdown");
 }

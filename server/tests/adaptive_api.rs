@@ -4,7 +4,7 @@
 
 mod http;
 
-use http::{client, config, create, halted, patch, read_frames, server, ws_connect};
+use http::{config, create, get, halted, patch, read_frames, server, ws_connect};
 use pathstream::render::adaptive::TILE_SIZE;
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
@@ -39,11 +39,7 @@ async fn an_adaptive_session_spreads_its_samples_and_says_where() {
     assert_eq!(done["tiles"], cols * rows, "44x28 in {tile}x{tile} tiles");
 
     // The map: one pixel per tile, more than one colour.
-    let r = client()
-        .get(format!("{base}/api/sessions/{id}/samples.png"))
-        .send()
-        .await
-        .expect("request");
+    let r = get(format!("{base}/api/sessions/{id}/samples.png")).await;
     assert_eq!(r.status(), 200);
     assert_eq!(r.headers()["content-type"], "image/png");
     let map = image::load_from_memory(&r.bytes().await.expect("body")).expect("png");

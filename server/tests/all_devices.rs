@@ -7,7 +7,7 @@ mod common;
 mod http;
 
 use common::{assert_same_samples, opencl_device, render, scene};
-use http::{client, config, create, halted, metric, metrics, patch, pfm, status};
+use http::{client, config, create, get, halted, metric, metrics, patch, pfm, status};
 use pathstream::api::{start_with_device, start_with_devices, Running};
 use pathstream::render::{Backend, Quality, RenderJob};
 use pathstream::service::Placement;
@@ -119,13 +119,10 @@ async fn a_change_mid_render_lets_no_stale_block_in() {
         return;
     };
     let id = session(&base, 100_000, 1).await;
-    let r = client()
-        .get(format!(
-            "{base}/api/sessions/{id}/frame.pfm?min_spp=8&timeout_ms=60000"
-        ))
-        .send()
-        .await
-        .expect("frame");
+    let r = get(format!(
+        "{base}/api/sessions/{id}/frame.pfm?min_spp=8&timeout_ms=60000"
+    ))
+    .await;
     assert_eq!(r.status(), 200);
     // Blocks of seed 1 are in flight on both devices when seed 5 arrives.
     let r = patch(&base, &id, "quality", json!({"seed": 5, "spp": 96})).await;
@@ -209,11 +206,8 @@ async fn serve_backend_all_starts_a_worker_per_device_and_places_sessions_on_all
         ..config()
     };
     let (_server, base) = http::server(cfg).await;
-    let health: Value = client()
-        .get(format!("{base}/api/health"))
-        .send()
+    let health: Value = get(format!("{base}/api/health"))
         .await
-        .expect("health")
         .json()
         .await
         .expect("json");

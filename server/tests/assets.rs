@@ -114,11 +114,8 @@ async fn uploaded_meshes_and_models_render_in_sessions() {
         ),
         (200, Some(id.as_str()), Some(true))
     );
-    let list: Value = client()
-        .get(format!("{base}/api/assets"))
-        .send()
+    let list: Value = get(format!("{base}/api/assets"))
         .await
-        .expect("req")
         .json()
         .await
         .expect("json");
@@ -143,17 +140,9 @@ async fn uploaded_meshes_and_models_render_in_sessions() {
     assert_eq!(s2["camera"]["position"], json!([0.3, 0.3, 3.0]), "{s2}");
 
     // Deleted: gone for new scenes, still rendered by the sessions using it.
-    let r = client()
-        .delete(format!("{base}/api/assets/{id}"))
-        .send()
-        .await
-        .expect("req");
+    let r = delete(format!("{base}/api/assets/{id}")).await;
     assert_eq!(r.status(), 204);
-    let r = client()
-        .get(format!("{base}/api/assets/{id}"))
-        .send()
-        .await
-        .expect("req");
+    let r = get(format!("{base}/api/assets/{id}")).await;
     assert_eq!(r.status(), 404);
     let r = patch(&base, &sid, "camera", json!({"vfov_deg": 50})).await;
     assert_eq!(r.status(), 200, "{:?}", r.text().await);
@@ -253,11 +242,7 @@ async fn every_bad_upload_or_reference_is_a_4xx_naming_the_problem() {
     for (scene, expect) in scenes {
         assert_refused(&base, scene, expect).await;
     }
-    let r = client()
-        .delete(format!("{base}/api/assets/nothing"))
-        .send()
-        .await
-        .expect("req");
+    let r = delete(format!("{base}/api/assets/nothing")).await;
     assert_eq!(r.status(), 404);
     running.shutdown().await.expect("shutdown");
 }

@@ -30,6 +30,20 @@ pub fn client() -> reqwest::Client {
     reqwest::Client::new()
 }
 
+/// The answer to GET `url` (there must be one).
+pub async fn get(url: impl reqwest::IntoUrl) -> reqwest::Response {
+    client().get(url).send().await.expect("an answer to GET")
+}
+
+/// The answer to DELETE `url` (there must be one).
+pub async fn delete(url: impl reqwest::IntoUrl) -> reqwest::Response {
+    client()
+        .delete(url)
+        .send()
+        .await
+        .expect("an answer to DELETE")
+}
+
 pub async fn create(base: &str, body: Value) -> Value {
     let r = client()
         .post(format!("{base}/api/sessions"))
@@ -42,11 +56,8 @@ pub async fn create(base: &str, body: Value) -> Value {
 }
 
 pub async fn status(base: &str, id: &str) -> Value {
-    client()
-        .get(format!("{base}/api/sessions/{id}"))
-        .send()
+    get(format!("{base}/api/sessions/{id}"))
         .await
-        .expect("request")
         .json()
         .await
         .expect("json")
@@ -54,11 +65,8 @@ pub async fn status(base: &str, id: &str) -> Value {
 
 /// The server's `/metrics` text.
 pub async fn metrics(base: &str) -> String {
-    client()
-        .get(format!("{base}/metrics"))
-        .send()
+    get(format!("{base}/metrics"))
         .await
-        .expect("metrics")
         .text()
         .await
         .expect("text")
@@ -74,13 +82,10 @@ pub fn metric(text: &str, name: &str) -> u64 {
 
 /// Linear image after at least `min_spp` samples.
 pub async fn pfm(base: &str, id: &str, min_spp: u64) -> Vec<[f32; 3]> {
-    let r = client()
-        .get(format!(
-            "{base}/api/sessions/{id}/frame.pfm?min_spp={min_spp}&timeout_ms=60000"
-        ))
-        .send()
-        .await
-        .expect("request");
+    let r = get(format!(
+        "{base}/api/sessions/{id}/frame.pfm?min_spp={min_spp}&timeout_ms=60000"
+    ))
+    .await;
     assert_eq!(r.status(), 200);
     let spp: u64 = r.headers()["x-pathstream-spp"]
         .to_str()

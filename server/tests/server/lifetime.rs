@@ -40,17 +40,9 @@ async fn idle_sessions_expire_but_watched_ones_do_not() {
     // ... and the watched one, idle for HTTP as long, stays while its
     // client keeps reading, for several timeouts more.
     read_frames(&mut ws, Instant::now() + 3 * timeout).await;
-    let gone = client()
-        .get(format!("{base}/api/sessions/{idle}"))
-        .send()
-        .await
-        .expect("req");
+    let gone = get(format!("{base}/api/sessions/{idle}")).await;
     assert_eq!(gone.status(), 404);
-    let kept = client()
-        .get(format!("{base}/api/sessions/{watched}"))
-        .send()
-        .await
-        .expect("req");
+    let kept = get(format!("{base}/api/sessions/{watched}")).await;
     assert_eq!(kept.status(), 200, "a watched session does not expire");
     running.shutdown().await.expect("shutdown");
 }
@@ -113,20 +105,11 @@ async fn after_the_opencl_device_fails_the_service_reports_rayon() {
         .await
         .expect("starts");
     let base = format!("http://{}", running.addr);
-    let get = |path: &'static str| {
+    let json_at = |path: &'static str| {
         let url = format!("{base}{path}");
-        async move {
-            client()
-                .get(url)
-                .send()
-                .await
-                .expect("req")
-                .json::<Value>()
-                .await
-                .expect("json")
-        }
+        async move { get(url).await.json::<Value>().await.expect("json") }
     };
-    let devices = get("/api/devices").await;
+    let devices = json_at("/api/devices").await;
     assert_eq!(
         (
             devices["default"].as_str(),
@@ -154,7 +137,7 @@ async fn after_the_opencl_device_fails_the_service_reports_rayon() {
         "{st}"
     );
     for path in ["/api/devices", "/api/health"] {
-        let v = get(path).await;
+        let v = json_at(path).await;
         let worker = &v["backends"][1];
         assert_eq!(worker["backend"], "cpu", "{path}: {v}");
         assert!(
@@ -165,7 +148,7 @@ async fn after_the_opencl_device_fails_the_service_reports_rayon() {
             "{path}: {v}"
         );
     }
-    assert_eq!(get("/api/devices").await["default"], "cpu");
+    assert_eq!(json_at("/api/devices").await["default"], "cpu");
     // A new session says where it will render before its first pass.
     let fresh = create(
         &base,

@@ -18,20 +18,14 @@ use tokio_tungstenite::tungstenite::Message;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn session_lifecycle() {
     let (running, base) = server(config()).await;
-    let health: Value = client()
-        .get(format!("{base}/api/health"))
-        .send()
+    let health: Value = get(format!("{base}/api/health"))
         .await
-        .expect("req")
         .json()
         .await
         .expect("json");
     assert_eq!(health["status"], "ok");
-    let scenes: Value = client()
-        .get(format!("{base}/api/scenes"))
-        .send()
+    let scenes: Value = get(format!("{base}/api/scenes"))
         .await
-        .expect("req")
         .json()
         .await
         .expect("json");
@@ -66,22 +60,15 @@ async fn session_lifecycle() {
     }
     assert_eq!(s["backend"], "cpu");
 
-    let list: Value = client()
-        .get(format!("{base}/api/sessions"))
-        .send()
+    let list: Value = get(format!("{base}/api/sessions"))
         .await
-        .expect("req")
         .json()
         .await
         .expect("json");
     assert_eq!(list["sessions"][0]["id"], id.as_str());
 
     // min_spp waits; the halt at 32 spp stops the session.
-    let png = client()
-        .get(format!("{base}/api/sessions/{id}/frame.png?min_spp=32"))
-        .send()
-        .await
-        .expect("req");
+    let png = get(format!("{base}/api/sessions/{id}/frame.png?min_spp=32")).await;
     assert_eq!(png.headers()["content-type"], "image/png");
     let img = image::load_from_memory(&png.bytes().await.expect("body")).expect("a PNG");
     assert_eq!((img.width(), img.height()), (24, 16));
@@ -91,11 +78,8 @@ async fn session_lifecycle() {
     let pixels = pfm(&base, &id, 32).await;
     assert_eq!(pixels.len(), 24 * 16);
 
-    let metrics = client()
-        .get(format!("{base}/metrics"))
-        .send()
+    let metrics = get(format!("{base}/metrics"))
         .await
-        .expect("req")
         .text()
         .await
         .expect("text");
@@ -119,17 +103,9 @@ async fn session_lifecycle() {
         .expect("a count");
     assert!(rendered >= 32 * 24 * 16, "{rendered} camera paths counted");
 
-    let del = client()
-        .delete(format!("{base}/api/sessions/{id}"))
-        .send()
-        .await
-        .expect("req");
+    let del = delete(format!("{base}/api/sessions/{id}")).await;
     assert_eq!(del.status(), 204);
-    let gone = client()
-        .get(format!("{base}/api/sessions/{id}"))
-        .send()
-        .await
-        .expect("req");
+    let gone = get(format!("{base}/api/sessions/{id}")).await;
     assert_eq!(gone.status(), 404);
     let body: Value = gone.json().await.expect("json error");
     assert!(body["error"].as_str().expect("message").contains(&id));
@@ -204,11 +180,8 @@ async fn updates_restart_accumulation_and_change_the_image() {
     assert_eq!(st["quality"]["rr_depth"], 2);
     assert_eq!(st["quality"]["spp"], 64);
     assert_eq!(st["generation"], 3);
-    let presets: Value = client()
-        .get(format!("{base}/api/presets"))
-        .send()
+    let presets: Value = get(format!("{base}/api/presets"))
         .await
-        .expect("req")
         .json()
         .await
         .expect("json");
