@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{client, start_server, text};
+use common::{assert_fails, client, start_server, text};
 
 #[test]
 fn render_saves_a_png_and_a_pfm_and_deletes_its_session() {
@@ -196,12 +196,7 @@ fn commands_for_one_session_and_exit_codes() {
         "a setting beside the preset wins"
     );
     let bad = client(&server, &["quality", &id, "--preset", "fast"]);
-    assert_eq!(bad.status.code(), Some(3));
-    assert!(
-        text(&bad.stderr).contains("quality.preset"),
-        "{}",
-        text(&bad.stderr)
-    );
+    assert_fails(&bad, 3, "quality.preset");
     let dir = tempfile::tempdir().expect("tempdir");
     let frame = dir.path().join("f.png");
     let run = client(
@@ -238,12 +233,7 @@ fn commands_for_one_session_and_exit_codes() {
 
     // 3: the server said no, and its message is shown.
     let gone = client(&server, &["status", &id]);
-    assert_eq!(gone.status.code(), Some(3));
-    assert!(
-        text(&gone.stderr).contains(&format!("no session '{id}'")),
-        "{}",
-        text(&gone.stderr)
-    );
+    assert_fails(&gone, 3, &format!("no session '{id}'"));
     let bad = client(&server, &["camera", "x", "--position", "1,2"]);
     assert_eq!(bad.status.code(), Some(2), "bad arguments");
     let bad_out = client(&server, &["frame", "x", "-o", "f.jpg"]);
@@ -490,12 +480,7 @@ fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
             &png("x.png"),
         ],
     );
-    assert_eq!(run.status.code(), Some(2), "{}", text(&run.stderr));
-    assert!(
-        text(&run.stderr).contains("broken.ply"),
-        "{}",
-        text(&run.stderr)
-    );
+    assert_fails(&run, 2, "broken.ply");
     // A scene naming a missing file: exit 2, the JSON path named.
     std::fs::write(
         &scene,
@@ -512,10 +497,5 @@ fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
             &png("y.png"),
         ],
     );
-    assert_eq!(run.status.code(), Some(2), "{}", text(&run.stderr));
-    assert!(
-        text(&run.stderr).contains("objects[0].file"),
-        "{}",
-        text(&run.stderr)
-    );
+    assert_fails(&run, 2, "objects[0].file");
 }

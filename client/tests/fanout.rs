@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{start_server, text};
+use common::{assert_fails, start_server, text};
 
 /// `pathstream-client --server S1 --server S2 ... ARGS`.
 fn client(servers: &[&str], args: &[&str]) -> Command {
@@ -197,12 +197,7 @@ fn an_unreachable_server_is_dropped_with_a_warning_and_the_png_is_the_servers() 
         .arg(dir.path().join("never.png"))
         .output()
         .expect("runs");
-    assert_eq!(run.status.code(), Some(4), "{}", text(&run.stderr));
-    assert!(
-        text(&run.stderr).contains("no server left"),
-        "{}",
-        text(&run.stderr)
-    );
+    assert_fails(&run, 4, "no server left");
     // Several servers are for render only.
     let run = client(&[&live.url, dead], &["sessions"])
         .output()

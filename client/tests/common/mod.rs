@@ -82,3 +82,10 @@ pub fn client(server: &Server, args: &[&str]) -> Output {
 pub fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
+
+/// That `run` exited with `code` and its message names `named`.
+pub fn assert_fails(run: &Output, code: i32, named: &str) {
+    let stderr = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(code), "{stderr}");
+    assert!(stderr.contains(named), "{named:?} not in: {stderr}");
+}
