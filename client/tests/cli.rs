@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{assert_fails, client, start_server, text};
+use common::{assert_fails, client, client_into_closed_pipe, start_server, text};
 
 #[test]
 fn render_saves_a_png_and_a_pfm_and_deletes_its_session() {
@@ -165,6 +165,9 @@ fn commands_for_one_session_and_exit_codes() {
     assert!(created.status.success(), "{}", text(&created.stderr));
     let status: serde_json::Value = serde_json::from_slice(&created.stdout).expect("status JSON");
     let id = status["id"].as_str().expect("id").to_owned();
+    // A reader that stops early (`| head`) ends the output, not in a panic.
+    let unread = client_into_closed_pipe(&server, &["status", &id]);
+    assert!(unread.status.success(), "{}", text(&unread.stderr));
     let camera = client(
         &server,
         &["camera", &id, "--vfov-deg", "45", "--position", "0,0.1,0"],

@@ -79,6 +79,28 @@ fn scenes_lists_every_builtin_and_prints_json() {
 }
 
 #[test]
+fn output_into_a_closed_pipe_ends_quietly() {
+    // `pathstream scenes --json cornell-mesh | head`: the reader has gone
+    // before the first write.
+    for args in [
+        &["scenes", "--json", "cornell-mesh"][..],
+        &["scenes"],
+        &["devices"],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pathstream"))
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("starts");
+        drop(child.stdout.take());
+        let out = child.wait_with_output().expect("ends");
+        assert!(out.status.success(), "{args:?}: {}", text(&out.stderr));
+        assert!(!text(&out.stderr).contains("panicked"), "{args:?}");
+    }
+}
+
+#[test]
 fn render_writes_a_png_and_prints_one_summary_line() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (out, path) = render(dir.path(), "a.png", &["--spp", "8"]);

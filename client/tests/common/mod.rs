@@ -79,6 +79,21 @@ pub fn client(server: &Server, args: &[&str]) -> Output {
         .expect("runs")
 }
 
+/// As [`client`], with standard output a pipe whose reader has already
+/// gone (`pathstream-client ... | head -0`).
+pub fn client_into_closed_pipe(server: &Server, args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pathstream-client"))
+        .arg("--server")
+        .arg(&server.url)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs");
+    drop(child.stdout.take());
+    child.wait_with_output().expect("ends")
+}
+
 pub fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }

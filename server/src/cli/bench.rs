@@ -267,7 +267,7 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         other => CliError::Failed(other.to_string()),
     })?;
     observer.bar.finish_and_clear();
-    print!("{}", report::markdown(&results));
+    super::write_out(format_args!("{}", report::markdown(&results)))?;
     if let Some(dir) = &args.out {
         let mut files = report::write_csv(&results, dir)
             .map_err(|e| CliError::Failed(format!("--out {}: {e}", dir.display())))?;

@@ -1,6 +1,6 @@
 //! `pathstream devices`: OpenCL platforms and devices, and what `auto` picks.
 
-use super::CliError;
+use super::{outln, CliError};
 use pathstream::render::backend::opencl::{auto_pick, list_devices};
 
 #[derive(clap::Args, Debug)]
@@ -25,18 +25,18 @@ pub fn run(args: DevicesArgs) -> Result<(), CliError> {
             "error": listed.as_ref().err(),
             "auto": auto,
         });
-        println!("{value}");
+        outln!("{value}")?;
         return Ok(());
     }
     match &listed {
         Ok(devices) => {
-            println!("OpenCL devices:");
+            outln!("OpenCL devices:")?;
             for d in devices {
-                println!("  [{}] {}", d.index, d.describe());
+                outln!("  [{}] {}", d.index, d.describe())?;
             }
         }
-        Err(why) => println!("OpenCL: {why}"),
+        Err(why) => outln!("OpenCL: {why}")?,
     }
-    println!("auto picks: {auto}");
+    outln!("auto picks: {auto}")?;
     Ok(())
 }

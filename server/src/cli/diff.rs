@@ -1,7 +1,7 @@
 //! `pathstream diff`: the relative RMS error of an image against a reference
 //! (both linear PFM), the measure the film's error estimate predicts.
 
-use super::CliError;
+use super::{outln, CliError};
 use pathstream::render::film::relative_rms_error;
 use pathstream::render::output::decode_pfm;
 use std::path::PathBuf;
@@ -29,9 +29,9 @@ pub fn run(args: DiffArgs) -> Result<(), CliError> {
             args.image.display()
         )));
     }
-    println!(
+    outln!(
         "relative RMS error {:.4}%",
         relative_rms_error(&image, &reference) * 100.0
-    );
+    )?;
     Ok(())
 }

@@ -27,6 +27,28 @@ impl CliError {
     }
 }
 
+/// `println!` for a command's output: `Ok` also when the reader has gone
+/// (`pathstream scenes --json cornell | head`), which `println!` answers
+/// with a panic; any other failure to write is the command's failure.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::cli::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+pub(crate) use outln;
+
+/// Writes `text` to standard output (see [`outln`]).
+pub fn write_out(text: std::fmt::Arguments) -> Result<(), CliError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_fmt(text).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(CliError::Failed(format!("writing to standard output: {e}")))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// `on` / `off` switches.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Switch {

@@ -1,7 +1,7 @@
 //! `pathstream render`: one scene to one image file, with a progress bar and
 //! a one-line summary.
 
-use super::{CliError, Switch};
+use super::{outln, CliError, Switch};
 use indicatif::{ProgressBar, ProgressStyle};
 use pathstream::render::denoise::{self, FilterQuality};
 use pathstream::render::job::check_size;
@@ -375,7 +375,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         [one] => format!("backend {} ({})", one.backend, one.device),
         all => format!("backend all ({} devices)", all.len()),
     };
-    println!(
+    outln!(
         "{} {}x{}: {spp} in {:.2} s, {:.2} M paths/s, error estimate {}, {backend}{} -> {}{}",
         args.scene,
         args.width,
@@ -386,20 +386,20 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         rejected,
         args.out.display(),
         if args.denoise { " (denoised)" } else { "" }
-    );
+    )?;
     if shares.len() > 1 {
         for s in &shares {
             let failure = s
                 .failure
                 .as_ref()
                 .map_or_else(String::new, |f| format!("; dropped out: {f}"));
-            println!(
+            outln!(
                 "  {} ({}): {:.2} M paths/s, {:.1}% of the samples{failure}",
                 s.backend,
                 s.device,
                 s.samples_per_sec / 1e6,
                 100.0 * s.samples as f64 / done.samples.max(1) as f64
-            );
+            )?;
         }
     }
     Ok(())

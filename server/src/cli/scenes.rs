@@ -1,6 +1,6 @@
 //! `pathstream scenes`: the built-in scene names, or one scene's JSON.
 
-use super::CliError;
+use super::{outln, CliError};
 use pathstream::bench::scenes as bench;
 use pathstream::render::scene::{builtin, BUILTIN_NAMES};
 
@@ -52,15 +52,15 @@ pub fn run(args: ScenesArgs) -> Result<(), CliError> {
         };
         let text = serde_json::to_string_pretty(&scene.to_json())
             .map_err(|e| CliError::Failed(e.to_string()))?;
-        println!("{text}");
+        outln!("{text}")?;
         return Ok(());
     }
     for name in BUILTIN_NAMES {
-        println!("{name:<20} {}", describe(name));
+        outln!("{name:<20} {}", describe(name))?;
     }
-    println!("\nbench scenes (`pathstream bench --scenes`, `pathstream scenes --json`):");
+    outln!("\nbench scenes (`pathstream bench --scenes`, `pathstream scenes --json`):")?;
     for (name, what) in bench::NAMES {
-        println!("{name:<20} {what}");
+        outln!("{name:<20} {what}")?;
     }
     Ok(())
 }

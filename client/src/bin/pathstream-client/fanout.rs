@@ -28,7 +28,7 @@
 //!   server makes `frame.png`.
 
 use super::guard::{Interrupt, CREATE_GRACE};
-use super::{extension, session_request, write, CreateArgs, Failure, RenderArgs};
+use super::{extension, outln, session_request, write, CreateArgs, Failure, RenderArgs};
 use futures_util::future::join_all;
 use indicatif::{ProgressBar, ProgressStyle};
 use pathstream_client::merge::{combined_error, merge};
@@ -165,7 +165,7 @@ async fn work(fleet: &mut Fleet, args: &RenderArgs, kind: &str) -> Result<(), Fa
         _ => merged.image.encode_pfm(),
     };
     write(&args.out, &bytes)?;
-    println!("{}", fleet.summary(&frames, &merged, args));
+    outln!("{}", fleet.summary(&frames, &merged, args))?;
     Ok(())
 }
 

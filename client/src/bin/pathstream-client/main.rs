@@ -39,6 +39,28 @@ impl From<ClientError> for Failure {
     }
 }
 
+/// `println!` for the command's output: `Ok` also when the reader has gone
+/// (`pathstream-client sessions | head -1`), which `println!` answers with
+/// a panic; any other failure to write fails the command.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+pub(crate) use outln;
+
+/// Writes `text` to standard output (see [`outln`]).
+fn write_out(text: std::fmt::Arguments) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_fmt(text).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Failure(1, format!("writing to standard output: {e}")))
+        }
+        _ => Ok(()),
+    }
+}
+
 fn usage(msg: String) -> Failure {
     Failure(2, msg)
 }
@@ -66,7 +88,7 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
 
 fn print_status(s: &SessionStatus) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(s).map_err(|e| Failure(1, e.to_string()))?;
-    println!("{text}");
+    outln!("{text}")?;
     Ok(())
 }
 
@@ -157,7 +179,7 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
             _ => client.frame_pfm(&id, Some(status.spp), None).await?,
         };
         write(&args.out, &bytes)?;
-        println!(
+        outln!(
             "{} {}x{}: {}, error estimate {}, {:.2} M paths/s on {} ({}) -> {}",
             status.scene,
             status.width,
@@ -170,18 +192,18 @@ async fn render(client: &Client, args: &RenderArgs) -> Result<(), Failure> {
             status.backend,
             status.device,
             args.out.display()
-        );
+        )?;
         if status.devices.len() > 1 {
             for d in &status.devices {
                 let failure = (d.failure.as_ref())
                     .map_or_else(String::new, |f| format!("; dropped out: {f}"));
-                println!(
+                outln!(
                     "  {} ({}): {:.2} M paths/s, {} paths{failure}",
                     d.backend,
                     d.device,
                     d.samples_per_sec / 1e6,
                     d.samples
-                );
+                )?;
             }
         }
         Ok(())
@@ -257,7 +279,7 @@ async fn orbit(
             bar.inc(1);
         }
         bar.finish_and_clear();
-        println!("{frames} frames of {scene} in {}", out_dir.display());
+        outln!("{frames} frames of {scene} in {}", out_dir.display())?;
         Ok(())
     };
     owning(client, &id, &mut interrupt, work).await
@@ -298,10 +320,16 @@ async fn run(cli: Cli) -> Result<(), Failure> {
         Command::Render(args) => render(&client, &args).await,
         Command::Sessions => {
             for s in client.sessions().await? {
-                println!(
+                outln!(
                     "{}  {} {}x{}  {} spp  {}  {}",
-                    s.id, s.scene, s.width, s.height, s.spp, s.state, s.backend
-                );
+                    s.id,
+                    s.scene,
+                    s.width,
+                    s.height,
+                    s.spp,
+                    s.state,
+                    s.backend
+                )?;
             }
             Ok(())
         }
@@ -356,19 +384,23 @@ async fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Delete { id } => Ok(client.delete_session(&id).await?),
         Command::Upload { file } => {
-            println!(
+            outln!(
                 "{}",
                 upload(&client, &file, &file.display().to_string()).await?
-            );
+            )?;
             Ok(())
         }
         Command::Assets => {
             let list = client.assets().await?;
             for a in &list.assets {
-                println!(
+                outln!(
                     "{}  {}  {}  {} triangles  {} bytes",
-                    a.id, a.name, a.format, a.triangles, a.memory_bytes
-                );
+                    a.id,
+                    a.name,
+                    a.format,
+                    a.triangles,
+                    a.memory_bytes
+                )?;
             }
             Ok(())
         }
@@ -386,7 +418,7 @@ async fn run(cli: Cli) -> Result<(), Failure> {
                 match stream.next().await {
                     Some(Ok(frame)) => {
                         write(&out_dir.join(format!("frame_{saved:04}.png")), &frame.png)?;
-                        println!("frame {saved}: {} spp", frame.status.spp);
+                        outln!("frame {saved}: {} spp", frame.status.spp)?;
                         saved += 1;
                     }
                     Some(Err(e)) => return Err(e.into()),
