@@ -1,6 +1,8 @@
 //! pathstream: a progressive path tracer served over HTTP, in layers that
 //! each import only from those below:
 //!
+//! - `mesh_data`: a triangle mesh's arrays, the one plain type the two
+//!   layers above it share;
 //! - `render`: the renderer (scene model, world, BVH, materials, lights,
 //!   integrator, backends); it reads no files and knows no HTTP;
 //! - `model`: model file loaders (OBJ, glTF, PLY) producing their own plain
@@ -15,6 +17,7 @@
 
 pub mod api;
 pub mod bench;
+pub mod mesh_data;
 pub mod model;
 pub mod render;
 pub mod resolve;

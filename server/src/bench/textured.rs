@@ -65,7 +65,7 @@ fn ball(name: &str, material: Value, maps: Maps) -> Result<Arc<LoadedModel>, Sce
         serde_json::from_value(material).map_err(|e| SceneError::new(name, e.to_string()))?;
     let model = LoadedModel::new(
         name,
-        vec![uv_sphere(100, 100).into()],
+        vec![uv_sphere(100, 100)],
         vec![(name.to_owned(), MaterialJson::Pbr(Box::new(pbr)), maps)],
         vec![(0, DAffine3::IDENTITY)],
         None,

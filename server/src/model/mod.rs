@@ -252,25 +252,6 @@ pub struct Image {
     pub rgba: Vec<u8>,
 }
 
-/// An indexed triangle mesh.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct MeshData {
-    pub name: String,
-    pub positions: Vec<[f32; 3]>,
-    /// Per-vertex unit shading normals (same length as `positions`), if any.
-    pub normals: Option<Vec<[f32; 3]>>,
-    /// Per-vertex texture coordinates, sets 0 and 1 (UV origin top left).
-    pub uvs: [Option<Vec<[f32; 2]>>; 2],
-    /// Per-vertex tangents (w: the bitangent's sign), given or generated.
-    pub tangents: Option<Vec<[f32; 4]>>,
-    /// Per-vertex colours (linear RGB in [0, 1], glTF's COLOR_0, PLY's
-    /// red/green/blue), which multiply the base colour.
-    pub colors: Option<Vec<[f32; 3]>>,
-    pub triangles: Vec<[u32; 3]>,
-    /// Per triangle: index into [`Model::materials`].
-    pub materials: Vec<u32>,
-}
-
 /// A mesh placed in the world.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Instance {
@@ -338,6 +319,7 @@ pub enum Format {
 /// `.glb`, `.ply`, any case): the contract's, which clients use too.
 pub use pathstream_wire::asset::is_model_name;
 
+pub use crate::mesh_data::MeshData;
 pub use image::{image_format, load_image};
 
 /// Reads a model file; references to other files (OBJ's `mtllib`, a

@@ -20,7 +20,6 @@ use crate::render::scene::{
     MaterialJson, ObjectJson, PbrJson, ProjectionJson, SceneJson, SurfaceJson, BUILTIN_NAMES,
 };
 use crate::render::scene::{AttenuationJson, FresnelJson, MapSlot, Maps, Scene, SceneError};
-use crate::render::shape::MeshData;
 use crate::render::texture::{Sampling, Texture, UvTransform, Wrap};
 use std::path::Path;
 use std::sync::Arc;
@@ -161,7 +160,7 @@ pub fn texture_bytes(bytes: &[u8], name: &str, limits: &model::Limits) -> Result
 /// renderer's types. `name` is the file's (or the upload's) name, for
 /// material names and messages.
 pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
-    let meshes = model.meshes.into_iter().map(MeshData::from).collect();
+    let meshes = model.meshes;
     let textures = (model.images.into_iter())
         .map(|i| Texture::new(&i.name, i.width, i.height, &i.rgba).map(Arc::new))
         .collect::<Result<Vec<_>, _>>()
@@ -185,23 +184,6 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
         ..CameraJson::default()
     });
     LoadedModel::new(name, meshes, materials, instances, camera, model.warnings)
-}
-
-/// A loader's mesh as the renderer's mesh data (the same fields; the
-/// renderer checks them in `Mesh::new`).
-impl From<model::MeshData> for MeshData {
-    fn from(m: model::MeshData) -> Self {
-        MeshData {
-            name: m.name,
-            positions: m.positions,
-            normals: m.normals,
-            uvs: m.uvs,
-            tangents: m.tangents,
-            colors: m.colors,
-            triangles: m.triangles,
-            materials: m.materials,
-        }
-    }
 }
 
 /// A loader's texture maps on the renderer's textures (`textures[i]` is

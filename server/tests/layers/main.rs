@@ -18,6 +18,7 @@ use paths::{references, resolve};
 
 /// Top-level modules by level, lowest first.
 const LEVELS: &[&[&str]] = &[
+    &["mesh_data"],
     &["render", "model"],
     &["resolve"],
     &["service"],

@@ -7,32 +7,13 @@
 //! OpenCL kernel reads too), so that a leaf reads its triangles in sequence;
 //! the indexed form stays for shading normals and materials.
 
+pub use crate::mesh_data::MeshData;
 use crate::render::bvh::{Aabb, Bvh, WideBvh, MAX_LEAF};
 use crate::render::embree::{Embree, MeshScene};
 use crate::render::math::Vec3A;
 use crate::render::shape::{TriPack, TriVerts};
 use rayon::prelude::*;
 use std::sync::{Arc, OnceLock};
-
-/// A mesh's data as it arrives (from a model file or inline scene JSON),
-/// before [`Mesh::new`] checks it.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct MeshData {
-    pub name: String,
-    pub positions: Vec<[f32; 3]>,
-    /// Per-vertex unit shading normals (same length as `positions`), if any.
-    pub normals: Option<Vec<[f32; 3]>>,
-    /// Per-vertex texture coordinates, sets 0 and 1 (glTF's TEXCOORD_n).
-    pub uvs: [Option<Vec<[f32; 2]>>; 2],
-    /// Per-vertex tangents, w the bitangent's sign (glTF's TANGENT).
-    pub tangents: Option<Vec<[f32; 4]>>,
-    /// Per-vertex linear RGB colours in [0, 1] (glTF's COLOR_0), which
-    /// multiply the material's base colour.
-    pub colors: Option<Vec<[f32; 3]>>,
-    pub triangles: Vec<[u32; 3]>,
-    /// Per triangle: the mesh's material slot (empty: slot 0 everywhere).
-    pub materials: Vec<u32>,
-}
 
 #[derive(Debug)]
 pub struct Mesh {
