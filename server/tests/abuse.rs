@@ -6,7 +6,9 @@
 mod http;
 
 use futures_util::{SinkExt, StreamExt};
-use http::{client, config, create, delete, get, metric, metrics, raw, server, status, ws_connect};
+use http::{
+    client, config, create, delete, get, get_json, metric, metrics, raw, server, status, ws_connect,
+};
 use serde_json::{json, Value};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -106,11 +108,7 @@ async fn bodies_a_web_page_could_send_cross_site_are_refused() {
             "{message}"
         );
     }
-    let list: Value = get(format!("{base}/api/sessions"))
-        .await
-        .json()
-        .await
-        .expect("json");
+    let list: Value = get_json(format!("{base}/api/sessions")).await;
     assert_eq!(
         list["sessions"].as_array().map(Vec::len),
         Some(0),

@@ -7,7 +7,7 @@ mod common;
 mod http;
 
 use common::{assert_same_samples, opencl_device, render, scene};
-use http::{client, config, create, get, halted, metric, metrics, patch, pfm, status};
+use http::{client, config, create, get, get_json, halted, metric, metrics, patch, pfm, status};
 use pathstream::api::{start_with_device, start_with_devices, Running};
 use pathstream::render::{Backend, Quality, RenderJob};
 use pathstream::service::Placement;
@@ -206,11 +206,7 @@ async fn serve_backend_all_starts_a_worker_per_device_and_places_sessions_on_all
         ..config()
     };
     let (_server, base) = http::server(cfg).await;
-    let health: Value = get(format!("{base}/api/health"))
-        .await
-        .json()
-        .await
-        .expect("json");
+    let health: Value = get_json(format!("{base}/api/health")).await;
     let kinds: Vec<&str> = (health["backends"].as_array().expect("backends").iter())
         .filter_map(|b| b["backend"].as_str())
         .collect();

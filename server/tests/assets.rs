@@ -114,11 +114,7 @@ async fn uploaded_meshes_and_models_render_in_sessions() {
         ),
         (200, Some(id.as_str()), Some(true))
     );
-    let list: Value = get(format!("{base}/api/assets"))
-        .await
-        .json()
-        .await
-        .expect("json");
+    let list: Value = get_json(format!("{base}/api/assets")).await;
     assert_eq!(list["assets"].as_array().map(Vec::len), Some(1));
     assert!(list["memory_bytes"].as_u64().is_some_and(|m| m > 0));
 

@@ -10,13 +10,9 @@ mod common;
 mod http;
 
 use common::oidn;
-use http::{create, halted, next_frame, patch, server, ws_connect_with, ws_send};
+use http::{create, get, get_json, halted, next_frame, patch, server, ws_connect_with, ws_send};
 use serde_json::{json, Value};
 use std::process::{Command, Stdio};
-
-async fn get(url: impl reqwest::IntoUrl) -> reqwest::Response {
-    reqwest::get(url).await.expect("request")
-}
 
 /// Sum of absolute differences of horizontally adjacent values as
 /// displayed (a PFM frame's pixel noise, the light's edges clipped).
@@ -124,11 +120,7 @@ async fn without_the_library_the_server_renders_and_refuses_to_denoise_by_name()
     let broken = broken.to_str().expect("utf-8").to_owned();
     for oidn in ["/nonexistent/oidn", broken.as_str()] {
         let (mut child, base) = serve_with(oidn);
-        let devices: Value = get(&format!("{base}/api/devices"))
-            .await
-            .json()
-            .await
-            .expect("json");
+        let devices: Value = get_json(&format!("{base}/api/devices")).await;
         let d = &devices["denoiser"];
         assert_eq!(d["available"], false, "{oidn}: {d}");
         let why = d["reason"].as_str().unwrap_or_default();

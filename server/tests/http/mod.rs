@@ -35,6 +35,11 @@ pub async fn get(url: impl reqwest::IntoUrl) -> reqwest::Response {
     client().get(url).send().await.expect("an answer to GET")
 }
 
+/// The JSON answer to GET `url`.
+pub async fn get_json<T: serde::de::DeserializeOwned>(url: impl reqwest::IntoUrl) -> T {
+    get(url).await.json().await.expect("a JSON answer to GET")
+}
+
 /// The answer to DELETE `url` (there must be one).
 pub async fn delete(url: impl reqwest::IntoUrl) -> reqwest::Response {
     client()
@@ -56,11 +61,7 @@ pub async fn create(base: &str, body: Value) -> Value {
 }
 
 pub async fn status(base: &str, id: &str) -> Value {
-    get(format!("{base}/api/sessions/{id}"))
-        .await
-        .json()
-        .await
-        .expect("json")
+    get_json(format!("{base}/api/sessions/{id}")).await
 }
 
 /// The server's `/metrics` text.

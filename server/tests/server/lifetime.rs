@@ -107,7 +107,7 @@ async fn after_the_opencl_device_fails_the_service_reports_rayon() {
     let base = format!("http://{}", running.addr);
     let json_at = |path: &'static str| {
         let url = format!("{base}{path}");
-        async move { get(url).await.json::<Value>().await.expect("json") }
+        async move { get_json::<Value>(url).await }
     };
     let devices = json_at("/api/devices").await;
     assert_eq!(

@@ -18,17 +18,9 @@ use tokio_tungstenite::tungstenite::Message;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn session_lifecycle() {
     let (running, base) = server(config()).await;
-    let health: Value = get(format!("{base}/api/health"))
-        .await
-        .json()
-        .await
-        .expect("json");
+    let health: Value = get_json(format!("{base}/api/health")).await;
     assert_eq!(health["status"], "ok");
-    let scenes: Value = get(format!("{base}/api/scenes"))
-        .await
-        .json()
-        .await
-        .expect("json");
+    let scenes: Value = get_json(format!("{base}/api/scenes")).await;
     assert!(scenes["scenes"]
         .as_array()
         .expect("list")
@@ -60,11 +52,7 @@ async fn session_lifecycle() {
     }
     assert_eq!(s["backend"], "cpu");
 
-    let list: Value = get(format!("{base}/api/sessions"))
-        .await
-        .json()
-        .await
-        .expect("json");
+    let list: Value = get_json(format!("{base}/api/sessions")).await;
     assert_eq!(list["sessions"][0]["id"], id.as_str());
 
     // min_spp waits; the halt at 32 spp stops the session.
@@ -180,11 +168,7 @@ async fn updates_restart_accumulation_and_change_the_image() {
     assert_eq!(st["quality"]["rr_depth"], 2);
     assert_eq!(st["quality"]["spp"], 64);
     assert_eq!(st["generation"], 3);
-    let presets: Value = get(format!("{base}/api/presets"))
-        .await
-        .json()
-        .await
-        .expect("json");
+    let presets: Value = get_json(format!("{base}/api/presets")).await;
     let names: Vec<&str> = presets["presets"]
         .as_array()
         .expect("list")
