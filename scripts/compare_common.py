@@ -26,20 +26,22 @@ def run(cmd):
 RR_DEPTH = 5
 
 
-def render_args(exe, scene, args, spp, path):
+def render_args(exe, scene, args, spp, path, adaptive=False):
     """A pathstream `render` of `scene` (a JSON file) to `path` with the
-    comparison's settings, less the sampler and seed."""
+    comparison's settings, less the sampler and seed; uniform sampling
+    unless `adaptive` (then `spp` is the mean)."""
     return [
         exe, "render", "--scene", scene, "--width", str(args.size),
         "--height", str(args.size), "--spp", str(spp),
         "--max-depth", str(args.max_depth), "--rr-depth", str(RR_DEPTH),
-        "--filter", "box", "--adaptive", "off", "--backend", "cpu", "--out", path,
+        "--filter", "box", "--adaptive", "on" if adaptive else "off",
+        "--backend", "cpu", "--out", path,
     ]
 
 
-def pathstream_render(exe, scene, args, spp, sampler, seed, path):
+def pathstream_render(exe, scene, args, spp, sampler, seed, path, adaptive=False):
     """Renders `scene` (a JSON file) to `path`; the render's own seconds."""
-    text = run(render_args(exe, scene, args, spp, path)
+    text = run(render_args(exe, scene, args, spp, path, adaptive)
                + ["--sampler", sampler, "--seed", str(seed)])
     m = re.search(r"in ([0-9.]+) s,", text)
     if not m:
@@ -152,11 +154,16 @@ def add_arguments(ap, out, spp, reference_spp):
 
 
 def pathstream_runs(args, scene_file):
-    """pathstream's two samplers as runs for `measure`."""
-    def run_with(sampler):
+    """pathstream's two samplers as runs for `measure`, then its Sobol points
+    with adaptive sampling (on by default with the `final` and `reference`
+    presets), which the other renderers lack: what a user of each waits
+    for an image at a given error, not a per-sample comparison."""
+    def run_with(sampler, adaptive=False):
         return lambda spp, path: pathstream_render(
-            args.exe, scene_file, args, spp, sampler, 1, path)
-    return [("pathstream", s, run_with(s)) for s in ("random", "sobol")]
+            args.exe, scene_file, args, spp, sampler, 1, path, adaptive)
+    return [("pathstream", s, run_with(s)) for s in ("random", "sobol")] + [
+        ("pathstream", "sobol-adaptive", run_with("sobol", True))
+    ]
 
 
 def measure(args, reference, runs):
