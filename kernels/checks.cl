@@ -57,8 +57,7 @@ __kernel void check_sincos(__global float *out, uint n, __global const float *u)
         return;
     }
     float2 r = sincos_turns(u[i]);
-    out[2 * i] = r.x;
-    out[2 * i + 1] = r.y;
+    vstore2(r, 0, out + 2 * i);
 }
 
 /* pixel_offset(P, sample = i, (u[2i], u[2i+1])) with P's filter, stratified
@@ -69,8 +68,7 @@ __kernel void check_pixel_offset(__global float *out, uint n, __global const flo
         return;
     }
     float2 r = pixel_offset(P, (ulong)i, (float2)(u[2 * i], u[2 * i + 1]), P->sampler != 0u);
-    out[2 * i] = r.x;
-    out[2 * i + 1] = r.y;
+    vstore2(r, 0, out + 2 * i);
 }
 
 /* Ray i = (rays[2i].xyz origin, rays[2i+1].xyz unit direction) against every
@@ -115,12 +113,8 @@ __kernel void check_scatter(__global float *out, uint n, __global const float4 *
     Material mat = materials[material]; /* MatRef: private in the generic build */
     float3 dir = scatter_outward(&mat, ggx, in[2 * i].xyz, in[2 * i + 1].xyz, &s, &weight, &specular);
     __global float *r = out + (size_t)i * 8u;
-    r[0] = dir.x;
-    r[1] = dir.y;
-    r[2] = dir.z;
-    r[3] = weight.x;
-    r[4] = weight.y;
-    r[5] = weight.z;
+    vstore3(dir, 0, r);
+    vstore3(weight, 0, r + 3);
     r[6] = (float)specular;
     r[7] = 0.0f;
 }
@@ -184,9 +178,7 @@ __kernel void check_triangle(__global float *out, uint n, __global const float4 
     __global float *o = out + (size_t)i * 4u;
     if (tri_intersect(&r, tris[3 * i].xyz, tris[3 * i + 1].xyz, tris[3 * i + 2].xyz, INFINITY, &t, &b)) {
         o[0] = t;
-        o[1] = b.x;
-        o[2] = b.y;
-        o[3] = b.z;
+        vstore3(b, 0, o + 1);
     } else {
         o[0] = -1.0f;
         o[1] = 0.0f;
@@ -233,9 +225,7 @@ __kernel void check_light_sample(__global float *out, uint n, __global const flo
     float weight;
     __global float *o = out + (size_t)i * 4u;
     if (sample_emitter(&sc, L, sf.p, sf.object, sf.prim, n3, n3, in[3 * i + 2].xy, &dir, &weight)) {
-        o[0] = dir.x;
-        o[1] = dir.y;
-        o[2] = dir.z;
+        vstore3(dir, 0, o);
         o[3] = weight;
     } else {
         o[0] = 0.0f;
@@ -294,14 +284,10 @@ __kernel void check_env_map(__global float *out, uint n, __global const float4 *
     float weight = 0.0f;
     int ok = env_sample(&sc, u[i], &dir, &weight);
     __global float *o = out + 10 * i;
-    o[0] = r.x;
-    o[1] = r.y;
-    o[2] = r.z;
+    vstore3(r, 0, o);
     o[3] = env_pdf(&sc, d);
     o[4] = ok ? 1.0f : 0.0f;
-    o[5] = dir.x;
-    o[6] = dir.y;
-    o[7] = dir.z;
+    vstore3(dir, 0, o + 5);
     o[8] = weight;
     o[9] = atan2_turns(d.y, d.x);
 }
@@ -322,9 +308,7 @@ __kernel void check_sun(__global float *out, uint n, __global const float2 *u, _
     sun_sample(P, u[i], &dir, &weight);
     float3 d = dirs[i].xyz;
     __global float *o = out + 6 * i;
-    o[0] = dir.x;
-    o[1] = dir.y;
-    o[2] = dir.z;
+    vstore3(dir, 0, o);
     o[3] = weight;
     o[4] = sun_covers(P, d) ? 1.0f : 0.0f;
     o[5] = emitter_pdf(&sc, &lights[which], (float3)(0.0f), NO_OBJECT, NO_PRIM, d, d, d, d);
@@ -345,12 +329,8 @@ __kernel void check_camera_ray(__global float *out, uint n, __global const float
     float3 o, d;
     camera_ray(P, xy[2 * i], xy[2 * i + 1], &s, &o, &d);
     __global float *r = out + 6 * i;
-    r[0] = o.x;
-    r[1] = o.y;
-    r[2] = o.z;
-    r[3] = d.x;
-    r[4] = d.y;
-    r[5] = d.z;
+    vstore3(o, 0, r);
+    vstore3(d, 0, r + 3);
 }
 
 #if HAS_TEXTURES
@@ -377,30 +357,14 @@ __kernel void check_maps(__global float *out, uint n, __global const float4 *in,
     float3 nc = (float3)(0.0f);
     shade_maps(&sc, &tc, &m, &ns, &nc);
     __global float *o = out + 24 * i;
-    o[0] = m.albedo.x;
-    o[1] = m.albedo.y;
-    o[2] = m.albedo.z;
-    o[3] = m.pbr.x;
-    o[4] = m.pbr.y;
-    o[5] = m.pbr.z;
-    o[6] = m.pbr.w;
-    o[7] = ns.x;
-    o[8] = ns.y;
-    o[9] = ns.z;
-    o[10] = m.emission.x;
-    o[11] = m.emission.y;
-    o[12] = m.emission.z;
+    vstore3(m.albedo.xyz, 0, o);
+    vstore4(m.pbr, 0, o + 3);
+    vstore3(ns, 0, o + 7);
+    vstore3(m.emission.xyz, 0, o + 10);
     o[13] = m.glass.x;
-    o[14] = m.coat.x;
-    o[15] = m.coat.y;
-    o[16] = m.coat.z;
-    o[17] = m.spec.x;
-    o[18] = m.spec.y;
-    o[19] = m.spec.z;
-    o[20] = m.spec.w;
-    o[21] = nc.x;
-    o[22] = nc.y;
-    o[23] = nc.z;
+    vstore3(m.coat.xyz, 0, o + 14);
+    vstore4(m.spec, 0, o + 17);
+    vstore3(nc, 0, o + 21);
 }
 #endif
 
