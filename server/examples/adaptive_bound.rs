@@ -1,6 +1,6 @@
 //! What an allocation of samples can gain over uniform sampling, measured
 //! without timing noise (docs/RENDERER.md, "What an allocation can gain").
-//! `cargo run --release --example adaptive_bound -- [scene] [width] [height] [runs] [spp per run] [pilot spp]`
+//! `cargo run --release --example adaptive_bound -- [scene] [width] [height] [runs] [spp per run] [pilot spp] [seeds]`
 //!
 //! The truth: `runs` independent uniform renders of `spp` samples (the
 //! bench's unbiased setting); a pixel's variance per sample, v_p, from the
@@ -15,8 +15,9 @@
 //! pilot render's own error estimate (one more render of `pilot spp`,
 //! another seed, its even/odd halves as the film uses them), from the tile
 //! alone or the tile grown by 1 or 2 pixels. Last, the renderer's adaptive
-//! sampling against uniform at `pilot spp` on average (four seeds, squared
-//! errors against the runs' mean, its own error taken out).
+//! sampling against uniform at `pilot spp` on average (`seeds` seeds, 4
+//! unless given; squared errors against the runs' mean, its own error taken
+//! out).
 use pathstream::bench::settings;
 use pathstream::render::film::relative_rms_error;
 use pathstream::render::progressive::{self, halted, Progress};
@@ -103,6 +104,7 @@ fn main() {
     let num = |i: usize, d: &str| -> u64 { arg(i, d).parse().expect("a number") };
     let (w, h) = (num(2, "64") as u32, num(3, "64") as u32);
     let (runs, spp, pilot_spp) = (num(4, "64"), num(5, "64"), num(6, "64"));
+    let seeds = num(7, "4");
     let mut backend = Backend::choose(BackendChoice::Cpu).expect("cpu");
     let mut render = |seed: u64, spp: u64| {
         let q = Quality {
@@ -140,7 +142,7 @@ fn main() {
         );
     }
     // The renderer's own adaptive sampling against uniform at the same
-    // mean spp, four seeds; the truth is the mean of the runs.
+    // mean spp, `seeds` seeds; the truth is the mean of the runs.
     let truth: Vec<[f32; 3]> = (0..films[0].len())
         .map(|p| std::array::from_fn(|c| films.iter().map(|f| f[p][c]).sum::<f32>() / runs as f32))
         .collect();
@@ -152,7 +154,7 @@ fn main() {
             .map(|&x| f64::from(x).powi(2))
             .sum::<f64>();
     let (mut eu, mut ea) = (0.0, 0.0);
-    for seed in 1..=4u64 {
+    for seed in 1..=seeds {
         let q = Quality {
             seed,
             spp: Some(pilot_spp),
@@ -177,7 +179,7 @@ fn main() {
         ea += relative_rms_error(&film.mean(), &truth).powi(2) - truth_err2;
     }
     println!(
-        "the renderer's adaptive sampling at {pilot_spp} mean spp (4 seeds): uniform's error^2 / adaptive's = {:.3}",
+        "the renderer's adaptive sampling at {pilot_spp} mean spp ({seeds} seeds): uniform's error^2 / adaptive's = {:.3}",
         eu / ea
     );
 }
