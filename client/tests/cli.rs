@@ -1,6 +1,7 @@
 //! The `pathstream-client` command line against a real `pathstream` server
 //! process (the workspace builds both binaries into the same folder).
 
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -385,25 +386,16 @@ fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
     let model = dir.path().join("tet.ply");
     std::fs::write(&model, TETRAHEDRON_PLY).expect("model");
     let png = |name: &str| dir.path().join(name).to_str().expect("utf-8").to_owned();
+    let render = |scene: &Path, out: &str| {
+        let scene = scene.to_str().expect("utf-8");
+        let size = ["--width", "24", "--height", "16", "--spp", "8"];
+        let args = [&["render", "--scene", scene][..], &size, &["-o", out]].concat();
+        client(&server, &args)
+    };
 
     // The file alone: uploaded, framed and lit by the server's defaults.
     let direct = png("direct.png");
-    let run = client(
-        &server,
-        &[
-            "render",
-            "--scene",
-            model.to_str().expect("utf-8"),
-            "--width",
-            "24",
-            "--height",
-            "16",
-            "--spp",
-            "8",
-            "-o",
-            &direct,
-        ],
-    );
+    let run = render(&model, &direct);
     assert!(run.status.success(), "{}", text(&run.stderr));
     // No emitter in the file: the server says it lit it by a default sky.
     assert!(
@@ -436,22 +428,7 @@ fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
                         {"type": "mesh", "file": "tet.ply", "material": "red", "transform": {"translate": [2, 0, 0]}}]}"#,
     )
     .expect("scene");
-    let run = client(
-        &server,
-        &[
-            "render",
-            "--scene",
-            scene.to_str().expect("utf-8"),
-            "--width",
-            "24",
-            "--height",
-            "16",
-            "--spp",
-            "8",
-            "-o",
-            &png("scene.png"),
-        ],
-    );
+    let run = render(&scene, &png("scene.png"));
     assert!(run.status.success(), "{}", text(&run.stderr));
     // The same bytes twice, and the file given alone before: one asset.
     let assets = client(&server, &["assets"]);
@@ -473,16 +450,7 @@ fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
         "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n",
     )
     .expect("file");
-    let run = client(
-        &server,
-        &[
-            "render",
-            "--scene",
-            broken.to_str().expect("utf-8"),
-            "-o",
-            &png("x.png"),
-        ],
-    );
+    let run = render(&broken, &png("x.png"));
     assert_fails(&run, 2, "broken.ply");
     // A scene naming a missing file: exit 2, the JSON path named.
     std::fs::write(
@@ -490,15 +458,6 @@ fn render_uploads_model_files_given_directly_or_named_by_a_scene() {
         r#"{"objects": [{"type": "model", "file": "nowhere.obj"}]}"#,
     )
     .expect("scene");
-    let run = client(
-        &server,
-        &[
-            "render",
-            "--scene",
-            scene.to_str().expect("utf-8"),
-            "-o",
-            &png("y.png"),
-        ],
-    );
+    let run = render(&scene, &png("y.png"));
     assert_fails(&run, 2, "objects[0].file");
 }
