@@ -160,7 +160,6 @@ pub fn texture_bytes(bytes: &[u8], name: &str, limits: &model::Limits) -> Result
 /// renderer's types. `name` is the file's (or the upload's) name, for
 /// material names and messages.
 pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
-    let meshes = model.meshes;
     let textures = (model.images.into_iter())
         .map(|i| Texture::new(&i.name, i.width, i.height, &i.rgba).map(Arc::new))
         .collect::<Result<Vec<_>, _>>()
@@ -183,7 +182,14 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
         ortho_height: c.ortho_height,
         ..CameraJson::default()
     });
-    LoadedModel::new(name, meshes, materials, instances, camera, model.warnings)
+    LoadedModel::new(
+        name,
+        model.meshes,
+        materials,
+        instances,
+        camera,
+        model.warnings,
+    )
 }
 
 /// A loader's texture maps on the renderer's textures (`textures[i]` is
