@@ -15,22 +15,13 @@ use crate::render::shape::{TriPack, TriVerts};
 use rayon::prelude::*;
 use std::sync::{Arc, OnceLock};
 
+/// A checked [`MeshData`] (read through `Deref`: `mesh.positions`) and
+/// what is built from it once. Its `materials` has an entry per triangle
+/// (the data's empty list becomes slot 0 everywhere); an instance maps the
+/// slots to scene materials.
 #[derive(Debug)]
 pub struct Mesh {
-    pub name: String,
-    pub positions: Vec<[f32; 3]>,
-    /// Unit shading normals per vertex, if the mesh has them.
-    pub normals: Option<Vec<[f32; 3]>>,
-    /// Texture coordinates per vertex, sets 0 and 1, where it has them.
-    pub uvs: [Option<Vec<[f32; 2]>>; 2],
-    /// Tangents per vertex (w: the bitangent's sign), where it has them.
-    pub tangents: Option<Vec<[f32; 4]>>,
-    /// Colours per vertex, where it has them.
-    pub colors: Option<Vec<[f32; 3]>>,
-    pub triangles: Vec<[u32; 3]>,
-    /// Per triangle: the mesh's own material slot (an instance maps slots
-    /// to scene materials).
-    pub materials: Vec<u32>,
+    data: MeshData,
     /// Number of material slots (one more than the largest in `materials`).
     pub material_slots: u32,
     pub bvh: Bvh,
@@ -77,19 +68,27 @@ pub enum MeshError {
     TooMany(usize),
 }
 
+impl std::ops::Deref for Mesh {
+    type Target = MeshData;
+
+    #[inline(always)]
+    fn deref(&self) -> &MeshData {
+        &self.data
+    }
+}
+
 impl Mesh {
     /// Checks the data and builds the BVH (in parallel).
     pub fn new(data: MeshData) -> Result<Mesh, MeshError> {
         let MeshData {
-            name,
             positions,
             normals,
             uvs,
             tangents,
             colors,
             triangles,
-            materials,
-        } = data;
+            ..
+        } = &data;
         if triangles.is_empty() {
             return Err(MeshError::Empty);
         }
@@ -99,7 +98,7 @@ impl Mesh {
         {
             return Err(MeshError::Position(i));
         }
-        if let Some(n) = &normals {
+        if let Some(n) = normals {
             if n.len() != positions.len() {
                 return Err(MeshError::NormalCount(n.len(), positions.len()));
             }
@@ -108,15 +107,15 @@ impl Mesh {
             }
         }
         let n = positions.len();
-        for (what, set) in ["TEXCOORD_0", "TEXCOORD_1"].into_iter().zip(&uvs) {
+        for (what, set) in ["TEXCOORD_0", "TEXCOORD_1"].into_iter().zip(uvs) {
             if let Some(v) = set {
                 attribute(what, v, n)?;
             }
         }
-        if let Some(t) = &tangents {
+        if let Some(t) = tangents {
             attribute("TANGENT", t, n)?;
         }
-        if let Some(c) = &colors {
+        if let Some(c) = colors {
             attribute("COLOR_0", c, n)?;
             if let Some(index) = c
                 .iter()
@@ -130,11 +129,11 @@ impl Mesh {
                 return Err(MeshError::Index(i, bad, positions.len()));
             }
         }
-        let materials = if materials.is_empty() {
-            vec![0; triangles.len()]
-        } else {
-            materials
-        };
+        let mut data = data;
+        if data.materials.is_empty() {
+            data.materials = vec![0; data.triangles.len()];
+        }
+        let (positions, triangles, materials) = (&data.positions, &data.triangles, &data.materials);
         if materials.len() != triangles.len() {
             return Err(MeshError::MaterialCount(materials.len(), triangles.len()));
         }
@@ -157,14 +156,7 @@ impl Mesh {
             .map(|(k, count)| TriPack::new(&tris, (k * MAX_LEAF) as u32, count))
             .collect();
         Ok(Mesh {
-            name,
-            positions,
-            normals,
-            uvs,
-            tangents,
-            colors,
-            triangles,
-            materials,
+            data,
             material_slots,
             bvh,
             wide,
