@@ -17,6 +17,7 @@
 
 pub mod api;
 pub mod bench;
+pub mod material_maps;
 pub mod mesh_data;
 pub mod model;
 pub mod render;

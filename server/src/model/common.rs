@@ -419,7 +419,7 @@ pub(super) fn finish(mut ctx: Ctx, parts: Parts) -> Result<Model, ModelError> {
 
     let image_count = images.len();
     let bad_image = (materials.iter())
-        .flat_map(|m| m.maps.refs())
+        .flat_map(|m| m.maps.by_slot().into_iter().flatten())
         .any(|r| r.image >= image_count || r.uv > 1);
     if bad_image {
         return Err(ctx.err("a material refers to an image the model does not have (a loader bug)"));

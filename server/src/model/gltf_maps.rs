@@ -218,14 +218,16 @@ pub(super) fn maps(m: &::gltf::Material, images: &mut Images, notes: &mut Vec<St
             images,
             notes,
         ),
-        metallic_roughness: read(
-            "metallic-roughness texture",
-            pbr.metallic_roughness_texture(),
-            images,
-            notes,
-        ),
         ..Maps::default()
     };
+    // Metal in its blue channel, roughness in its green.
+    let metallic_roughness = read(
+        "metallic-roughness texture",
+        pbr.metallic_roughness_texture(),
+        images,
+        notes,
+    );
+    (out.metallic, out.roughness) = (metallic_roughness, metallic_roughness);
     if let Some(n) = m.normal_texture() {
         let t = n.extension_value(TRANSFORM);
         let index = n.texture().index();
@@ -233,7 +235,7 @@ pub(super) fn maps(m: &::gltf::Material, images: &mut Images, notes: &mut Vec<St
         let scale = f64::from(n.scale());
         out.normal_scale = if scale.is_finite() { scale } else { 1.0 };
     }
-    out.emissive = read("emissive texture", m.emissive_texture(), images, notes);
+    out.emission = read("emissive texture", m.emissive_texture(), images, notes);
     out
 }
 

@@ -121,7 +121,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
             let cutoff = m.alpha_cutoff().map_or(0.5, widen);
             let cutoff = if cutoff.is_finite() { cutoff } else { 0.5 };
             match translucent || cutoff > 1.0 {
-                true => super::AlphaMode::Mask(cutoff),
+                true => super::AlphaMode::Mask(cutoff as f32),
                 false => super::AlphaMode::Opaque,
             }
         }
@@ -137,7 +137,7 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
         && maps.transmission.is_none()
         && roughness == 0.0
         && metallic == 0.0
-        && maps.metallic_roughness.is_none();
+        && maps.metallic.is_none();
     let json = if smooth_glass {
         let ior = match m.ior() {
             None => common::DEFAULT_IOR,
@@ -149,21 +149,12 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
             attenuation,
             emission,
         }
-    } else if metallic == 1.0
-        && roughness == 0.0
-        && clearcoat == 0.0
-        && maps.metallic_roughness.is_none()
-    {
+    } else if metallic == 1.0 && roughness == 0.0 && clearcoat == 0.0 && maps.metallic.is_none() {
         Material::Mirror {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,
         }
-    } else if metallic == 0.0
-        && roughness == 1.0
-        && t == 0.0
-        && plain
-        && maps.metallic_roughness.is_none()
-    {
+    } else if metallic == 0.0 && roughness == 1.0 && t == 0.0 && plain && maps.metallic.is_none() {
         Material::Diffuse {
             albedo: common::albedo("base colour", rgb, &mut notes),
             emission,

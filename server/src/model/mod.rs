@@ -122,89 +122,10 @@ pub struct Attenuation {
     pub distance: f64,
 }
 
-/// A material's texture maps (each format's module says which it reads).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Maps {
-    /// Multiplies the base colour (sRGB RGB; alpha unused for now).
-    pub base_color: Option<TextureRef>,
-    /// glTF's metallic-roughness texture: roughness in green, metal in blue.
-    pub metallic_roughness: Option<TextureRef>,
-    /// A tangent-space normal map and its x/y scale.
-    pub normal: Option<TextureRef>,
-    pub normal_scale: f64,
-    /// Multiplies the emission (sRGB RGB).
-    pub emissive: Option<TextureRef>,
-    /// glTF's extension textures: transmission (red), clear coat weight
-    /// (red) and roughness (green), specular strength (alpha) and colour
-    /// (sRGB RGB; also OBJ's `map_Ks`).
-    pub transmission: Option<TextureRef>,
-    pub clearcoat: Option<TextureRef>,
-    pub clearcoat_roughness: Option<TextureRef>,
-    pub specular: Option<TextureRef>,
-    pub specular_color: Option<TextureRef>,
-    /// glTF's `clearcoatNormalTexture` and its x/y scale.
-    pub clearcoat_normal: Option<TextureRef>,
-    pub clearcoat_normal_scale: f64,
-    /// glTF's `alphaMode` and the base colour factor's alpha (which the
-    /// base colour texture's alpha channel multiplies).
-    pub alpha_mode: AlphaMode,
-    pub alpha: f64,
-}
-
-/// Which surfaces a ray stops at.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum AlphaMode {
-    #[default]
-    Opaque,
-    /// Where alpha >= the cutoff.
-    Mask(f64),
-    /// With probability alpha.
-    Blend,
-}
-
-impl Default for Maps {
-    fn default() -> Self {
-        Self {
-            base_color: None,
-            metallic_roughness: None,
-            normal: None,
-            normal_scale: 1.0,
-            emissive: None,
-            transmission: None,
-            clearcoat: None,
-            clearcoat_roughness: None,
-            specular: None,
-            specular_color: None,
-            clearcoat_normal: None,
-            clearcoat_normal_scale: 1.0,
-            alpha_mode: AlphaMode::Opaque,
-            alpha: 1.0,
-        }
-    }
-}
-
-impl Maps {
-    pub fn is_empty(&self) -> bool {
-        self.refs().next().is_none()
-    }
-
-    /// The texture references that are set.
-    pub fn refs(&self) -> impl Iterator<Item = &TextureRef> {
-        [
-            &self.base_color,
-            &self.metallic_roughness,
-            &self.normal,
-            &self.emissive,
-            &self.transmission,
-            &self.clearcoat,
-            &self.clearcoat_roughness,
-            &self.specular,
-            &self.specular_color,
-        ]
-        .into_iter()
-        .flatten()
-    }
-}
+/// A material's texture maps (each format's module says which it reads),
+/// each slot a reference to one of the model's images.
+pub type Maps = crate::material_maps::Maps<TextureRef>;
+pub use crate::material_maps::AlphaMode;
 
 /// How a material reads one of [`Model::images`].
 #[derive(Clone, Copy, Debug, PartialEq)]

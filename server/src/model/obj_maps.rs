@@ -93,7 +93,7 @@ pub(super) fn read(
     }
     for ((base, emissive, specular, bump), m) in maps.into_iter().zip(materials.iter_mut()) {
         m.maps.base_color = base;
-        m.maps.emissive = emissive;
+        m.maps.emission = emissive;
         m.maps.specular_color = specular;
         if let Some((i, scale)) = bump {
             let grey = images[i]

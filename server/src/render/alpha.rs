@@ -18,15 +18,7 @@ use crate::render::shape::Mesh;
 use crate::render::texture::{self, Sampling, Texture};
 use std::sync::Arc;
 
-/// How an alpha-tested material decides.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum AlphaMode {
-    Opaque,
-    /// There where alpha >= the cutoff.
-    Mask(f32),
-    /// There with probability alpha.
-    Blend,
-}
+pub use crate::material_maps::AlphaMode;
 
 /// One material slot's test.
 #[derive(Clone, Debug)]

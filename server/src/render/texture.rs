@@ -165,7 +165,7 @@ pub enum Map {
 }
 
 /// Slots per material.
-pub const MAP_SLOTS: usize = 11;
+pub const MAP_SLOTS: usize = crate::material_maps::SLOTS;
 
 impl Map {
     pub const ALL: [Map; MAP_SLOTS] = [

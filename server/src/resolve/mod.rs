@@ -12,7 +12,6 @@ mod files;
 pub use files::FileResolver;
 
 use crate::model::{self, Model};
-use crate::render::alpha::AlphaMode;
 use crate::render::envmap::EnvMap;
 use crate::render::math::{DAffine3, DMat3, DVec3};
 use crate::render::scene::{
@@ -193,45 +192,22 @@ pub fn loaded_model(name: &str, model: Model) -> Result<LoadedModel, String> {
 }
 
 /// A loader's texture maps on the renderer's textures (`textures[i]` is
-/// the model's image `i`); glTF's metallic-roughness texture feeds both
-/// the metallic (blue) and the roughness (green) slot.
+/// the model's image `i`).
 fn render_maps(maps: &model::Maps, textures: &[Arc<Texture>]) -> Maps {
-    let slot = |r: &Option<model::TextureRef>| {
-        r.as_ref().map(|r| MapSlot {
-            source: None,
-            texture: textures[r.image].clone(),
-            sampling: Sampling {
-                uv: r.uv,
-                transform: UvTransform::new(r.offset, r.rotation, r.scale),
-                wrap: r.wrap.map(|w| match w {
-                    model::Wrap::Repeat => Wrap::Repeat,
-                    model::Wrap::Clamp => Wrap::Clamp,
-                    model::Wrap::Mirror => Wrap::Mirror,
-                }),
-            },
-        })
-    };
-    Maps {
-        base_color: slot(&maps.base_color),
-        metallic: slot(&maps.metallic_roughness),
-        roughness: slot(&maps.metallic_roughness),
-        normal: slot(&maps.normal),
-        emission: slot(&maps.emissive),
-        transmission: slot(&maps.transmission),
-        clearcoat: slot(&maps.clearcoat),
-        clearcoat_roughness: slot(&maps.clearcoat_roughness),
-        specular: slot(&maps.specular),
-        specular_color: slot(&maps.specular_color),
-        clearcoat_normal: slot(&maps.clearcoat_normal),
-        normal_scale: maps.normal_scale,
-        clearcoat_normal_scale: maps.clearcoat_normal_scale,
-        alpha_mode: match maps.alpha_mode {
-            model::AlphaMode::Opaque => AlphaMode::Opaque,
-            model::AlphaMode::Mask(cutoff) => AlphaMode::Mask(cutoff as f32),
-            model::AlphaMode::Blend => AlphaMode::Blend,
+    let slot = |r: &model::TextureRef| MapSlot {
+        source: None,
+        texture: textures[r.image].clone(),
+        sampling: Sampling {
+            uv: r.uv,
+            transform: UvTransform::new(r.offset, r.rotation, r.scale),
+            wrap: r.wrap.map(|w| match w {
+                model::Wrap::Repeat => Wrap::Repeat,
+                model::Wrap::Clamp => Wrap::Clamp,
+                model::Wrap::Mirror => Wrap::Mirror,
+            }),
         },
-        alpha: maps.alpha,
-    }
+    };
+    maps.map(slot)
 }
 
 /// A loader's material as scene JSON (glass from files is always exact

@@ -18,7 +18,7 @@ use paths::{references, resolve};
 
 /// Top-level modules by level, lowest first.
 const LEVELS: &[&[&str]] = &[
-    &["mesh_data"],
+    &["mesh_data", "material_maps"],
     &["render", "model"],
     &["resolve"],
     &["service"],

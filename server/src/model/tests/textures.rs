@@ -70,11 +70,12 @@ fn maps_images_and_attributes_are_read() {
         (b.offset, b.rotation, b.scale),
         ([0.5, 0.25], 0.5, [2.0, 3.0])
     );
-    let m = maps.metallic_roughness.expect("metallic-roughness");
+    let m = maps.metallic.expect("metallic-roughness");
     assert_eq!((m.image, m.uv, m.wrap), (1, 1, [Wrap::Repeat; 2]));
+    assert_eq!(maps.roughness, Some(m), "one texture, both slots");
     assert_eq!(maps.normal.map(|n| n.image), Some(2));
     assert_eq!(maps.normal_scale, 0.5);
-    assert_eq!(maps.emissive.map(|e| e.image), Some(3));
+    assert_eq!(maps.emission.map(|e| e.image), Some(3));
     assert!(model.warnings.is_empty(), "{:?}", model.warnings);
     let mesh = &model.meshes[0];
     assert_eq!(mesh.uvs, quad().uvs);
@@ -271,13 +272,13 @@ fn obj_map_ke_multiplies_ke_or_is_the_emission() {
         crate::model::Material::Diffuse { emission, .. } => emission,
         ref other => panic!("{other:?}"),
     };
-    let both = m.materials[0].2.emissive.expect("map_Ke");
+    let both = m.materials[0].2.emission.expect("map_Ke");
     assert_eq!((emission(0), both.scale), (Some([2.0; 3]), [2.0, 2.0]));
     assert_eq!(m.images[both.image].rgba, [255, 128, 0, 255]);
     // No Ke: the map is the emission; a map that cannot be read, no glow.
     assert_eq!(emission(1), Some([1.0; 3]));
-    assert!(m.materials[1].2.emissive.is_some());
-    assert_eq!((emission(2), m.materials[2].2.emissive), (None, None));
+    assert!(m.materials[1].2.emission.is_some());
+    assert_eq!((emission(2), m.materials[2].2.emission), (None, None));
     assert!(
         m.warnings.iter().any(|w| w.contains("missing.png")),
         "{:?}",

@@ -54,7 +54,7 @@ pub(super) fn world_maps(
             continue;
         }
         let mut w = WorldMaps::NONE;
-        for (map, s) in Map::ALL.into_iter().zip(m.maps.by_map()) {
+        for (map, s) in Map::ALL.into_iter().zip(m.maps.by_slot()) {
             w.slots[map as usize] = slot(s);
         }
         w.normal_scale = m.maps.normal_scale as f32;
