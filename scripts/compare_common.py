@@ -196,3 +196,48 @@ def measure(args, reference, runs):
             )
         summary.append((who, sampler, rows))
     print_summary(summary, pixels)
+    write_results(args, summary)
+
+
+def write_results(args, summary):
+    """`times.csv` in `args.out` (a row per render), and with matplotlib
+    installed `time-to-error.png`: error against seconds, log-log, a line
+    per renderer and sampler, and the 1% level."""
+    path = os.path.join(args.out, "times.csv")
+    with open(path, "w") as f:
+        f.write("renderer,sampler,spp,seconds,error\n")
+        for who, sampler, rows in summary:
+            for spp, s, err in rows:
+                f.write(f"{who},{sampler},{spp},{s:.4f},{err:.6f}\n")
+    print(f"\nrenders: {path}")
+    try:
+        import matplotlib
+    except ImportError:
+        print("(no plot: pip install matplotlib)")
+        return
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+    for who, sampler, rows in summary:
+        ax.plot([r[1] for r in rows], [100 * r[2] for r in rows], marker="o",
+                label=f"{who.split()[0]} {sampler}",
+                linestyle="-" if who == "pathstream" else "--")
+    ax.axhline(1.0, color="grey", linewidth=0.8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(f"seconds ({args.threads} threads)")
+    ax.set_ylabel("relative RMS error, %")
+    ax.set_title(f"{args.scene}, {args.size}x{args.size}: error against render time")
+    plain = matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}")
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(plain)
+        axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.grid(True, which="both", linewidth=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    png = os.path.join(args.out, "time-to-error.png")
+    fig.savefig(png)
+    print(f"plot: {png}")
