@@ -170,7 +170,10 @@ def measure(args, reference, runs):
     """Renders each run, (renderer, sampler, render(spp, path) -> seconds,
     or (seconds, the samples per pixel it took) where a sampler rounds the
     count it is asked for), at every spp of `args.spp`; prints a row per
-    render, then the summary. Rows, rates and times use the spp taken."""
+    render, then the summary. Rows, rates and times use the spp taken.
+    A run may end with a reference of its own renderer's to measure its
+    error against (else: `reference`, pathstream's), so that the two
+    renderers' small differences in the scene do not count as noise."""
     spps = [int(s) for s in args.spp.split(",")]
     pixels = args.size * args.size
     print(
@@ -180,14 +183,14 @@ def measure(args, reference, runs):
     print("| renderer | sampler | spp | seconds | M samples/s | error |")
     print("| --- | --- | ---: | ---: | ---: | ---: |")
     summary = []
-    for who, sampler, render in runs:
+    for who, sampler, render, *own in runs:
         rows = []
         for spp in spps:
             name = f"{who.split()[0].lower()}-{sampler}-{spp}.pfm"
             path = os.path.abspath(os.path.join(args.out, name))
             s = render(spp, path)
             s, spp = s if isinstance(s, tuple) else (s, spp)
-            err = rel_error(args.exe, reference, path)
+            err = rel_error(args.exe, own[0] if own else reference, path)
             rows.append((spp, s, err))
             print(
                 f"| {who} | {sampler} | {spp} | {s:.3f} | {spp * pixels / s / 1e6:.2f} "
