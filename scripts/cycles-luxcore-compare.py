@@ -7,8 +7,10 @@ f32 vertices, normals, albedos, lamp and camera. They use the same
 resolution, samples per pixel, path depth, box pixel filter and threads.
 Reported per renderer and sampler:
 - samples per second;
-- the relative RMS error against a long pathstream reference
-  (`pathstream diff`) at each spp;
+- the relative RMS error (`pathstream diff`) at each spp against a long
+  render of the same renderer's (its distance from pathstream's is
+  printed first: the renderers' own small differences in the scene, which
+  would otherwise count as noise);
 - the time each needs to reach 1% error.
 
 Cycles and LuxCore are timed without their fixed costs (scene sync, BVH
@@ -50,8 +52,8 @@ import time
 import numpy as np
 
 from compare_common import (
-    RR_DEPTH, add_arguments, diffuse_meshes, measure, pathstream_runs, scene_and_reference,
-    write_pfm,
+    RR_DEPTH, add_arguments, diffuse_meshes, measure, own_reference, pathstream_runs,
+    scene_and_reference, write_pfm,
 )
 
 
@@ -120,7 +122,7 @@ def cycles_scene(bpy, scene, args):
     cd = bpy.data.cameras.new("camera")
     cd.sensor_fit = "VERTICAL"
     cd.angle_y = np.radians(cam["vfov_deg"])
-    cd.clip_start = cam.get("near_clip", 0.01)
+    cd.clip_start = cam.get("near_clip") or 0.01
     co = bpy.data.objects.new("camera", cd)
     right, up, fwd = camera_frame(cam)
     m = np.identity(4)
@@ -167,18 +169,19 @@ def cycles_once(bpy, sc, spp, seed, exr):
     return time.perf_counter() - start
 
 
-def cycles_render(bpy, sc, args, spp, seed, path):
+def cycles_render(bpy, sc, args, spp, seed, path, timed=True):
     """Renders `spp` samples to `path` (PFM); the seconds the samples took
-    beyond the first."""
+    beyond the first (untimed: one render, None)."""
     exr = path[: -len(".pfm")] + ".exr"
-    cycles_once(bpy, sc, spp, seed, exr)  # warm: kernels, caches
-    t1 = cycles_once(bpy, sc, 1, seed, exr)
+    if timed:
+        cycles_once(bpy, sc, spp, seed, exr)  # warm: kernels, caches
+        t1 = cycles_once(bpy, sc, 1, seed, exr)
     tn = cycles_once(bpy, sc, spp, seed, exr)
     img = bpy.data.images.load(exr)
     px = np.array(img.pixels[:], dtype=np.float32).reshape(args.size, args.size, 4)
     bpy.data.images.remove(img)
     write_pfm(path, px[:, :, :3])  # Blender's rows start at the bottom too
-    return (tn - t1) * spp / (spp - 1)
+    return (tn - t1) * spp / (spp - 1) if timed else None
 
 
 # ---------------------------------------------------------------- LuxCore
@@ -224,14 +227,14 @@ def luxcore_scene(lux, scene, args):
     props.Set(lux.Property("scene.camera.lookat.target", list(cam["look_at"])))
     props.Set(lux.Property("scene.camera.up", list(cam["up"])))
     props.Set(lux.Property("scene.camera.fieldofview", cam["vfov_deg"]))
-    props.Set(lux.Property("scene.camera.cliphither", cam.get("near_clip", 0.01)))
+    props.Set(lux.Property("scene.camera.cliphither", cam.get("near_clip") or 0.01))
     dy = -2.0 / args.size  # one pixel: the window spans 2
     props.Set(lux.Property("scene.camera.screenwindow", [-1.0, 1.0, -1.0 + dy, 1.0 + dy]))
     s.Parse(props)
     return s
 
 
-def luxcore_render(lux, lscene, args, spp, sampler, seed, path):
+def luxcore_render(lux, lscene, args, spp, sampler, seed, path, timed=True):
     """As `cycles_render`, with LuxCore's PATHCPU engine."""
 
     def once(n):
@@ -270,14 +273,15 @@ def luxcore_render(lux, lscene, args, spp, sampler, seed, path):
         session.Stop()
         return config, session, seconds
 
-    once(spp)  # warm
-    _, _, t1 = once(1)
+    if timed:
+        once(spp)  # warm
+        _, _, t1 = once(1)
     _config, session, tn = once(spp)
     buf = np.zeros(args.size * args.size * 3, dtype=np.float32)
     session.GetFilm().GetOutputFloat(lux.FilmOutputType.RGB, buf)
     # LuxCore's rows start at the bottom, as PFM's do.
     write_pfm(path, buf.reshape(args.size, args.size, 3))
-    return (tn - t1) * spp / (spp - 1)
+    return (tn - t1) * spp / (spp - 1) if timed else None
 
 
 def main():
@@ -297,8 +301,10 @@ def main():
         import bpy
 
         sc = cycles_scene(bpy, scene, args)
+        own = own_reference(args, "cycles", lambda spp, path: cycles_render(
+            bpy, sc, args, spp, 4242, path, timed=False))
         runs.append(("Cycles", "default",
-                     lambda spp, path: cycles_render(bpy, sc, args, spp, 1, path)))
+                     lambda spp, path: cycles_render(bpy, sc, args, spp, 1, path), own))
     if "luxcore" in only:
         # LuxCore probes every OpenCL platform on its own, and its bundled
         # libraries crash in PoCL's (installed for pathstream's tests):
@@ -309,10 +315,12 @@ def main():
 
         lux.Init(lambda _msg: None)
         lscene = luxcore_scene(lux, scene, args)
+        own = own_reference(args, "luxcore", lambda spp, path: luxcore_render(
+            lux, lscene, args, spp, "SOBOL", 4242, path, timed=False))
         for sampler in ("RANDOM", "SOBOL"):
             runs.append(("LuxCore", sampler.lower(),
                          lambda spp, path, s=sampler: luxcore_render(
-                             lux, lscene, args, spp, s, 1, path)))
+                             lux, lscene, args, spp, s, 1, path), own))
     measure(args, reference, runs)
     sys.stdout.flush()
     if "luxcore" in only:

@@ -44,7 +44,7 @@ import time
 import numpy as np
 
 from compare_common import (
-    RR_DEPTH, add_arguments, diffuse_meshes, measure, pathstream_runs, rel_error,
+    RR_DEPTH, add_arguments, diffuse_meshes, measure, own_reference, pathstream_runs,
     scene_and_reference,
 )
 
@@ -69,7 +69,7 @@ def mitsuba_scene(mi, scene, args, out_dir):
         "type": "perspective",
         "fov": cam["vfov_deg"],
         "fov_axis": "y",
-        "near_clip": cam.get("near_clip", 0.01),
+        "near_clip": cam.get("near_clip") or 0.01,
         "to_world": mi.ScalarTransform4f().look_at(
             origin=cam["position"], target=cam["look_at"], up=cam["up"]
         ),
@@ -164,22 +164,15 @@ def mitsuba_render(mi, dr, scene_dict, args, spp, sampler, seed, path):
     return seconds, scene.sensors()[0].sampler().sample_count()
 
 
-def mitsuba_reference(mi, dr, scene_dict, args):
-    """Mitsuba's own long render (multijitter, `args.reference_spp`),
-    rendered once into `args.out` and reused."""
-    path = os.path.join(
-        args.out,
-        f"mitsuba-{args.scene}-{args.size}-d{args.max_depth}-ref{args.reference_spp}.pfm",
-    )
-    if not os.path.exists(path):
-        scene_dict = dict(scene_dict)
-        sensor = dict(scene_dict["sensor"])
-        sensor["sampler"] = {"type": "multijitter", "sample_count": args.reference_spp}
-        scene_dict["sensor"] = sensor
-        img = mi.render(mi.load_dict(scene_dict), spp=args.reference_spp, seed=4242)
-        dr.eval(img)
-        mi.Bitmap(img).write(path)
-    return path
+def mitsuba_reference(mi, dr, scene_dict, args, path):
+    """One untimed render of `args.reference_spp` (multijitter) to `path`."""
+    scene_dict = dict(scene_dict)
+    sensor = dict(scene_dict["sensor"])
+    sensor["sampler"] = {"type": "multijitter", "sample_count": args.reference_spp}
+    scene_dict["sensor"] = sensor
+    img = mi.render(mi.load_dict(scene_dict), spp=args.reference_spp, seed=4242)
+    dr.eval(img)
+    mi.Bitmap(img).write(path)
 
 
 def main():
@@ -201,8 +194,7 @@ def main():
     def with_mitsuba(sampler):
         return lambda spp, path: mitsuba_render(mi, dr, d, args, spp, sampler, 1, path)
 
-    own = mitsuba_reference(mi, dr, d, args)
-    print(f"Mitsuba's reference against pathstream's: {rel_error(args.exe, reference, own) * 100:.2f}%")
+    own = own_reference(args, "mitsuba", lambda _spp, path: mitsuba_reference(mi, dr, d, args, path))
     runs = pathstream_runs(args, scene_file) + [
         (f"mitsuba {args.variant}", s, with_mitsuba(s), own)
         for s in ("independent", "multijitter", "ldsampler")
