@@ -126,7 +126,8 @@ pub struct Camera {
     pub up: [f64; 3],
     /// Full vertical field of view in degrees.
     pub vfov_deg: f64,
-    /// Camera rays start on the plane at this distance along the view axis.
+    /// Camera rays start this far from the camera along themselves (a
+    /// sphere around it, as smallpt's camera: not a plane).
     pub near_clip: f64,
     /// Thin-lens radius (depth of field); 0: a pinhole.
     #[serde(default)]
