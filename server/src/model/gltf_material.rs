@@ -118,10 +118,11 @@ fn material(m: &::gltf::Material, index: usize, images: &mut Images) -> Mat {
     maps.alpha_mode = match m.alpha_mode() {
         AlphaMode::Opaque => super::AlphaMode::Opaque,
         AlphaMode::Mask => {
-            let cutoff = m.alpha_cutoff().map_or(0.5, widen);
+            // glTF's f32, as the renderer's alpha test compares it.
+            let cutoff = m.alpha_cutoff().unwrap_or(0.5);
             let cutoff = if cutoff.is_finite() { cutoff } else { 0.5 };
             match translucent || cutoff > 1.0 {
-                true => super::AlphaMode::Mask(cutoff as f32),
+                true => super::AlphaMode::Mask(cutoff),
                 false => super::AlphaMode::Opaque,
             }
         }

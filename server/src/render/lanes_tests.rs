@@ -38,8 +38,8 @@ type Op = (&'static str, F32s<16>, fn(f32, f32) -> f32);
 /// payload of a NaN that arithmetic makes unspecified, and they differ
 /// between one the compiler folds from constants and one the processor
 /// makes (sincos_turns of an infinity: sin 0xffc00000 folded, 0x7fc00000
-/// computed), so whether the test's scalar call was folded decided it. A NaN against a number
-/// still fails.
+/// computed), so whether the test's scalar call was folded decided it.
+/// A NaN against a number still fails.
 fn same_bits(a: f32, b: f32) -> bool {
     a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
 }

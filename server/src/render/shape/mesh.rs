@@ -79,7 +79,7 @@ impl std::ops::Deref for Mesh {
 
 impl Mesh {
     /// Checks the data and builds the BVH (in parallel).
-    pub fn new(data: MeshData) -> Result<Mesh, MeshError> {
+    pub fn new(mut data: MeshData) -> Result<Mesh, MeshError> {
         let MeshData {
             positions,
             normals,
@@ -129,7 +129,6 @@ impl Mesh {
                 return Err(MeshError::Index(i, bad, positions.len()));
             }
         }
-        let mut data = data;
         if data.materials.is_empty() {
             data.materials = vec![0; data.triangles.len()];
         }
