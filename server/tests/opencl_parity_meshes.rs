@@ -242,6 +242,18 @@ fn mesh_args<'a>(input: &'a [[f32; 4]], p: &'a Packed) -> Vec<CheckArg<'a>> {
     ]
 }
 
+/// The arguments of the emitter checks (`check_light_sample`,
+/// `check_emitter_pdf`) after the item count: each item's input, its
+/// emitter, and the scene's objects and lights.
+fn emitter_args<'a>(input: &'a [[f32; 4]], which: &'a [u32], p: &'a Packed) -> Vec<CheckArg<'a>> {
+    vec![
+        CheckArg::Buffer(bytemuck::cast_slice(input)),
+        CheckArg::Buffer(bytemuck::cast_slice(which)),
+        CheckArg::Buffer(bytemuck::cast_slice(&p.objects)),
+        CheckArg::Buffer(bytemuck::cast_slice(&p.lights)),
+    ]
+}
+
 /// The nearest hit among mesh instances (a rotated and scaled 81,920-
 /// triangle ball, a 20,480- and an 80-triangle ball, spheres and walls) on 1e5
 /// rays from inside the room: the same object, triangle and distance as
@@ -415,12 +427,7 @@ fn light_picks_and_light_samples_agree_bit_for_bit() {
             "check_light_sample",
             n,
             4,
-            &[
-                CheckArg::Buffer(bytemuck::cast_slice(&input)),
-                CheckArg::Buffer(bytemuck::cast_slice(&which)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.lights)),
-            ],
+            &emitter_args(&input, &which, &packed),
         )
         .expect("run");
     let mut sampled = 0;
@@ -494,12 +501,7 @@ fn mis_densities_and_emitter_lookups_agree_bit_for_bit() {
             "check_emitter_pdf",
             n,
             1,
-            &[
-                CheckArg::Buffer(bytemuck::cast_slice(&input)),
-                CheckArg::Buffer(bytemuck::cast_slice(&which)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.objects)),
-                CheckArg::Buffer(bytemuck::cast_slice(&packed.lights)),
-            ],
+            &emitter_args(&input, &which, &packed),
         )
         .expect("run");
     let positive = want.iter().filter(|p| **p > 0.0).count();
