@@ -28,6 +28,7 @@ pub mod ffi {
     pub type RTCScene = *mut c_void;
     pub type RTCGeometry = *mut c_void;
     pub const RTC_SCENE_FLAG_NONE: c_uint = 0;
+    pub const RTC_INTERSECT_CONTEXT_FLAG_COHERENT: c_uint = 1;
 
     #[link(name = "embree3")]
     extern "C" {
@@ -134,6 +135,16 @@ impl Drop for Device {
             ffi::rtcReleaseDevice(self.0)
         }
     }
+}
+
+/// How a pass asks Embree: one ray at a time (`rtcIntersect1`), or
+/// packets of sixteen (`rtcIntersect16`), told they are incoherent (the
+/// default) or coherent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Query {
+    Single,
+    Packets,
+    Coherent,
 }
 
 /// A committed Embree scene of one triangle mesh, released on drop.
@@ -257,7 +268,13 @@ impl EmbreeScene {
     /// Up to sixteen rays' nearest hits in one packet (`rtcIntersect16`),
     /// mapped by `map` first, appended to `out` as `intersect` reports them.
     #[inline(always)]
-    pub fn intersect16(&self, map: &Affine3A, rays: &[(Ray, Origin)], out: &mut Vec<Option<Hit>>) {
+    pub fn intersect16(
+        &self,
+        map: &Affine3A,
+        rays: &[(Ray, Origin)],
+        coherent: bool,
+        out: &mut Vec<Option<Hit>>,
+    ) {
         let mut valid = ffi::Valid16([0; 16]);
         // SAFETY: an all-zero packet is a valid value of this plain-data
         // struct; the fields the lanes use are set below.
@@ -278,6 +295,9 @@ impl EmbreeScene {
             valid.0[k] = -1;
         }
         let mut context = ffi::RTCIntersectContext::new(None);
+        if coherent {
+            context.flags = ffi::RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        }
         // SAFETY: the scene is committed and live; the mask, context and
         // packet are valid, 64-byte aligned and exclusively ours.
         #[allow(unsafe_code)]
@@ -297,13 +317,19 @@ impl EmbreeScene {
     }
 
     /// Every ray's nearest hit in packets of sixteen neighbouring rays,
-    /// on rayon's threads in chunks as `hits` does.
-    pub fn hits16(&self, map: &Affine3A, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+    /// on rayon's threads in chunks as `hits` does; `coherent` tells
+    /// Embree the rays of a packet are alike (Mitsuba's camera rays).
+    pub fn hits16(
+        &self,
+        map: &Affine3A,
+        rays: &[(Ray, Origin)],
+        coherent: bool,
+    ) -> Vec<Option<Hit>> {
         rays.par_chunks(4096)
             .flat_map_iter(|chunk| {
                 let mut out = Vec::with_capacity(chunk.len());
                 for packet in chunk.chunks(16) {
-                    self.intersect16(map, packet, &mut out);
+                    self.intersect16(map, packet, coherent, &mut out);
                 }
                 out
             })
@@ -318,12 +344,13 @@ impl EmbreeScene {
             .collect()
     }
 
-    /// Rays per second of one pass, in packets of sixteen if `packets`.
-    pub fn rays_per_sec(&self, map: &Affine3A, rays: &[(Ray, Origin)], packets: bool) -> f64 {
+    /// Rays per second of one pass, asked as `query` says.
+    pub fn rays_per_sec(&self, map: &Affine3A, rays: &[(Ray, Origin)], query: Query) -> f64 {
         let start = Instant::now();
-        let hits = match packets {
-            true => self.hits16(map, rays),
-            false => self.hits(map, rays),
+        let hits = match query {
+            Query::Single => self.hits(map, rays),
+            Query::Packets => self.hits16(map, rays, false),
+            Query::Coherent => self.hits16(map, rays, true),
         };
         let seconds = start.elapsed().as_secs_f64();
         std::hint::black_box(hits);

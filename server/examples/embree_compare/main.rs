@@ -32,6 +32,8 @@
 //! neighbouring rays (`rtcIntersect16`, as a wavefront of sixteen lanes
 //! would hand them over), default build, checked to give the single
 //! rays' hits.
+//! `--first-rays` measures `cornell-mesh`'s first rays instead, a pixel's
+//! sixteen samples to a packet (`first_rays.rs`).
 //!
 //! Embree is bound by the small `extern "C"` block in `embree.rs` (Embree 3's C API,
 //! `libembree3`); only this example uses it, behind the `embree` feature.
@@ -46,8 +48,9 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 mod embree;
+mod first_rays;
 
-use embree::{ffi, Device, EmbreeScene};
+use embree::{ffi, Device, EmbreeScene, Query};
 
 /// How far Embree's hits agree with pathstream's on one ray kind.
 #[derive(Debug, Default)]
@@ -149,6 +152,7 @@ struct Args {
     quality: bool,
     verbose: bool,
     packets: bool,
+    first_rays: bool,
 }
 
 fn parse_args() -> Args {
@@ -159,6 +163,7 @@ fn parse_args() -> Args {
         quality: false,
         verbose: false,
         packets: false,
+        first_rays: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -170,8 +175,9 @@ fn parse_args() -> Args {
             "--quality" => args.quality = true,
             "--verbose" => args.verbose = true,
             "--packets" => args.packets = true,
+            "--first-rays" => args.first_rays = true,
             "-h" | "--help" => {
-                println!("embree_compare [TRIANGLES...] [--out FILE.csv] [--repeats N] [--quality] [--verbose] [--packets]");
+                println!("embree_compare [TRIANGLES...] [--out FILE.csv] [--repeats N] [--quality] [--verbose] [--packets] [--first-rays]");
                 std::process::exit(0);
             }
             n => args
@@ -216,7 +222,7 @@ fn measure(device: &Device, n: usize, args: &Args) -> Row {
     // checks the JSON mesh data).
     let data = bumpy_sphere(n);
     let start = Instant::now();
-    let again = Mesh::new(data.into()).expect("a valid mesh");
+    let again = Mesh::new(data).expect("a valid mesh");
     let build_mesh = start.elapsed().as_secs_f64();
     assert_eq!(again.triangles.len(), triangles.len());
     drop(again);
@@ -262,20 +268,25 @@ fn measure(device: &Device, n: usize, args: &Args) -> Row {
             .count()
     };
     let packets_differ = args.packets.then(|| {
-        differ(&medium.hits(&map, &camera), &medium.hits16(&map, &camera))
-            + differ(&medium.hits(&map, &bounce), &medium.hits16(&map, &bounce))
+        differ(
+            &medium.hits(&map, &camera),
+            &medium.hits16(&map, &camera, false),
+        ) + differ(
+            &medium.hits(&map, &bounce),
+            &medium.hits16(&map, &bounce, false),
+        )
     });
     let time = |rays: &[(Ray, Origin)]| {
         let mut best = [0.0f64; 5];
         for _ in 0..args.repeats.max(1) {
             let mut pass = [
                 rays_per_sec(&world, rays, 1),
-                medium.rays_per_sec(&map, rays, false),
-                robust.rays_per_sec(&map, rays, false),
+                medium.rays_per_sec(&map, rays, Query::Single),
+                robust.rays_per_sec(&map, rays, Query::Single),
                 high.as_ref()
-                    .map_or(0.0, |h| h.rays_per_sec(&map, rays, false)),
+                    .map_or(0.0, |h| h.rays_per_sec(&map, rays, Query::Single)),
                 if args.packets {
-                    medium.rays_per_sec(&map, rays, true)
+                    medium.rays_per_sec(&map, rays, Query::Packets)
                 } else {
                     0.0
                 },
@@ -500,6 +511,10 @@ fn main() {
         v % 100,
         args.repeats
     );
+    if args.first_rays {
+        first_rays::run(&device, args.repeats);
+        return;
+    }
     let mut rows = Vec::new();
     for &n in &args.sizes {
         eprintln!("{n} triangles ...");
