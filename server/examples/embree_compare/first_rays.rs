@@ -20,26 +20,15 @@
 use crate::embree::{ffi, Device, EmbreeScene, Query};
 use pathstream::bench::meshes::rays_per_sec;
 use pathstream::render::backend::nearest_hits;
-use pathstream::render::math::{basis, Affine3A, Vec3A};
+use pathstream::render::material::cosine_hemisphere;
+use pathstream::render::math::{Affine3A, Vec3A};
 use pathstream::render::ray::Ray;
+use pathstream::render::sampler::Sampler;
 use pathstream::render::world::{Geometry, Hit, Origin, World};
 use pathstream::render::{Quality, RenderJob};
 
 const SIZE: u32 = 128;
 const SAMPLES: u32 = 16;
-
-/// A uniform number in [0, 1) for item `i`, stream `k` (splitmix64).
-fn uniform(i: u64, k: u64) -> f32 {
-    let mut x = i
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        .wrapping_add(k.wrapping_mul(0xD1B5_4A32_D192_ED03));
-    x ^= x >> 30;
-    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x ^= x >> 27;
-    x = x.wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^= x >> 31;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
 
 /// The three sets of rays, a pixel's sixteen samples after one another.
 struct Sets {
@@ -50,27 +39,26 @@ struct Sets {
 
 fn sets(job: &RenderJob) -> Sets {
     let world = &job.world;
-    let mut camera = Vec::new();
+    // Each sample's own random numbers (the renderer's `random` sampler).
+    let (mut camera, mut numbers) = (Vec::new(), Vec::new());
     for y in 0..SIZE {
         for x in 0..SIZE {
-            for s in 0..SAMPLES {
-                let i = u64::from((y * SIZE + x) * SAMPLES + s);
-                let ray = job
-                    .camera
-                    .ray(x as f32 + uniform(i, 0), y as f32 + uniform(i, 1));
-                camera.push((ray, Origin::NONE));
+            for s in 0..u64::from(SAMPLES) {
+                let mut rng = Sampler::new(7, u64::from(y * SIZE + x), s);
+                let (dx, dy) = rng.next_2d();
+                camera.push((job.camera.ray(x as f32 + dx, y as f32 + dy), Origin::NONE));
+                numbers.push(rng);
             }
         }
     }
     let hits = nearest_hits(world, &camera);
     let (mut bounce, mut shadow) = (Vec::new(), Vec::new());
     let emitters = &world.lights.emitters;
-    for (k, ((ray, _), hit)) in camera.iter().zip(&hits).enumerate() {
+    for (((ray, _), hit), rng) in camera.iter().zip(&hits).zip(&mut numbers) {
         let Some(hit) = hit else { continue };
         let s = world.surface(hit, ray);
         let nl = if ray.dir.dot(s.ng) < 0.0 { s.ng } else { -s.ng };
         let ns = if s.ns.dot(nl) < 0.0 { -s.ns } else { s.ns };
-        let i = k as u64;
         // Leaving the surface along `dir`: the renderer's origin, moved
         // as Mitsuba moves its own.
         let leave = |dir: Vec3A| {
@@ -85,16 +73,12 @@ fn sets(job: &RenderJob) -> Sets {
             };
             (r, from)
         };
-        let (u1, u2) = (uniform(i, 2), uniform(i, 3));
-        let (t, b) = basis(ns);
-        let (sin, cos) = (std::f32::consts::TAU * u2).sin_cos();
-        let r = u1.sqrt();
-        let dir = (t * (r * cos) + b * (r * sin) + ns * (1.0 - u1).max(0.0).sqrt()).normalize();
-        bounce.push(leave(dir));
-        let e = &emitters[(uniform(i, 4) * emitters.len() as f32) as usize % emitters.len()];
-        if let Some((dir, _)) =
-            e.sample_direction(&s.receiver(nl, ns), uniform(i, 5), uniform(i, 6))
-        {
+        let (u1, u2) = rng.next_2d();
+        bounce.push(leave(cosine_hemisphere(ns, u1, u2)));
+        let pick = (rng.next_f32() * emitters.len() as f32) as usize;
+        let (u1, u2) = rng.next_2d();
+        let e = &emitters[pick.min(emitters.len() - 1)];
+        if let Some((dir, _)) = e.sample_direction(&s.receiver(nl, ns), u1, u2) {
             shadow.push(leave(dir));
         }
     }
@@ -127,7 +111,8 @@ fn flat(world: &World) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
 }
 
 /// Rays both tracers hit at distances more than 1e-4 apart (relative), and
-/// rays one hits and the other misses.
+/// rays one hits and the other misses (the table gives the larger of the
+/// two packet queries' counts).
 fn disagree(ours: &[Option<Hit>], theirs: &[Option<Hit>]) -> (usize, usize) {
     let mut far = 0;
     let mut one = 0;
@@ -177,7 +162,12 @@ pub fn run(device: &Device, repeats: u32) {
         ("first bounce", &sets.bounce),
         ("first shadow", &sets.shadow),
     ] {
-        let (far, one) = disagree(&nearest_hits(world, rays), &fast.hits16(&id, rays, false));
+        // Hits as the own BVH finds them, against each packet query's.
+        let ours = nearest_hits(world, rays);
+        let (far, one) = [false, true]
+            .map(|coherent| disagree(&ours, &fast.hits16(&id, rays, coherent)))
+            .into_iter()
+            .fold((0, 0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
         let mut m: [Vec<f64>; 6] = Default::default();
         for _ in 0..repeats.max(1) {
             m[0].push(rays_per_sec(world, rays, 1));
