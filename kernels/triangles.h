@@ -92,7 +92,7 @@ static inline int tri_intersect(const TriRay *r, float3 p0, float3 p1, float3 p2
     }
     float t_scaled = u * dot3(r->rz, a) + v * dot3(r->rz, b) + w * dot3(r->rz, c);
     float t = t_scaled / det;
-    if (!(t > 0.0f && t < t_max)) {
+    if (!(t > 0.0f && t <= t_max)) {
         return 0;
     }
     float inv = 1.0f / det;

@@ -5,7 +5,7 @@ mod common;
 use common::meshes::{leaving, mixed_scene, ray_in, unit};
 use common::{mesh_object, scene};
 use pathstream::model::generate::icosphere;
-use pathstream::render::isa::Portable;
+use pathstream::render::isa::{Isa, Portable};
 use pathstream::render::math::{DVec3, Vec3A};
 use pathstream::render::ray::Ray;
 use pathstream::render::sampler::Sampler;
@@ -212,4 +212,107 @@ fn spawned_origins_lie_on_the_side_they_leave_to() {
         // The offset is needed: the bare hit point is on the wrong side often.
         assert!(wrong_without_offset > tried / 20, "scale {scale} at {at}: bare hit points wrong only {wrong_without_offset} of {tried} times");
     }
+}
+
+/// `rays` one by one and as a packet, on `isa`: the same hits, bit for bit.
+fn packet_agrees<I: Isa>(isa: I, world: &World, rays: &[Ray], what: &str) {
+    let mut packed = vec![None; rays.len()];
+    world.intersect_packet(isa, rays, &mut packed);
+    for (k, (ray, got)) in rays.iter().zip(&packed).enumerate() {
+        let alone = world.intersect(isa, ray, Origin::NONE);
+        assert_eq!(*got, alone, "{what}: ray {k} of {}", rays.len());
+    }
+}
+
+/// Packets of up to sixteen rays (as the render loop makes of a pixel's
+/// camera rays, or of a run of pixels'): each ray gets the hit it gets
+/// alone. Origins from one point (a pinhole) to a spread of 20 units (a
+/// lens), directions from nearly one to any (rays whose directions differ
+/// in sign cannot share a packet and go one by one); on the triangle
+/// Cornell box and on meshes that are rotated, scaled and moved.
+#[test]
+fn packets_of_rays_get_the_hits_their_rays_get_alone() {
+    let cornell = pathstream::bench::scenes::cornell_mesh().expect("cornell-mesh");
+    let mixed = mixed_scene();
+    for (name, s) in [("cornell-mesh", &cornell), ("mixed scene", &mixed)] {
+        let world = World::new(s, s.camera.position);
+        assert!(world.uses_bvh());
+        let (mut shared, mut hits, mut all) = (0, 0, 0);
+        for i in 0..4_000u64 {
+            let mut smp = Sampler::new(31, i, 0);
+            let spread = [0.0, 0.01, 1.0, 20.0][(i % 4) as usize];
+            let cone = [1e-3, 0.02, 0.3, 3.0][(i / 4 % 4) as usize];
+            let axis = (unit(&mut smp) * 0.15 + Vec3A::NEG_Z).normalize();
+            let centre = unit(&mut smp) * spread;
+            let rays: Vec<Ray> = (0..1 + i % 16)
+                .map(|_| {
+                    let o = centre + unit(&mut smp) * (spread * 0.5);
+                    Ray::new(o, (axis + unit(&mut smp) * cone).normalize())
+                })
+                .collect();
+            let signs = |r: &Ray| r.dir.to_array().map(|c| c.is_sign_negative());
+            shared += usize::from(rays.iter().all(|r| signs(r) == signs(&rays[0])));
+            packet_agrees(Portable, &world, &rays, name);
+            #[cfg(target_arch = "x86_64")]
+            if let Some(avx2) = pathstream::render::isa::Avx2::detect() {
+                packet_agrees(avx2, &world, &rays, name);
+            }
+            all += rays.len();
+            hits += rays
+                .iter()
+                .filter(|r| world.intersect(Portable, r, Origin::NONE).is_some())
+                .count();
+        }
+        assert!(
+            shared > 1_000 && hits > all / 3,
+            "{name}: {shared} packets shared, {hits} hits of {all} rays"
+        );
+    }
+}
+
+/// A ball placed twice at the same place: every ray meets two triangles
+/// at the same distance, and the hit is the lower (object, triangle) of
+/// the two, whichever the traversal met first, for single rays and
+/// packets alike (as the OpenCL kernel decides it).
+#[test]
+fn a_tie_goes_to_the_lower_object_and_triangle() {
+    let ball = icosphere(5);
+    let objects: Vec<_> = (0..2)
+        .map(|_| {
+            mesh_object(
+                &ball,
+                "m",
+                json!({"translate": [0, 0, -4], "scale": 1.5}),
+                true,
+            )
+        })
+        .collect();
+    let j = json!({"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "vfov_deg": 40},
+        "materials": {"m": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}, "objects": objects});
+    let s = Scene::from_json_value(j).expect("valid");
+    let world = World::new(&s, s.camera.position);
+    let n = ball.triangles.len() as u32;
+    let mut hits = 0;
+    for i in 0..2_000u64 {
+        let mut smp = Sampler::new(41, i, 0);
+        let axis = (unit(&mut smp) * 0.3 + Vec3A::NEG_Z).normalize();
+        let rays: Vec<Ray> = (0..16)
+            .map(|_| Ray::new(Vec3A::ZERO, (axis + unit(&mut smp) * 0.01).normalize()))
+            .collect();
+        packet_agrees(Portable, &world, &rays, "the ball placed twice");
+        for ray in &rays {
+            let Some(hit) = world.intersect(Portable, ray, Origin::NONE) else {
+                continue;
+            };
+            hits += 1;
+            assert!(
+                hit.object == 0 && hit.prim < n,
+                "ray {i}: object {} triangle {} of {n}",
+                hit.object,
+                hit.prim
+            );
+            assert_eq!(Some(hit), world.intersect_brute(ray, Origin::NONE));
+        }
+    }
+    assert!(hits > 10_000, "only {hits} hits");
 }

@@ -15,7 +15,7 @@ use crate::render::sampler::Sampler;
 use crate::render::scene::{
     EnvironmentJson, ImportJson, MeshDataJson, ObjectJson, SceneJson, SurfaceJson,
 };
-use crate::render::world::{Origin, World};
+use crate::render::world::{Hit, Origin, World};
 use crate::render::{Backend, BackendChoice, BackendError, Film, Quality, RenderJob, Scene};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -122,10 +122,23 @@ pub fn ray_set(triangles: usize) -> RaySet {
 
 /// Rays per second through the world, best of `repeats` passes over `rays`.
 pub fn rays_per_sec(world: &World, rays: &[(Ray, Origin)], repeats: u32) -> f64 {
+    rays_per_sec_with(world, rays, repeats, nearest_hits)
+}
+
+/// How a set of rays is traced: `nearest_hits` or `nearest_hits_packets`.
+pub type Tracer = fn(&World, &[(Ray, Origin)]) -> Vec<Option<Hit>>;
+
+/// [`rays_per_sec`] with the rays traced by `trace`.
+pub fn rays_per_sec_with(
+    world: &World,
+    rays: &[(Ray, Origin)],
+    repeats: u32,
+    trace: Tracer,
+) -> f64 {
     let mut best = f64::INFINITY;
     for _ in 0..repeats.max(1) {
         let start = Instant::now();
-        let hits = nearest_hits(world, rays);
+        let hits = trace(world, rays);
         best = best.min(start.elapsed().as_secs_f64());
         std::hint::black_box(hits);
     }

@@ -6,6 +6,7 @@
 //! image, bit for bit. Paths are traced two at a time, side by side.
 
 use crate::render::adaptive::{TileWork, TILE_SIZE};
+use crate::render::bvh::PACKET;
 use crate::render::features::{self, FeatureSums};
 use crate::render::film::{Film, PixelSums};
 use crate::render::integrator::{Path, PathSettings};
@@ -295,37 +296,79 @@ pub const SLICE_CHUNK: usize = 16;
 pub fn nearest_hits(world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
     let wide = wide_isa();
     rays.par_chunks(4096)
-        .flat_map_iter(|chunk| hits_chunk(wide, world, chunk))
+        .flat_map_iter(|chunk| hits_chunk(wide, world, chunk, false))
+        .collect()
+}
+
+/// [`nearest_hits`] with the rays in packets of [`PACKET`] after one
+/// another ([`World::intersect_packet`]), as the render loop traces its
+/// camera rays: the same hits. Rays that leave a surface go one by one.
+pub fn nearest_hits_packets(world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+    let wide = wide_isa();
+    rays.par_chunks(4096)
+        .flat_map_iter(|chunk| hits_chunk(wide, world, chunk, true))
         .collect()
 }
 
 #[cfg(target_arch = "x86_64")]
-fn hits_chunk(wide: Option<Avx2>, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+fn hits_chunk(
+    wide: Option<Avx2>,
+    world: &World,
+    rays: &[(Ray, Origin)],
+    packets: bool,
+) -> Vec<Option<Hit>> {
     match wide {
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[allow(unsafe_code)]
-        Some(isa) => unsafe { hits_avx2(isa, world, rays) },
-        None => hits_with(Portable, world, rays),
+        Some(isa) => unsafe { hits_avx2(isa, world, rays, packets) },
+        None => hits_with(Portable, world, rays, packets),
     }
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-fn hits_chunk(_: Option<Portable>, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
-    hits_with(Portable, world, rays)
+fn hits_chunk(
+    _: Option<Portable>,
+    world: &World,
+    rays: &[(Ray, Origin)],
+    packets: bool,
+) -> Vec<Option<Hit>> {
+    hits_with(Portable, world, rays, packets)
 }
 
 /// `hits_with` compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn hits_avx2(isa: Avx2, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
-    hits_with(isa, world, rays)
+fn hits_avx2(isa: Avx2, world: &World, rays: &[(Ray, Origin)], packets: bool) -> Vec<Option<Hit>> {
+    hits_with(isa, world, rays, packets)
 }
 
 #[inline(always)]
-fn hits_with<I: Isa>(isa: I, world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
+fn hits_with<I: Isa>(
+    isa: I,
+    world: &World,
+    rays: &[(Ray, Origin)],
+    packets: bool,
+) -> Vec<Option<Hit>> {
     // A plain loop: an iterator's `collect` would put the traversal in a
     // function of its own, compiled without the caller's AVX2.
     let mut hits = Vec::with_capacity(rays.len());
+    if packets {
+        for group in rays.chunks(PACKET) {
+            let n = group.len();
+            let fresh = group.iter().all(|(_, from)| *from == Origin::NONE);
+            let rays: [Ray; PACKET] = std::array::from_fn(|k| group[k.min(n - 1)].0);
+            let mut found = [None; PACKET];
+            if fresh {
+                world.intersect_packet(isa, &rays[..n], &mut found[..n]);
+            } else {
+                for (k, (r, from)) in group.iter().enumerate() {
+                    found[k] = world.intersect(isa, r, *from);
+                }
+            }
+            hits.extend_from_slice(&found[..n]);
+        }
+        return hits;
+    }
     for (r, from) in rays {
         hits.push(world.intersect(isa, r, *from));
     }
@@ -354,11 +397,17 @@ fn render_span(
     span: Span<'_>,
     samples: Range<u64>,
 ) -> u64 {
-    match wide {
+    // Two functions, not one with both loops: inlined into one, the mesh
+    // scenes' loop lost its gain (code placement).
+    match (wide, job.world.packets_pay()) {
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[allow(unsafe_code)]
-        Some(isa) => unsafe { span_avx2(isa, job, first, span, samples) },
-        None => span_with(Portable, job, first, span, samples),
+        (Some(isa), false) => unsafe { span_avx2(isa, job, first, span, samples) },
+        // SAFETY: as above.
+        #[allow(unsafe_code)]
+        (Some(isa), true) => unsafe { packets_avx2(isa, job, first, span, samples) },
+        (None, false) => span_with(Portable, job, first, span, samples),
+        (None, true) => span_packets(Portable, job, first, span, samples),
     }
 }
 
@@ -370,7 +419,23 @@ fn render_span(
     span: Span<'_>,
     samples: Range<u64>,
 ) -> u64 {
-    span_with(Portable, job, first, span, samples)
+    match job.world.packets_pay() {
+        false => span_with(Portable, job, first, span, samples),
+        true => span_packets(Portable, job, first, span, samples),
+    }
+}
+
+/// `span_packets` compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn packets_avx2(
+    isa: Avx2,
+    job: &RenderJob,
+    first: usize,
+    span: Span<'_>,
+    samples: Range<u64>,
+) -> u64 {
+    span_packets(isa, job, first, span, samples)
 }
 
 /// `span_with` compiled for AVX2 and FMA.
@@ -381,27 +446,19 @@ fn span_avx2(isa: Avx2, job: &RenderJob, first: usize, span: Span<'_>, samples: 
 }
 
 /// Traces paths `$a` and, if `$pair`, `$b` to their ends, bounce by
-/// bounce: each bounce traces both paths' rays before shading either, so
-/// that the processor overlaps the two (independent) intersection tests,
-/// and the second path's surface is prefetched while the first shades.
+/// bounce, starting from their cameras rays' hits `$hit_a` and `$hit_b`:
+/// each bounce traces both paths' rays before shading either, so that the
+/// processor overlaps the two (independent) intersection tests, and the
+/// second path's surface is prefetched while the first shades.
 /// A macro, not a function: the loop stays in its caller's body, compiled
 /// and inlined as before (as a function it cost smallpt 15%, measured).
 macro_rules! trace_two {
-    ($isa:expr, $job:expr, $a:ident, $b:ident, $pair:expr) => {{
+    ($isa:expr, $job:expr, ($a:ident, $hit_a:expr), ($b:ident, $hit_b:expr), $pair:expr) => {{
         let (world, settings) = (&$job.world, &$job.settings);
         let (mut live_a, mut live_b) = (true, $pair);
         let meshes = !world.instances.is_empty();
-        while live_a || live_b {
-            let hit_a = if live_a {
-                world.intersect($isa, &$a.ray, $a.from)
-            } else {
-                None
-            };
-            let hit_b = if live_b {
-                world.intersect($isa, &$b.ray, $b.from)
-            } else {
-                None
-            };
+        let (mut hit_a, mut hit_b) = ($hit_a, $hit_b);
+        loop {
             // The second path's surface loads (a mesh's vertices, which
             // miss the cache) start while the first shades.
             if let (true, Some(h)) = (meshes, &hit_b) {
@@ -409,6 +466,19 @@ macro_rules! trace_two {
             }
             live_a = live_a && $a.advance($isa, world, settings, hit_a);
             live_b = live_b && $b.advance($isa, world, settings, hit_b);
+            if !(live_a || live_b) {
+                break;
+            }
+            hit_a = if live_a {
+                world.intersect($isa, &$a.ray, $a.from)
+            } else {
+                None
+            };
+            hit_b = if live_b {
+                world.intersect($isa, &$b.ray, $b.from)
+            } else {
+                None
+            };
         }
     }};
 }
@@ -451,7 +521,8 @@ impl Pair {
 /// at a time, side by side ([`trace_two`]): two samples of a pixel, or
 /// with one sample per pixel (a slice, or a 512x512 pass on two cores)
 /// two neighbouring pixels (20% faster than one path at a time,
-/// measured). Each pixel gets its samples in index order.
+/// measured). Each pixel gets its samples in index order. In a world of
+/// meshes [`span_packets`] runs instead.
 #[inline(always)]
 fn span_with<I: Isa>(
     isa: I,
@@ -460,7 +531,7 @@ fn span_with<I: Isa>(
     mut span: Span<'_>,
     samples: Range<u64>,
 ) -> u64 {
-    let settings = &job.settings;
+    let (world, settings) = (&job.world, &job.settings);
     let n = span.sums.len();
     let mut rejected = 0u64;
     let mut at = Pair {
@@ -472,7 +543,13 @@ fn span_with<I: Isa>(
         let pair = then.i < n;
         let mut a = at.path(job, first);
         let mut b = if pair { then.path(job, first) } else { a };
-        trace_two!(isa, job, a, b, pair);
+        let hit_a = world.intersect(isa, &a.ray, a.from);
+        let hit_b = if pair {
+            world.intersect(isa, &b.ray, b.from)
+        } else {
+            None
+        };
+        trace_two!(isa, job, (a, hit_a), (b, hit_b), pair);
         rejected += u64::from(!span.add(at.i, at.s, &a, settings));
         if pair {
             rejected += u64::from(!span.add(then.i, then.s, &b, settings));
@@ -481,3 +558,6 @@ fn span_with<I: Isa>(
     }
     rejected
 }
+
+mod packets;
+use packets::span_packets;

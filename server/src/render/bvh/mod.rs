@@ -17,6 +17,7 @@
 mod aabb;
 mod build;
 mod flatten;
+mod packet;
 mod traverse;
 mod wide;
 #[cfg(target_arch = "x86_64")]
@@ -24,8 +25,9 @@ mod wide_avx2;
 
 pub use aabb::Aabb;
 pub use build::MAX_LEAF;
+pub use packet::{BoxPacket, PACKET};
 pub(crate) use traverse::STACK;
-pub use traverse::{BoxRay, Nodes, Walk, Walk4, ROBUST};
+pub use traverse::{BoxRay, Nodes, Probe, Walk, Walk4, ROBUST};
 pub use wide::{test_portable, Walk8, WideBvh, WideNode, WideNodes, WideTest, WIDTH};
 #[cfg(target_arch = "x86_64")]
 pub use wide_avx2::test as test_avx2;

@@ -10,7 +10,7 @@
 //! 0 * inf = NaN for that plane, and the running max/min drop NaNs, so the
 //! slab does not constrain it (it is inside).
 
-use super::{Bvh, BvhNode, EMPTY};
+use super::{BoxPacket, Bvh, BvhNode, EMPTY};
 use crate::render::math::{gamma, Vec3A, Vec4};
 use std::mem::MaybeUninit;
 
@@ -50,6 +50,13 @@ impl BoxRay {
             near: [3 * neg(dir.x), 1 + 3 * neg(dir.y), 2 + 3 * neg(dir.z)],
             far: [3 - 3 * neg(dir.x), 4 - 3 * neg(dir.y), 5 - 3 * neg(dir.z)],
         }
+    }
+
+    /// The ray's origin and reciprocal direction.
+    #[inline(always)]
+    pub fn axes(&self) -> ([f32; 3], [f32; 3]) {
+        let x = |v: &[Vec4; 3]| [v[0].x, v[1].x, v[2].x];
+        (x(&self.org), x(&self.inv))
     }
 
     /// The same ray (direction) from `origin`: what a ray becomes in the
@@ -121,6 +128,24 @@ pub trait Nodes<const W: usize> {
     fn test(&self, ray: &BoxRay, index: u32, t_max: f32) -> ([f32; W], u32);
     /// Child `i` of node `index` as a stack entry: `child << 3 | count`.
     fn entry(&self, index: u32, i: usize) -> u32;
+    /// The boxes of node `index`'s children, as rows (min x, min y, min z,
+    /// max x, max y, max z).
+    fn bounds(&self, index: u32) -> &[[f32; W]; 6];
+}
+
+/// What a walk tests nodes with: one ray ([`BoxRay`], with the node test
+/// of `Nodes`), or a packet of rays ([`super::BoxPacket`]).
+pub trait Probe<T, const W: usize> {
+    /// Entry distance of each child of node `index` and the mask of those
+    /// met before `t_max`.
+    fn probe(&self, nodes: &T, index: u32, t_max: f32) -> ([f32; W], u32);
+}
+
+impl<T: Nodes<W>, const W: usize> Probe<T, W> for BoxRay {
+    #[inline(always)]
+    fn probe(&self, nodes: &T, index: u32, t_max: f32) -> ([f32; W], u32) {
+        nodes.test(self, index, t_max)
+    }
 }
 
 impl Nodes<4> for &[BvhNode] {
@@ -136,16 +161,22 @@ impl Nodes<4> for &[BvhNode] {
         debug_assert_ne!(node.child[i], EMPTY);
         node.child[i] << COUNT_BITS | node.count[i]
     }
+
+    #[inline(always)]
+    fn bounds(&self, index: u32) -> &[[f32; 4]; 6] {
+        &self[index as usize].bounds
+    }
 }
 
 /// A nearest-first traversal in progress: [`Walk::next_leaf`] hands the
 /// caller one leaf at a time, so that the caller's leaf test is its own
 /// code (inlined with everything around it into the function compiled for
 /// the CPU's instruction set, which a callback was not). `N` stack entries
-/// are enough for any tree this code builds.
-pub struct Walk<T, const W: usize, const N: usize> {
+/// are enough for any tree this code builds. `R` tests the nodes: one ray,
+/// or a packet (whose walk visits every leaf that any of its rays would).
+pub struct Walk<T, const W: usize, const N: usize, R = BoxRay> {
     nodes: T,
-    ray: BoxRay,
+    ray: R,
     // Not zeroed: a deep tree's stack is kilobytes, and clearing it for
     // every ray (and again for every instance it enters) cost the mesh
     // scenes a tenth of their time in `memset`.
@@ -158,11 +189,11 @@ pub struct Walk<T, const W: usize, const N: usize> {
 /// A walk of a four-wide [`Bvh`].
 pub type Walk4<'a> = Walk<&'a [BvhNode], 4, STACK>;
 
-impl<T: Nodes<W>, const W: usize, const N: usize> Walk<T, W, N> {
+impl<T: Nodes<W>, const W: usize, const N: usize, R: Probe<T, W>> Walk<T, W, N, R> {
     /// A walk from stack entry `start` (node 0: `Some(0)`; nothing to
     /// visit: `None`).
     #[inline(always)]
-    pub(super) fn new(nodes: T, ray: BoxRay, start: Option<u32>) -> Self {
+    pub(super) fn new(nodes: T, ray: R, start: Option<u32>) -> Self {
         Self {
             nodes,
             ray,
@@ -198,7 +229,7 @@ impl<T: Nodes<W>, const W: usize, const N: usize> Walk<T, W, N> {
             if count > 0 {
                 return Some((child, count));
             }
-            let (t, mut mask) = self.nodes.test(&self.ray, child, t_max);
+            let (t, mut mask) = self.ray.probe(&self.nodes, child, t_max);
             // One or two children hit (most nodes): no sort loop, and the
             // order the loop below would give (on a tie, the later child
             // first).
@@ -254,6 +285,14 @@ impl Bvh {
     pub fn walk(&self, ray: BoxRay) -> Walk4<'_> {
         let start = (!self.nodes.is_empty()).then_some(0);
         Walk::new(self.nodes.as_slice(), ray, start)
+    }
+
+    /// A walk of the leaves that any ray of `packet` may meet, nearest
+    /// (for the packet's bounds) first.
+    #[inline(always)]
+    pub fn walk_packet(&self, packet: BoxPacket) -> Walk<&[BvhNode], 4, STACK, BoxPacket> {
+        let start = (!self.nodes.is_empty()).then_some(0);
+        Walk::new(self.nodes.as_slice(), packet, start)
     }
 
     /// Visits the leaves that `ray` may meet before `t_max`, nearest box

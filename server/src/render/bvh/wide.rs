@@ -12,7 +12,7 @@
 use super::build::Node2;
 use super::flatten::{collapse, Slots};
 use super::traverse::{BoxRay, Nodes, Walk, COUNT_BITS};
-use super::{Aabb, EMPTY};
+use super::{Aabb, BoxPacket, EMPTY};
 
 /// Children per node.
 pub const WIDTH: usize = 8;
@@ -116,6 +116,21 @@ impl WideBvh {
         Walk::new(nodes, ray, self.start)
     }
 
+    /// A walk of the leaves that any ray of `packet` may meet (`test`
+    /// only gives the walk its type: a packet tests nodes itself).
+    #[inline(always)]
+    pub fn walk_packet<T: WideTest>(
+        &self,
+        packet: BoxPacket,
+        test: T,
+    ) -> Walk<WideNodes<'_, T>, WIDTH, STACK, BoxPacket> {
+        let nodes = WideNodes {
+            nodes: &self.nodes,
+            test,
+        };
+        Walk::new(nodes, packet, self.start)
+    }
+
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<WideNode>()
     }
@@ -177,5 +192,10 @@ impl<T: WideTest> Nodes<WIDTH> for WideNodes<'_, T> {
         let node = &self.nodes[index as usize];
         debug_assert_ne!(node.child[i], EMPTY);
         node.child[i] << COUNT_BITS | node.count[i]
+    }
+
+    #[inline(always)]
+    fn bounds(&self, index: u32) -> &[[f32; WIDTH]; 6] {
+        &self.nodes[index as usize].bounds
     }
 }

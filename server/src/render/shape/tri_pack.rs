@@ -9,14 +9,17 @@
 //! test gives the same bits: the same watertightness, the same hits. A lane
 //! whose edge function comes out zero goes to the scalar test, which redoes
 //! it in f64. The leaf's triangles are then offered in slot order with the
-//! scalar loop's rule (a hit counts only if nearer than the best so far), so
-//! the nearest hit is the one the scalar loop finds, ties included.
+//! scalar loop's rule (a hit counts if it is no farther than the best so
+//! far, and [`crate::render::world::Hit`] keeps the lower (object, prim) of
+//! two at the same distance), so the nearest hit is the one the scalar loop
+//! finds, ties included, whatever order the leaves are visited in.
 //!
 //! The OpenCL kernel keeps reading the leaf-ordered [`TriVerts`]; packs are
 //! the CPU's own copy (160 bytes per leaf), with the triangles' indices, so
 //! that a hit is offered without loading its [`TriVerts`] too.
 
 use super::triangle::{TriRay, TriVerts};
+use crate::render::bvh::Aabb;
 use crate::render::math::{Vec3A, Vec4};
 
 /// Up to four triangles; lanes past the leaf's count repeat its last one
@@ -46,7 +49,7 @@ pub struct PackHits {
     v: [f32; 4],
     w: [f32; 4],
     det: [f32; 4],
-    /// Lanes hit between 0 and `t_max` (bit i: lane i).
+    /// Lanes hit after 0 and not beyond `t_max` (bit i: lane i).
     pub hits: u32,
     /// Lanes the scalar test must decide (an edge function was zero).
     pub scalar: u32,
@@ -79,6 +82,28 @@ impl TriPack {
             }
         }
         Self { p, index }
+    }
+
+    /// The box around the leaf's triangles (the lanes past its count
+    /// repeat its last triangle).
+    #[inline(always)]
+    pub fn bounds(&self) -> Aabb {
+        let p = &self.p;
+        let mut lo = [0.0; 3];
+        let mut hi = [0.0; 3];
+        for c in 0..3 {
+            let (a, b, d) = (
+                Vec4::from_array(p[c]),
+                Vec4::from_array(p[3 + c]),
+                Vec4::from_array(p[6 + c]),
+            );
+            lo[c] = a.min(b).min(d).min_element();
+            hi[c] = a.max(b).max(d).max_element();
+        }
+        Aabb {
+            min: Vec3A::from(lo),
+            max: Vec3A::from(hi),
+        }
     }
 
     /// Lanes that hold the leaf's triangles.
@@ -117,7 +142,7 @@ impl TriRay {
         let hits = inside
             & det.cmpne(zero).bitmask()
             & t.cmpgt(zero).bitmask()
-            & t.cmplt(Vec4::splat(t_max)).bitmask()
+            & t.cmple(Vec4::splat(t_max)).bitmask()
             & !scalar;
         PackHits {
             t: t.to_array(),

@@ -109,7 +109,8 @@ impl TriRay {
     }
 
     /// Distance to the triangle (in units of the ray's direction) if the
-    /// ray meets it strictly between 0 and `t_max`, with the barycentric
+    /// ray meets it after 0 and not beyond `t_max` (a hit at `t_max` itself
+    /// counts, so that [`crate::render::world::Hit`]'s tie rule sees it), with the barycentric
     /// weights of its three vertices at the hit.
     #[inline(always)]
     pub fn intersect(&self, [p0, p1, p2]: [Vec3A; 3], t_max: f32) -> Option<(f32, [f32; 3])> {
@@ -137,7 +138,7 @@ impl TriRay {
         }
         let t_scaled = u * self.row_z.dot(a) + v * self.row_z.dot(b) + w * self.row_z.dot(c);
         let t = t_scaled / det;
-        if !(t > 0.0 && t < t_max) {
+        if !(t > 0.0 && t <= t_max) {
             return None;
         }
         let inv = 1.0 / det;

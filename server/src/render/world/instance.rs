@@ -22,7 +22,7 @@ use crate::render::bvh::{BoxRay, MAX_LEAF};
 use crate::render::isa::Isa;
 use crate::render::math::{gamma, Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
 use crate::render::ray::Ray;
-use crate::render::shape::{hit_point, Mesh, TriRay};
+use crate::render::shape::{hit_point, Mesh, TriRay, TriVerts};
 use std::sync::Arc;
 
 #[derive(Clone, Debug)]
@@ -54,8 +54,8 @@ pub struct Instance {
 /// only moves the origin.
 #[derive(Clone, Copy, Debug)]
 pub struct Prepared {
-    tri: TriRay,
-    boxes: BoxRay,
+    pub(super) tri: TriRay,
+    pub(super) boxes: BoxRay,
 }
 
 impl Prepared {
@@ -124,63 +124,97 @@ impl Instance {
         skip: u32,
         best: &mut Hit,
     ) {
-        // `pre` is `ray` prepared in camera space (there whenever some
-        // instance is only translated): a mesh moved but not turned or
-        // scaled (a wall, identity matrix) reuses its direction.
-        let (tri_ray, box_ray) = if let (true, Some(pre)) = (self.translation_only, pre) {
+        let (tri_ray, box_ray) = self.prepare(ray, pre);
+        let mesh = &*self.mesh;
+        if BRUTE {
+            self.offer_tris(id, (&tri_ray, ray), &mesh.tris, skip, best);
+            return;
+        }
+        let mut walk = mesh.wide.walk(box_ray, isa);
+        while let Some((first, _)) = walk.next_leaf(best.t) {
+            self.offer_leaf(id, (&tri_ray, ray), first, skip, best);
+        }
+    }
+
+    /// `ray` in object space, prepared for the triangle and box tests.
+    /// `pre` is `ray` prepared in camera space (there whenever some
+    /// instance is only translated): a mesh moved but not turned or scaled
+    /// (a wall, identity matrix) reuses its direction.
+    #[inline(always)]
+    pub(super) fn prepare(&self, ray: &Ray, pre: Option<&Prepared>) -> (TriRay, BoxRay) {
+        if let (true, Some(pre)) = (self.translation_only, pre) {
             let o = ray.origin + self.obj_from_cam.translation;
             (pre.tri.from_origin(o), pre.boxes.from_origin(o))
         } else {
             let o = self.obj_from_cam.transform_point3a(ray.origin);
             let d = self.obj_from_cam.transform_vector3a(ray.dir);
             (TriRay::new(o, d), BoxRay::new(o, d))
-        };
-        let mesh = &*self.mesh;
-        // Whether the ray stops at a triangle it meets (alpha-tested slots).
-        let stops = |index: u32, bary: [f32; 3]| match &self.alpha {
+        }
+    }
+
+    /// Whether `ray` stops at triangle `index`, met at `bary` (its slot's
+    /// alpha test, if it has one).
+    #[inline(always)]
+    fn stops(&self, ray: &Ray, index: u32, bary: [f32; 3]) -> bool {
+        match &self.alpha {
             None => true,
-            Some(tests) => tests[mesh.materials[index as usize] as usize]
-                .passes(mesh, index, bary, ray.origin, ray.dir),
-        };
-        let test = |tris: &[crate::render::shape::TriVerts], best: &mut Hit| {
-            for tri in tris {
-                let index = tri.index();
-                if index == skip {
-                    continue;
-                }
-                if let Some((t, bary)) = tri_ray.intersect(tri.vertices(), best.t) {
-                    if stops(index, bary) {
-                        best.offer(t, id, index, bary);
-                    }
+            Some(tests) => tests[self.mesh.materials[index as usize] as usize]
+                .passes(&self.mesh, index, bary, ray.origin, ray.dir),
+        }
+    }
+
+    /// Offers each of `tris` that `tri_ray` (`ray` in object space) meets,
+    /// one scalar test each.
+    #[inline(always)]
+    fn offer_tris(
+        &self,
+        id: u32,
+        (tri_ray, ray): (&TriRay, &Ray),
+        tris: &[TriVerts],
+        skip: u32,
+        best: &mut Hit,
+    ) {
+        for tri in tris {
+            let index = tri.index();
+            if index == skip {
+                continue;
+            }
+            if let Some((t, bary)) = tri_ray.intersect(tri.vertices(), best.t) {
+                if self.stops(ray, index, bary) {
+                    best.offer(t, id, index, bary);
                 }
             }
-        };
-        if BRUTE {
-            test(&mesh.tris, best);
-            return;
         }
-        // A leaf's triangles four at a time, offered in slot order as the
-        // scalar loop above offers them (see `shape::tri_pack`).
-        let mut walk = mesh.wide.walk(box_ray, isa);
-        while let Some((first, _)) = walk.next_leaf(best.t) {
-            let pack = &mesh.packs[first as usize / MAX_LEAF];
-            let found = tri_ray.intersect4(pack, best.t);
-            let mut lanes = (found.hits | found.scalar) & pack.lanes();
-            while lanes != 0 {
-                let lane = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                let index = pack.index[lane];
-                if index == skip {
-                    continue;
-                }
-                if found.scalar & (1 << lane) != 0 {
-                    test(
-                        std::slice::from_ref(&mesh.tris[first as usize + lane]),
-                        best,
-                    );
-                } else if found.t[lane] < best.t && stops(index, found.bary(lane)) {
-                    best.offer(found.t[lane], id, index, found.bary(lane));
-                }
+    }
+
+    /// Offers the triangles of the leaf at slot `first` that `tri_ray`
+    /// meets: four at a time, in slot order as [`Instance::offer_tris`]
+    /// offers them (see `shape::tri_pack`).
+    #[inline(always)]
+    pub(super) fn offer_leaf(
+        &self,
+        id: u32,
+        (tri_ray, ray): (&TriRay, &Ray),
+        first: u32,
+        skip: u32,
+        best: &mut Hit,
+    ) {
+        let mesh = &*self.mesh;
+        let pack = &mesh.packs[first as usize / MAX_LEAF];
+        let found = tri_ray.intersect4(pack, best.t);
+        let mut lanes = (found.hits | found.scalar) & pack.lanes();
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let index = pack.index[lane];
+            if index == skip {
+                continue;
+            }
+            if found.scalar & (1 << lane) != 0 {
+                let tri = std::slice::from_ref(&mesh.tris[first as usize + lane]);
+                self.offer_tris(id, (tri_ray, ray), tri, skip, best);
+            } else if found.t[lane] <= best.t && self.stops(ray, index, found.bary(lane)) {
+                best.offer(found.t[lane], id, index, found.bary(lane));
             }
         }
     }

@@ -22,6 +22,7 @@ mod embree_rays;
 mod emitters;
 mod instance;
 mod merge;
+mod packet;
 mod scan;
 mod textures;
 
@@ -102,7 +103,11 @@ impl Hit {
     };
 
     /// Takes (t, object, prim) if it comes before this hit: nearer, or as
-    /// near with a lower (object, prim).
+    /// near with a lower (object, prim). So the nearest hit does not depend
+    /// on the order in which a traversal offers candidates (a single ray's
+    /// nearest-first walk, a packet's walk, the kernel's four-wide one):
+    /// the triangle tests accept a hit at exactly the best distance so far
+    /// for this rule to decide.
     #[inline(always)]
     fn offer(&mut self, t: f32, object: u32, prim: u32, bary: [f32; 3]) {
         if t < self.t || (t == self.t && (object, prim) < (self.object, self.prim)) {
