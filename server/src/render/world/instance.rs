@@ -225,7 +225,7 @@ impl Instance {
         let mesh = &*self.mesh;
         let v = mesh.vertices(hit.prim);
         let (p_obj, err) = hit_point(v, hit.bary);
-        let n_obj = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+        let n_obj = mesh.face_normal(hit.prim);
         let ng = (self.normal_from_obj * n_obj).normalize_or_zero();
         let (ns, smooth) = match mesh.shading_normal(hit.prim, hit.bary) {
             Some(n) => match (self.normal_from_obj * n).try_normalize() {

@@ -33,21 +33,18 @@ impl World {
     pub fn intersect_packet<I: Isa>(&self, isa: I, rays: &[Ray], hits: &mut [Option<Hit>]) {
         assert!(rays.len() <= PACKET && hits.len() == rays.len());
         let n = rays.len();
-        let packed = n > 1 && !matches!(self.embree.get(), Some(Some(_)));
-        let (bvh, big) = match &self.accel {
-            Accel::Bvh { bvh, big } if packed => (bvh, big),
-            _ => {
-                for (hit, ray) in hits.iter_mut().zip(rays) {
-                    *hit = self.intersect(isa, ray, Origin::NONE);
-                }
-                return;
+        let embree = matches!(self.embree.get(), Some(Some(_)));
+        let packed = match &self.accel {
+            Accel::Bvh { bvh, big } if n > 1 && !embree => {
+                let boxes: [BoxRay; PACKET] = std::array::from_fn(|k| {
+                    let ray = &rays[k.min(n - 1)];
+                    BoxRay::new(ray.origin, ray.dir)
+                });
+                BoxPacket::of(&boxes[..n]).map(|packet| (bvh, big, boxes, packet))
             }
+            _ => None,
         };
-        let boxes: [BoxRay; PACKET] = std::array::from_fn(|k| {
-            let ray = &rays[k.min(n - 1)];
-            BoxRay::new(ray.origin, ray.dir)
-        });
-        let Some(packet) = BoxPacket::of(&boxes[..n]) else {
+        let Some((bvh, big, boxes, packet)) = packed else {
             for (hit, ray) in hits.iter_mut().zip(rays) {
                 *hit = self.intersect(isa, ray, Origin::NONE);
             }
