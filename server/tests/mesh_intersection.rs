@@ -316,3 +316,34 @@ fn a_tie_goes_to_the_lower_object_and_triangle() {
     }
     assert!(hits > 10_000, "only {hits} hits");
 }
+
+/// Camera rays go as packets only in worlds of fewer than
+/// `PACKET_MAX_TRIANGLES` placed triangles: in larger meshes a packet
+/// with a ray that misses walks everything in its frustum (a 1M-triangle
+/// mesh rendered 3x slower, docs/BENCHMARKS.md).
+#[test]
+fn large_worlds_trace_their_camera_rays_one_by_one() {
+    use pathstream::render::world::PACKET_MAX_TRIANGLES;
+    let ball = icosphere(5);
+    let per_ball = ball.triangles.len();
+    let world_of = |balls: usize| {
+        let objects: Vec<_> = (0..balls)
+            .map(|k| mesh_object(&ball, "m", json!({"translate": [3 * k, 0, -4]}), true))
+            .collect();
+        let j = json!({"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "vfov_deg": 40},
+            "materials": {"m": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}, "objects": objects});
+        let s = Scene::from_json_value(j).expect("valid");
+        World::new(&s, s.camera.position)
+    };
+    let below = (PACKET_MAX_TRIANGLES - 1) / per_ball;
+    assert!(
+        world_of(below).packets_pay(),
+        "{} triangles",
+        below * per_ball
+    );
+    assert!(
+        !world_of(below + 1).packets_pay(),
+        "{} triangles",
+        (below + 1) * per_ball
+    );
+}

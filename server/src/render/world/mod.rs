@@ -29,6 +29,7 @@ mod textures;
 pub use build::{scan_cost, AccelChoice, SCAN_MAX_COST};
 pub use embree_rays::EMBREE_MIN_TRIANGLES;
 pub use instance::Instance;
+pub use packet::PACKET_MAX_TRIANGLES;
 
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
 use crate::render::isa::{Isa, Portable};

@@ -11,17 +11,34 @@ use super::{Accel, Geometry, Hit, Origin, World};
 use crate::render::bvh::{Aabb, BoxPacket, BoxRay, MAX_LEAF, PACKET, ROBUST};
 use crate::render::isa::Isa;
 use crate::render::ray::Ray;
-use crate::render::world::NO_PRIM;
+use crate::render::world::{EMBREE_MIN_TRIANGLES, NO_PRIM};
+
+/// Worlds of this many placed triangles or more trace their camera rays
+/// one by one. A packet's walk culls a node only beyond the farthest of
+/// its rays' nearest hits so far, so where one of its rays misses (a
+/// silhouette) it visits everything in the packet's frustum, behind the
+/// surface too. In a mesh of 100,000 triangles that still paid (paths
+/// +4-8%); in one of 1M it cost 3x, in one of 4M 6.6x (docs/BENCHMARKS.md,
+/// "Issue 32 before and after"). Where Embree is installed, such worlds
+/// go through it anyway ([`EMBREE_MIN_TRIANGLES`], the same bound).
+pub const PACKET_MAX_TRIANGLES: usize = EMBREE_MIN_TRIANGLES;
 
 impl World {
     /// Whether camera rays gain from going through
     /// [`World::intersect_packet`]: in a world of meshes walked by the own
-    /// BVH. Spheres and quads alone (a scan, or a BVH of a few objects)
-    /// and Embree's worlds trace them one by one.
+    /// BVH, of fewer than [`PACKET_MAX_TRIANGLES`] placed triangles.
+    /// Spheres and quads alone (a scan, or a BVH of a few objects),
+    /// Embree's worlds and larger meshes trace them one by one.
     pub fn packets_pay(&self) -> bool {
         matches!(self.accel, Accel::Bvh { .. })
             && !self.instances.is_empty()
             && !matches!(self.embree.get(), Some(Some(_)))
+            && (self.instances.iter())
+                .try_fold(0, |n, i| {
+                    let n = n + i.triangles();
+                    (n < PACKET_MAX_TRIANGLES).then_some(n)
+                })
+                .is_some()
     }
 
     /// The nearest hits of `rays` (at most [`PACKET`], none leaving a
