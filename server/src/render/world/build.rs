@@ -233,6 +233,7 @@ impl World {
         };
         let vertex_colors = instances.iter().any(|i| i.mesh.colors.is_some());
         let translated_meshes = instances.iter().any(|i| i.translation_only);
+        let placed_triangles = instances.iter().map(|i| i.triangles()).sum();
         Self {
             origin,
             objects,
@@ -242,6 +243,7 @@ impl World {
             maps,
             vertex_colors,
             translated_meshes,
+            placed_triangles,
             lights,
             environment,
             env_map,

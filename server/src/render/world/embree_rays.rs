@@ -77,7 +77,7 @@ impl EmbreeRays {
     /// or too many other objects to scan beside them (then the world's own
     /// BVH serves).
     pub(super) fn build(world: &World, min_triangles: usize) -> Result<EmbreeRays, String> {
-        let triangles: usize = world.instances.iter().map(|i| i.triangles()).sum();
+        let triangles = world.placed_triangles;
         if triangles == 0 || triangles < min_triangles {
             return Err(format!("{triangles} triangles, fewer than {min_triangles}"));
         }

@@ -196,6 +196,9 @@ pub struct World {
     /// Some placed mesh is only translated (`Instance::translation_only`):
     /// rays are then prepared for the triangle test once, in camera space.
     pub translated_meshes: bool,
+    /// Triangles of every placed mesh together (a mesh placed twice
+    /// counted twice): what the choices of tracer go by.
+    pub placed_triangles: usize,
     pub lights: Lights,
     /// Radiance of rays that leave the scene, where there is no map.
     pub environment: Vec3A,

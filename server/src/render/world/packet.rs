@@ -19,8 +19,12 @@ use crate::render::world::{EMBREE_MIN_TRIANGLES, NO_PRIM};
 /// silhouette) it visits everything in the packet's frustum, behind the
 /// surface too. In a mesh of 100,000 triangles that still paid (paths
 /// +4-8%); in one of 1M it cost 3x, in one of 4M 6.6x (docs/BENCHMARKS.md,
-/// "Issue 32 before and after"). Where Embree is installed, such worlds
-/// go through it anyway ([`EMBREE_MIN_TRIANGLES`], the same bound).
+/// "Issue 32 before and after"). A walk that culls each ray by its own
+/// hit at every node mended most of that (1M: 1.65-1.71 M paths/s against
+/// 0.70) but still lost to single rays (2.09-2.22) and cost a few percent
+/// below the bound: not kept ("Each ray culled by its own hit in a
+/// packet's walk"). Where Embree is installed, such worlds go through it
+/// anyway ([`EMBREE_MIN_TRIANGLES`], the same bound).
 pub const PACKET_MAX_TRIANGLES: usize = EMBREE_MIN_TRIANGLES;
 
 impl World {
@@ -33,12 +37,7 @@ impl World {
         matches!(self.accel, Accel::Bvh { .. })
             && !self.instances.is_empty()
             && !matches!(self.embree.get(), Some(Some(_)))
-            && (self.instances.iter())
-                .try_fold(0, |n, i| {
-                    let n = n + i.triangles();
-                    (n < PACKET_MAX_TRIANGLES).then_some(n)
-                })
-                .is_some()
+            && self.placed_triangles < PACKET_MAX_TRIANGLES
     }
 
     /// The nearest hits of `rays` (at most [`PACKET`], none leaving a
