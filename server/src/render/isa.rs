@@ -17,6 +17,15 @@ pub trait Isa: Copy + Send + Sync + WideTest {
     /// Nearest sphere hit over `batches`: (distance, object index as f32),
     /// distance infinity when there is none. Same result on every `Isa`.
     fn nearest_sphere(self, batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32);
+
+    /// This token as an [`Avx2`], if it is one (a constant of the type):
+    /// what picks the copy of an out-of-line function compiled for it
+    /// (`World::intersect`).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx2(self) -> Option<Avx2> {
+        None
+    }
 }
 
 /// Four-lane code that every CPU runs.
@@ -71,5 +80,10 @@ impl Isa for Avx2 {
         unsafe {
             crate::render::shape::nearest_sphere_avx2(batches, ray, from)
         }
+    }
+
+    #[inline(always)]
+    fn avx2(self) -> Option<Avx2> {
+        Some(self)
     }
 }

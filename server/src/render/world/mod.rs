@@ -32,6 +32,8 @@ pub use instance::Instance;
 pub use packet::PACKET_MAX_TRIANGLES;
 
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
+#[cfg(target_arch = "x86_64")]
+use crate::render::isa::Avx2;
 use crate::render::isa::{Isa, Portable};
 use crate::render::light::{EnvLight, Lights, Receiver};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
@@ -279,8 +281,55 @@ impl World {
 
     /// Nearest hit along `ray`, never the surface the ray starts on; the
     /// spheres of a scan are tested with `isa`'s kernel.
+    ///
+    /// One copy of the BVH's traversal per instruction set, out of line:
+    /// the render loop traces rays at a dozen places (path and shadow rays,
+    /// of two paths, for each kind of surface), and inlined at each the
+    /// loop took 0.8 MB of machine code per copy and most of the crate's
+    /// build. Out of line it renders as fast (docs/BENCHMARKS.md, "The
+    /// traversal out of line").
     #[inline(always)]
     pub fn intersect<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
+        // A scan of a few spheres and quads stays inline: it is small, and
+        // a call costs the sphere scenes 4% (Embree serves only meshes).
+        if let (
+            Accel::Scan {
+                sphere_batches,
+                quads,
+                ..
+            },
+            None | Some(None),
+        ) = (&self.accel, self.embree.get())
+        {
+            let hit = scan::nearest(isa, sphere_batches, quads, ray, from);
+            return (hit.t < f32::INFINITY).then_some(hit);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx2) = isa.avx2() {
+            // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
+            #[allow(unsafe_code)]
+            return unsafe { self.nearest_avx2(avx2, ray, from) };
+        }
+        self.nearest_portable(ray, from)
+    }
+
+    /// [`World::nearest`] for every CPU.
+    #[inline(never)]
+    fn nearest_portable(&self, ray: &Ray, from: Origin) -> Option<Hit> {
+        self.nearest(Portable, ray, from)
+    }
+
+    /// [`World::nearest`] compiled for AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(never)]
+    #[target_feature(enable = "avx2,fma")]
+    fn nearest_avx2(&self, isa: Avx2, ray: &Ray, from: Origin) -> Option<Hit> {
+        self.nearest(isa, ray, from)
+    }
+
+    /// [`World::intersect`]'s traversal, inlined into each copy.
+    #[inline(always)]
+    fn nearest<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
         if let Some(Some(embree)) = self.embree.get() {
             let hit = embree.nearest(self, isa, ray, from);
             return (hit.t < f32::INFINITY).then_some(hit);
