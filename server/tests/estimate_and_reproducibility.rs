@@ -54,28 +54,45 @@ fn splitting_samples_into_passes_does_not_change_the_image() {
 
 #[test]
 fn the_wide_kernels_give_the_portable_image_bit_for_bit() {
-    use pathstream::render::backend::CpuBackend;
+    use pathstream::render::backend::{CpuBackend, IsaCap};
     use pathstream::render::{Film, RenderJob};
+    // `cornell-mesh` runs the packet loop and the traversal's out-of-line
+    // copies; the sphere scenes the plain loop with an inline scan.
     for (name, max_depth, nee) in [
         ("smallpt", 0, false),
         ("cornell-glass", 6, true),
         ("cornell", 6, true),
+        ("cornell-mesh", 6, true),
     ] {
-        let s = scene(name);
+        let s = match name {
+            "cornell-mesh" => pathstream::bench::scenes::cornell_mesh().expect("cornell-mesh"),
+            _ => scene(name),
+        };
         let q = Quality {
             max_depth,
             nee,
             ..Quality::default()
         };
         let job = RenderJob::new(&s, 32, 24, &q);
-        let (mut wide, mut portable) = (Film::new(32, 24), Film::new(32, 24));
-        CpuBackend::default().render(&job, &mut wide, 16);
-        CpuBackend::default()
-            .portable_only()
-            .render(&job, &mut portable, 16);
+        let render = |cap: IsaCap| {
+            let mut film = Film::new(32, 24);
+            CpuBackend::default()
+                .isa_cap(cap)
+                .render(&job, &mut film, 16);
+            film
+        };
+        // The widest this CPU has (AVX-512 on the test machine), AVX2 at
+        // most, and the code every CPU runs.
+        let widest = render(IsaCap::Widest);
+        let avx2 = render(IsaCap::Avx2);
+        let portable = render(IsaCap::Portable);
         assert!(
-            wide.pixels() == portable.pixels(),
-            "{name}: the images differ"
+            widest.pixels() == portable.pixels(),
+            "{name}: the widest kernels' image differs from the portable one"
+        );
+        assert!(
+            avx2.pixels() == portable.pixels(),
+            "{name}: the AVX2 kernels' image differs from the portable one"
         );
     }
 }

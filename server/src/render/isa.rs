@@ -26,6 +26,13 @@ pub trait Isa: Copy + Send + Sync + WideTest {
     fn avx2(self) -> Option<Avx2> {
         None
     }
+
+    /// This token as an [`Avx512`], if it is one (as [`Isa::avx2`]).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx512(self) -> Option<Avx512> {
+        None
+    }
 }
 
 /// Four-lane code that every CPU runs.
@@ -84,6 +91,52 @@ impl Isa for Avx2 {
 
     #[inline(always)]
     fn avx2(self) -> Option<Avx2> {
+        Some(self)
+    }
+}
+
+/// The AVX2 kernels in code compiled for AVX-512 (F, VL, BW, DQ): the
+/// same arithmetic, with 32 vector registers and mask registers for the
+/// compiler. Proof that the CPU has AVX-512 as well as AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub struct Avx512(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx512 {
+    /// The token, if this CPU has AVX-512 F, VL, BW and DQ, AVX2 and FMA.
+    pub fn detect() -> Option<Self> {
+        let avx512 = is_x86_feature_detected!("avx512f")
+            && is_x86_feature_detected!("avx512vl")
+            && is_x86_feature_detected!("avx512bw")
+            && is_x86_feature_detected!("avx512dq");
+        (avx512 && Avx2::detect().is_some()).then_some(Self(()))
+    }
+
+    /// The AVX2 token this one implies.
+    #[inline(always)]
+    pub fn avx2(self) -> Avx2 {
+        Avx2(())
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl WideTest for Avx512 {
+    #[inline(always)]
+    fn wide_test(self, ray: &BoxRay, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
+        Avx512::avx2(self).wide_test(ray, node, t_max)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Isa for Avx512 {
+    #[inline(always)]
+    fn nearest_sphere(self, batches: &[SphereBatch], ray: &Ray, from: Leaving) -> (f32, f32) {
+        Avx512::avx2(self).nearest_sphere(batches, ray, from)
+    }
+
+    #[inline(always)]
+    fn avx512(self) -> Option<Avx512> {
         Some(self)
     }
 }

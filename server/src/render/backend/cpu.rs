@@ -1,18 +1,15 @@
 //! The rayon backend: rows in parallel, each pixel's samples in index order.
 //!
 //! A row is rendered by one function with the whole path loop inlined into
-//! it, compiled once for every CPU and once more for AVX2 and FMA; the
-//! latter is chosen at run time where the CPU has them. Both give the same
+//! it, compiled for every CPU, for AVX2 and FMA, and for AVX-512; the
+//! widest the CPU has is chosen at run time (`wide`). All give the same
 //! image, bit for bit. Paths are traced two at a time, side by side.
 
 use crate::render::adaptive::{TileWork, TILE_SIZE};
-use crate::render::bvh::PACKET;
 use crate::render::features::{self, FeatureSums};
 use crate::render::film::{Film, PixelSums};
 use crate::render::integrator::{Path, PathSettings};
-#[cfg(target_arch = "x86_64")]
-use crate::render::isa::Avx2;
-use crate::render::isa::{Isa, Portable};
+use crate::render::isa::Isa;
 use crate::render::job::RenderJob;
 use crate::render::ray::Ray;
 use crate::render::world::{Hit, Origin, World, EMBREE_MIN_TRIANGLES};
@@ -26,8 +23,8 @@ pub struct CpuBackend {
     fallback_reason: Option<String>,
     /// A pool of its own (the server's, at low priority); None: rayon's global pool.
     pool: Option<Arc<rayon::ThreadPool>>,
-    /// Never use the wide kernels, even where the CPU has them.
-    portable_only: bool,
+    /// The widest kernels it may use (the widest the CPU has but in tests).
+    cap: IsaCap,
     /// Where meshes are traced through Embree (where it is installed).
     embree: EmbreeUse,
 }
@@ -73,12 +70,9 @@ impl CpuBackend {
         }
     }
 
-    /// This backend without the wide kernels: the code every CPU runs.
-    pub fn portable_only(self) -> Self {
-        Self {
-            portable_only: true,
-            ..self
-        }
+    /// This backend using at most the kernels `cap` names.
+    pub fn isa_cap(self, cap: IsaCap) -> Self {
+        Self { cap, ..self }
     }
 
     /// This backend tracing meshes through Embree where `embree` says.
@@ -141,7 +135,7 @@ impl CpuBackend {
         self.prepare(job);
         let first = film.next_sample();
         let width = film.width() as usize;
-        let wide = if self.portable_only { None } else { wide_isa() };
+        let wide = Wide::detect(self.cap);
         let work = |film: &mut Film| -> Option<u64> {
             let (pixels, feats) = film.parts_mut(job.settings.features);
             let n = pixels.len();
@@ -181,7 +175,7 @@ impl CpuBackend {
     ) -> bool {
         self.prepare(job);
         let (start, sample) = (film.slice_start(), film.next_sample());
-        let wide = if self.portable_only { None } else { wide_isa() };
+        let wide = Wide::detect(self.cap);
         let work = |film: &mut Film| -> Option<u64> {
             let (pixels, feats) = film.parts_mut(job.settings.features);
             (pixels[start..end].par_chunks_mut(SLICE_CHUNK))
@@ -229,7 +223,7 @@ impl CpuBackend {
             (row_of(first) * TILE_SIZE) as usize,
             ((row_of(last) + 1) * TILE_SIZE).min(tiles.height) as usize,
         );
-        let wide = if self.portable_only { None } else { wide_isa() };
+        let wide = Wide::detect(self.cap);
         let rows = |film: &mut Film| -> Option<u64> {
             let (pixels, feats) = film.parts_mut(job.settings.features);
             let (from, to) = (y0 * width, y1 * width);
@@ -294,155 +288,20 @@ pub const SLICE_CHUNK: usize = 16;
 /// parallel on rayon's threads with the widest kernels this CPU has: what
 /// the benchmarks time as rays per second.
 pub fn nearest_hits(world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
-    let wide = wide_isa();
+    let wide = Wide::detect(IsaCap::Widest);
     rays.par_chunks(4096)
         .flat_map_iter(|chunk| hits_chunk(wide, world, chunk, false))
         .collect()
 }
 
-/// [`nearest_hits`] with the rays in packets of [`PACKET`] after one
+/// [`nearest_hits`] with the rays in packets of [`crate::render::bvh::PACKET`] after one
 /// another ([`World::intersect_packet`]), as the render loop traces its
 /// camera rays: the same hits. Rays that leave a surface go one by one.
 pub fn nearest_hits_packets(world: &World, rays: &[(Ray, Origin)]) -> Vec<Option<Hit>> {
-    let wide = wide_isa();
+    let wide = Wide::detect(IsaCap::Widest);
     rays.par_chunks(4096)
         .flat_map_iter(|chunk| hits_chunk(wide, world, chunk, true))
         .collect()
-}
-
-#[cfg(target_arch = "x86_64")]
-fn hits_chunk(
-    wide: Option<Avx2>,
-    world: &World,
-    rays: &[(Ray, Origin)],
-    packets: bool,
-) -> Vec<Option<Hit>> {
-    match wide {
-        // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
-        #[allow(unsafe_code)]
-        Some(isa) => unsafe { hits_avx2(isa, world, rays, packets) },
-        None => hits_with(Portable, world, rays, packets),
-    }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn hits_chunk(
-    _: Option<Portable>,
-    world: &World,
-    rays: &[(Ray, Origin)],
-    packets: bool,
-) -> Vec<Option<Hit>> {
-    hits_with(Portable, world, rays, packets)
-}
-
-/// `hits_with` compiled for AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn hits_avx2(isa: Avx2, world: &World, rays: &[(Ray, Origin)], packets: bool) -> Vec<Option<Hit>> {
-    hits_with(isa, world, rays, packets)
-}
-
-#[inline(always)]
-fn hits_with<I: Isa>(
-    isa: I,
-    world: &World,
-    rays: &[(Ray, Origin)],
-    packets: bool,
-) -> Vec<Option<Hit>> {
-    // A plain loop: an iterator's `collect` would put the traversal in a
-    // function of its own, compiled without the caller's AVX2.
-    let mut hits = Vec::with_capacity(rays.len());
-    if packets {
-        for group in rays.chunks(PACKET) {
-            let n = group.len();
-            let fresh = group.iter().all(|(_, from)| *from == Origin::NONE);
-            let rays: [Ray; PACKET] = std::array::from_fn(|k| group[k.min(n - 1)].0);
-            let mut found = [None; PACKET];
-            if fresh {
-                world.intersect_packet(isa, &rays[..n], &mut found[..n]);
-            } else {
-                for (k, (r, from)) in group.iter().enumerate() {
-                    found[k] = world.intersect(isa, r, *from);
-                }
-            }
-            hits.extend_from_slice(&found[..n]);
-        }
-        return hits;
-    }
-    for (r, from) in rays {
-        hits.push(world.intersect(isa, r, *from));
-    }
-    hits
-}
-
-/// The wide kernels this CPU can run, if any.
-#[cfg(target_arch = "x86_64")]
-fn wide_isa() -> Option<Avx2> {
-    Avx2::detect()
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn wide_isa() -> Option<Portable> {
-    None
-}
-
-/// Adds samples `samples` to the pixels `span`, which start at pixel
-/// number `first` (row-major); returns how many were rejected. Runs the
-/// wide code when `wide` is given.
-#[cfg(target_arch = "x86_64")]
-fn render_span(
-    wide: Option<Avx2>,
-    job: &RenderJob,
-    first: usize,
-    span: Span<'_>,
-    samples: Range<u64>,
-) -> u64 {
-    // Two functions, not one with both loops: inlined into one, the mesh
-    // scenes' loop lost its gain (code placement).
-    match (wide, job.world.packets_pay()) {
-        // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
-        #[allow(unsafe_code)]
-        (Some(isa), false) => unsafe { span_avx2(isa, job, first, span, samples) },
-        // SAFETY: as above.
-        #[allow(unsafe_code)]
-        (Some(isa), true) => unsafe { packets_avx2(isa, job, first, span, samples) },
-        (None, false) => span_with(Portable, job, first, span, samples),
-        (None, true) => span_packets(Portable, job, first, span, samples),
-    }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn render_span(
-    _: Option<Portable>,
-    job: &RenderJob,
-    first: usize,
-    span: Span<'_>,
-    samples: Range<u64>,
-) -> u64 {
-    match job.world.packets_pay() {
-        false => span_with(Portable, job, first, span, samples),
-        true => span_packets(Portable, job, first, span, samples),
-    }
-}
-
-/// `span_packets` compiled for AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn packets_avx2(
-    isa: Avx2,
-    job: &RenderJob,
-    first: usize,
-    span: Span<'_>,
-    samples: Range<u64>,
-) -> u64 {
-    span_packets(isa, job, first, span, samples)
-}
-
-/// `span_with` compiled for AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn span_avx2(isa: Avx2, job: &RenderJob, first: usize, span: Span<'_>, samples: Range<u64>) -> u64 {
-    span_with(isa, job, first, span, samples)
 }
 
 /// Traces paths `$a` and, if `$pair`, `$b` to their ends, bounce by
@@ -560,4 +419,7 @@ fn span_with<I: Isa>(
 }
 
 mod packets;
+mod wide;
 use packets::span_packets;
+pub use wide::IsaCap;
+use wide::{hits_chunk, render_span, Wide};

@@ -33,7 +33,7 @@ pub use packet::PACKET_MAX_TRIANGLES;
 
 use crate::render::bvh::{Aabb, BoxRay, Bvh};
 #[cfg(target_arch = "x86_64")]
-use crate::render::isa::Avx2;
+use crate::render::isa::{Avx2, Avx512};
 use crate::render::isa::{Isa, Portable};
 use crate::render::light::{EnvLight, Lights, Receiver};
 use crate::render::material::{SurfaceMaterial, NO_MAPS};
@@ -305,6 +305,13 @@ impl World {
             return (hit.t < f32::INFINITY).then_some(hit);
         }
         #[cfg(target_arch = "x86_64")]
+        if let Some(avx512) = isa.avx512() {
+            // SAFETY: an `Avx512` exists only where the CPU has AVX-512 F,
+            // VL, BW and DQ, AVX2 and FMA.
+            #[allow(unsafe_code)]
+            return unsafe { self.nearest_avx512(avx512, ray, from) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if let Some(avx2) = isa.avx2() {
             // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
             #[allow(unsafe_code)]
@@ -324,6 +331,15 @@ impl World {
     #[inline(never)]
     #[target_feature(enable = "avx2,fma")]
     fn nearest_avx2(&self, isa: Avx2, ray: &Ray, from: Origin) -> Option<Hit> {
+        self.nearest(isa, ray, from)
+    }
+
+    /// [`World::nearest`] compiled for AVX-512, called from the render
+    /// loop's AVX-512 copy.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(never)]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
+    fn nearest_avx512(&self, isa: Avx512, ray: &Ray, from: Origin) -> Option<Hit> {
         self.nearest(isa, ray, from)
     }
 
