@@ -291,16 +291,15 @@ impl World {
     #[inline(always)]
     pub fn intersect<I: Isa>(&self, isa: I, ray: &Ray, from: Origin) -> Option<Hit> {
         // A scan of a few spheres and quads stays inline: it is small, and
-        // a call costs the sphere scenes 4% (Embree serves only meshes).
-        if let (
-            Accel::Scan {
-                sphere_batches,
-                quads,
-                ..
-            },
-            None | Some(None),
-        ) = (&self.accel, self.embree.get())
+        // a call costs the sphere scenes 4%. A scanned world has no meshes,
+        // so Embree (which serves only meshes) never traces it.
+        if let Accel::Scan {
+            sphere_batches,
+            quads,
+            ..
+        } = &self.accel
         {
+            debug_assert!(!matches!(self.embree.get(), Some(Some(_))));
             let hit = scan::nearest(isa, sphere_batches, quads, ray, from);
             return (hit.t < f32::INFINITY).then_some(hit);
         }
