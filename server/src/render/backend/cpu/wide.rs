@@ -53,9 +53,9 @@ impl Wide {
     }
 }
 
-/// The nearest hits of `rays` with `wide`'s kernels, in packets of
-/// [`PACKET`] where `packets` says (the AVX-512 machine runs the AVX2 copy:
-/// only the render loop gained from the wider registers).
+/// The nearest hits of `rays` with `wide`'s kernels (the copy of the
+/// traversal the render loop of the same width calls), in packets of
+/// [`PACKET`] where `packets` says.
 pub(super) fn hits_chunk(
     wide: Wide,
     world: &World,
@@ -67,10 +67,11 @@ pub(super) fn hits_chunk(
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
         Wide::Avx2(isa) => unsafe { hits_avx2(isa, world, rays, packets) },
-        // SAFETY: as above; an `Avx512` holds an `Avx2`.
+        // SAFETY: an `Avx512` exists only where the CPU has AVX-512 F, VL,
+        // BW and DQ, AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
-        Wide::Avx512(isa) => unsafe { hits_avx2(isa.avx2(), world, rays, packets) },
+        Wide::Avx512(isa) => unsafe { hits_avx512(isa, world, rays, packets) },
         Wide::Portable => hits_with(Portable, world, rays, packets),
     }
 }
@@ -79,6 +80,18 @@ pub(super) fn hits_chunk(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn hits_avx2(isa: Avx2, world: &World, rays: &[(Ray, Origin)], packets: bool) -> Vec<Option<Hit>> {
+    hits_with(isa, world, rays, packets)
+}
+
+/// `hits_with` compiled for AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
+fn hits_avx512(
+    isa: Avx512,
+    world: &World,
+    rays: &[(Ray, Origin)],
+    packets: bool,
+) -> Vec<Option<Hit>> {
     hits_with(isa, world, rays, packets)
 }
 
