@@ -141,15 +141,51 @@ def time_to(target, rows):
     return s * (err / target) ** 2, "extrapolated"
 
 
+def spread(values, fmt="{:.2f}"):
+    """The median of `values`, and their range where there are several."""
+    m = fmt.format(float(np.median(values)))
+    if len(values) == 1:
+        return m
+    return f"{m} ({fmt.format(min(values))}-{fmt.format(max(values))})"
+
+
+def rate_and_time(rows, pixels):
+    """One round's renders (spp, s, error) of a run: M samples/s (median
+    over its renders) and the time to 1% error with how it was found."""
+    rate = float(np.median([spp * pixels / s / 1e6 for spp, s, _ in rows]))
+    return (rate, *time_to(0.01, rows))
+
+
 def print_summary(summary, pixels):
-    """Per renderer and sampler: samples/s (median over its renders), the
-    error at each spp and the time to 1% error."""
+    """Per renderer and sampler: samples/s (median over its renders) and
+    the time to 1% error, each the median (range) over the rounds; then
+    each other renderer's lead over pathstream, round by round: its
+    samples/s over pathstream's Sobol points', and pathstream's adaptive
+    time to 1% over its own."""
+    rounds = len(summary[0][2])
+    print(f"\n{rounds} round(s); median (range) over them")
     print("\n| renderer | sampler | M samples/s (median) | seconds to 1% error |")
     print("| --- | --- | ---: | ---: |")
-    for who, sampler, rows in summary:
-        rate = np.median([spp * pixels / s / 1e6 for spp, s, _ in rows])
-        t, how = time_to(0.01, rows)
-        print(f"| {who} | {sampler} | {rate:.2f} | {t:.2f} ({how}) |")
+    found = {}
+    for who, sampler, by_round in summary:
+        got = [rate_and_time(rows, pixels) for rows in by_round]
+        found[(who, sampler)] = got
+        hows = sorted({how for _, _, how in got})
+        print(f"| {who} | {sampler} | {spread([g[0] for g in got])} "
+              f"| {spread([g[1] for g in got])} ({'; '.join(hows)}) |")
+    sobol = found.get(("pathstream", "sobol"))
+    adaptive = found.get(("pathstream", "sobol-adaptive"))
+    if not (sobol and adaptive):
+        return
+    print("\n| renderer | sampler | samples/s over pathstream sobol | "
+          "pathstream adaptive's time to 1% over its |")
+    print("| --- | --- | ---: | ---: |")
+    for (who, sampler), got in found.items():
+        if who == "pathstream":
+            continue
+        rate = [g[0] / p[0] for g, p in zip(got, sobol)]
+        time = [a[1] / g[1] for g, a in zip(got, adaptive)]
+        print(f"| {who} | {sampler} | {spread(rate)} | {spread(time)} |")
 
 
 def add_arguments(ap, out, spp, reference_spp):
@@ -164,6 +200,9 @@ def add_arguments(ap, out, spp, reference_spp):
     ap.add_argument("--threads", type=int, default=os.cpu_count())
     ap.add_argument("--reference-spp", type=int, default=reference_spp)
     ap.add_argument("--exe", default="target/release/pathstream")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="render everything this many times, the runs in turn "
+                         "(reversed every other round); times are medians and ranges")
     ap.add_argument("--out", default=out)
 
 
@@ -199,11 +238,14 @@ def own_reference(args, renderer, render):
 def measure(args, reference, runs):
     """Renders each run, (renderer, sampler, render(spp, path) -> seconds,
     or (seconds, the samples per pixel it took) where a sampler rounds the
-    count it is asked for), at every spp of `args.spp`; prints a row per
-    render, then the summary. Rows, rates and times use the spp taken.
-    A run may end with a reference of its own renderer's to measure its
-    error against (else: `reference`, pathstream's), so that the two
-    renderers' small differences in the scene do not count as noise."""
+    count it is asked for), at every spp of `args.spp`, `args.rounds`
+    times (the runs in turn, in reverse order every other round, so that a
+    machine's drift falls on all of them); prints a row per render, then
+    the summary. Rows, rates and times use the spp taken. A run may end
+    with a reference of its own renderer's to measure its error against
+    (else: `reference`, pathstream's), so that the two renderers' small
+    differences in the scene do not count as noise. Every render is
+    seeded, so its error is the same in every round: only times vary."""
     spps = [int(s) for s in args.spp.split(",")]
     pixels = args.size * args.size
     print(
@@ -214,24 +256,31 @@ def measure(args, reference, runs):
     for own in sorted({r[3] for r in runs if len(r) > 3}):
         print(f"{os.path.basename(own)} against pathstream's reference: "
               f"{rel_error(args.exe, reference, own) * 100:.2f}%")
-    print("| renderer | sampler | spp | seconds | M samples/s | error |")
-    print("| --- | --- | ---: | ---: | ---: | ---: |")
-    summary = []
-    for who, sampler, render, *own in runs:
-        rows = []
-        for spp in spps:
-            name = f"{who.split()[0].lower()}-{sampler}-{spp}.pfm"
-            path = os.path.abspath(os.path.join(args.out, name))
-            s = render(spp, path)
-            s, spp = s if isinstance(s, tuple) else (s, spp)
-            err = rel_error(args.exe, own[0] if own else reference, path)
-            rows.append((spp, s, err))
-            print(
-                f"| {who} | {sampler} | {spp} | {s:.3f} | {spp * pixels / s / 1e6:.2f} "
-                f"| {err * 100:.2f}% |",
-                flush=True,
-            )
-        summary.append((who, sampler, rows))
+    print("| round | renderer | sampler | spp | seconds | M samples/s | error |")
+    print("| ---: | --- | --- | ---: | ---: | ---: | ---: |")
+    errors = {}
+    by_run = [[] for _ in runs]
+    for r in range(args.rounds):
+        order = list(range(len(runs)))
+        for k in order if r % 2 == 0 else reversed(order):
+            who, sampler, render, *own = runs[k]
+            rows = []
+            for spp in spps:
+                name = f"{who.split()[0].lower()}-{sampler}-{spp}.pfm"
+                path = os.path.abspath(os.path.join(args.out, name))
+                s = render(spp, path)
+                s, taken = s if isinstance(s, tuple) else (s, spp)
+                if (k, spp) not in errors:
+                    errors[(k, spp)] = rel_error(args.exe, own[0] if own else reference, path)
+                err = errors[(k, spp)]
+                rows.append((taken, s, err))
+                print(
+                    f"| {r + 1} | {who} | {sampler} | {taken} | {s:.3f} "
+                    f"| {taken * pixels / s / 1e6:.2f} | {err * 100:.2f}% |",
+                    flush=True,
+                )
+            by_run[k].append(rows)
+    summary = [(who, sampler, by_run[k]) for k, (who, sampler, *_) in enumerate(runs)]
     print_summary(summary, pixels)
     write_results(args, summary)
 
@@ -242,10 +291,11 @@ def write_results(args, summary):
     per renderer and sampler, and the 1% level."""
     path = os.path.join(args.out, "times.csv")
     with open(path, "w") as f:
-        f.write("renderer,sampler,spp,seconds,error\n")
-        for who, sampler, rows in summary:
-            for spp, s, err in rows:
-                f.write(f"{who},{sampler},{spp},{s:.4f},{err:.6f}\n")
+        f.write("round,renderer,sampler,spp,seconds,error\n")
+        for who, sampler, by_round in summary:
+            for r, rows in enumerate(by_round):
+                for spp, s, err in rows:
+                    f.write(f"{r + 1},{who},{sampler},{spp},{s:.4f},{err:.6f}\n")
     print(f"\nrenders: {path}")
     try:
         import matplotlib
@@ -257,8 +307,11 @@ def write_results(args, summary):
     import matplotlib.ticker
 
     fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
-    for who, sampler, rows in summary:
-        ax.plot([r[1] for r in rows], [100 * r[2] for r in rows], marker="o",
+    for who, sampler, by_round in summary:
+        # Each render's median time over the rounds (its error is the same).
+        seconds = np.median([[s for _, s, _ in rows] for rows in by_round], axis=0)
+        errors = [100 * err for _, _, err in by_round[0]]
+        ax.plot(seconds, errors, marker="o",
                 label=f"{who.split()[0]} {sampler}",
                 linestyle="-" if who == "pathstream" else "--")
     ax.axhline(1.0, color="grey", linewidth=0.8)
