@@ -188,9 +188,10 @@ def print_summary(summary, pixels):
         print(f"| {who} | {sampler} | {spread(rate)} | {spread(time)} |")
 
 
-def add_arguments(ap, out, spp, reference_spp):
+def add_arguments(ap, out, spp, reference_spp, rounds=True):
     """The options every comparison takes (defaults: `out`, `spp`,
-    `reference_spp`)."""
+    `reference_spp`), with `--rounds` where the script times renders
+    through `measure`."""
     ap.add_argument("--scene", default="cornell-mesh")
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--spp", default=spp)
@@ -200,9 +201,10 @@ def add_arguments(ap, out, spp, reference_spp):
     ap.add_argument("--threads", type=int, default=os.cpu_count())
     ap.add_argument("--reference-spp", type=int, default=reference_spp)
     ap.add_argument("--exe", default="target/release/pathstream")
-    ap.add_argument("--rounds", type=int, default=1,
-                    help="render everything this many times, the runs in turn "
-                         "(reversed every other round); times are medians and ranges")
+    if rounds:
+        ap.add_argument("--rounds", type=int, default=1,
+                        help="render everything this many times, the runs in turn "
+                             "(reversed every other round); times are medians and ranges")
     ap.add_argument("--out", default=out)
 
 

@@ -184,7 +184,7 @@ def by_depth(args, scene, scene_file):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     add_arguments(ap, os.path.join(tempfile.gettempdir(), "mitsuba-profile"),
-                  "256", 0)
+                  "256", 0, rounds=False)
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--renders", type=int, default=3)
     ap.add_argument("--profiling", default="target/profiling/pathstream")
