@@ -6,9 +6,12 @@ The render loop is one function with everything inlined into it
 reads perf's samples, asks addr2line for each sample's chain of inlined
 frames, and charges the sample to the innermost frame in `server/src/`:
 a table by file and by line. A sample whose chain passes through
-`World::intersect` counts as a nearest-hit query ("rays"), any other as
-the work around the rays (camera, shading, light sampling, film); a query
-inlined into `integrator::nee` is a shadow ray, any other a path ray.
+`World::intersect`, or that falls in the out-of-line traversal of a BVH
+world (`World::nearest_avx512` and its twins), counts as a nearest-hit
+query ("rays"), any other as the work around the rays (camera, shading,
+light sampling, film). An inlined query (a scan of spheres and quads)
+inside `integrator::nee` is a shadow ray, any other a path ray; the
+out-of-line traversal's samples do not say which ray they serve.
 
 Needs perf and binutils (`apt-get install linux-perf binutils`), and a
 binary with line tables:
@@ -99,9 +102,18 @@ def main():
         loc = loc.split("/server/src/")[-1].split(" ")[0]
         by_line[loc] += n
         by_file[loc.split(":")[0]] += n
-        rays = any("World::intersect" in f for f, _ in chain)
-        kind["rays (World::intersect)" if rays else "around the rays"] += n
-        if rays:
+        # A BVH world's traversal is a function of its own per instruction
+        # set (`World::nearest_avx512` and its twins), which the sample
+        # cannot tell a shadow ray's from a path ray's; a scan of spheres
+        # and quads, and the camera rays' packets, stay inlined.
+        out_of_line = "World::nearest" in key[0]
+        # Methods in an `impl` block inlined elsewhere are named
+        # `<impl ...::World>::intersect_packet`.
+        rays = out_of_line or any(re.search(r"World>?::intersect", f) for f, _ in chain)
+        kind["rays (World::intersect and World::nearest_*)" if rays else "around the rays"] += n
+        if out_of_line:
+            split["rays: out of line (shadow and path rays together)"] += n
+        elif rays:
             # A shadow ray's query is inlined into next-event estimation.
             shadow = any("integrator::nee::" in f for f, _ in chain)
             split["rays: shadow (integrator::nee)" if shadow else "rays: path"] += n
