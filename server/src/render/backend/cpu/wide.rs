@@ -140,26 +140,31 @@ pub(super) fn render_span(
 ) -> u64 {
     // Two functions per instruction set, not one with both loops: inlined
     // into one, the mesh scenes' loop lost its gain (code placement).
-    match (wide, job.world.packets_pay()) {
+    let packets = job.world.packets_pay();
+    match wide {
         // SAFETY: an `Avx512` exists only where the CPU has AVX-512 F, VL,
         // BW and DQ, AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
-        (Wide::Avx512(isa), false) => unsafe { span_avx512(isa, job, first, span, samples) },
-        // SAFETY: as above.
-        #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code)]
-        (Wide::Avx512(isa), true) => unsafe { packets_avx512(isa, job, first, span, samples) },
+        Wide::Avx512(isa) => unsafe {
+            match packets {
+                true => packets_avx512(isa, job, first, span, samples),
+                false => span_avx512(isa, job, first, span, samples),
+            }
+        },
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
-        (Wide::Avx2(isa), false) => unsafe { span_avx2(isa, job, first, span, samples) },
-        // SAFETY: as above.
-        #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code)]
-        (Wide::Avx2(isa), true) => unsafe { packets_avx2(isa, job, first, span, samples) },
-        (Wide::Portable, false) => span_with(Portable, job, first, span, samples),
-        (Wide::Portable, true) => span_packets(Portable, job, first, span, samples),
+        Wide::Avx2(isa) => unsafe {
+            match packets {
+                true => packets_avx2(isa, job, first, span, samples),
+                false => span_avx2(isa, job, first, span, samples),
+            }
+        },
+        Wide::Portable => match packets {
+            true => span_packets(Portable, job, first, span, samples),
+            false => span_with(Portable, job, first, span, samples),
+        },
     }
 }
 
