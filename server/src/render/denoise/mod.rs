@@ -234,7 +234,84 @@ pub fn denoise(
     let ran = filter.run(color, guides, &mut out);
     *last_run().lock().unwrap_or_else(|e| e.into_inner()) = Some((started, Instant::now()));
     ran.map_err(DenoiseError::Failed)?;
+    match check(color, &out) {
+        Check::Fine => {}
+        Check::NonFinite(i) => {
+            return Err(DenoiseError::Failed(format!(
+                "the denoiser returned a non-finite pixel ({i} of {pixels})"
+            )))
+        }
+        Check::Far { input, output } => {
+            // Kept (the denoiser spreads fireflies' energy, which can move
+            // a mean), but said: a black or washed-out denoised frame
+            // should leave a trace of what went in.
+            let (albedo, normal) = features.map_or((None, None), |f| {
+                (Some(mean_of(&f.albedo)), Some(mean_of(&f.normal)))
+            });
+            tracing::warn!(
+                width,
+                height,
+                ?quality,
+                input,
+                output,
+                ?albedo,
+                ?normal,
+                "a denoised image's mean luminance is far from its input's"
+            );
+        }
+    }
     Ok(out)
+}
+
+/// What a denoised image says of the denoiser's run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Check {
+    Fine,
+    /// Pixel `.0` is NaN or infinite (the frame goes out as rendered).
+    NonFinite(usize),
+    /// The mean luminance moved by more than a factor of [`FAR`].
+    Far {
+        input: f64,
+        output: f64,
+    },
+}
+
+/// How far a denoised image's mean luminance may move from its input's
+/// before it is reported: the denoiser keeps a mean within a percent or
+/// two, unless fireflies dominate the image.
+const FAR: f64 = 2.0;
+
+/// Checks `out`, the denoised `color`.
+fn check(color: &[[f32; 3]], out: &[[f32; 3]]) -> Check {
+    if let Some(i) = out.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        return Check::NonFinite(i);
+    }
+    let (input, output) = (luminance(color), luminance(out));
+    let finite_input = input.is_finite() && input > 0.0;
+    if finite_input && !(output <= input * FAR && output >= input / FAR) {
+        return Check::Far { input, output };
+    }
+    Check::Fine
+}
+
+/// Mean Rec. 709 luminance of an image (in f64: a sum of millions).
+fn luminance(image: &[[f32; 3]]) -> f64 {
+    let sum: f64 = image
+        .iter()
+        .map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]))
+        .sum();
+    sum / image.len().max(1) as f64
+}
+
+/// Mean of each channel of an image.
+fn mean_of(image: &[[f32; 3]]) -> [f64; 3] {
+    let mut sum = [0.0f64; 3];
+    for p in image {
+        for (s, &c) in sum.iter_mut().zip(p) {
+            *s += f64::from(c);
+        }
+    }
+    sum.map(|s| s / image.len().max(1) as f64)
 }
 
 /// When the last image was denoised (start, end).
@@ -266,6 +343,25 @@ mod tests {
             kind: kind.into(),
             name: format!("{kind} {index}"),
         }
+    }
+
+    #[test]
+    fn a_denoised_image_is_checked_for_non_finite_pixels_and_a_moved_mean() {
+        let color = vec![[0.5f32, 0.4, 0.3]; 64];
+        let mut out = color.clone();
+        out[3][1] *= 1.5;
+        assert_eq!(check(&color, &out), Check::Fine);
+        out[7][2] = f32::NAN;
+        assert_eq!(check(&color, &out), Check::NonFinite(7));
+        out[7][2] = f32::INFINITY;
+        assert_eq!(check(&color, &out), Check::NonFinite(7));
+        let black = vec![[0.0f32; 3]; 64];
+        assert!(matches!(check(&color, &black), Check::Far { output, .. } if output == 0.0));
+        let bright = vec![[2.0f32; 3]; 64];
+        assert!(matches!(check(&color, &bright), Check::Far { .. }));
+        // A black input has no mean to keep.
+        assert_eq!(check(&black, &black), Check::Fine);
+        assert_eq!(check(&black, &color), Check::Fine);
     }
 
     #[test]
