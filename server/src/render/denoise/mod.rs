@@ -21,7 +21,7 @@ use crate::render::features::Features;
 use pathstream_wire::{Denoiser as DenoiserInfo, DenoiserDevice};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// The share of the time that streamed frames' denoising may take (see
 /// [`next_turn`]): on a CPU denoiser, what it takes the renderer loses.
@@ -241,7 +241,7 @@ pub fn denoise(
                 "the denoiser returned a non-finite pixel ({i} of {pixels})"
             )))
         }
-        Check::Far { input, output } => {
+        Check::Far { input, output } if now_and_then() => {
             // Kept (the denoiser spreads fireflies' energy, which can move
             // a mean), but said: a black or washed-out denoised frame
             // should leave a trace of what went in.
@@ -259,8 +259,21 @@ pub fn denoise(
                 "a denoised image's mean luminance is far from its input's"
             );
         }
+        Check::Far { .. } => {}
     }
     Ok(out)
+}
+
+/// True at most once a minute: a stream denoises several frames a second,
+/// and one warning says what each would.
+fn now_and_then() -> bool {
+    static LAST: Mutex<Option<Instant>> = Mutex::new(None);
+    let mut last = LAST.lock().unwrap_or_else(|e| e.into_inner());
+    let due = last.is_none_or(|t| t.elapsed() >= Duration::from_secs(60));
+    if due {
+        *last = Some(Instant::now());
+    }
+    due
 }
 
 /// What a denoised image says of the denoiser's run.
