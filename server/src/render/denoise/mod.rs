@@ -17,6 +17,7 @@ mod oidn;
 
 pub use oidn::FilterQuality;
 
+use crate::render::envmap::spectrum::luminance;
 use crate::render::features::Features;
 use pathstream_wire::{Denoiser as DenoiserInfo, DenoiserDevice};
 use std::path::PathBuf;
@@ -241,10 +242,10 @@ pub fn denoise(
                 "the denoiser returned a non-finite pixel ({i} of {pixels})"
             )))
         }
+        // Kept (the denoiser spreads fireflies' energy, which can move a
+        // mean), but said: a black or washed-out denoised frame should
+        // leave a trace of what went in.
         Check::Far { input, output } if now_and_then() => {
-            // Kept (the denoiser spreads fireflies' energy, which can move
-            // a mean), but said: a black or washed-out denoised frame
-            // should leave a trace of what went in.
             let (albedo, normal) = features.map_or((None, None), |f| {
                 (Some(mean_of(&f.albedo)), Some(mean_of(&f.normal)))
             });
@@ -299,7 +300,8 @@ fn check(color: &[[f32; 3]], out: &[[f32; 3]]) -> Check {
     if let Some(i) = out.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
         return Check::NonFinite(i);
     }
-    let (input, output) = (luminance(color), luminance(out));
+    // Luminance is linear: the mean's is the mean luminance.
+    let (input, output) = (luminance(mean_of(color)), luminance(mean_of(out)));
     let finite_input = input.is_finite() && input > 0.0;
     if finite_input && !(output <= input * FAR && output >= input / FAR) {
         return Check::Far { input, output };
@@ -307,16 +309,7 @@ fn check(color: &[[f32; 3]], out: &[[f32; 3]]) -> Check {
     Check::Fine
 }
 
-/// Mean Rec. 709 luminance of an image (in f64: a sum of millions).
-fn luminance(image: &[[f32; 3]]) -> f64 {
-    let sum: f64 = image
-        .iter()
-        .map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]))
-        .sum();
-    sum / image.len().max(1) as f64
-}
-
-/// Mean of each channel of an image.
+/// Mean of each channel of an image (in f64: a sum of millions).
 fn mean_of(image: &[[f32; 3]]) -> [f64; 3] {
     let mut sum = [0.0f64; 3];
     for p in image {
