@@ -37,15 +37,13 @@
 //! microfacets (a white rough glass sphere goes grey). The lobe is divided
 //! by its white albedo E(mu_o) (Turquin's 2019 scaling), read from
 //! [`Table`]: E by cos(theta_o), roughness and index, for light arriving
-//! from outside and from inside, integrated on first use (scenes that do
-//! not transmit never pay for it). The kernel (`kernels/ggx.h`) gets the
+//! from outside and from inside, integrated once and stored (the
+//! renderer reads it on first use). The kernel (`kernels/ggx.h`) gets the
 //! same floats and mirrors every routine here.
 
-use super::{distribution, reflect_about, smith_r, visible_normal, ALPHA_MIN, TABLE_N};
+use super::{distribution, reflect_about, smith_r, visible_normal, TABLE_N};
 use crate::render::fresnel;
 use crate::render::math::Vec3A;
-use crate::render::sampler::sobol::sobol_2d;
-use rayon::prelude::*;
 use std::sync::OnceLock;
 
 /// Points on the table's index axis, x = (ior - 1) / (ior + 1) from 0 to
@@ -59,8 +57,6 @@ pub const PART_LEN: usize = 2 * IOR_N * TABLE_N * TABLE_N;
 /// Floats in [`Table::data`]: the white glass's part, then the clear
 /// glass's (one that reflects only where nothing can cross).
 pub const TABLE_LEN: usize = 2 * PART_LEN;
-/// Points per table entry (a Sobol (0,2)-sequence).
-const TABLE_POINTS: u32 = 512;
 
 /// The white albedo of the single-scattering lobe, and of the lobe of a
 /// glass with specular 0 (`KHR_materials_specular`: transmission alone,
@@ -70,10 +66,14 @@ pub struct Table {
     pub data: Box<[f32]>,
 }
 
-/// The table, integrated once per process on first use.
+/// The table (`tables/glass.f32`, integrated by `integrate.rs`), read
+/// once per process on first use.
 pub fn table() -> &'static Table {
     static T: OnceLock<Table> = OnceLock::new();
-    T.get_or_init(Table::integrate)
+    static BYTES: &[u8; TABLE_LEN * 4] = include_bytes!("tables/glass.f32");
+    T.get_or_init(|| Table {
+        data: super::floats(BYTES),
+    })
 }
 
 /// The table's index coordinate of `ior`.
@@ -83,51 +83,6 @@ fn ior_x(ior: f32) -> f32 {
 }
 
 impl Table {
-    fn integrate() -> Table {
-        let n = TABLE_N;
-        let points: Vec<(f32, f32)> = (0..TABLE_POINTS)
-            .map(|k| {
-                let (x, y) = sobol_2d(k);
-                let u = |b: u32| ((f64::from(b) + 0.5) / 4_294_967_296.0) as f32;
-                (u(x), u(y))
-            })
-            .collect();
-        let mut data = vec![0.0f32; TABLE_LEN];
-        data.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
-            let j = row % n;
-            let k = (row / n) % IOR_N;
-            let side = (row / (n * IOR_N)) % 2;
-            let clear = row >= 2 * n * IOR_N;
-            let x = k as f32 / (IOR_N - 1) as f32 / IOR_SCALE;
-            let ior = (1.0 + x) / (1.0 - x);
-            let eta = if side == 0 { ior } else { 1.0 / ior };
-            let r = j as f32 / (n - 1) as f32;
-            let alpha = (r * r).max(ALPHA_MIN);
-            for (i, e) in out.iter_mut().enumerate() {
-                let mu = (i as f32 / (n - 1) as f32).max(1e-4);
-                let wo = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-                let mut sum = 0.0f64;
-                for &(u1, u2) in &points {
-                    let h = visible_normal(wo, alpha, u1, u2);
-                    let (f, wt) = split(wo, h, eta);
-                    // The clear glass reflects only where nothing crosses.
-                    let f = if clear && f < 1.0 { 0.0 } else { f };
-                    let wr = reflect_about(wo, h);
-                    if f > 0.0 && wr.z > 0.0 {
-                        sum += f64::from(f * masking_ratio(wo, wr, alpha));
-                    }
-                    if f < 1.0 && wt.z < 0.0 {
-                        sum += f64::from((1.0 - f) * masking_ratio(wo, wt, alpha));
-                    }
-                }
-                *e = (sum / f64::from(TABLE_POINTS)) as f32;
-            }
-        });
-        Table {
-            data: data.into_boxed_slice(),
-        }
-    }
-
     /// E(mu) at `roughness` and `ior`, for light arriving from outside
     /// (`entering`) or inside: trilinear.
     #[inline(always)]
@@ -160,18 +115,10 @@ impl Table {
     }
 }
 
-/// G2(wo, wi) / G1(wo), height-correlated, wi on either side.
-#[inline(always)]
-fn masking_ratio(wo: Vec3A, wi: Vec3A, alpha: f32) -> f32 {
-    let (ro, ri) = (smith_r(wo, alpha), smith_r(wi, alpha));
-    let ci = wi.z.abs();
-    (wo.z + ro) * ci / (ro * ci + ri * wo.z)
-}
-
 /// The Fresnel reflectance at microfacet `h` seen from `wo` (wo . h > 0)
 /// and the refracted direction (meaningless where the reflectance is 1).
 #[inline(always)]
-fn split(wo: Vec3A, h: Vec3A, eta: f32) -> (f32, Vec3A) {
+pub(super) fn split(wo: Vec3A, h: Vec3A, eta: f32) -> (f32, Vec3A) {
     let c = wo.dot(h).max(0.0);
     let s = fresnel::exact(c, 1.0, eta);
     let wt = (h * (c / eta - s.cos_t) - wo / eta).normalize();

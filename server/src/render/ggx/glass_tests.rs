@@ -4,6 +4,7 @@
 //! the BTDF's generalised reciprocity.
 
 use super::super::tests::{dir, sphere_chi2};
+use super::super::ALPHA_MIN;
 use super::*;
 use crate::render::sampler::Sampler;
 

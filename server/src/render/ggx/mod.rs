@@ -12,7 +12,7 @@
 //! specular layer lets through, `(1 - Es(mu_o)) (1 - Es(mu_i)) / (1 -
 //! Es_avg)`, so a white base under the coating also keeps every bit of
 //! energy. E, and its split into Schlick's F0 and (1 - cos)^5 parts, come
-//! from [`Tables`], integrated at start-up (not guessed) and read by
+//! from [`Tables`], integrated once (not guessed) and stored and read by
 //! bilinear lookup; the kernel (`kernels/ggx.h`) gets the same floats and
 //! mirrors every routine here operation for operation.
 //!
@@ -32,7 +32,6 @@ pub mod coat;
 pub mod glass;
 
 use crate::render::math::{sincos_turns, Vec3A};
-use crate::render::sampler::sobol::sobol_2d;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::OnceLock;
 
@@ -44,8 +43,6 @@ pub const TABLE_N: usize = 32;
 /// Floats in [`Tables::data`]: A and B per (cos, roughness), then their
 /// cosine-weighted averages per roughness.
 pub const TABLE_LEN: usize = 2 * TABLE_N * TABLE_N + 2 * TABLE_N;
-/// Points per table entry (a Sobol (0,2)-sequence; the integrand is smooth).
-const TABLE_POINTS: u32 = 4096;
 
 /// The metallic-roughness parameters of one material (its base colour is
 /// the material's albedo).
@@ -138,67 +135,30 @@ pub struct Tables {
     pub data: Box<[f32]>,
 }
 
-/// The tables, integrated once per process.
+/// The tables (`tables/ggx.f32`, integrated by `integrate.rs`), read once
+/// per process.
 pub fn tables() -> &'static Tables {
     static T: OnceLock<Tables> = OnceLock::new();
-    T.get_or_init(Tables::integrate)
+    static BYTES: &[u8; TABLE_LEN * 4] = include_bytes!("tables/ggx.f32");
+    T.get_or_init(|| Tables {
+        data: floats(BYTES),
+    })
 }
 
+/// Little-endian f32s.
+fn floats(bytes: &[u8]) -> Box<[f32]> {
+    bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
+}
+
+/// Where the averages start in [`Tables::data`] (A's, then B's).
 const AVG_A: usize = 2 * TABLE_N * TABLE_N;
+#[cfg(test)]
 const AVG_B: usize = AVG_A + TABLE_N;
 
 impl Tables {
-    fn integrate() -> Tables {
-        let n = TABLE_N;
-        let mut data = vec![0.0f32; TABLE_LEN];
-        for j in 0..n {
-            let r = j as f32 / (n - 1) as f32;
-            let alpha = (r * r).max(ALPHA_MIN);
-            for i in 0..n {
-                let mu = (i as f32 / (n - 1) as f32).max(1e-4);
-                let wo = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-                let (mut a, mut b) = (0.0f64, 0.0f64);
-                for k in 0..TABLE_POINTS {
-                    let (x, y) = sobol_2d(k);
-                    let u1 = ((f64::from(x) + 0.5) / 4_294_967_296.0) as f32;
-                    let u2 = ((f64::from(y) + 0.5) / 4_294_967_296.0) as f32;
-                    let h = visible_normal(wo, alpha, u1, u2);
-                    let wi = reflect_about(wo, h);
-                    if wi.z <= 0.0 {
-                        continue;
-                    }
-                    // f cos / pdf of a visible-normal sample: G2 / G1(wo).
-                    let (ro, ri) = (smith_r(wo, alpha), smith_r(wi, alpha));
-                    let w = f64::from((wo.z + ro) * wi.z / (ro * wi.z + ri * wo.z));
-                    let c5 = f64::from(pow5(1.0 - wo.dot(h).clamp(0.0, 1.0)));
-                    a += w * (1.0 - c5);
-                    b += w * c5;
-                }
-                data[j * n + i] = (a / f64::from(TABLE_POINTS)) as f32;
-                data[n * n + j * n + i] = (b / f64::from(TABLE_POINTS)) as f32;
-            }
-            // 2 * integral of E(mu) mu over the table's piecewise-linear E,
-            // exactly, so that the multiple-scattering lobes integrate to
-            // what their formula says.
-            for (part, avg) in [(0, AVG_A), (n * n, AVG_B)] {
-                let mut sum = 0.0f64;
-                let h = 1.0 / (n - 1) as f64;
-                for i in 0..n - 1 {
-                    let (ea, eb) = (
-                        f64::from(data[part + j * n + i]),
-                        f64::from(data[part + j * n + i + 1]),
-                    );
-                    let mu_a = i as f64 * h;
-                    sum += h * (ea * (mu_a / 2.0 + h / 6.0) + eb * (mu_a / 2.0 + h / 3.0));
-                }
-                data[avg + j] = (2.0 * sum) as f32;
-            }
-        }
-        Tables {
-            data: data.into_boxed_slice(),
-        }
-    }
-
     /// The single-scattering lobe's white directional albedo E(mu) at
     /// `roughness` (what a microfacet BSDF without the added lobes keeps).
     pub fn single_scattering(&self, mu: f32, roughness: f32) -> f32 {
@@ -585,5 +545,7 @@ fn weighed(
     })
 }
 
+#[cfg(test)]
+mod integrate;
 #[cfg(test)]
 mod tests;
