@@ -316,6 +316,49 @@ impl EmbreeScene {
         }
     }
 
+    /// The nearest hits of sixteen rays in one packet, lane `k` live where
+    /// `live[k]`; hits as `intersect` reports them (for `wide_paths`).
+    #[allow(dead_code)]
+    #[inline(always)]
+    pub fn intersect16_lanes(
+        &self,
+        o: &[pathstream::render::math::Vec3A; 16],
+        d: &[pathstream::render::math::Vec3A; 16],
+        live: &[bool; 16],
+    ) -> [Option<Hit>; 16] {
+        let mut valid = ffi::Valid16([0; 16]);
+        // SAFETY: an all-zero packet is a valid value of this plain-data
+        // struct; the fields the lanes use are set below.
+        #[allow(unsafe_code)]
+        let mut rh: ffi::RTCRayHit16 = unsafe { std::mem::zeroed() };
+        for k in 0..16 {
+            for axis in 0..3 {
+                rh.org[axis][k] = o[k][axis];
+                rh.dir[axis][k] = d[k][axis];
+            }
+            rh.tfar[k] = f32::INFINITY;
+            rh.mask[k] = u32::MAX;
+            rh.geom_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
+            rh.prim_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
+            rh.inst_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
+            valid.0[k] = if live[k] { -1 } else { 0 };
+        }
+        let mut context = ffi::RTCIntersectContext::new(None);
+        // SAFETY: as in `intersect16`.
+        #[allow(unsafe_code)]
+        unsafe {
+            ffi::rtcIntersect16(valid.0.as_ptr(), self.scene, &mut context, &mut rh)
+        };
+        std::array::from_fn(|k| {
+            (live[k] && rh.geom_id[k] != ffi::RTC_INVALID_GEOMETRY_ID).then_some(Hit {
+                t: rh.tfar[k],
+                object: 0,
+                prim: rh.prim_id[k],
+                bary: [1.0 - rh.u[k] - rh.v[k], rh.u[k], rh.v[k]],
+            })
+        })
+    }
+
     /// Every ray's nearest hit in packets of sixteen neighbouring rays,
     /// on rayon's threads in chunks as `hits` does; `coherent` tells
     /// Embree the rays of a packet are alike (Mitsuba's camera rays).
