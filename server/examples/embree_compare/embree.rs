@@ -65,6 +65,14 @@ pub mod ffi {
             context: *mut RTCIntersectContext,
             rayhit: *mut RTCRayHit16,
         );
+        /// Reads and writes only the rays (`RTCRay16`, the first part of
+        /// an `RTCRayHit16`): tfar becomes -inf where something blocks.
+        pub fn rtcOccluded16(
+            valid: *const i32,
+            scene: RTCScene,
+            context: *mut RTCIntersectContext,
+            ray: *mut RTCRayHit16,
+        );
     }
 
     /// `RTCRayHit16`: sixteen rays and their hits, a field at a time
@@ -357,6 +365,39 @@ impl EmbreeScene {
                 bary: [1.0 - rh.u[k] - rh.v[k], rh.u[k], rh.v[k]],
             })
         })
+    }
+
+    /// Whether anything blocks each live lane's ray before its `tfar`
+    /// (`rtcOccluded16`; for `wide_paths`).
+    #[allow(dead_code)]
+    #[inline(always)]
+    pub fn occluded16_lanes(
+        &self,
+        o: &[pathstream::render::math::Vec3A; 16],
+        d: &[pathstream::render::math::Vec3A; 16],
+        tfar: &[f32; 16],
+        live: &[bool; 16],
+    ) -> [bool; 16] {
+        let mut valid = ffi::Valid16([0; 16]);
+        // SAFETY: as in `intersect16`.
+        #[allow(unsafe_code)]
+        let mut rh: ffi::RTCRayHit16 = unsafe { std::mem::zeroed() };
+        for k in 0..16 {
+            for axis in 0..3 {
+                rh.org[axis][k] = o[k][axis];
+                rh.dir[axis][k] = d[k][axis];
+            }
+            rh.tfar[k] = tfar[k];
+            rh.mask[k] = u32::MAX;
+            valid.0[k] = if live[k] { -1 } else { 0 };
+        }
+        let mut context = ffi::RTCIntersectContext::new(None);
+        // SAFETY: as in `intersect16`; Embree touches only the rays.
+        #[allow(unsafe_code)]
+        unsafe {
+            ffi::rtcOccluded16(valid.0.as_ptr(), self.scene, &mut context, &mut rh)
+        };
+        std::array::from_fn(|k| live[k] && rh.tfar[k] == f32::NEG_INFINITY)
     }
 
     /// Every ray's nearest hit in packets of sixteen neighbouring rays,

@@ -3,30 +3,36 @@
 //! step, their state (ray, throughput, radiance, random numbers) in lanes
 //! from the camera to their ends; the random numbers, the light samples,
 //! the BSDF samples, the throughputs and roulette are computed over the
-//! sixteen lanes at once. The rays (path and shadow), the surfaces and the
-//! spawned origins stay one per lane, through the renderer's own
-//! `World::intersect`, `World::surface` and `World::spawn`. Lanes whose
-//! paths ended stay masked (no compaction: in a closed box they end
-//! together).
+//! sixteen lanes at once. Lanes whose paths ended stay masked (no
+//! compaction: in a closed box they end together). By default the rays
+//! (path and shadow), the surfaces and the spawned origins stay one per
+//! lane, through the renderer's own `World::intersect`, `World::surface`
+//! and `World::spawn`.
 //!
-//! cornell-mesh only (diffuse meshes, triangle emitters, no environment).
-//! Its own random numbers (a hash per lane and dimension), so its image
-//! agrees with `pathstream render --sampler random` in expectation, not
-//! bit for bit (`pathstream diff` against a long render of the renderer's
-//! own says how far).
+//! cornell-mesh only (diffuse meshes, triangle emitters, no environment),
+//! its near clip at 0 as `scripts/mitsuba-compare.py` renders it. Its own
+//! random numbers (a hash per lane and dimension), so its image agrees
+//! with `pathstream render --sampler random` in expectation, not bit for
+//! bit (`pathstream diff` against a long render says how far).
 //!
 //! ```text
-//! apt-get install -y libembree-dev        # for --embree (Debian: Embree 3.13.5)
+//! apt-get install -y libembree-dev        # Debian: Embree 3.13.5
 //! cargo run --release -p pathstream --features embree --example wide_paths -- \
-//!     [SPP] [ROUNDS] [--embree]
+//!     [SPP] [ROUNDS] [--embree] [--simd-surface]
 //! ```
 //!
-//! `--embree`: the lanes' rays go through Embree in packets of sixteen
-//! (`rtcIntersect16`, one flat scene of every placed triangle,
-//! `RTC_BUILD_QUALITY_HIGH`, default flags: Mitsuba's set-up), their
-//! origins moved off the surface as Mitsuba moves them. Writes the first
-//! round's image to `/tmp/wide-paths.pfm`. Results: docs/BENCHMARKS.md,
-//! "Paths in lanes, a prototype". AVX-512 only.
+//! - `--embree`: the lanes' rays go through Embree in packets of sixteen
+//!   (one flat scene of every placed triangle, `RTC_BUILD_QUALITY_HIGH`,
+//!   default flags: Mitsuba's set-up): path rays by `rtcIntersect16`,
+//!   shadow rays by `rtcOccluded16` up to 0.999 of the light point's
+//!   distance; origins moved off the surface as Mitsuba moves them.
+//! - `--simd-surface`: the surfaces over lanes too, Mitsuba's way (the
+//!   hit point from the ray, the vertex normals interpolated over lanes,
+//!   origins moved off by an epsilon over lanes, nothing skipped): see
+//!   `flat.rs`. With the own BVH, rays then leave no triangle out.
+//!
+//! Writes the first round's image to `/tmp/wide-paths.pfm`. Results:
+//! docs/BENCHMARKS.md, "Paths in lanes, a prototype". AVX-512 only.
 
 // Lane `k` of several arrays at once.
 #![allow(clippy::needless_range_loop)]
@@ -44,75 +50,11 @@ use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use std::time::Instant;
 
-#[path = "embree_compare/embree.rs"]
-#[allow(dead_code, unused_imports)]
-mod embree;
-use embree::{ffi, Device, EmbreeScene};
+mod flat;
+mod tracer;
 
-/// Who traces the lanes' rays: the renderer's BVH one ray at a time, or
-/// Embree in packets of sixteen (one flat scene of every placed triangle,
-/// `RTC_BUILD_QUALITY_HIGH`, default flags: Mitsuba's set-up).
-enum Tracer<'a> {
-    Own,
-    Embree(&'a EmbreeScene, &'a [(u32, u32)]),
-}
-
-impl Tracer<'_> {
-    /// The nearest hits of the live lanes' rays.
-    #[inline(always)]
-    fn trace(
-        &self,
-        world: &World,
-        isa: Avx512,
-        o: &V,
-        d: &V,
-        from: &[Origin; L],
-        live: &[bool; L],
-    ) -> [Option<Hit>; L] {
-        let mut hits = [None; L];
-        match self {
-            Tracer::Own => {
-                for k in 0..L {
-                    if live[k] {
-                        let ray = Ray::new(lane(o, k), lane(d, k));
-                        hits[k] = world.intersect(isa, &ray, from[k]);
-                    }
-                }
-            }
-            Tracer::Embree(scene, map) => {
-                let os: [Vec3A; L] = std::array::from_fn(|k| lane(o, k));
-                let ds: [Vec3A; L] = std::array::from_fn(|k| lane(d, k));
-                let found = scene.intersect16_lanes(&os, &ds, live);
-                for k in 0..L {
-                    if let Some(h) = found[k] {
-                        let (object, first) = map[h.prim as usize];
-                        hits[k] = Some(Hit {
-                            object,
-                            prim: h.prim - first,
-                            ..h
-                        });
-                    }
-                }
-            }
-        }
-        hits
-    }
-
-    /// An origin for a ray leaving `s` along `dir`: the renderer's; for
-    /// Embree, which is told nothing of the triangle a ray leaves, moved
-    /// off the surface as Mitsuba moves its rays.
-    #[inline(always)]
-    fn leave(&self, world: &World, s: &Surface, dir: Vec3A) -> Vec3A {
-        let r = world.spawn(s, dir);
-        match self {
-            Tracer::Own => r.origin,
-            Tracer::Embree(..) => {
-                let side = if dir.dot(s.ng) > 0.0 { s.ng } else { -s.ng };
-                r.origin + side * (1.0 + s.p.abs().max_element()) * (1500.0 * f32::EPSILON / 2.0)
-            }
-        }
-    }
-}
+use flat::{leave_lanes, Flat};
+use tracer::{ffi, Device, EmbreeScene, Tracer};
 
 const L: usize = 16;
 const SIZE: u32 = 128;
@@ -161,6 +103,8 @@ struct Ctx<'a> {
     lamp: Vec<LampTri>,
     tracer: Tracer<'a>,
     isa: Avx512,
+    /// With `--simd-surface` (and `--embree`): surfaces over lanes.
+    flat: Option<&'a Flat>,
 }
 
 fn lane(v: &V, k: usize) -> Vec3A {
@@ -204,8 +148,62 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
         let (mut p, mut ng, mut ns) = (zero(), zero(), zero());
         let (mut albedo, mut emission) = (zero(), zero());
         let mut smooth = [false; L];
-        let hits = tracer.trace(world, isa, &o, &d, &from, &alive);
+        if let Some(flat) = ctx.flat {
+            let os: [Vec3A; L] = std::array::from_fn(|k| lane(&o, k));
+            let ds: [Vec3A; L] = std::array::from_fn(|k| lane(&d, k));
+            let found = match tracer {
+                Tracer::Embree(scene, _) => scene.intersect16_lanes(&os, &ds, &alive),
+                // The own BVH told nothing of the triangle a ray leaves
+                // either (the origins are moved off as for Embree); hits
+                // as flat triangle numbers.
+                Tracer::Own => std::array::from_fn(|k| {
+                    let ray = Ray::new(os[k], ds[k]);
+                    let h = alive[k]
+                        .then(|| world.intersect(isa, &ray, Origin::NONE))
+                        .flatten()?;
+                    Some(Hit {
+                        prim: flat.first[h.object as usize] + h.prim,
+                        ..h
+                    })
+                }),
+            };
+            let (mut t, mut b) = (c(0.0), [c(1.0 / 3.0); 3]);
+            // Lanes without a hit keep a unit normal (no NaN to mask).
+            let mut n = [V::splat_vec(Vec3A::Z); 3];
+            ng = V::splat_vec(Vec3A::Z);
+            for k in 0..L {
+                let Some(h) = found[k] else {
+                    alive[k] = false;
+                    continue;
+                };
+                let i = h.prim as usize;
+                t.0[k] = h.t;
+                let g = flat.ng[i];
+                set(&mut ng, k, g);
+                for j in 0..3 {
+                    b[j].0[k] = h.bary[j];
+                    let v = if flat.smooth[i] {
+                        flat.vn[flat.tris[i][j] as usize]
+                    } else {
+                        g
+                    };
+                    set(&mut n[j], k, v);
+                }
+                set(&mut albedo, k, flat.albedo[i]);
+                set(&mut emission, k, flat.emission[i]);
+                smooth[k] = flat.smooth[i];
+            }
+            p = o + d * t;
+            ns = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize();
+        }
+        let hits = match ctx.flat {
+            Some(_) => [None; L],
+            None => tracer.trace(world, isa, &o, &d, &from, &alive),
+        };
         for k in 0..L {
+            if ctx.flat.is_some() {
+                break;
+            }
             surf[k] = None;
             if !alive[k] {
                 continue;
@@ -269,7 +267,16 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
         let mut lit = c(0.0);
         let mut shadow = [false; L];
         let (mut so, mut sfrom) = (zero(), [Origin::NONE; L]);
+        if ctx.flat.is_some() {
+            so = leave_lanes(p, ng, dir);
+            for k in 0..L {
+                shadow[k] = alive[k] && found.0[k] != 0 && cos_s.0[k] > 0.0 && toward.0[k] > 0.0;
+            }
+        }
         for k in 0..L {
+            if ctx.flat.is_some() {
+                break;
+            }
             let Some(s) = &surf[k] else { continue };
             if found.0[k] == 0 || !(cos_s.0[k] > 0.0 && toward.0[k] > 0.0) {
                 continue;
@@ -283,12 +290,10 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
             };
             shadow[k] = true;
         }
-        let blockers = tracer.trace(world, isa, &so, &dir, &sfrom, &shadow);
+        let reached = tracer.unblocked(world, isa, (&so, &dir, &q), &sfrom, &shadow, &target);
         for k in 0..L {
-            if let (true, Some(h)) = (shadow[k], blockers[k]) {
-                if (h.object, h.prim) == target[k] {
-                    lit.0[k] = 1.0;
-                }
+            if reached[k] {
+                lit.0[k] = 1.0;
             }
         }
         l = l + f * lit;
@@ -304,6 +309,28 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
         let survive = rng.next();
         let roulette = bounce + 1 > RR_DEPTH;
         let q = beta.x.max(beta.y).max(beta.z).0.map(|v| v.min(0.99));
+        if ctx.flat.is_some() {
+            for k in 0..L {
+                if !alive[k] {
+                    continue;
+                }
+                if smooth[k] && !(below.0[k] > 0.0) {
+                    alive[k] = false;
+                    continue;
+                }
+                if roulette {
+                    if !(survive.0[k] < q[k]) {
+                        alive[k] = false;
+                        continue;
+                    }
+                    let b = lane(&beta, k) / q[k];
+                    set(&mut beta, k, b);
+                }
+            }
+            o = leave_lanes(p, ng, nd);
+            d = nd;
+            continue;
+        }
         for k in 0..L {
             let Some(s) = &surf[k] else { continue };
             if smooth[k] && !(below.0[k] > 0.0) {
@@ -412,12 +439,15 @@ fn main() {
     } else {
         Tracer::Own
     };
+    let simd_surface = std::env::args().any(|a| a == "--simd-surface");
+    let flat = simd_surface.then(|| Flat::build(world, &triangles, &map));
     let ctx = Ctx {
         world,
         job: &job,
         lamp,
         tracer,
         isa,
+        flat: flat.as_ref(),
     };
     for round in 0..rounds {
         let start = Instant::now();
