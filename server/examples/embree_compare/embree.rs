@@ -1,7 +1,7 @@
 //! Embree 3 through a small `extern "C"` block (rtcore.h, 3.13): a device,
 //! a scene of one triangle mesh, and single-ray queries on rayon's threads.
 
-use pathstream::render::math::Affine3A;
+use pathstream::render::math::{Affine3A, Vec3A};
 use pathstream::render::ray::Ray;
 use pathstream::render::world::{Hit, Origin};
 use rayon::prelude::*;
@@ -283,76 +283,34 @@ impl EmbreeScene {
         coherent: bool,
         out: &mut Vec<Option<Hit>>,
     ) {
-        let mut valid = ffi::Valid16([0; 16]);
-        // SAFETY: an all-zero packet is a valid value of this plain-data
-        // struct; the fields the lanes use are set below.
-        #[allow(unsafe_code)]
-        let mut rh: ffi::RTCRayHit16 = unsafe { std::mem::zeroed() };
-        for (k, (ray, _)) in rays.iter().enumerate().take(16) {
-            let o = map.transform_point3a(ray.origin);
-            let d = map.transform_vector3a(ray.dir);
-            for axis in 0..3 {
-                rh.org[axis][k] = o[axis];
-                rh.dir[axis][k] = d[axis];
-            }
-            rh.tfar[k] = f32::INFINITY;
-            rh.mask[k] = u32::MAX;
-            rh.geom_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
-            rh.prim_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
-            rh.inst_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
-            valid.0[k] = -1;
+        let n = rays.len().min(16);
+        let (mut o, mut d) = ([Vec3A::ZERO; 16], [Vec3A::ZERO; 16]);
+        for (k, (ray, _)) in rays.iter().take(16).enumerate() {
+            o[k] = map.transform_point3a(ray.origin);
+            d[k] = map.transform_vector3a(ray.dir);
         }
+        let live = std::array::from_fn(|k| k < n);
+        let hits = self.nearest16(&o, &d, &live, coherent);
+        out.extend_from_slice(&hits[..n]);
+    }
+
+    /// The nearest hits of sixteen rays in one packet, lane `k` live where
+    /// `live[k]`; hits as `intersect` reports them.
+    #[inline(always)]
+    pub fn nearest16(
+        &self,
+        o: &[Vec3A; 16],
+        d: &[Vec3A; 16],
+        live: &[bool; 16],
+        coherent: bool,
+    ) -> [Option<Hit>; 16] {
+        let (valid, mut rh) = packet16(o, d, &[f32::INFINITY; 16], live);
         let mut context = ffi::RTCIntersectContext::new(None);
         if coherent {
             context.flags = ffi::RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
         }
         // SAFETY: the scene is committed and live; the mask, context and
         // packet are valid, 64-byte aligned and exclusively ours.
-        #[allow(unsafe_code)]
-        unsafe {
-            ffi::rtcIntersect16(valid.0.as_ptr(), self.scene, &mut context, &mut rh)
-        };
-        for k in 0..rays.len().min(16) {
-            out.push(
-                (rh.geom_id[k] != ffi::RTC_INVALID_GEOMETRY_ID).then_some(Hit {
-                    t: rh.tfar[k],
-                    object: 0,
-                    prim: rh.prim_id[k],
-                    bary: [1.0 - rh.u[k] - rh.v[k], rh.u[k], rh.v[k]],
-                }),
-            );
-        }
-    }
-
-    /// The nearest hits of sixteen rays in one packet, lane `k` live where
-    /// `live[k]`; hits as `intersect` reports them (for `wide_paths`).
-    #[allow(dead_code)]
-    #[inline(always)]
-    pub fn intersect16_lanes(
-        &self,
-        o: &[pathstream::render::math::Vec3A; 16],
-        d: &[pathstream::render::math::Vec3A; 16],
-        live: &[bool; 16],
-    ) -> [Option<Hit>; 16] {
-        let mut valid = ffi::Valid16([0; 16]);
-        // SAFETY: an all-zero packet is a valid value of this plain-data
-        // struct; the fields the lanes use are set below.
-        #[allow(unsafe_code)]
-        let mut rh: ffi::RTCRayHit16 = unsafe { std::mem::zeroed() };
-        for k in 0..16 {
-            for axis in 0..3 {
-                rh.org[axis][k] = o[k][axis];
-                rh.dir[axis][k] = d[k][axis];
-            }
-            rh.tfar[k] = f32::INFINITY;
-            rh.mask[k] = u32::MAX;
-            rh.geom_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
-            rh.prim_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
-            rh.inst_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
-            valid.0[k] = if live[k] { -1 } else { 0 };
-        }
-        let mut context = ffi::RTCIntersectContext::new(None);
-        // SAFETY: as in `intersect16`.
         #[allow(unsafe_code)]
         unsafe {
             ffi::rtcIntersect16(valid.0.as_ptr(), self.scene, &mut context, &mut rh)
@@ -371,28 +329,16 @@ impl EmbreeScene {
     /// (`rtcOccluded16`; for `wide_paths`).
     #[allow(dead_code)]
     #[inline(always)]
-    pub fn occluded16_lanes(
+    pub fn occluded16(
         &self,
-        o: &[pathstream::render::math::Vec3A; 16],
-        d: &[pathstream::render::math::Vec3A; 16],
+        o: &[Vec3A; 16],
+        d: &[Vec3A; 16],
         tfar: &[f32; 16],
         live: &[bool; 16],
     ) -> [bool; 16] {
-        let mut valid = ffi::Valid16([0; 16]);
-        // SAFETY: as in `intersect16`.
-        #[allow(unsafe_code)]
-        let mut rh: ffi::RTCRayHit16 = unsafe { std::mem::zeroed() };
-        for k in 0..16 {
-            for axis in 0..3 {
-                rh.org[axis][k] = o[k][axis];
-                rh.dir[axis][k] = d[k][axis];
-            }
-            rh.tfar[k] = tfar[k];
-            rh.mask[k] = u32::MAX;
-            valid.0[k] = if live[k] { -1 } else { 0 };
-        }
+        let (valid, mut rh) = packet16(o, d, tfar, live);
         let mut context = ffi::RTCIntersectContext::new(None);
-        // SAFETY: as in `intersect16`; Embree touches only the rays.
+        // SAFETY: as in `nearest16`; Embree touches only the rays.
         #[allow(unsafe_code)]
         unsafe {
             ffi::rtcOccluded16(valid.0.as_ptr(), self.scene, &mut context, &mut rh)
@@ -450,4 +396,33 @@ impl Drop for EmbreeScene {
             ffi::rtcReleaseScene(self.scene)
         }
     }
+}
+
+/// A packet of sixteen rays (origin `o`, direction `d`, from 0 to `tfar`),
+/// lane `k` live where `live[k]`, and its `valid` mask.
+#[inline(always)]
+fn packet16(
+    o: &[Vec3A; 16],
+    d: &[Vec3A; 16],
+    tfar: &[f32; 16],
+    live: &[bool; 16],
+) -> (ffi::Valid16, ffi::RTCRayHit16) {
+    let mut valid = ffi::Valid16([0; 16]);
+    // SAFETY: an all-zero packet is a valid value of this plain-data
+    // struct; the fields the lanes use are set below.
+    #[allow(unsafe_code)]
+    let mut rh: ffi::RTCRayHit16 = unsafe { std::mem::zeroed() };
+    for k in 0..16 {
+        for axis in 0..3 {
+            rh.org[axis][k] = o[k][axis];
+            rh.dir[axis][k] = d[k][axis];
+        }
+        rh.tfar[k] = tfar[k];
+        rh.mask[k] = u32::MAX;
+        rh.geom_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
+        rh.prim_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
+        rh.inst_id[k] = ffi::RTC_INVALID_GEOMETRY_ID;
+        valid.0[k] = if live[k] { -1 } else { 0 };
+    }
+    (valid, rh)
 }

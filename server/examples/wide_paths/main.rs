@@ -152,7 +152,7 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
             let os: [Vec3A; L] = std::array::from_fn(|k| lane(&o, k));
             let ds: [Vec3A; L] = std::array::from_fn(|k| lane(&d, k));
             let found = match tracer {
-                Tracer::Embree(scene, _) => scene.intersect16_lanes(&os, &ds, &alive),
+                Tracer::Embree(scene, _) => scene.nearest16(&os, &ds, &alive, false),
                 // The own BVH told nothing of the triangle a ray leaves
                 // either (the origins are moved off as for Embree); hits
                 // as flat triangle numbers.
@@ -309,30 +309,10 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
         let survive = rng.next();
         let roulette = bounce + 1 > RR_DEPTH;
         let q = beta.x.max(beta.y).max(beta.z).0.map(|v| v.min(0.99));
-        if ctx.flat.is_some() {
-            for k in 0..L {
-                if !alive[k] {
-                    continue;
-                }
-                if smooth[k] && !(below.0[k] > 0.0) {
-                    alive[k] = false;
-                    continue;
-                }
-                if roulette {
-                    if !(survive.0[k] < q[k]) {
-                        alive[k] = false;
-                        continue;
-                    }
-                    let b = lane(&beta, k) / q[k];
-                    set(&mut beta, k, b);
-                }
-            }
-            o = leave_lanes(p, ng, nd);
-            d = nd;
-            continue;
-        }
         for k in 0..L {
-            let Some(s) = &surf[k] else { continue };
+            if !alive[k] {
+                continue;
+            }
             if smooth[k] && !(below.0[k] > 0.0) {
                 alive[k] = false;
                 continue;
@@ -345,6 +325,16 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
                 let b = lane(&beta, k) / q[k];
                 set(&mut beta, k, b);
             }
+        }
+        if ctx.flat.is_some() {
+            o = leave_lanes(p, ng, nd);
+            d = nd;
+            continue;
+        }
+        for k in 0..L {
+            let (true, Some(s)) = (alive[k], &surf[k]) else {
+                continue;
+            };
             let dk = lane(&nd, k);
             set(&mut o, k, tracer.leave(world, s, dk));
             set(&mut d, k, dk);

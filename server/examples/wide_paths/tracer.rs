@@ -40,7 +40,7 @@ impl Tracer<'_> {
             Tracer::Embree(scene, map) => {
                 let os: [Vec3A; L] = std::array::from_fn(|k| lane(o, k));
                 let ds: [Vec3A; L] = std::array::from_fn(|k| lane(d, k));
-                let found = scene.intersect16_lanes(&os, &ds, live);
+                let found = scene.nearest16(&os, &ds, live, false);
                 for k in 0..L {
                     if let Some(h) = found[k] {
                         let (object, first) = map[h.prim as usize];
@@ -81,7 +81,7 @@ impl Tracer<'_> {
                 let os: [Vec3A; L] = std::array::from_fn(|k| lane(o, k));
                 let ds: [Vec3A; L] = std::array::from_fn(|k| lane(d, k));
                 let tfar: [f32; L] = std::array::from_fn(|k| (lane(q, k) - os[k]).length() * 0.999);
-                let blocked = scene.occluded16_lanes(&os, &ds, &tfar, live);
+                let blocked = scene.occluded16(&os, &ds, &tfar, live);
                 std::array::from_fn(|k| live[k] && !blocked[k])
             }
         }
