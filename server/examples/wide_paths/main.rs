@@ -18,7 +18,7 @@
 //! ```text
 //! apt-get install -y libembree-dev        # Debian: Embree 3.13.5
 //! cargo run --release -p pathstream --features embree --example wide_paths -- \
-//!     [SPP] [ROUNDS] [--embree] [--simd-surface]
+//!     [SPP] [ROUNDS] [--embree] [--simd-surface [--robust-spawn]]
 //! ```
 //!
 //! - `--embree`: the lanes' rays go through Embree in packets of sixteen
@@ -30,6 +30,10 @@
 //!   hit point from the ray, the vertex normals interpolated over lanes,
 //!   origins moved off by an epsilon over lanes, nothing skipped): see
 //!   `flat.rs`. With the own BVH, rays then leave no triangle out.
+//! - `--robust-spawn` (with `--simd-surface`): the renderer's spawn
+//!   instead of the epsilon, over lanes: the object-space hit point and
+//!   its error bound, moved that far and rounded away from the plane, then
+//!   mapped to camera space (`flat::Robust`).
 //!
 //! Writes the first round's image to `/tmp/wide-paths.pfm`. Results:
 //! docs/BENCHMARKS.md, "Paths in lanes, a prototype". AVX-512 only.
@@ -53,7 +57,7 @@ use std::time::Instant;
 mod flat;
 mod tracer;
 
-use flat::{leave_lanes, Flat};
+use flat::{leave_lanes, Flat, Robust, RobustCam};
 use tracer::{ffi, Device, EmbreeScene, Tracer};
 
 const L: usize = 16;
@@ -96,6 +100,23 @@ struct LampTri {
     id: (u32, u32),
 }
 
+/// How rays leave a surface in `--simd-surface` mode.
+#[derive(Clone, Copy)]
+enum Spawn {
+    /// Mitsuba's epsilon.
+    Epsilon,
+    /// The renderer's: object space, error bound, round trip (`Robust`).
+    Object,
+    /// The same bound in camera space, on the flat scene's vertices.
+    Camera,
+}
+
+/// A vertex's spawn data, by [`Spawn`].
+enum Origins {
+    Object(Robust),
+    Camera(RobustCam),
+}
+
 /// What every pixel reads.
 struct Ctx<'a> {
     world: &'a World,
@@ -103,8 +124,12 @@ struct Ctx<'a> {
     lamp: Vec<LampTri>,
     tracer: Tracer<'a>,
     isa: Avx512,
-    /// With `--simd-surface` (and `--embree`): surfaces over lanes.
+    /// With `--simd-surface`: surfaces over lanes.
     flat: Option<&'a Flat>,
+    /// With `--robust-spawn[=camera]` too: the renderer's spawn over lanes.
+    robust: Spawn,
+    /// The flat scene's camera-space vertices.
+    positions: &'a [[f32; 3]],
 }
 
 fn lane(v: &V, k: usize) -> Vec3A {
@@ -148,6 +173,7 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
         let (mut p, mut ng, mut ns) = (zero(), zero(), zero());
         let (mut albedo, mut emission) = (zero(), zero());
         let mut smooth = [false; L];
+        let mut robust = None;
         if let Some(flat) = ctx.flat {
             let os: [Vec3A; L] = std::array::from_fn(|k| lane(&o, k));
             let ds: [Vec3A; L] = std::array::from_fn(|k| lane(&d, k));
@@ -195,6 +221,20 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
             }
             p = o + d * t;
             ns = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize();
+            let prims = std::array::from_fn(|k| found[k].map(|h| h.prim));
+            match ctx.robust {
+                Spawn::Epsilon => {}
+                Spawn::Object => {
+                    let r = Robust::gather(world, flat, &prims, &b);
+                    p = r.point();
+                    robust = Some(Origins::Object(r));
+                }
+                Spawn::Camera => {
+                    let r = RobustCam::gather(flat, ctx.positions, &prims, &b);
+                    p = r.point();
+                    robust = Some(Origins::Camera(r));
+                }
+            }
         }
         let hits = match ctx.flat {
             Some(_) => [None; L],
@@ -268,7 +308,11 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
         let mut shadow = [false; L];
         let (mut so, mut sfrom) = (zero(), [Origin::NONE; L]);
         if ctx.flat.is_some() {
-            so = leave_lanes(p, ng, dir);
+            so = match &robust {
+                Some(Origins::Object(r)) => r.origin(ng, dir),
+                Some(Origins::Camera(r)) => r.origin(dir),
+                None => leave_lanes(p, ng, dir),
+            };
             for k in 0..L {
                 shadow[k] = alive[k] && found.0[k] != 0 && cos_s.0[k] > 0.0 && toward.0[k] > 0.0;
             }
@@ -327,7 +371,11 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
             }
         }
         if ctx.flat.is_some() {
-            o = leave_lanes(p, ng, nd);
+            o = match &robust {
+                Some(Origins::Object(r)) => r.origin(ng, nd),
+                Some(Origins::Camera(r)) => r.origin(nd),
+                None => leave_lanes(p, ng, nd),
+            };
             d = nd;
             continue;
         }
@@ -438,6 +486,15 @@ fn main() {
         tracer,
         isa,
         flat: flat.as_ref(),
+        robust: match std::env::args()
+            .find(|a| a.starts_with("--robust-spawn"))
+            .as_deref()
+        {
+            None => Spawn::Epsilon,
+            Some("--robust-spawn=camera") => Spawn::Camera,
+            Some(_) => Spawn::Object,
+        },
+        positions: &positions,
     };
     for round in 0..rounds {
         let start = Instant::now();
