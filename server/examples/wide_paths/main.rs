@@ -111,7 +111,9 @@ enum Spawn {
     Camera,
 }
 
-/// A vertex's spawn data, by [`Spawn`].
+/// A vertex's spawn data, by [`Spawn`] (on the stack, one a vertex: not
+/// boxed, which would allocate at every vertex).
+#[allow(clippy::large_enum_variant)]
 enum Origins {
     Object(Robust),
     Camera(RobustCam),
