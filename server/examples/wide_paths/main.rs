@@ -18,7 +18,7 @@
 //! ```text
 //! apt-get install -y libembree-dev        # Debian: Embree 3.13.5
 //! cargo run --release -p pathstream --features embree --example wide_paths -- \
-//!     [SPP] [ROUNDS] [--embree] [--simd-surface [--robust-spawn]]
+//!     [SPP] [ROUNDS] [--embree] [--simd-surface [--robust-spawn[=camera]]] [--sobol]
 //! ```
 //!
 //! - `--embree`: the lanes' rays go through Embree in packets of sixteen
@@ -35,6 +35,8 @@
 //!   its error bound, moved that far and rounded away from the plane, then
 //!   mapped to camera space (`flat::Robust`).
 //!
+//! - `--sobol`: Sobol points in the renderer's way over lanes (see `Rng`).
+//!
 //! Writes the first round's image to `/tmp/wide-paths.pfm`. Results:
 //! docs/BENCHMARKS.md, "Paths in lanes, a prototype". AVX-512 only.
 
@@ -48,6 +50,7 @@ use pathstream::render::light::{EmitterShape, LightTri};
 use pathstream::render::material::cosine_hemisphere;
 use pathstream::render::math::Vec3A;
 use pathstream::render::ray::Ray;
+use pathstream::render::sampler::sobol::{hash32, lk_hash};
 use pathstream::render::world::{Hit, Origin, Surface, World};
 use pathstream::render::{Quality, RenderJob};
 use rayon::prelude::*;
@@ -78,18 +81,93 @@ fn mix(mut x: U) -> U {
     x ^ (x >> 16)
 }
 
+/// The lanes' random numbers: a hash per lane and dimension, or with
+/// `--sobol` the renderer's kind of points (`sampler::sobol`): each
+/// pixel's even and odd samples two independently scrambled (0,2)-
+/// sequences, a point's index shuffled by a nested uniform scramble and
+/// its values Owen-scrambled, the seeds hashed from (pixel, dimension,
+/// half). Not the renderer's bits; its work, over lanes.
 struct Rng {
     key: U,
     n: u32,
+    sobol: Option<(u32, U, U)>,
 }
 
 impl Rng {
+    /// Samples `s0..s0 + 16` of pixel `pixel`.
     #[inline(always)]
-    fn next(&mut self) -> R {
-        self.n += 1;
-        let b = mix(self.key ^ U::splat(self.n.wrapping_mul(0x9e37_79b9)));
+    fn new(pixel: u32, s0: u32, sobol: bool) -> Rng {
+        let key = mix(U32s(std::array::from_fn(|k| pixel * 8192 + s0 + k as u32)));
+        let sobol = sobol.then(|| {
+            let s = |k: usize| s0 + k as u32;
+            (
+                pixel,
+                U32s(std::array::from_fn(|k| (s(k) >> 1).reverse_bits())),
+                U32s(std::array::from_fn(|k| s(k) & 1)),
+            )
+        });
+        Rng { key, n: 0, sobol }
+    }
+
+    #[inline(always)]
+    fn unit(b: U) -> R {
         F32s(b.0.map(|b| (b >> 8) as f32 * (1.0 / 16_777_216.0)))
     }
+
+    #[inline(always)]
+    fn next(&mut self) -> R {
+        match self.sobol {
+            // A 1-D point: the van der Corput point of the shuffled index,
+            // which is the shuffle's hash itself (`sampler::sobol`).
+            Some((pixel, rindex, half)) => {
+                self.n += 1;
+                let (a, b) = (
+                    hash32(pixel ^ (self.n << 20)),
+                    hash32(pixel ^ (self.n << 20) ^ (1 << 31)),
+                );
+                let seed = U32s(std::array::from_fn(|k| if half.0[k] != 0 { b } else { a }));
+                Self::unit(lk_hash(rindex, seed))
+            }
+            None => {
+                self.n += 1;
+                Self::unit(mix(self.key ^ U::splat(self.n.wrapping_mul(0x9e37_79b9))))
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn next_2d(&mut self) -> (R, R) {
+        let Some((pixel, rindex, half)) = self.sobol else {
+            return (self.next(), self.next());
+        };
+        self.n += 1;
+        // Three seeds per half, chosen lane by lane.
+        let seeds = [0u32, 1].map(|h| {
+            let k = hash32(pixel ^ (self.n << 20) ^ (h << 31));
+            let x = hash32(k ^ 0x68bc_21eb);
+            (k, x, hash32(x ^ 0x2545_f491))
+        });
+        // Lane by lane, the seed of its half (a select, no call).
+        let seed =
+            |a: u32, b: u32| U32s(std::array::from_fn(|k| if half.0[k] != 0 { b } else { a }));
+        let (s0, s1) = (seeds[0], seeds[1]);
+        let shuffled = lk_hash(rindex, seed(s0.0, s1.0)).reverse_bits();
+        let x = lk_hash(shuffled, seed(s0.1, s1.1)).reverse_bits();
+        let y = lk_hash(superset_sum(shuffled), seed(s0.2, s1.2)).reverse_bits();
+        (Self::unit(x), Self::unit(y))
+    }
+}
+
+/// Sobol's second generator matrix applied to `i`, before the bit
+/// reversal (`sampler::sobol`'s).
+#[inline(always)]
+fn superset_sum(mut y: U) -> U {
+    let c = U::splat;
+    y = y ^ ((y >> 1) & c(0x5555_5555));
+    y = y ^ ((y >> 2) & c(0x3333_3333));
+    y = y ^ ((y >> 4) & c(0x0F0F_0F0F));
+    y = y ^ ((y >> 8) & c(0x00FF_00FF));
+    y ^ ((y >> 16) & c(0x0000_FFFF))
 }
 
 /// One of the lamp's triangles, its emission and which triangle of the
@@ -132,6 +210,8 @@ struct Ctx<'a> {
     robust: Spawn,
     /// The flat scene's camera-space vertices.
     positions: &'a [[f32; 3]],
+    /// With `--sobol`: Sobol points, not hashes.
+    sobol: bool,
 }
 
 fn lane(v: &V, k: usize) -> Vec3A {
@@ -153,11 +233,8 @@ fn zero() -> V {
 fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
     let (world, job, tracer, isa) = (ctx.world, ctx.job, &ctx.tracer, ctx.isa);
     let c = R::splat;
-    let key = mix(U32s(std::array::from_fn(|k| {
-        (y * SIZE + x) * 8192 + s0 + k as u32
-    })));
-    let mut rng = Rng { key, n: 0 };
-    let (u1, u2) = (rng.next(), rng.next());
+    let mut rng = Rng::new(y * SIZE + x, s0, ctx.sobol);
+    let (u1, u2) = rng.next_2d();
     let (mut o, mut d) = (zero(), zero());
     for k in 0..L {
         let r = job.camera.ray(x as f32 + u1.0[k], y as f32 + u2.0[k]);
@@ -280,7 +357,8 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
         let nl = ng * c(1.0).copysign(-d.dot(ng));
         let ns = ns * c(1.0).copysign(ns.dot(nl));
         // A light sample: a lamp triangle per lane, a point on it.
-        let (pick, u1, u2) = (rng.next(), rng.next(), rng.next());
+        let pick = rng.next();
+        let (u1, u2) = rng.next_2d();
         let count = ctx.lamp.len();
         let (mut p0, mut e1, mut e2, mut n) = (zero(), zero(), zero(), zero());
         let (mut area, mut le) = (c(0.0), zero());
@@ -347,7 +425,7 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
             break;
         }
         // The bounce, over lanes.
-        let (v1, v2) = (rng.next(), rng.next());
+        let (v1, v2) = rng.next_2d();
         let nd = cosine_hemisphere(ns, v1, v2);
         beta = V::new(beta.x * albedo.x, beta.y * albedo.y, beta.z * albedo.z);
         emit = c(0.0);
@@ -399,7 +477,7 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
 }
 
 #[allow(unsafe_code)]
-#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,gfni")]
 fn row(ctx: &Ctx, y: u32, spp: u32) -> Vec<Vec3A> {
     (0..SIZE)
         .map(|x| {
@@ -497,6 +575,7 @@ fn main() {
             Some(_) => Spawn::Object,
         },
         positions: &positions,
+        sobol: std::env::args().any(|a| a == "--sobol"),
     };
     for round in 0..rounds {
         let start = Instant::now();
