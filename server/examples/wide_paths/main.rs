@@ -477,7 +477,7 @@ fn pixel(ctx: &Ctx, x: u32, y: u32, s0: u32) -> Vec3A {
 }
 
 #[allow(unsafe_code)]
-#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,gfni")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
 fn row(ctx: &Ctx, y: u32, spp: u32) -> Vec<Vec3A> {
     (0..SIZE)
         .map(|x| {
