@@ -50,7 +50,7 @@ use pathstream::render::light::{EmitterShape, LightTri};
 use pathstream::render::material::cosine_hemisphere;
 use pathstream::render::math::Vec3A;
 use pathstream::render::ray::Ray;
-use pathstream::render::sampler::sobol::{hash32, lk_hash};
+use pathstream::render::sampler::sobol::{hash32, lk_hash, superset_sum};
 use pathstream::render::world::{Hit, Origin, Surface, World};
 use pathstream::render::{Quality, RenderJob};
 use rayon::prelude::*;
@@ -156,18 +156,6 @@ impl Rng {
         let y = lk_hash(superset_sum(shuffled), seed(s0.2, s1.2)).reverse_bits();
         (Self::unit(x), Self::unit(y))
     }
-}
-
-/// Sobol's second generator matrix applied to `i`, before the bit
-/// reversal (`sampler::sobol`'s).
-#[inline(always)]
-fn superset_sum(mut y: U) -> U {
-    let c = U::splat;
-    y = y ^ ((y >> 1) & c(0x5555_5555));
-    y = y ^ ((y >> 2) & c(0x3333_3333));
-    y = y ^ ((y >> 4) & c(0x0F0F_0F0F));
-    y = y ^ ((y >> 8) & c(0x00FF_00FF));
-    y ^ ((y >> 16) & c(0x0000_FFFF))
 }
 
 /// One of the lamp's triangles, its emission and which triangle of the

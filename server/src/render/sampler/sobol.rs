@@ -51,7 +51,7 @@ pub fn owen(v: u32, seed: u32) -> u32 {
 /// include p's: Sobol's second generator matrix applied to `i`, before the
 /// bit reversal.
 #[inline(always)]
-fn superset_sum<B: Bits>(mut y: B) -> B {
+pub fn superset_sum<B: Bits>(mut y: B) -> B {
     let c = B::splat;
     y = y ^ ((y >> 1) & c(0x5555_5555));
     y = y ^ ((y >> 2) & c(0x3333_3333));
