@@ -3,7 +3,7 @@
 use super::{set, L, R, V};
 use pathstream::render::lanes::U32s;
 use pathstream::render::lanes::{Real, Vector};
-use pathstream::render::math::Vec3A;
+use pathstream::render::math::{gamma, Vec3A};
 use pathstream::render::world::World;
 
 /// Every placed triangle in camera space, for surfaces over lanes
@@ -89,8 +89,8 @@ pub struct Robust {
     m: [V; 4],
 }
 
-/// gamma(7), as `render::math::gamma` gives it.
-const GAMMA7: f32 = 7.0 * (f32::EPSILON * 0.5) / (1.0 - 7.0 * (f32::EPSILON * 0.5));
+/// The hit point's rounding bound (`triangle::hit_point`'s).
+const GAMMA7: f32 = gamma(7);
 
 impl Robust {
     /// The lanes' hits (flat triangle `prim[k]` at barycentrics `b`).

@@ -71,16 +71,6 @@ type R = F32s<L>;
 type U = U32s<L>;
 type V = V3<R>;
 
-/// lowbias32 in every lane.
-#[inline(always)]
-fn mix(mut x: U) -> U {
-    x = x ^ (x >> 16);
-    x = x.wrapping_mul(U::splat(0x7feb_352d));
-    x = x ^ (x >> 15);
-    x = x.wrapping_mul(U::splat(0x846c_a68b));
-    x ^ (x >> 16)
-}
-
 /// The lanes' random numbers: a hash per lane and dimension, or with
 /// `--sobol` the renderer's kind of points (`sampler::sobol`): each
 /// pixel's even and odd samples two independently scrambled (0,2)-
@@ -97,7 +87,7 @@ impl Rng {
     /// Samples `s0..s0 + 16` of pixel `pixel`.
     #[inline(always)]
     fn new(pixel: u32, s0: u32, sobol: bool) -> Rng {
-        let key = mix(U32s(std::array::from_fn(|k| pixel * 8192 + s0 + k as u32)));
+        let key = hash32(U32s(std::array::from_fn(|k| pixel * 8192 + s0 + k as u32)));
         let sobol = sobol.then(|| {
             let s = |k: usize| s0 + k as u32;
             (
@@ -130,7 +120,9 @@ impl Rng {
             }
             None => {
                 self.n += 1;
-                Self::unit(mix(self.key ^ U::splat(self.n.wrapping_mul(0x9e37_79b9))))
+                Self::unit(hash32(
+                    self.key ^ U::splat(self.n.wrapping_mul(0x9e37_79b9)),
+                ))
             }
         }
     }

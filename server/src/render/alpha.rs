@@ -14,6 +14,7 @@
 //! `kernels/triangles.h` (`alpha_passes`) mirrors it.
 
 use crate::render::math::Vec3A;
+use crate::render::sampler::sobol::hash32;
 use crate::render::shape::Mesh;
 use crate::render::texture::{self, Sampling, Texture};
 use std::sync::Arc;
@@ -80,20 +81,9 @@ pub fn blend_u(o: Vec3A, d: Vec3A, prim: u32) -> f32 {
     ];
     let mut h: u32 = 0x9E37_79B9;
     for w in words {
-        h = mix(h ^ w);
+        h = hash32(h ^ w);
     }
     (h >> 8) as f32 * (1.0 / 16_777_216.0)
-}
-
-/// A 32-bit finaliser (lowbias32, Wellons).
-#[inline(always)]
-fn mix(mut x: u32) -> u32 {
-    x ^= x >> 16;
-    x = x.wrapping_mul(0x7feb_352d);
-    x ^= x >> 15;
-    x = x.wrapping_mul(0x846c_a68b);
-    x ^= x >> 16;
-    x
 }
 
 #[cfg(test)]

@@ -12,8 +12,8 @@
 //! specular layer lets through, `(1 - Es(mu_o)) (1 - Es(mu_i)) / (1 -
 //! Es_avg)`, so a white base under the coating also keeps every bit of
 //! energy. E, and its split into Schlick's F0 and (1 - cos)^5 parts, come
-//! from [`Tables`], integrated once (not guessed) and stored and read by
-//! bilinear lookup; the kernel (`kernels/ggx.h`) gets the same floats and
+//! from [`Tables`], integrated (not guessed), stored in the binary and read
+//! by bilinear lookup; the kernel (`kernels/ggx.h`) gets the same floats and
 //! mirrors every routine here operation for operation.
 //!
 //! Transmission (`KHR_materials_transmission`): the dielectric's diffuse
