@@ -15,7 +15,7 @@ pub mod mis;
 pub mod nee;
 
 pub use mis::Combine;
-pub use nee::LightSampling;
+pub use nee::{Direct, LightSampling, Shadow};
 
 use crate::render::camera::CameraRays;
 use crate::render::features::{self, Guide};
@@ -149,8 +149,9 @@ impl Path {
     }
 
     /// Continues the path at `hit`, the nearest hit along `self.ray`
-    /// (`world.intersect(isa, &self.ray, self.from)`); false once the path
-    /// has ended (it must not be advanced again then).
+    /// (`world.intersect(isa, &self.ray, self.from)`), tracing its shadow
+    /// ray at once; false once the path has ended (it must not be advanced
+    /// again then).
     #[inline(always)]
     pub fn advance<I: Isa>(
         &mut self,
@@ -158,6 +159,34 @@ impl Path {
         world: &World,
         settings: &PathSettings,
         hit: Option<Hit>,
+    ) -> bool {
+        let mut shadow = None;
+        let live = self.step(isa, world, settings, hit, &mut shadow);
+        if let Some(light) = shadow.and_then(|s| s.trace(isa, world)) {
+            self.l += light;
+        }
+        live
+    }
+
+    /// Adds what a shadow ray of this path's last [`Path::step`] brought
+    /// ([`Shadow::light`]).
+    #[inline(always)]
+    pub fn add_light(&mut self, light: Vec3A) {
+        self.l += light;
+    }
+
+    /// [`Path::advance`] without its shadow ray: that is left in `shadow`
+    /// (if the vertex sent one) for the caller to trace before the path's
+    /// next step, and to add what it brings ([`Path::add_light`]); the
+    /// path's radiance is the same as if it had been traced at once.
+    #[inline(always)]
+    pub fn step<I: Isa>(
+        &mut self,
+        isa: I,
+        world: &World,
+        settings: &PathSettings,
+        hit: Option<Hit>,
+        shadow: &mut Option<Shadow>,
     ) -> bool {
         let Some(hit) = hit else {
             // Left the scene: the environment, counted as an emitter's hit
@@ -234,7 +263,8 @@ impl Path {
         let lobes_built;
         if gathered {
             let sampling = settings.light_sampling;
-            if let Bsdf::Pbr(p) = &m.bsdf {
+            // What NEE found, and the path's factors before and after it.
+            let (direct, pre, post) = if let Bsdf::Pbr(p) = &m.bsdf {
                 let (t, b) = basis(ns);
                 let local = |v: Vec3A| Vec3A::new(v.dot(t), v.dot(b), v.dot(ns));
                 let wo = -local(ray.dir);
@@ -249,8 +279,8 @@ impl Path {
                     ggx::eval_cos(tables, p, m.albedo, built, wo, wi) * w
                 };
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
-                self.l += self.beta * direct;
                 lobes = Lobes::Built(built);
+                (direct, self.beta, 1.0)
             } else if world.diffuse_mis() {
                 let f = |dir: Vec3A, light_pdf: f32| {
                     let cos = ns.dot(dir);
@@ -258,11 +288,16 @@ impl Path {
                     Vec3A::splat(cos * w)
                 };
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
-                self.l += self.beta * m.albedo * direct * FRAC_1_PI;
+                (direct, self.beta * m.albedo, FRAC_1_PI)
             } else {
                 let f = |dir: Vec3A, _pdf: f32| Vec3A::splat(ns.dot(dir));
                 let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
-                self.l += self.beta * m.albedo * direct * FRAC_1_PI;
+                (direct, self.beta * m.albedo, FRAC_1_PI)
+            };
+            match direct {
+                Direct::None => {}
+                Direct::Traced(sum) => self.l += pre * sum * post,
+                Direct::Shadow(ray) => *shadow = Some(ray.scaled(pre, post)),
             }
             if settings.max_depth != 0 && self.bounces + 1 >= settings.max_depth {
                 // The bounce's own hit would count no emission after a
