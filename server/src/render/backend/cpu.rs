@@ -3,7 +3,9 @@
 //! A row is rendered by one function with the whole path loop inlined into
 //! it, compiled for every CPU, for AVX2 and FMA, and for AVX-512; the
 //! widest the CPU has is chosen at run time (`wide`). All give the same
-//! image, bit for bit. Paths are traced two at a time, side by side.
+//! image, bit for bit. Paths are traced two at a time, side by side; where
+//! Embree traces the world, 4, 8 or 16 at a time in lanes, their rays in
+//! Embree's packets (`lanes`, [`PathLoop`]).
 
 use crate::render::adaptive::{TileWork, TILE_SIZE};
 use crate::render::features::{self, FeatureSums};
@@ -27,6 +29,21 @@ pub struct CpuBackend {
     cap: IsaCap,
     /// Where meshes are traced through Embree (where it is installed).
     embree: EmbreeUse,
+    /// Which loop traces the paths.
+    paths: PathLoop,
+}
+
+/// How the CPU advances its paths.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PathLoop {
+    /// In lanes where Embree traces the world (its packets serve them),
+    /// in pairs elsewhere.
+    #[default]
+    Auto,
+    /// Always in lanes (to test the lane loop against the pair loop).
+    Lanes,
+    /// Always in pairs.
+    Pairs,
 }
 
 /// Where the CPU traces meshes through Embree rather than its own BVH.
@@ -78,6 +95,20 @@ impl CpuBackend {
     /// This backend tracing meshes through Embree where `embree` says.
     pub fn with_embree(self, embree: EmbreeUse) -> Self {
         Self { embree, ..self }
+    }
+
+    /// This backend advancing paths as `paths` says.
+    pub fn with_paths(self, paths: PathLoop) -> Self {
+        Self { paths, ..self }
+    }
+
+    /// Whether `job`'s paths go in lanes.
+    fn lanes(&self, job: &RenderJob) -> bool {
+        match self.paths {
+            PathLoop::Auto => job.world.traced_by_embree(),
+            PathLoop::Lanes => true,
+            PathLoop::Pairs => false,
+        }
     }
 
     pub fn device(&self) -> String {
@@ -133,6 +164,7 @@ impl CpuBackend {
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
         self.prepare(job);
+        let lanes = self.lanes(job);
         let first = film.next_sample();
         let width = film.width() as usize;
         let wide = Wide::detect(self.cap);
@@ -153,6 +185,7 @@ impl CpuBackend {
                         y * width,
                         span,
                         first..first + count,
+                        lanes,
                     ))
                 })
                 .sum()
@@ -174,6 +207,7 @@ impl CpuBackend {
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
         self.prepare(job);
+        let lanes = self.lanes(job);
         let (start, sample) = (film.slice_start(), film.next_sample());
         let wide = Wide::detect(self.cap);
         let work = |film: &mut Film| -> Option<u64> {
@@ -187,7 +221,14 @@ impl CpuBackend {
                     }
                     let first = start + k * SLICE_CHUNK;
                     let span = Span::new(chunk, f);
-                    Some(render_span(wide, job, first, span, sample..sample + 1))
+                    Some(render_span(
+                        wide,
+                        job,
+                        first,
+                        span,
+                        sample..sample + 1,
+                        lanes,
+                    ))
                 })
                 .sum()
         };
@@ -211,6 +252,7 @@ impl CpuBackend {
             return true;
         };
         self.prepare(job);
+        let lanes = self.lanes(job);
         let tiles = *film.tiles();
         let width = film.width() as usize;
         // Each entry with the sample its tile is at; entries by tile row.
@@ -245,7 +287,7 @@ impl CpuBackend {
                         let samples = *at..at + u64::from(w.count);
                         let f = f.as_deref_mut().map(|f| &mut f[a..b]);
                         let span = Span::new(&mut row[a..b], f);
-                        rejected += render_span(wide, job, y * width + a, span, samples);
+                        rejected += render_span(wide, job, y * width + a, span, samples, lanes);
                     }
                     Some(rejected)
                 })
@@ -418,8 +460,10 @@ fn span_with<I: Isa>(
     rejected
 }
 
+mod lanes;
 mod packets;
 mod wide;
+use lanes::span_lanes;
 use packets::span_packets;
 pub use wide::IsaCap;
 use wide::{hits_chunk, render_span, Wide};

@@ -9,7 +9,7 @@ mod cpu;
 pub mod opencl;
 mod priority;
 
-pub use cpu::{nearest_hits, nearest_hits_packets, CpuBackend, EmbreeUse, IsaCap};
+pub use cpu::{nearest_hits, nearest_hits_packets, CpuBackend, EmbreeUse, IsaCap, PathLoop};
 pub use opencl::{OpenClBackend, OpenClError};
 
 use crate::render::adaptive::TileWork;

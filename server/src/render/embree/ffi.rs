@@ -122,7 +122,64 @@ pub struct Api {
     pub commit_scene: unsafe extern "C" fn(Handle),
     pub release_scene: unsafe extern "C" fn(Handle),
     pub intersect1: unsafe extern "C" fn(Handle, *mut Context, *mut RayHit),
+    /// `rtcIntersect4`, `8` and `16`: a packet's valid mask (-1 or 0 a
+    /// lane), the scene, the context and an `RTCRayHitN` ([`RayHitN`]).
+    pub intersect4: PacketFn,
+    pub intersect8: PacketFn,
+    pub intersect16: PacketFn,
+    /// `rtcOccluded4`, `8` and `16`: the same, reading and writing only
+    /// the packet's rays (tfar becomes -inf where something blocks).
+    pub occluded4: PacketFn,
+    pub occluded8: PacketFn,
+    pub occluded16: PacketFn,
 }
+
+impl Api {
+    /// The nearest-hit and the occlusion query for packets of `w` rays.
+    pub fn packet_queries(&self, w: usize) -> (PacketFn, PacketFn) {
+        match w {
+            4 => (self.intersect4, self.occluded4),
+            8 => (self.intersect8, self.occluded8),
+            16 => (self.intersect16, self.occluded16),
+            _ => unreachable!("Embree's packets are 4, 8 or 16 rays, not {w}"),
+        }
+    }
+}
+
+/// A packet query's entry point.
+pub type PacketFn = unsafe extern "C" fn(*const c_int, Handle, *mut Context, *mut c_void);
+
+/// `RTCRayHitN` for N = `W` (4, 8 or 16): `RTCRayN` then `RTCHitN` with
+/// one instance level, a field at a time, each `W` lanes (the headers
+/// align them to the packet's width; 64 bytes serves every width).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug)]
+pub struct RayHitN<const W: usize> {
+    pub org: [[f32; W]; 3],
+    pub tnear: [f32; W],
+    pub dir: [[f32; W]; 3],
+    pub time: [f32; W],
+    pub tfar: [f32; W],
+    pub mask: [c_uint; W],
+    pub id: [c_uint; W],
+    pub flags: [c_uint; W],
+    pub ng: [[f32; W]; 3],
+    pub u: [f32; W],
+    pub v: [f32; W],
+    pub prim_id: [c_uint; W],
+    pub geom_id: [c_uint; W],
+    pub inst_id: [c_uint; W],
+}
+
+/// Where `RTCRayN`'s `id` field of lane `i` lies, in 32-bit words from
+/// the packet's start (rtcore_ray.h's `RTCRayN_id`).
+pub const fn ray_id_word(n: usize, i: usize) -> usize {
+    10 * n + i
+}
+
+const _: () = assert!(std::mem::size_of::<RayHitN<16>>() == 20 * 64);
+const _: () = assert!(std::mem::offset_of!(RayHitN<8>, id) == ray_id_word(8, 0) * 4);
+const _: () = assert!(std::mem::offset_of!(RayHitN<4>, ng) == 12 * 4 * 4);
 
 /// The loaded library (kept loaded while its entry points may be called).
 pub struct Library {
@@ -158,6 +215,12 @@ impl Library {
             commit_scene = "rtcCommitScene",
             release_scene = "rtcReleaseScene",
             intersect1 = "rtcIntersect1",
+            intersect4 = "rtcIntersect4",
+            intersect8 = "rtcIntersect8",
+            intersect16 = "rtcIntersect16",
+            occluded4 = "rtcOccluded4",
+            occluded8 = "rtcOccluded8",
+            occluded16 = "rtcOccluded16",
         );
         Ok(Library {
             api,

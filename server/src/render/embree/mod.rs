@@ -22,6 +22,7 @@
 #![allow(unsafe_code)]
 
 pub mod ffi;
+mod packet;
 
 use std::ffi::c_void;
 use std::path::PathBuf;
@@ -316,9 +317,10 @@ pub struct RawHit {
 
 /// Which hits a query accepts (Embree goes on past a refused one).
 pub trait HitFilter {
-    /// Whether the ray stops at triangle `prim` of placement `id` at
-    /// barycentrics `u`, `v`. Must not panic (it runs inside Embree).
-    fn accepts(&self, id: u32, prim: u32, u: f32, v: f32) -> bool;
+    /// Whether ray `lane` of the query (0 for a single ray) stops at
+    /// triangle `prim` of placement `id` at barycentrics `u`, `v`. Must
+    /// not panic (it runs inside Embree).
+    fn accepts(&self, lane: u32, id: u32, prim: u32, u: f32, v: f32) -> bool;
 }
 
 /// The context a filtered query passes: Embree's, then the filter.
@@ -328,18 +330,22 @@ struct Filtered<'a, F> {
     filter: &'a F,
 }
 
-/// Embree's filter callback for `F`: refuses each hit `F` refuses.
+/// Embree's filter callback for `F`: refuses each hit `F` refuses. A
+/// ray's lane is its `id` field, which the queries set (Embree may hand
+/// the callback a packet's rays one at a time, or copies of them).
 unsafe extern "C" fn run_filter<F: HitFilter>(args: *const ffi::FilterArgs) {
-    // SAFETY: Embree passes valid arguments for N hits; the context is the
-    // `Filtered<F>` that `InstanceScene::intersect` made (its first field
-    // is Embree's context, `repr(C)`) and which outlives the query; `hit`
-    // is N hits by field, 32-bit values each (rtcore_ray.h's RTCHitN).
+    // SAFETY: Embree passes valid arguments for N rays and hits; the
+    // context is the `Filtered<F>` that a query of `InstanceScene` made
+    // (its first field is Embree's context, `repr(C)`) and which outlives
+    // the query; `ray` and `hit` are N rays and N hits by field, 32-bit
+    // values each (rtcore_ray.h's RTCRayN and RTCHitN).
     unsafe {
         let args = &*args;
         let filter = (*args.context.cast::<Filtered<'_, F>>()).filter;
         let n = args.n as usize;
         let floats = args.hit.cast::<f32>();
         let ints = args.hit.cast::<u32>();
+        let rays = args.ray.cast::<u32>();
         for i in 0..n {
             let valid = args.valid.add(i);
             if *valid == 0 {
@@ -347,7 +353,8 @@ unsafe extern "C" fn run_filter<F: HitFilter>(args: *const ffi::FilterArgs) {
             }
             let (u, v) = (*floats.add(3 * n + i), *floats.add(4 * n + i));
             let (prim, id) = (*ints.add(5 * n + i), *ints.add(7 * n + i));
-            if !filter.accepts(id, prim, u, v) {
+            let lane = *rays.add(ffi::ray_id_word(n, i));
+            if !filter.accepts(lane, id, prim, u, v) {
                 *valid = 0;
             }
         }

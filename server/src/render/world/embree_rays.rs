@@ -40,17 +40,22 @@ impl std::fmt::Debug for EmbreeRays {
     }
 }
 
-/// The rays' filter: the triangle a ray leaves, and alpha tests.
+/// The rays' filter: the triangle a ray leaves, and alpha tests; for a
+/// packet, lane `k`'s ray and origin are `rays[k]` and `from[k]`.
 struct Refuse<'a> {
     world: &'a World,
-    from: Origin,
-    ray: &'a Ray,
+    from: &'a [Origin],
+    rays: &'a [Ray],
 }
 
 impl HitFilter for Refuse<'_> {
     #[inline(always)]
-    fn accepts(&self, id: u32, prim: u32, u: f32, v: f32) -> bool {
-        if id == self.from.object && prim == self.from.prim {
+    fn accepts(&self, lane: u32, id: u32, prim: u32, u: f32, v: f32) -> bool {
+        let (Some(from), Some(ray)) = (self.from.get(lane as usize), self.rays.get(lane as usize))
+        else {
+            return true;
+        };
+        if id == from.object && prim == from.prim {
             return false;
         }
         let Some(Geometry::Instance(i)) = self.world.objects.get(id as usize).map(|o| o.geometry)
@@ -66,7 +71,7 @@ impl HitFilter for Refuse<'_> {
                     return true;
                 };
                 let bary = [1.0 - u - v, u, v];
-                tests[slot as usize].passes(mesh, prim, bary, self.ray.origin, self.ray.dir)
+                tests[slot as usize].passes(mesh, prim, bary, ray.origin, ray.dir)
             }
         }
     }
@@ -137,8 +142,13 @@ impl EmbreeRays {
             false => scan::nearest(isa, &self.sphere_batches, &self.quads, ray, from),
         };
         let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
-        let refuse = Refuse { world, from, ray };
-        let hit = match from.prim != NO_PRIM || self.alpha {
+        let (from, ray) = ([from], [*ray]);
+        let refuse = Refuse {
+            world,
+            from: &from,
+            rays: &ray,
+        };
+        let hit = match from[0].prim != NO_PRIM || self.alpha {
             true => self.scene.intersect(o, d, best.t, Some(&refuse)),
             false => self.scene.intersect::<Refuse<'_>>(o, d, best.t, None),
         };
@@ -153,6 +163,101 @@ impl EmbreeRays {
             }
         }
         best
+    }
+
+    /// [`EmbreeRays::nearest`] for the live lanes of a packet of `W` rays
+    /// (4, 8 or 16), Embree's packet query serving them all at once.
+    #[inline(always)]
+    fn nearest_lanes<I: Isa, const W: usize>(
+        &self,
+        world: &World,
+        isa: I,
+        (rays, from): (&[Ray; W], &[Origin; W]),
+        live: &[bool; W],
+    ) -> [Hit; W] {
+        let mut best = [Hit::NONE; W];
+        self.scan_lanes(isa, rays, from, live, &mut best);
+        let (o, d) = (
+            rays.map(|r| r.origin.to_array()),
+            rays.map(|r| r.dir.to_array()),
+        );
+        let tfar = best.map(|h| h.t);
+        // No filter but for alpha tests: the spawn's offset keeps nearly
+        // every ray off the triangle it leaves, and the few lanes that
+        // meet it again are asked once more, alone, with the filter.
+        let filter = self.alpha.then_some(Refuse { world, from, rays });
+        let hits = self
+            .scene
+            .intersect_lanes((&o, &d, &tfar), live, filter.as_ref());
+        for (k, (b, h)) in best.iter_mut().zip(hits).enumerate() {
+            let h = match h {
+                Some(h) if h.id == from[k].object && h.prim == from[k].prim => {
+                    let again = self.nearest(world, isa, &rays[k], from[k]);
+                    if again.t < b.t {
+                        *b = again;
+                    }
+                    continue;
+                }
+                Some(h) => h,
+                None => continue,
+            };
+            if h.t < b.t {
+                *b = Hit {
+                    t: h.t,
+                    object: h.id,
+                    prim: h.prim,
+                    bary: [1.0 - h.u - h.v, h.u, h.v],
+                };
+            }
+        }
+        best
+    }
+
+    /// Whether anything but the surface each live lane's ray leaves
+    /// blocks it before `tmax[k]`.
+    #[inline(always)]
+    fn occluded_lanes<I: Isa, const W: usize>(
+        &self,
+        world: &World,
+        isa: I,
+        (rays, from, tmax): (&[Ray; W], &[Origin; W], &[f32; W]),
+        live: &[bool; W],
+    ) -> [bool; W] {
+        let mut best = [Hit::NONE; W];
+        self.scan_lanes(isa, rays, from, live, &mut best);
+        let scanned: [bool; W] = std::array::from_fn(|k| live[k] && best[k].t < tmax[k]);
+        let rest: [bool; W] = std::array::from_fn(|k| live[k] && !scanned[k]);
+        let (o, d) = (
+            rays.map(|r| r.origin.to_array()),
+            rays.map(|r| r.dir.to_array()),
+        );
+        // Without the filter but for alpha tests, as in `nearest_lanes`:
+        // a ray spawned off a triangle does not meet it again
+        // (`tests/lane_loop.rs` counts the answers against the filtered
+        // query's).
+        let filter = self.alpha.then_some(Refuse { world, from, rays });
+        let blocked = self
+            .scene
+            .occluded_lanes((&o, &d, tmax), &rest, filter.as_ref());
+        std::array::from_fn(|k| scanned[k] || blocked[k])
+    }
+
+    /// The spheres' and quads' nearest hits of the live lanes, into `best`.
+    #[inline(always)]
+    fn scan_lanes<I: Isa, const W: usize>(
+        &self,
+        isa: I,
+        rays: &[Ray; W],
+        from: &[Origin; W],
+        live: &[bool; W],
+        best: &mut [Hit; W],
+    ) {
+        if self.sphere_batches.is_empty() && self.quads.is_empty() {
+            return;
+        }
+        for k in (0..W).filter(|&k| live[k]) {
+            best[k] = scan::nearest(isa, &self.sphere_batches, &self.quads, &rays[k], from[k]);
+        }
     }
 }
 
@@ -183,5 +288,44 @@ impl World {
     /// Whether [`World::use_embree`] has made rays go through Embree.
     pub fn traced_by_embree(&self) -> bool {
         matches!(self.embree.get(), Some(Some(_)))
+    }
+
+    /// [`World::intersect`] for the live lanes of `W` rays (4, 8 or 16):
+    /// through Embree's packets where it traces this world, else one ray
+    /// at a time.
+    #[inline(always)]
+    pub fn intersect_lanes<I: Isa, const W: usize>(
+        &self,
+        isa: I,
+        rays: &[Ray; W],
+        from: &[Origin; W],
+        live: &[bool; W],
+    ) -> [Option<Hit>; W] {
+        match self.embree.get() {
+            Some(Some(e)) => e
+                .nearest_lanes(self, isa, (rays, from), live)
+                .map(|h| (h.t < f32::INFINITY).then_some(h)),
+            _ => std::array::from_fn(|k| match live[k] {
+                true => self.intersect(isa, &rays[k], from[k]),
+                false => None,
+            }),
+        }
+    }
+
+    /// Where Embree traces this world: whether anything but the surface
+    /// each live lane's ray leaves blocks it before `tmax[k]` (Embree's
+    /// occlusion query, which stops at the first blocker). None elsewhere
+    /// (the own BVH answers a nearest-hit query as fast).
+    #[inline(always)]
+    pub fn occluded_lanes<I: Isa, const W: usize>(
+        &self,
+        isa: I,
+        (rays, from, tmax): (&[Ray; W], &[Origin; W], &[f32; W]),
+        live: &[bool; W],
+    ) -> Option<[bool; W]> {
+        match self.embree.get() {
+            Some(Some(e)) => Some(e.occluded_lanes(self, isa, (rays, from, tmax), live)),
+            _ => None,
+        }
     }
 }

@@ -4,7 +4,7 @@
 //! same image, bit for bit (tested); the widest the CPU has is chosen at
 //! run time, within the backend's cap.
 
-use super::{span_packets, span_with, Span};
+use super::{span_lanes, span_packets, span_with, Span};
 use crate::render::bvh::PACKET;
 #[cfg(target_arch = "x86_64")]
 use crate::render::isa::{Avx2, Avx512};
@@ -130,13 +130,16 @@ fn hits_with<I: Isa>(
 
 /// Adds samples `samples` to the pixels `span`, which start at pixel
 /// number `first` (row-major); returns how many were rejected. Runs the
-/// copy of the loop `wide` names.
+/// copy of the loop `wide` names: the lane loop where `lanes` says, its
+/// packets as wide as the instruction set's float lanes (16, 8, or 4 for
+/// every CPU).
 pub(super) fn render_span(
     wide: Wide,
     job: &RenderJob,
     first: usize,
     span: Span<'_>,
     samples: Range<u64>,
+    lanes: bool,
 ) -> u64 {
     // Two functions per instruction set, not one with both loops: inlined
     // into one, the mesh scenes' loop lost its gain (code placement).
@@ -147,25 +150,52 @@ pub(super) fn render_span(
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
         Wide::Avx512(isa) => unsafe {
-            match packets {
-                true => packets_avx512(isa, job, first, span, samples),
-                false => span_avx512(isa, job, first, span, samples),
+            match (lanes, packets) {
+                (true, _) => lanes_avx512(isa, job, first, span, samples),
+                (false, true) => packets_avx512(isa, job, first, span, samples),
+                (false, false) => span_avx512(isa, job, first, span, samples),
             }
         },
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
         Wide::Avx2(isa) => unsafe {
-            match packets {
-                true => packets_avx2(isa, job, first, span, samples),
-                false => span_avx2(isa, job, first, span, samples),
+            match (lanes, packets) {
+                (true, _) => lanes_avx2(isa, job, first, span, samples),
+                (false, true) => packets_avx2(isa, job, first, span, samples),
+                (false, false) => span_avx2(isa, job, first, span, samples),
             }
         },
-        Wide::Portable => match packets {
-            true => span_packets(Portable, job, first, span, samples),
-            false => span_with(Portable, job, first, span, samples),
+        Wide::Portable => match (lanes, packets) {
+            (true, _) => span_lanes::<_, 4>(Portable, job, first, span, samples),
+            (false, true) => span_packets(Portable, job, first, span, samples),
+            (false, false) => span_with(Portable, job, first, span, samples),
         },
     }
+}
+
+/// The lane loop sixteen paths wide.
+#[inline(always)]
+fn span_lanes16<I: Isa>(
+    isa: I,
+    job: &RenderJob,
+    first: usize,
+    span: Span<'_>,
+    s: Range<u64>,
+) -> u64 {
+    span_lanes::<I, 16>(isa, job, first, span, s)
+}
+
+/// The lane loop eight paths wide.
+#[inline(always)]
+fn span_lanes8<I: Isa>(
+    isa: I,
+    job: &RenderJob,
+    first: usize,
+    span: Span<'_>,
+    s: Range<u64>,
+) -> u64 {
+    span_lanes::<I, 8>(isa, job, first, span, s)
 }
 
 /// `$name`: the loop `$body` compiled with the target features `$features`
@@ -188,6 +218,14 @@ compiled_for!(
 compiled_for!(
     /// `span_packets` compiled for AVX2 and FMA.
     packets_avx2, span_packets, Avx2, "avx2,fma"
+);
+compiled_for!(
+    /// The lane loop, eight paths wide, compiled for AVX2 and FMA.
+    lanes_avx2, span_lanes8, Avx2, "avx2,fma"
+);
+compiled_for!(
+    /// The lane loop, sixteen paths wide, compiled for AVX-512.
+    lanes_avx512, span_lanes16, Avx512, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
 );
 compiled_for!(
     /// `span_with` compiled for AVX-512 (32 vector registers; the
