@@ -303,6 +303,8 @@ fn help_documents_every_render_flag() {
         "--exposure",
         "--out",
         "--preset",
+        "--embree",
+        "--cpu-paths",
     ] {
         assert!(help.contains(flag), "{flag} missing from render --help");
     }
@@ -324,6 +326,31 @@ fn help_documents_every_render_flag() {
     ] {
         assert!(help.contains(flag), "{flag} missing from bench --help");
     }
+}
+
+#[test]
+fn the_cpus_loops_and_tracers_are_chosen_by_flags() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let run = |file: &str, flags: &[&str]| {
+        let path = dir.path().join(file);
+        let mut args = vec!["render", "--scene", "cornell-mesh", "--width", "16"];
+        args.extend(["--height", "12", "--spp", "4", "--backend", "cpu"]);
+        args.extend(flags);
+        args.extend(["--out", path.to_str().expect("utf-8 path")]);
+        let out = pathstream(&args);
+        assert!(out.status.success(), "{flags:?}: {}", text(&out.stderr));
+        std::fs::read(path).expect("image")
+    };
+    // The own BVH's rays: the lanes' image is the pairs' bit for bit.
+    let pairs = run("pairs.pfm", &["--embree", "off", "--cpu-paths", "pairs"]);
+    let lanes = run("lanes.pfm", &["--embree", "off", "--cpu-paths", "lanes"]);
+    assert!(
+        pairs == lanes,
+        "--cpu-paths lanes changed the own BVH's image"
+    );
+    let bad = pathstream(&["render", "--scene", "cornell", "--cpu-paths", "wide"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(text(&bad.stderr).contains("--cpu-paths"));
 }
 
 #[test]

@@ -3,6 +3,7 @@
 
 use super::{outln, CliError, Switch};
 use indicatif::{ProgressBar, ProgressStyle};
+use pathstream::render::backend::{EmbreeUse, PathLoop};
 use pathstream::render::denoise::{self, FilterQuality};
 use pathstream::render::job::check_size;
 use pathstream::render::output::{write_image, ImageFormat};
@@ -52,6 +53,28 @@ impl BackendArg {
             BackendArg::All => BackendChoice::All,
         }
     }
+}
+
+/// `--embree`: where the CPU traces meshes through Embree (if installed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EmbreeArg {
+    /// Scenes of at least 100,000 placed triangles.
+    Large,
+    /// Every scene with meshes.
+    All,
+    /// Never: the own BVH.
+    Off,
+}
+
+/// `--cpu-paths`: how the CPU advances its paths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PathsArg {
+    /// In lanes where Embree traces the scene, else in pairs.
+    Auto,
+    /// 4-16 at a time in lanes, their rays traced together.
+    Lanes,
+    /// Two at a time, side by side.
+    Pairs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -119,6 +142,14 @@ pub struct RenderArgs {
     /// of one specialised to the scene: for measuring what specialisation buys.
     #[arg(long)]
     generic_kernel: bool,
+    /// CPU backend: where meshes are traced through Embree, where the
+    /// library is installed (else always the own BVH).
+    #[arg(long, value_enum, default_value_t = EmbreeArg::Large)]
+    embree: EmbreeArg,
+    /// CPU backend: how paths are advanced (the image is the same but for
+    /// rounding; for measuring the loops).
+    #[arg(long, value_enum, default_value_t = PathsArg::Auto)]
+    cpu_paths: PathsArg,
     /// Thin-lens radius in scene units (depth of field) [default: the
     /// scene's camera's; 0 = pinhole].
     #[arg(long, value_name = "R", conflicts_with = "f_number")]
@@ -299,8 +330,21 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     };
     let job = RenderJob::new(&scene, args.width, args.height, &quality);
     for backend in &mut backends {
-        if let Backend::OpenCl { backend, .. } = backend {
-            backend.generic = args.generic_kernel;
+        match backend {
+            Backend::OpenCl { backend, .. } => backend.generic = args.generic_kernel,
+            Backend::Cpu(cpu) => {
+                let embree = match args.embree {
+                    EmbreeArg::Large => EmbreeUse::LargeMeshes,
+                    EmbreeArg::All => EmbreeUse::AllMeshes,
+                    EmbreeArg::Off => EmbreeUse::Never,
+                };
+                let paths = match args.cpu_paths {
+                    PathsArg::Auto => PathLoop::Auto,
+                    PathsArg::Lanes => PathLoop::Lanes,
+                    PathsArg::Pairs => PathLoop::Pairs,
+                };
+                *cpu = std::mem::take(cpu).with_embree(embree).with_paths(paths);
+            }
         }
         tracing::info!(backend = backend.name(), device = %backend.device(), "rendering");
         backend

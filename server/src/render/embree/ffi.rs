@@ -23,6 +23,7 @@ pub const SCENE_FLAG_CONTEXT_FILTER_FUNCTION: c_uint = 1 << 3;
 pub const BUILD_QUALITY_MEDIUM: c_uint = 1;
 pub const BUILD_QUALITY_HIGH: c_uint = 2;
 pub const CONTEXT_FLAG_INCOHERENT: c_uint = 0;
+pub const CONTEXT_FLAG_COHERENT: c_uint = 1;
 pub const INVALID_ID: c_uint = c_uint::MAX;
 pub const DEVICE_PROPERTY_VERSION: c_uint = 0;
 pub const ERROR_NONE: c_uint = 0;

@@ -56,12 +56,17 @@ impl InstanceScene {
         query: ffi::PacketFn,
         valid: &Valid<W>,
         packet: &mut ffi::RayHitN<W>,
-        filter: Option<&F>,
+        (filter, coherent): (Option<&F>, bool),
     ) {
         let p = (packet as *mut ffi::RayHitN<W>).cast::<c_void>();
+        let flags = match coherent {
+            true => ffi::CONTEXT_FLAG_COHERENT,
+            false => ffi::CONTEXT_FLAG_INCOHERENT,
+        };
         match filter {
             None => {
                 let mut context = ffi::Context::new(None);
+                context.flags = flags;
                 // SAFETY: a committed, live scene; the mask, context and
                 // packet are valid, aligned as the header wants (64
                 // bytes serves every width), and ours for the call; the
@@ -73,6 +78,7 @@ impl InstanceScene {
                     context: ffi::Context::new(Some(run_filter::<F>)),
                     filter,
                 };
+                context.context.flags = flags;
                 let c = (&mut context as *mut Filtered<'_, F>).cast::<ffi::Context>();
                 // SAFETY: as above; `context` starts with Embree's context
                 // and lives through the call, in which `run_filter::<F>`
@@ -84,17 +90,19 @@ impl InstanceScene {
 
     /// The nearest hit of each live lane's ray `org[k] + t dir[k]`, 0 <= t
     /// <= `tfar[k]`, that `filter` (if any) accepts; `W` is 4, 8 or 16.
+    /// `coherent`: the rays start together and go alike (a pixel's camera
+    /// rays), which Embree's packet walk serves better told.
     #[inline(always)]
     pub fn intersect_lanes<F: HitFilter, const W: usize>(
         &self,
         (org, dir, tfar): (&[[f32; 3]; W], &[[f32; 3]; W], &[f32; W]),
         live: &[bool; W],
-        filter: Option<&F>,
+        (filter, coherent): (Option<&F>, bool),
     ) -> [Option<RawHit>; W] {
         const { assert!(W == 4 || W == 8 || W == 16) };
         let (valid, mut p) = packet(org, dir, tfar, live);
         let (query, _) = self.embree.lib.api.packet_queries(W);
-        self.run_packet(query, &valid, &mut p, filter);
+        self.run_packet(query, &valid, &mut p, (filter, coherent));
         std::array::from_fn(|k| {
             (live[k] && p.geom_id[k] != ffi::INVALID_ID).then_some(RawHit {
                 t: p.tfar[k],
@@ -118,7 +126,7 @@ impl InstanceScene {
         const { assert!(W == 4 || W == 8 || W == 16) };
         let (valid, mut p) = packet(org, dir, tfar, live);
         let (_, query) = self.embree.lib.api.packet_queries(W);
-        self.run_packet(query, &valid, &mut p, filter);
+        self.run_packet(query, &valid, &mut p, (filter, false));
         std::array::from_fn(|k| live[k] && p.tfar[k] == f32::NEG_INFINITY)
     }
 }

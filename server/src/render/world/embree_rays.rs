@@ -186,9 +186,8 @@ impl EmbreeRays {
         // every ray off the triangle it leaves, and the few lanes that
         // meet it again are asked once more, alone, with the filter.
         let filter = self.alpha.then_some(Refuse { world, from, rays });
-        let hits = self
-            .scene
-            .intersect_lanes((&o, &d, &tfar), live, filter.as_ref());
+        let camera = (from.iter().zip(live)).all(|(f, &l)| !l || *f == Origin::NONE);
+        let hits = (self.scene).intersect_lanes((&o, &d, &tfar), live, (filter.as_ref(), camera));
         for (k, (b, h)) in best.iter_mut().zip(hits).enumerate() {
             let h = match h {
                 Some(h) if h.id == from[k].object && h.prim == from[k].prim => {

@@ -73,6 +73,11 @@ fn trace_lanes<I: Isa, const W: usize>(
         let rays = std::array::from_fn(|k| paths[k].ray);
         let from = std::array::from_fn(|k| paths[k].from);
         let hits = world.intersect_lanes(isa, &rays, &from, &live);
+        // Every lane's surface loads (a mesh's vertices, which miss the
+        // cache) start before the first lane shades.
+        for h in hits.iter().flatten() {
+            world.prefetch_surface(h);
+        }
         let mut shadows = [None; W];
         for k in 0..W {
             if live[k] {
