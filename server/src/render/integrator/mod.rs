@@ -150,7 +150,8 @@ impl Path {
 
     /// Continues the path at `hit`, the nearest hit along `self.ray`
     /// (`world.intersect(isa, &self.ray, self.from)`), tracing its shadow
-    /// ray at once; false once the path has ended (it must not be advanced
+    /// ray at once (before the BSDF is evaluated for it, which a blocked
+    /// ray spares); false once the path has ended (it must not be advanced
     /// again then).
     #[inline(always)]
     pub fn advance<I: Isa>(
@@ -160,12 +161,7 @@ impl Path {
         settings: &PathSettings,
         hit: Option<Hit>,
     ) -> bool {
-        let mut shadow = None;
-        let live = self.step(isa, world, settings, hit, &mut shadow);
-        if let Some(light) = shadow.and_then(|s| s.trace(isa, world)) {
-            self.l += light;
-        }
-        live
+        self.step::<false, I>(isa, world, settings, hit, &mut None)
     }
 
     /// Adds what a shadow ray of this path's last [`Path::step`] brought
@@ -175,12 +171,13 @@ impl Path {
         self.l += light;
     }
 
-    /// [`Path::advance`] without its shadow ray: that is left in `shadow`
-    /// (if the vertex sent one) for the caller to trace before the path's
-    /// next step, and to add what it brings ([`Path::add_light`]); the
-    /// path's radiance is the same as if it had been traced at once.
+    /// [`Path::advance`], with `LATER` without its shadow ray: that is
+    /// left in `shadow` (if the vertex sent one) for the caller to trace
+    /// before the path's next step, and to add what it brings
+    /// ([`Path::add_light`]); the path's radiance is the same as if it had
+    /// been traced at once. Without `LATER`, `shadow` stays None.
     #[inline(always)]
-    pub fn step<I: Isa>(
+    pub fn step<const LATER: bool, I: Isa>(
         &mut self,
         isa: I,
         world: &World,
@@ -278,7 +275,8 @@ impl Path {
                     let w = mis::light_weight(settings.combine, light_pdf, bsdf_pdf);
                     ggx::eval_cos(tables, p, m.albedo, built, wo, wi) * w
                 };
-                let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
+                let direct =
+                    nee::direct::<LATER, I>(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
                 lobes = Lobes::Built(built);
                 (direct, self.beta, 1.0)
             } else if world.diffuse_mis() {
@@ -287,11 +285,13 @@ impl Path {
                     let w = mis::light_weight(settings.combine, light_pdf, cos * FRAC_1_PI);
                     Vec3A::splat(cos * w)
                 };
-                let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
+                let direct =
+                    nee::direct::<LATER, I>(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
                 (direct, self.beta * m.albedo, FRAC_1_PI)
             } else {
                 let f = |dir: Vec3A, _pdf: f32| Vec3A::splat(ns.dot(dir));
-                let direct = nee::direct(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
+                let direct =
+                    nee::direct::<LATER, I>(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
                 (direct, self.beta * m.albedo, FRAC_1_PI)
             };
             match direct {

@@ -72,17 +72,12 @@ impl Shadow {
     /// None where that is not its emitter.
     #[inline(always)]
     pub fn arriving(&self, world: &World, hit: Option<Hit>) -> Option<Vec3A> {
-        let e = &world.lights.emitters[self.emitter as usize];
-        match hit {
-            None if e.shape.is_distant() => Some(e.radiance(self.ray.dir)),
-            Some(h) if h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim) => {
-                Some(match e.maps {
-                    NO_MAPS => e.emission,
-                    _ => world.emitted(e, &h, &self.ray),
-                })
-            }
-            _ => None,
-        }
+        arriving(
+            world,
+            &world.lights.emitters[self.emitter as usize],
+            &self.ray,
+            hit,
+        )
     }
 
     /// Where an occlusion test answers for this ray: the distance before
@@ -124,6 +119,22 @@ impl Shadow {
     }
 }
 
+/// The radiance a shadow ray `ray` towards `e` brings where its nearest
+/// hit is `hit`, or None where that is not `e`.
+#[inline(always)]
+fn arriving(world: &World, e: &Emitter, ray: &Ray, hit: Option<Hit>) -> Option<Vec3A> {
+    match hit {
+        None if e.shape.is_distant() => Some(e.radiance(ray.dir)),
+        Some(h) if h.object == e.object && (e.prim == NO_PRIM || h.prim == e.prim) => {
+            Some(match e.maps {
+                NO_MAPS => e.emission,
+                _ => world.emitted(e, &h, ray),
+            })
+        }
+        _ => None,
+    }
+}
+
 /// How much shorter than the distance to its emitter's point an occlusion
 /// test looks (Mitsuba's and pbrt's shadow epsilon): surfaces in the last
 /// thousandth, the emitter itself among them, do not block.
@@ -136,11 +147,13 @@ pub const SHADOW_EPSILON: f32 = 1e-3;
 /// pick's probability times the emitter's solid-angle density): for
 /// diffuse, cos(theta_s), the caller multiplying by albedo / pi; for
 /// `pbr`, BSDF cos weighted against BSDF sampling (`mis`). With one
-/// emitter picked, the shadow ray is returned untraced. `isa` picks the
-/// intersection kernels.
+/// emitter picked and `LATER`, the shadow ray is returned untraced (and
+/// `f` evaluated whether or not it will be blocked); else traced at once,
+/// `f` evaluated only where it is not. `isa` picks the intersection
+/// kernels.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub fn direct<I: Isa>(
+pub fn direct<const LATER: bool, I: Isa>(
     isa: I,
     world: &World,
     s: &Surface,
@@ -151,21 +164,15 @@ pub fn direct<I: Isa>(
     f: impl Fn(Vec3A, f32) -> Vec3A,
 ) -> Direct {
     let lights = &world.lights;
-    let found = |shadow: Option<Shadow>| shadow.map_or(Direct::None, Direct::Shadow);
     match sampling {
         LightSampling::Power => match lights.emitters.as_slice() {
             [] => Direct::None,
             // One emitter (the thesis's scenes): picked with probability 1,
             // no random number spent on the pick.
-            [only] => found(one(
-                world,
-                (only, 0, 1.0),
-                s,
-                nl,
-                ns,
-                sampler.light_2d(0),
-                &f,
-            )),
+            [only] => {
+                let u = sampler.light_2d(0);
+                one::<LATER, I>(isa, world, (only, 0, 1.0), s, (nl, ns), u, &f)
+            }
             _ => {
                 let Some(table) = &lights.table else {
                     return Direct::None;
@@ -173,15 +180,15 @@ pub fn direct<I: Isa>(
                 let (x, u2) = sampler.light_pick_2d();
                 let (i, pmf, u1) = table.pick_point(x);
                 let e = (&lights.emitters[i], i, pmf);
-                found(one(world, e, s, nl, ns, (u1, u2), &f))
+                one::<LATER, I>(isa, world, e, s, (nl, ns), (u1, u2), &f)
             }
         },
         LightSampling::All => {
             let mut sum = Vec3A::ZERO;
             for (k, e) in lights.emitters.iter().enumerate() {
                 let u = sampler.light_2d(k as u32);
-                if let Some(light) = one(world, (e, k, 1.0), s, nl, ns, u, &f)
-                    .and_then(|shadow| shadow.scaled(Vec3A::ONE, 1.0).trace(isa, world))
+                if let Direct::Traced(light) =
+                    one::<false, I>(isa, world, (e, k, 1.0), s, (nl, ns), u, &f)
                 {
                     sum += light;
                 }
@@ -192,35 +199,45 @@ pub fn direct<I: Isa>(
 }
 
 /// The shadow ray towards `e` (emitter number `index`), picked with
-/// probability `pmf`; None where the sampled direction cannot light `s`.
+/// probability `pmf`: untraced with `LATER`, else traced (what it brings,
+/// Le * f * 1/pdf / pmf, or nothing where blocked).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn one(
+fn one<const LATER: bool, I: Isa>(
+    isa: I,
     world: &World,
     (e, index, pmf): (&Emitter, usize, f32),
     s: &Surface,
-    nl: Vec3A,
-    ns: Vec3A,
+    (nl, ns): (Vec3A, Vec3A),
     (u1, u2): (f32, f32),
     f: &impl Fn(Vec3A, f32) -> Vec3A,
-) -> Option<Shadow> {
-    let (dir, weight) = e.sample_direction(&s.receiver(nl, ns), u1, u2)?;
+) -> Direct {
+    let Some((dir, weight)) = e.sample_direction(&s.receiver(nl, ns), u1, u2) else {
+        return Direct::None;
+    };
     let cos_s = ns.dot(dir);
     if !(cos_s > 0.0 && nl.dot(dir) > 0.0) {
-        return None;
+        return Direct::None;
     }
     let from = Origin {
         object: s.object,
         prim: s.prim,
         entering: dir.dot(s.ng) < 0.0,
     };
-    Some(Shadow {
-        ray: world.spawn(s, dir),
-        from,
-        emitter: index as u32,
-        fw: f(dir, pmf / weight) * weight,
-        pmf,
-        pre: Vec3A::ONE,
-        post: 1.0,
-    })
+    let ray = world.spawn(s, dir);
+    if LATER {
+        return Direct::Shadow(Shadow {
+            ray,
+            from,
+            emitter: index as u32,
+            fw: f(dir, pmf / weight) * weight,
+            pmf,
+            pre: Vec3A::ONE,
+            post: 1.0,
+        });
+    }
+    let hit = world.intersect(isa, &ray, from);
+    match arriving(world, e, &ray, hit) {
+        Some(le) => Direct::Traced((le * (f(dir, pmf / weight) * weight)) / pmf),
+        None => Direct::None,
+    }
 }

@@ -81,7 +81,7 @@ fn trace_lanes<I: Isa, const W: usize>(
         let mut shadows = [None; W];
         for k in 0..W {
             if live[k] {
-                live[k] = paths[k].step(isa, world, settings, hits[k], &mut shadows[k]);
+                live[k] = paths[k].step::<true, I>(isa, world, settings, hits[k], &mut shadows[k]);
             }
         }
         trace_shadows(isa, world, paths, &shadows);
