@@ -16,10 +16,12 @@
 //! Each round measures own BVH and Embree one after the other (rays: one
 //! pass each; paths: `--seconds` of rendering each, 256x256, depth 4), so
 //! that load from elsewhere hits both alike; the table gives the median
-//! and the range over `--rounds` (default 5).
+//! and the range over `--rounds` (default 5). Paths through Embree go in
+//! lanes, their rays in Embree's packets (`PathLoop::Auto`), and for
+//! comparison in pairs, each ray alone; the own BVH's in pairs.
 
 use pathstream::bench::meshes::{ray_set, rays_per_sec};
-use pathstream::render::backend::{CpuBackend, EmbreeUse};
+use pathstream::render::backend::{CpuBackend, EmbreeUse, PathLoop};
 use pathstream::render::{progressive, Backend, Film, Quality, RenderJob, Scene};
 
 fn median_range(v: &mut [f64]) -> String {
@@ -27,8 +29,9 @@ fn median_range(v: &mut [f64]) -> String {
     format!("{:.2} ({:.2}-{:.2})", v[v.len() / 2], v[0], v[v.len() - 1])
 }
 
-/// Paths per second of `seconds` of rendering `scene` with `embree`.
-fn paths(scene: &Scene, embree: EmbreeUse, seconds: f64) -> f64 {
+/// Paths per second of `seconds` of rendering `scene` with `embree`,
+/// advanced as `loop_` says.
+fn paths(scene: &Scene, (embree, loop_): (EmbreeUse, PathLoop), seconds: f64) -> f64 {
     let quality = Quality {
         max_depth: 4,
         rr_depth: 5,
@@ -36,7 +39,8 @@ fn paths(scene: &Scene, embree: EmbreeUse, seconds: f64) -> f64 {
         ..Quality::default()
     };
     let job = RenderJob::new(scene, 256, 256, &quality);
-    let mut backend = Backend::Cpu(CpuBackend::default().with_embree(embree));
+    let cpu = CpuBackend::default().with_embree(embree).with_paths(loop_);
+    let mut backend = Backend::Cpu(cpu);
     let mut film = Film::new(256, 256);
     let done = progressive::render(&job, &mut backend, &mut film, &quality, |_| {})
         .expect("the CPU renders");
@@ -67,21 +71,25 @@ fn main() {
         eprintln!("error: {e}");
         std::process::exit(2);
     }
-    println!("| scene | camera M rays/s: own | Embree | bounce M rays/s: own | Embree | M paths/s: own | Embree |");
-    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+    println!("| scene | camera M rays/s: own | Embree | bounce M rays/s: own | Embree | M paths/s: own | Embree, lanes | Embree, pairs |");
+    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let own_paths = (EmbreeUse::Never, PathLoop::Pairs);
+    let lanes = (EmbreeUse::AllMeshes, PathLoop::Auto);
+    let pairs = (EmbreeUse::AllMeshes, PathLoop::Pairs);
     for n in sizes {
         let set = ray_set(n);
         let own = set.world.clone();
         let embree = set.world.clone();
         assert!(embree.use_embree(0), "Embree takes the mesh");
-        let mut m: [Vec<f64>; 6] = Default::default();
+        let mut m: [Vec<f64>; 7] = Default::default();
         for _ in 0..rounds {
             m[0].push(rays_per_sec(&own, &set.camera, 1) / 1e6);
             m[1].push(rays_per_sec(&embree, &set.camera, 1) / 1e6);
             m[2].push(rays_per_sec(&own, &set.bounce, 1) / 1e6);
             m[3].push(rays_per_sec(&embree, &set.bounce, 1) / 1e6);
-            m[4].push(paths(&set.scene, EmbreeUse::Never, seconds));
-            m[5].push(paths(&set.scene, EmbreeUse::AllMeshes, seconds));
+            m[4].push(paths(&set.scene, own_paths, seconds));
+            m[5].push(paths(&set.scene, lanes, seconds));
+            m[6].push(paths(&set.scene, pairs, seconds));
         }
         let cells: Vec<String> = m.iter_mut().map(|v| median_range(v)).collect();
         let triangles = set.scene.imports[0].instances[0].mesh.triangles.len();
@@ -91,14 +99,12 @@ fn main() {
         );
     }
     let scene = pathstream::bench::scenes::cornell_mesh().expect("cornell-mesh");
-    let (mut own, mut embree) = (Vec::new(), Vec::new());
+    let mut m: [Vec<f64>; 3] = Default::default();
     for _ in 0..rounds {
-        own.push(paths(&scene, EmbreeUse::Never, seconds));
-        embree.push(paths(&scene, EmbreeUse::AllMeshes, seconds));
+        m[0].push(paths(&scene, own_paths, seconds));
+        m[1].push(paths(&scene, lanes, seconds));
+        m[2].push(paths(&scene, pairs, seconds));
     }
-    println!(
-        "| cornell-mesh | | | | | {} | {} |",
-        median_range(&mut own),
-        median_range(&mut embree)
-    );
+    let cells: Vec<String> = m.iter_mut().map(|v| median_range(v)).collect();
+    println!("| cornell-mesh | | | | | {} |", cells.join(" | "));
 }
