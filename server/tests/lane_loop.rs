@@ -111,3 +111,83 @@ fn through_embree_the_lanes_agree_with_the_pair_loop() {
         }
     }
 }
+
+/// The lanes' Embree queries call no filter (no alpha here): a ray spawned
+/// off a triangle, grazing it both ways (the directions most likely to
+/// meet it again), gets the answers of the single-ray query, which
+/// refuses that triangle: the same nearest surface (a self-hit asked
+/// again alone), and from the occlusion test "blocked" exactly where that
+/// surface lies before the test's distance.
+#[test]
+fn embrees_packets_answer_as_the_filtered_single_rays() {
+    use common::meshes::{leaving, mixed_scene, unit};
+    use pathstream::render::isa::Portable;
+    use pathstream::render::math::Vec3A;
+    use pathstream::render::ray::Ray;
+    use pathstream::render::sampler::Sampler;
+    use pathstream::render::world::{Origin, World, NO_PRIM};
+    if !common::embree() {
+        return;
+    }
+    let scene = mixed_scene();
+    let world = World::new(&scene, scene.camera.position);
+    assert!(world.use_embree(0));
+    let mut rays = Vec::new();
+    for i in 0..100_000u64 {
+        let mut s = Sampler::new(11, i, 0);
+        let o = Vec3A::new(
+            1.0 + 98.0 * s.next_f32(),
+            81.6 * s.next_f32(),
+            170.0 * s.next_f32(),
+        ) - Vec3A::from(world.origin.as_vec3());
+        let ray = Ray::new(o, unit(&mut s));
+        let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else {
+            continue;
+        };
+        if hit.prim == NO_PRIM {
+            continue;
+        }
+        let surface = world.surface(&hit, &ray);
+        let v = unit(&mut s);
+        let tangent = (v - surface.ng * v.dot(surface.ng)).normalize();
+        for lift in [1e-3f32, -1e-3] {
+            let dir = (tangent + surface.ng * lift).normalize();
+            rays.push((world.spawn(&surface, dir), leaving(&hit, surface.ng, dir)));
+        }
+    }
+    let (mut differ, mut wrong, mut blocked) = (0, 0, 0);
+    for group in rays.chunks_exact(16) {
+        let r: [Ray; 16] = std::array::from_fn(|k| group[k].0);
+        let from: [Origin; 16] = std::array::from_fn(|k| group[k].1);
+        let single: [_; 16] = std::array::from_fn(|k| world.intersect(Portable, &r[k], from[k]));
+        let lanes = world.intersect_lanes(Portable, &r, &from, &[true; 16]);
+        for (a, b) in single.iter().zip(&lanes) {
+            let same = match (a, b) {
+                (Some(a), Some(b)) => {
+                    (a.object, a.prim) == (b.object, b.prim) && (a.t - b.t).abs() <= 1e-5 * a.t
+                }
+                (None, None) => true,
+                _ => false,
+            };
+            differ += usize::from(!same);
+        }
+        // Each lane's test just short of and just beyond its surface.
+        for factor in [0.999f32, 1.001] {
+            let tmax = single.map(|h| h.map_or(1e30, |h| h.t * factor));
+            let lanes = world.occluded_lanes(Portable, (&r, &from, &tmax), &[true; 16]);
+            let lanes = lanes.expect("Embree traces the world");
+            for k in 0..16 {
+                let expect = single[k].is_some_and(|h| h.t < tmax[k]);
+                wrong += usize::from(lanes[k] != expect);
+                blocked += usize::from(expect);
+            }
+        }
+    }
+    eprintln!(
+        "{} rays: {differ} nearest hits differ, {wrong} occlusion answers ({blocked} blocked)",
+        rays.len()
+    );
+    assert!(rays.len() > 30_000 && blocked > rays.len() / 2);
+    assert_eq!(differ, 0, "packet hits that are not the single rays'");
+    assert_eq!(wrong, 0, "occlusion answers that are not the single rays'");
+}
