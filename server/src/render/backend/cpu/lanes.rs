@@ -112,15 +112,17 @@ fn trace_shadows<I: Isa, const W: usize>(
     // nearest hit names.
     let (mut tested, mut named) = ([false; W], [false; W]);
     let (mut tmax, mut le) = ([0.0; W], [Vec3A::ZERO; W]);
+    let (mut rays, mut from) = ([paths[0].ray; W], [Origin::NONE; W]);
     for (k, s) in shadows.iter().enumerate() {
-        match s.map(|s| s.unblocked(world)) {
-            Some(Some((t, l))) => (tested[k], tmax[k], le[k]) = (true, t, l),
-            Some(None) => named[k] = true,
-            None => {}
+        let Some(s) = s else {
+            continue;
+        };
+        (rays[k], from[k]) = (s.ray, s.from);
+        match s.unblocked(world) {
+            Some((t, l)) => (tested[k], tmax[k], le[k]) = (true, t, l),
+            None => named[k] = true,
         }
     }
-    let rays = std::array::from_fn(|k| shadows[k].map_or(paths[k].ray, |s| s.ray));
-    let from = std::array::from_fn(|k| shadows[k].map_or(Origin::NONE, |s| s.from));
     if tested.contains(&true) {
         if let Some(blocked) = world.occluded_lanes(isa, (&rays, &from, &tmax), &tested) {
             for k in (0..W).filter(|&k| tested[k] && !blocked[k]) {
