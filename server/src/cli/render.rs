@@ -58,7 +58,7 @@ impl BackendArg {
 /// `--embree`: where the CPU traces meshes through Embree (if installed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum EmbreeArg {
-    /// Scenes of at least 100,000 placed triangles.
+    /// Scenes of at least 10,000 placed triangles.
     Large,
     /// Every scene with meshes.
     All,

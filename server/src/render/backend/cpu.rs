@@ -120,7 +120,8 @@ impl CpuBackend {
         let embree = match (self.embree, crate::render::embree::loaded()) {
             (EmbreeUse::Never, _) | (_, None) => String::new(),
             (EmbreeUse::LargeMeshes, Some(e)) => {
-                format!(", large meshes through Embree {}", e.version)
+                let k = EMBREE_MIN_TRIANGLES / 1000;
+                format!(", meshes of {k}k+ triangles through Embree {}", e.version)
             }
             (EmbreeUse::AllMeshes, Some(e)) => format!(", meshes through Embree {}", e.version),
         };

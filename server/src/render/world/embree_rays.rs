@@ -261,9 +261,12 @@ impl EmbreeRays {
 }
 
 /// Placed triangles from which the CPU backend traces through Embree
-/// where it can: below, its own BVH is as fast (docs/BENCHMARKS.md,
-/// "Embree as the CPU's tracer").
-pub const EMBREE_MIN_TRIANGLES: usize = 100_000;
+/// where it can. One ray at a time, Embree paid from 100,000 (its own BVH
+/// was as fast below: docs/BENCHMARKS.md, "Embree as the CPU's tracer");
+/// with the lane loop's packets, from 10,000 at least (1.17x at 9,800,
+/// 1.12x on `cornell-mesh`: "The lane loop"). Smaller worlds, not
+/// measured, keep the own BVH.
+pub const EMBREE_MIN_TRIANGLES: usize = 10_000;
 
 impl World {
     /// Whether this world's rays go through Embree on the CPU: on the
