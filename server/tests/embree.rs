@@ -12,9 +12,9 @@
 
 mod common;
 
-use common::meshes::{leaving, mixed_scene, ray_in, unit};
+use common::meshes::{grazing, leaving, mixed_scene, ray_in, unit};
 use pathstream::render::isa::Portable;
-use pathstream::render::math::{DVec3, Vec3A};
+use pathstream::render::math::DVec3;
 use pathstream::render::ray::Ray;
 use pathstream::render::sampler::Sampler;
 use pathstream::render::world::{Hit, Origin, World, NO_PRIM};
@@ -174,27 +174,10 @@ fn a_ray_from_a_triangle_never_meets_that_triangle() {
         return;
     };
     let (mut tried, mut onward) = (0u64, 0u64);
-    for i in 0..200_000u64 {
-        let mut s = Sampler::new(9, i, 0);
-        let o = Vec3A::new(
-            1.0 + 98.0 * s.next_f32(),
-            81.6 * s.next_f32(),
-            170.0 * s.next_f32(),
-        ) - Vec3A::from(world.origin.as_vec3());
-        let ray = Ray::new(o, unit(&mut s));
-        let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else {
-            continue;
-        };
-        if hit.prim == NO_PRIM {
-            continue;
-        }
-        let surface = world.surface(&hit, &ray);
-        // Grazing the plane both ways: the directions most likely to meet
-        // the triangle again at t = 0.
-        let v = unit(&mut s);
-        let tangent = (v - surface.ng * v.dot(surface.ng)).normalize();
-        for lift in [1e-3f32, -1e-3] {
-            let dir = (tangent + surface.ng * lift).normalize();
+    // Grazing the plane both ways: the directions most likely to meet the
+    // triangle again at t = 0.
+    for (i, (hit, surface, dirs)) in grazing(&world, 9, 200_000).into_iter().enumerate() {
+        for dir in dirs {
             let from = leaving(&hit, surface.ng, dir);
             tried += 1;
             let next = world.intersect(Portable, &Ray::new(surface.p, dir), from);

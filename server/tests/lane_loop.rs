@@ -120,12 +120,10 @@ fn through_embree_the_lanes_agree_with_the_pair_loop() {
 /// surface lies before the test's distance.
 #[test]
 fn embrees_packets_answer_as_the_filtered_single_rays() {
-    use common::meshes::{leaving, mixed_scene, unit};
+    use common::meshes::{grazing, leaving, mixed_scene};
     use pathstream::render::isa::Portable;
-    use pathstream::render::math::Vec3A;
     use pathstream::render::ray::Ray;
-    use pathstream::render::sampler::Sampler;
-    use pathstream::render::world::{Origin, World, NO_PRIM};
+    use pathstream::render::world::{Origin, World};
     if !common::embree() {
         return;
     }
@@ -133,25 +131,8 @@ fn embrees_packets_answer_as_the_filtered_single_rays() {
     let world = World::new(&scene, scene.camera.position);
     assert!(world.use_embree(0));
     let mut rays = Vec::new();
-    for i in 0..100_000u64 {
-        let mut s = Sampler::new(11, i, 0);
-        let o = Vec3A::new(
-            1.0 + 98.0 * s.next_f32(),
-            81.6 * s.next_f32(),
-            170.0 * s.next_f32(),
-        ) - Vec3A::from(world.origin.as_vec3());
-        let ray = Ray::new(o, unit(&mut s));
-        let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else {
-            continue;
-        };
-        if hit.prim == NO_PRIM {
-            continue;
-        }
-        let surface = world.surface(&hit, &ray);
-        let v = unit(&mut s);
-        let tangent = (v - surface.ng * v.dot(surface.ng)).normalize();
-        for lift in [1e-3f32, -1e-3] {
-            let dir = (tangent + surface.ng * lift).normalize();
+    for (hit, surface, dirs) in grazing(&world, 11, 100_000) {
+        for dir in dirs {
             rays.push((world.spawn(&surface, dir), leaving(&hit, surface.ng, dir)));
         }
     }

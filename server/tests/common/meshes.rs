@@ -3,10 +3,11 @@
 use super::{mesh_object, scene_json};
 use pathstream::model::generate::icosphere;
 use pathstream::model::MeshData;
+use pathstream::render::isa::Portable;
 use pathstream::render::math::{DVec3, Vec3A};
 use pathstream::render::ray::Ray;
 use pathstream::render::sampler::Sampler;
-use pathstream::render::world::{Hit, Origin, World};
+use pathstream::render::world::{Hit, Origin, Surface, World, NO_PRIM};
 use pathstream::render::Scene;
 use serde_json::json;
 
@@ -101,4 +102,33 @@ pub fn leaving(hit: &Hit, ng: Vec3A, dir: Vec3A) -> Origin {
         prim: hit.prim,
         entering: dir.dot(ng) < 0.0,
     }
+}
+
+/// Points on the triangles of `world` (`mixed_scene`'s: met by `n` random
+/// rays from inside its box, those meeting a mesh), each with two unit
+/// directions grazing the triangle's plane, one just above and one just
+/// below: the directions most likely to meet the triangle again.
+pub fn grazing(world: &World, seed: u64, n: u64) -> Vec<(Hit, Surface, [Vec3A; 2])> {
+    let mut out = Vec::new();
+    for i in 0..n {
+        let mut s = Sampler::new(seed, i, 0);
+        let o = Vec3A::new(
+            1.0 + 98.0 * s.next_f32(),
+            81.6 * s.next_f32(),
+            170.0 * s.next_f32(),
+        ) - Vec3A::from(world.origin.as_vec3());
+        let ray = Ray::new(o, unit(&mut s));
+        let Some(hit) = world.intersect(Portable, &ray, Origin::NONE) else {
+            continue;
+        };
+        if hit.prim == NO_PRIM {
+            continue;
+        }
+        let surface = world.surface(&hit, &ray);
+        let v = unit(&mut s);
+        let tangent = (v - surface.ng * v.dot(surface.ng)).normalize();
+        let dirs = [1e-3f32, -1e-3].map(|lift| (tangent + surface.ng * lift).normalize());
+        out.push((hit, surface, dirs));
+    }
+    out
 }

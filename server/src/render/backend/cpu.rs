@@ -410,6 +410,29 @@ impl Pair {
         }
     }
 
+    /// Up to `N` pairs from this one on, in a run of `n` pixels with
+    /// samples `samples` each: the pairs (the rest copies of this one), how
+    /// many, and the pair after them.
+    #[inline(always)]
+    fn group<const N: usize>(self, n: usize, samples: &Range<u64>) -> ([Pair; N], usize, Pair) {
+        let (mut pairs, mut count, mut at) = ([self; N], 0, self);
+        while count < N && at.i < n {
+            pairs[count] = at;
+            count += 1;
+            at = at.next(samples);
+        }
+        (pairs, count, at)
+    }
+
+    /// The first pair of a run with samples `samples`.
+    #[inline(always)]
+    fn first(samples: &Range<u64>) -> Pair {
+        Pair {
+            i: 0,
+            s: samples.start,
+        }
+    }
+
     /// The pair's camera path, its run starting at pixel `first`.
     #[inline(always)]
     fn path(self, job: &RenderJob, first: usize) -> Path {
@@ -436,10 +459,7 @@ fn span_with<I: Isa>(
     let (world, settings) = (&job.world, &job.settings);
     let n = span.sums.len();
     let mut rejected = 0u64;
-    let mut at = Pair {
-        i: 0,
-        s: samples.start,
-    };
+    let mut at = Pair::first(&samples);
     while at.i < n && at.s < samples.end {
         let then = at.next(&samples);
         let pair = then.i < n;

@@ -14,7 +14,7 @@
 
 use super::build::{scan_cost, SCAN_MAX_COST};
 use super::{scan, Geometry, Hit, Origin, World, NO_PRIM};
-use crate::render::embree::{embree, HitFilter, InstanceScene};
+use crate::render::embree::{embree, HitFilter, InstanceScene, RawHit};
 use crate::render::isa::Isa;
 use crate::render::ray::Ray;
 use crate::render::shape::{Quad, SphereBatch, SPHERE_BATCH_LANES};
@@ -152,15 +152,8 @@ impl EmbreeRays {
             true => self.scene.intersect(o, d, best.t, Some(&refuse)),
             false => self.scene.intersect::<Refuse<'_>>(o, d, best.t, None),
         };
-        if let Some(h) = hit {
-            if h.t < best.t {
-                best = Hit {
-                    t: h.t,
-                    object: h.id,
-                    prim: h.prim,
-                    bary: [1.0 - h.u - h.v, h.u, h.v],
-                };
-            }
+        if let Some(h) = hit.filter(|h| h.t < best.t) {
+            best = as_hit(h);
         }
         best
     }
@@ -189,24 +182,15 @@ impl EmbreeRays {
         let camera = (from.iter().zip(live)).all(|(f, &l)| !l || *f == Origin::NONE);
         let hits = (self.scene).intersect_lanes((&o, &d, &tfar), live, (filter.as_ref(), camera));
         for (k, (b, h)) in best.iter_mut().zip(hits).enumerate() {
-            let h = match h {
+            match h {
                 Some(h) if h.id == from[k].object && h.prim == from[k].prim => {
                     let again = self.nearest(world, isa, &rays[k], from[k]);
                     if again.t < b.t {
                         *b = again;
                     }
-                    continue;
                 }
-                Some(h) => h,
-                None => continue,
-            };
-            if h.t < b.t {
-                *b = Hit {
-                    t: h.t,
-                    object: h.id,
-                    prim: h.prim,
-                    bary: [1.0 - h.u - h.v, h.u, h.v],
-                };
+                Some(h) if h.t < b.t => *b = as_hit(h),
+                _ => {}
             }
         }
         best
@@ -257,6 +241,17 @@ impl EmbreeRays {
         for k in (0..W).filter(|&k| live[k]) {
             best[k] = scan::nearest(isa, &self.sphere_batches, &self.quads, &rays[k], from[k]);
         }
+    }
+}
+
+/// Embree's hit as the world's search reports it.
+#[inline(always)]
+fn as_hit(h: RawHit) -> Hit {
+    Hit {
+        t: h.t,
+        object: h.id,
+        prim: h.prim,
+        bary: [1.0 - h.u - h.v, h.u, h.v],
     }
 }
 

@@ -37,18 +37,10 @@ pub(super) fn span_lanes<I: Isa, const W: usize>(
     let settings = &job.settings;
     let n = span.sums.len();
     let mut rejected = 0u64;
-    let mut at = Pair {
-        i: 0,
-        s: samples.start,
-    };
+    let mut at = Pair::first(&samples);
     while at.i < n && at.s < samples.end {
-        let mut pairs = [at; W];
-        let mut count = 0;
-        while count < W && at.i < n {
-            pairs[count] = at;
-            count += 1;
-            at = at.next(&samples);
-        }
+        let (pairs, count, next) = at.group::<W>(n, &samples);
+        at = next;
         let mut paths: [Path; W] =
             std::array::from_fn(|k| pairs[k.min(count - 1)].path(job, first));
         trace_lanes(isa, &job.world, settings, &mut paths, count);

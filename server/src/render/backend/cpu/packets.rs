@@ -27,19 +27,11 @@ pub(super) fn span_packets<I: Isa>(
     let settings = &job.settings;
     let n = span.sums.len();
     let mut rejected = 0u64;
-    let mut at = Pair {
-        i: 0,
-        s: samples.start,
-    };
+    let mut at = Pair::first(&samples);
     while at.i < n && at.s < samples.end {
         // The group: up to PACKET pairs from `at` on.
-        let mut pairs = [at; PACKET];
-        let mut count = 0;
-        while count < PACKET && at.i < n {
-            pairs[count] = at;
-            count += 1;
-            at = at.next(&samples);
-        }
+        let (pairs, count, next) = at.group::<PACKET>(n, &samples);
+        at = next;
         let mut paths: [Path; PACKET] =
             std::array::from_fn(|k| pairs[k.min(count - 1)].path(job, first));
         let rays: [Ray; PACKET] = std::array::from_fn(|k| paths[k].ray);
