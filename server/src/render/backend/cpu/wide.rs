@@ -174,34 +174,10 @@ pub(super) fn render_span(
     }
 }
 
-/// The lane loop sixteen paths wide.
-#[inline(always)]
-fn span_lanes16<I: Isa>(
-    isa: I,
-    job: &RenderJob,
-    first: usize,
-    span: Span<'_>,
-    s: Range<u64>,
-) -> u64 {
-    span_lanes::<I, 16>(isa, job, first, span, s)
-}
-
-/// The lane loop eight paths wide.
-#[inline(always)]
-fn span_lanes8<I: Isa>(
-    isa: I,
-    job: &RenderJob,
-    first: usize,
-    span: Span<'_>,
-    s: Range<u64>,
-) -> u64 {
-    span_lanes::<I, 8>(isa, job, first, span, s)
-}
-
 /// `$name`: the loop `$body` compiled with the target features `$features`
 /// for the token `$isa` (an unsafe call: the token is the caller's proof).
 macro_rules! compiled_for {
-    ($(#[$doc:meta])* $name:ident, $body:ident, $isa:ty, $features:literal) => {
+    ($(#[$doc:meta])* $name:ident, $body:expr, $isa:ty, $features:literal) => {
         $(#[$doc])*
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = $features)]
@@ -221,11 +197,11 @@ compiled_for!(
 );
 compiled_for!(
     /// The lane loop, eight paths wide, compiled for AVX2 and FMA.
-    lanes_avx2, span_lanes8, Avx2, "avx2,fma"
+    lanes_avx2, span_lanes::<Avx2, 8>, Avx2, "avx2,fma"
 );
 compiled_for!(
     /// The lane loop, sixteen paths wide, compiled for AVX-512.
-    lanes_avx512, span_lanes16, Avx512, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
+    lanes_avx512, span_lanes::<Avx512, 16>, Avx512, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
 );
 compiled_for!(
     /// `span_with` compiled for AVX-512 (32 vector registers; the
