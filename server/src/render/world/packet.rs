@@ -11,7 +11,7 @@ use super::{Accel, Geometry, Hit, Origin, World};
 use crate::render::bvh::{Aabb, BoxPacket, BoxRay, MAX_LEAF, PACKET, ROBUST};
 use crate::render::isa::Isa;
 use crate::render::ray::Ray;
-use crate::render::world::{EMBREE_MIN_TRIANGLES, NO_PRIM};
+use crate::render::world::NO_PRIM;
 
 /// Worlds of this many placed triangles or more trace their camera rays
 /// one by one. A packet's walk culls a node only beyond the farthest of
@@ -24,8 +24,9 @@ use crate::render::world::{EMBREE_MIN_TRIANGLES, NO_PRIM};
 /// 0.70) but still lost to single rays (2.09-2.22) and cost a few percent
 /// below the bound: not kept ("Each ray culled by its own hit in a
 /// packet's walk"). Where Embree is installed, such worlds go through it
-/// anyway ([`EMBREE_MIN_TRIANGLES`], the same bound).
-pub const PACKET_MAX_TRIANGLES: usize = EMBREE_MIN_TRIANGLES;
+/// anyway (from [`super::EMBREE_MIN_TRIANGLES`], a lower bound since the lane
+/// loop: this one is the own walk's alone).
+pub const PACKET_MAX_TRIANGLES: usize = 100_000;
 
 impl World {
     /// Whether camera rays gain from going through
