@@ -12,13 +12,14 @@
 
 mod common;
 
-use common::meshes::{grazing, leaving, mixed_scene, ray_in, unit};
+use common::meshes::{grazing, leaving, mixed_scene, ray_in, soup, unit};
 use pathstream::render::isa::Portable;
 use pathstream::render::math::DVec3;
 use pathstream::render::ray::Ray;
 use pathstream::render::sampler::Sampler;
 use pathstream::render::world::{Hit, Origin, World, NO_PRIM};
 use pathstream::render::Scene;
+use serde_json::json;
 
 /// `scene`'s world with its meshes in Embree (None: Embree is not
 /// installed, outside CI).
@@ -224,4 +225,45 @@ fn embree_takes_only_worlds_with_enough_triangles() {
     let world = World::new(&s, s.camera.position);
     assert!(!world.use_embree(0), "300 spheres to scan beside the mesh");
     assert!(!world.traced_by_embree());
+}
+
+/// Meshes placed once are triangles of Embree's scene itself, a large
+/// mesh placed twice an instance of its own scene, and rays through both
+/// agree with brute force. The scene depends on the placements only: a
+/// camera move reuses it, a moved mesh builds it again.
+#[test]
+fn embrees_scene_holds_what_is_placed_once_and_outlives_a_camera_move() {
+    let s = mixed_scene();
+    let Some(world) = embree_world(&s) else {
+        return;
+    };
+    let layout = world.embree_layout().expect("Embree traces the world");
+    assert_eq!(layout.instances, 0, "{layout:?}");
+    assert!(layout.own_triangles >= 300 + 2 * 320, "{layout:?}");
+    let elsewhere = World::new(&s, s.camera.position + DVec3::new(3.0, -20.0, 70.0));
+    assert!(elsewhere.use_embree(0));
+    assert_eq!(elsewhere.embree_layout(), Some(layout), "a camera move");
+    let moved = s.translated(DVec3::new(0.0, 1.0, 0.0));
+    let moved = World::new(&moved, moved.camera.position);
+    assert!(moved.use_embree(0));
+    let build = moved.embree_layout().expect("Embree").build;
+    assert!(build > layout.build, "a moved scene, build {build}");
+
+    // Beyond merging (`MERGE_MESH_MAX`), placed twice: instances.
+    let mut j = common::scene_json("cornell-glass");
+    let objects = j["objects"].as_array_mut().expect("objects");
+    let big = soup(70_000, 4);
+    for t in [
+        json!({"scale": 0.5}),
+        json!({"translate": [40, 30, 70], "scale": [0.4, 0.5, 0.3],
+            "rotate": {"axis": [1, 2, 3], "deg": 40}}),
+    ] {
+        objects.push(common::mesh_object(&big, "white", t, false));
+    }
+    let s = Scene::from_json_value(j).expect("valid");
+    let world = embree_world(&s).expect("Embree loaded a moment ago");
+    let layout = world.embree_layout().expect("Embree");
+    assert_eq!(layout.instances, 2, "{layout:?}");
+    let the_box = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(99.0, 81.6, 170.0));
+    agree(&world, the_box, 1_500, 3, "a mesh placed twice");
 }

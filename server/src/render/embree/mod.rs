@@ -7,8 +7,10 @@
 //!
 //! What this module holds: the library and one device (started once, on
 //! first use, never released), a mesh as an Embree scene of one triangle
-//! geometry, and a scene of placed meshes (instances) that answers nearest
-//! hit queries. Both kinds of scene are built robust
+//! geometry, and the world's scene, which answers the queries: small
+//! meshes as triangles of its own in camera space (one tree for a ray to
+//! walk), large or shared ones as placed mesh scenes (instances, never
+//! rebuilt for a new camera). Both kinds of scene are built robust
 //! (`RTC_SCENE_FLAG_ROBUST`: watertight, as the CPU's own triangle test
 //! is). A query may carry a filter that refuses hits (the triangle a ray
 //! leaves, alpha-tested texels), called by Embree for each hit it finds.
@@ -16,7 +18,7 @@
 //! `unsafe` is allowed statement by statement, each with a `SAFETY:`
 //! comment. What the C API leaves to its caller: handles are used only
 //! while alive (each is owned by one Rust value that releases it on drop,
-//! and an instance scene holds the mesh scenes it places), buffers are
+//! and the world's scene holds the mesh scenes it places), buffers are
 //! written only within the counts asked for, and committed scenes are only
 //! read (Embree allows queries on one scene from many threads at once).
 #![allow(unsafe_code)]
@@ -176,11 +178,30 @@ impl Embree {
             scene: self.new_scene(ffi::BUILD_QUALITY_HIGH)?,
             embree: self,
         };
-        // SAFETY: a live device and scene; the buffers Embree returns have
-        // room for the counts asked (16-byte vertices, the padding Embree
-        // wants for its SIMD loads; 12-byte index triples) and are written
-        // only before the geometry is committed. The scene keeps the
-        // geometry, ours is released after attaching.
+        self.attach_triangles(scene.scene, 0, positions.iter().copied(), triangles)?;
+        // SAFETY: a live scene of ours, fully attached.
+        unsafe { (api.commit_scene)(scene.scene) };
+        self.check("building a mesh")?;
+        Ok(scene)
+    }
+
+    /// Triangles (positions, then index triples, every index checked by
+    /// the caller) as a geometry of `scene` with id `id`.
+    fn attach_triangles(
+        &self,
+        scene: ffi::Handle,
+        id: u32,
+        positions: impl ExactSizeIterator<Item = [f32; 3]>,
+        triangles: &[[u32; 3]],
+    ) -> Result<(), String> {
+        let api = &self.lib.api;
+        let n = positions.len();
+        // SAFETY: a live device and scene of ours, not yet committed; the
+        // buffers Embree returns have room for the counts asked (16-byte
+        // vertices, the padding Embree wants for its SIMD loads; 12-byte
+        // index triples) and are written only before the geometry is
+        // committed. The scene keeps the geometry, ours is released after
+        // attaching.
         unsafe {
             let geometry = (api.new_geometry)(self.device, ffi::GEOMETRY_TYPE_TRIANGLE);
             if geometry.is_null() {
@@ -191,13 +212,8 @@ impl Embree {
             let buffer = |kind, format, stride, count| {
                 (api.set_new_geometry_buffer)(geometry, kind, 0, format, stride, count)
             };
-            let vertices = buffer(
-                ffi::BUFFER_TYPE_VERTEX,
-                ffi::FORMAT_FLOAT3,
-                16,
-                positions.len(),
-            )
-            .cast::<[f32; 4]>();
+            let vertices =
+                buffer(ffi::BUFFER_TYPE_VERTEX, ffi::FORMAT_FLOAT3, 16, n).cast::<[f32; 4]>();
             let indices = buffer(
                 ffi::BUFFER_TYPE_INDEX,
                 ffi::FORMAT_UINT3,
@@ -210,57 +226,98 @@ impl Embree {
                 self.check("rtcSetNewGeometryBuffer")?;
                 return Err("rtcSetNewGeometryBuffer failed".into());
             }
-            let vertices = std::slice::from_raw_parts_mut(vertices, positions.len());
+            let vertices = std::slice::from_raw_parts_mut(vertices, n);
             for (v, p) in vertices.iter_mut().zip(positions) {
                 *v = [p[0], p[1], p[2], 0.0];
             }
             std::slice::from_raw_parts_mut(indices, triangles.len()).copy_from_slice(triangles);
             (api.commit_geometry)(geometry);
-            (api.attach_geometry_by_id)(scene.scene, geometry, 0);
+            (api.attach_geometry_by_id)(scene, geometry, id);
             (api.release_geometry)(geometry);
-            (api.commit_scene)(scene.scene);
         }
-        self.check("building a mesh")?;
-        Ok(scene)
+        self.check("adding triangles")
     }
 
-    /// Meshes placed: each `(id, mesh, cam_from_obj)`, the map's 3x4
-    /// matrix by columns (its last column the translation). A hit names
-    /// the placement by `id`.
-    pub fn instances(
-        &'static self,
-        placed: &[(u32, Arc<MeshScene>, [f32; 12])],
-    ) -> Result<InstanceScene, String> {
+    /// The world's meshes as one scene: each part either triangles of
+    /// their own, their vertices in camera space, or a mesh scene placed
+    /// by a matrix. A hit names the part by its id.
+    pub fn scene(&'static self, parts: Vec<Part<'_>>) -> Result<WorldScene, String> {
         let api = &self.lib.api;
-        let scene = InstanceScene {
-            scene: self.new_scene(ffi::BUILD_QUALITY_MEDIUM)?,
-            embree: self,
-            _meshes: placed.iter().map(|(_, m, _)| m.clone()).collect(),
+        let flat = parts.iter().any(|p| matches!(p, Part::Triangles { .. }));
+        // A scene over triangles is worth the better build (it is the
+        // tree most rays walk); one over placements alone is small.
+        let quality = match flat {
+            true => ffi::BUILD_QUALITY_HIGH,
+            false => ffi::BUILD_QUALITY_MEDIUM,
         };
-        for (id, mesh, matrix) in placed {
-            // SAFETY: live device, scenes (the mesh scene stays alive in
-            // `_meshes` as long as the instance scene) and a 12-float
-            // matrix read during the call.
-            unsafe {
-                let geometry = (api.new_geometry)(self.device, ffi::GEOMETRY_TYPE_INSTANCE);
-                if geometry.is_null() {
-                    self.check("rtcNewGeometry")?;
-                    return Err("rtcNewGeometry failed".into());
+        let mut scene = WorldScene {
+            scene: self.new_scene(quality)?,
+            embree: self,
+            _meshes: Vec::new(),
+        };
+        for part in parts {
+            match part {
+                Part::Triangles {
+                    id,
+                    positions,
+                    triangles,
+                } => {
+                    let n = positions.len();
+                    if let Some(t) = triangles.iter().flatten().find(|&&i| i as usize >= n) {
+                        return Err(format!("vertex index {t} of {n}"));
+                    }
+                    self.attach_triangles(scene.scene, id, positions.into_iter(), triangles)?;
                 }
-                (api.set_geometry_instanced_scene)(geometry, mesh.scene);
-                let m = matrix.as_ptr().cast::<c_void>();
-                (api.set_geometry_transform)(geometry, 0, ffi::FORMAT_FLOAT3X4_COLUMN_MAJOR, m);
-                (api.commit_geometry)(geometry);
-                (api.attach_geometry_by_id)(scene.scene, geometry, *id);
-                (api.release_geometry)(geometry);
+                Part::Placed { id, mesh, matrix } => {
+                    // SAFETY: live device, scenes (the mesh scene stays
+                    // alive in `_meshes` as long as the world's scene) and
+                    // a 12-float matrix read during the call.
+                    unsafe {
+                        let geometry = (api.new_geometry)(self.device, ffi::GEOMETRY_TYPE_INSTANCE);
+                        if geometry.is_null() {
+                            self.check("rtcNewGeometry")?;
+                            return Err("rtcNewGeometry failed".into());
+                        }
+                        (api.set_geometry_instanced_scene)(geometry, mesh.scene);
+                        let m = matrix.as_ptr().cast::<c_void>();
+                        (api.set_geometry_transform)(
+                            geometry,
+                            0,
+                            ffi::FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                            m,
+                        );
+                        (api.commit_geometry)(geometry);
+                        (api.attach_geometry_by_id)(scene.scene, geometry, id);
+                        (api.release_geometry)(geometry);
+                    }
+                    self.check("placing a mesh")?;
+                    scene._meshes.push(mesh);
+                }
             }
-            self.check("placing a mesh")?;
         }
         // SAFETY: a live scene of ours, fully attached.
         unsafe { (api.commit_scene)(scene.scene) };
-        self.check("building the placed meshes")?;
+        self.check("building the world's meshes")?;
         Ok(scene)
     }
+}
+
+/// A part of the world's scene ([`Embree::scene`]).
+pub enum Part<'a> {
+    /// A mesh's triangles, their vertices moved to camera space (a world
+    /// rebuilt for a new camera builds them again).
+    Triangles {
+        id: u32,
+        positions: Vec<[f32; 3]>,
+        triangles: &'a [[u32; 3]],
+    },
+    /// A mesh's own scene (built once, kept with the mesh) placed by a
+    /// 3x4 matrix by columns, its last column the translation.
+    Placed {
+        id: u32,
+        mesh: Arc<MeshScene>,
+        matrix: [f32; 12],
+    },
 }
 
 /// A mesh as an Embree scene (one triangle geometry), released on drop.
@@ -269,8 +326,9 @@ pub struct MeshScene {
     embree: &'static Embree,
 }
 
-/// Placed meshes as an Embree scene, released on drop.
-pub struct InstanceScene {
+/// The world's meshes as an Embree scene (triangles of its own and
+/// placed mesh scenes), released on drop.
+pub struct WorldScene {
     scene: ffi::Handle,
     embree: &'static Embree,
     _meshes: Vec<Arc<MeshScene>>,
@@ -302,7 +360,7 @@ macro_rules! scene_traits {
 }
 
 scene_traits!(MeshScene, "Embree mesh scene");
-scene_traits!(InstanceScene, "Embree instance scene");
+scene_traits!(WorldScene, "Embree world scene");
 
 /// A nearest hit: the distance, the placement's id, the triangle and its
 /// barycentrics u, v (weights of its second and third vertex).
@@ -313,6 +371,16 @@ pub struct RawHit {
     pub prim: u32,
     pub u: f32,
     pub v: f32,
+}
+
+/// The part a hit names: the placement it went through, else the
+/// geometry (triangles of the world's scene itself).
+#[inline(always)]
+fn hit_id(inst: u32, geom: u32) -> u32 {
+    match inst {
+        ffi::INVALID_ID => geom,
+        placed => placed,
+    }
 }
 
 /// Which hits a query accepts (Embree goes on past a refused one).
@@ -335,7 +403,7 @@ struct Filtered<'a, F> {
 /// the callback a packet's rays one at a time, or copies of them).
 unsafe extern "C" fn run_filter<F: HitFilter>(args: *const ffi::FilterArgs) {
     // SAFETY: Embree passes valid arguments for N rays and hits; the
-    // context is the `Filtered<F>` that a query of `InstanceScene` made
+    // context is the `Filtered<F>` that a query of `WorldScene` made
     // (its first field is Embree's context, `repr(C)`) and which outlives
     // the query; `ray` and `hit` are N rays and N hits by field, 32-bit
     // values each (rtcore_ray.h's RTCRayN and RTCHitN).
@@ -352,7 +420,12 @@ unsafe extern "C" fn run_filter<F: HitFilter>(args: *const ffi::FilterArgs) {
                 continue;
             }
             let (u, v) = (*floats.add(3 * n + i), *floats.add(4 * n + i));
-            let (prim, id) = (*ints.add(5 * n + i), *ints.add(7 * n + i));
+            let (prim, geom, inst) = (
+                *ints.add(5 * n + i),
+                *ints.add(6 * n + i),
+                *ints.add(7 * n + i),
+            );
+            let id = hit_id(inst, geom);
             let lane = *rays.add(ffi::ray_id_word(n, i));
             if !filter.accepts(lane, id, prim, u, v) {
                 *valid = 0;
@@ -361,7 +434,7 @@ unsafe extern "C" fn run_filter<F: HitFilter>(args: *const ffi::FilterArgs) {
     }
 }
 
-impl InstanceScene {
+impl WorldScene {
     /// The nearest hit along `origin + t dir` with 0 <= t <= `tfar` that
     /// `filter` (if any) accepts.
     #[inline(always)]
@@ -414,7 +487,7 @@ impl InstanceScene {
         }
         (rh.hit.geom_id != ffi::INVALID_ID).then_some(RawHit {
             t: rh.ray.tfar,
-            id: rh.hit.inst_id[0],
+            id: hit_id(rh.hit.inst_id[0], rh.hit.geom_id),
             prim: rh.hit.prim_id,
             u: rh.hit.u,
             v: rh.hit.v,

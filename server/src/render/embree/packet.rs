@@ -5,7 +5,7 @@
 //! for the live lanes together; a hit's distance may differ from the
 //! single ray's in its last bits, `tests/embree.rs` measures it).
 
-use super::{ffi, run_filter, Filtered, HitFilter, InstanceScene, RawHit};
+use super::{ffi, hit_id, run_filter, Filtered, HitFilter, RawHit, WorldScene};
 use std::ffi::c_void;
 
 /// A packet of `W` rays (origins `org`, directions `dir`, each from 0 to
@@ -47,7 +47,7 @@ fn packet<const W: usize>(
 #[repr(C, align(64))]
 struct Valid<const W: usize>([i32; W]);
 
-impl InstanceScene {
+impl WorldScene {
     /// Runs `query` (one of the packet entry points for `W` rays) on
     /// `packet` with `filter`, if any.
     #[inline(always)]
@@ -106,7 +106,7 @@ impl InstanceScene {
         std::array::from_fn(|k| {
             (live[k] && p.geom_id[k] != ffi::INVALID_ID).then_some(RawHit {
                 t: p.tfar[k],
-                id: p.inst_id[k],
+                id: hit_id(p.inst_id[k], p.geom_id[k]),
                 prim: p.prim_id[k],
                 u: p.u[k],
                 v: p.v[k],

@@ -1,7 +1,6 @@
 //! Nearest hits through Embree (`render::embree`), where the CPU has the
-//! library and the world has meshes: every placed mesh is an instance of
-//! an Embree scene of its own (built once per mesh, kept with it), and the
-//! few spheres and quads beside them are scanned first, as the scan
+//! library and the world has meshes: the meshes are one Embree scene
+//! (`world::embree_scene`), each ray moved into its frame; the few spheres and quads beside them are scanned first, as the scan
 //! accelerator scans them, their nearest hit bounding Embree's search.
 //!
 //! What the world's own search does and Embree is told through a filter:
@@ -13,16 +12,20 @@
 //! (`tests/embree.rs` measures both).
 
 use super::build::{scan_cost, SCAN_MAX_COST};
+use super::embree_scene::{EmbreeLayout, Frame};
 use super::{scan, Geometry, Hit, Origin, World, NO_PRIM};
-use crate::render::embree::{embree, HitFilter, InstanceScene, RawHit};
+use crate::render::embree::{embree, HitFilter, RawHit};
 use crate::render::isa::Isa;
+use crate::render::math::Vec3A;
 use crate::render::ray::Ray;
 use crate::render::shape::{Quad, SphereBatch, SPHERE_BATCH_LANES};
 use std::sync::Arc;
 
 /// The world's meshes in Embree, and what is scanned beside them.
 pub(super) struct EmbreeRays {
-    scene: InstanceScene,
+    frame: Arc<Frame>,
+    /// What moves a ray's origin into the scene's frame.
+    shift: Vec3A,
     sphere_batches: Vec<SphereBatch>,
     quads: Vec<(u32, Quad)>,
     /// Whether some placed mesh has alpha-tested triangles.
@@ -32,7 +35,7 @@ pub(super) struct EmbreeRays {
 impl std::fmt::Debug for EmbreeRays {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("EmbreeRays")
-            .field("scene", &self.scene)
+            .field("scene", &self.frame.scene)
             .field("spheres", &self.sphere_batches.len())
             .field("quads", &self.quads.len())
             .field("alpha", &self.alpha)
@@ -100,30 +103,17 @@ impl EmbreeRays {
         }
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
-        let mut placed = Vec::new();
-        let embree = embree()?;
         for (id, o) in world.objects.iter().enumerate() {
-            let id = id as u32;
             match o.geometry {
-                Geometry::Sphere(s) => spheres.push((id, s)),
-                Geometry::Quad(q) => quads.push((id, q)),
-                Geometry::Instance(i) => {
-                    let instance = &world.instances[i as usize];
-                    let mesh = instance.mesh.embree_scene(embree)?;
-                    let m = &instance.cam_from_obj;
-                    let (x, y, z, t) = (
-                        m.matrix3.x_axis,
-                        m.matrix3.y_axis,
-                        m.matrix3.z_axis,
-                        m.translation,
-                    );
-                    let columns = [x.x, x.y, x.z, y.x, y.y, y.z, z.x, z.y, z.z, t.x, t.y, t.z];
-                    placed.push((id, mesh, columns));
-                }
+                Geometry::Sphere(s) => spheres.push((id as u32, s)),
+                Geometry::Quad(q) => quads.push((id as u32, q)),
+                Geometry::Instance(_) => {}
             }
         }
+        let frame = super::embree_scene::frame(world, embree()?)?;
         Ok(EmbreeRays {
-            scene: embree.instances(&placed)?,
+            shift: frame.shift(world),
+            frame,
             sphere_batches: spheres
                 .chunks(SPHERE_BATCH_LANES)
                 .map(SphereBatch::new)
@@ -141,7 +131,7 @@ impl EmbreeRays {
             true => Hit::NONE,
             false => scan::nearest(isa, &self.sphere_batches, &self.quads, ray, from),
         };
-        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let (o, d) = ((ray.origin + self.shift).to_array(), ray.dir.to_array());
         let (from, ray) = ([from], [*ray]);
         let refuse = Refuse {
             world,
@@ -149,8 +139,8 @@ impl EmbreeRays {
             rays: &ray,
         };
         let hit = match from[0].prim != NO_PRIM || self.alpha {
-            true => self.scene.intersect(o, d, best.t, Some(&refuse)),
-            false => self.scene.intersect::<Refuse<'_>>(o, d, best.t, None),
+            true => self.frame.scene.intersect(o, d, best.t, Some(&refuse)),
+            false => self.frame.scene.intersect::<Refuse<'_>>(o, d, best.t, None),
         };
         if let Some(h) = hit.filter(|h| h.t < best.t) {
             best = as_hit(h);
@@ -171,7 +161,7 @@ impl EmbreeRays {
         let mut best = [Hit::NONE; W];
         self.scan_lanes(isa, rays, from, live, &mut best);
         let (o, d) = (
-            rays.map(|r| r.origin.to_array()),
+            rays.map(|r| (r.origin + self.shift).to_array()),
             rays.map(|r| r.dir.to_array()),
         );
         let tfar = best.map(|h| h.t);
@@ -180,7 +170,8 @@ impl EmbreeRays {
         // meet it again are asked once more, alone, with the filter.
         let filter = self.alpha.then_some(Refuse { world, from, rays });
         let camera = (from.iter().zip(live)).all(|(f, &l)| !l || *f == Origin::NONE);
-        let hits = (self.scene).intersect_lanes((&o, &d, &tfar), live, (filter.as_ref(), camera));
+        let hits =
+            (self.frame.scene).intersect_lanes((&o, &d, &tfar), live, (filter.as_ref(), camera));
         for (k, (b, h)) in best.iter_mut().zip(hits).enumerate() {
             match h {
                 Some(h) if h.id == from[k].object && h.prim == from[k].prim => {
@@ -211,7 +202,7 @@ impl EmbreeRays {
         let scanned: [bool; W] = std::array::from_fn(|k| live[k] && best[k].t < tmax[k]);
         let rest: [bool; W] = std::array::from_fn(|k| live[k] && !scanned[k]);
         let (o, d) = (
-            rays.map(|r| r.origin.to_array()),
+            rays.map(|r| (r.origin + self.shift).to_array()),
             rays.map(|r| r.dir.to_array()),
         );
         // Without the filter but for alpha tests, as in `nearest_lanes`:
@@ -219,9 +210,7 @@ impl EmbreeRays {
         // (`tests/lane_loop.rs` counts the answers against the filtered
         // query's).
         let filter = self.alpha.then_some(Refuse { world, from, rays });
-        let blocked = self
-            .scene
-            .occluded_lanes((&o, &d, tmax), &rest, filter.as_ref());
+        let blocked = (self.frame.scene).occluded_lanes((&o, &d, tmax), &rest, filter.as_ref());
         std::array::from_fn(|k| scanned[k] || blocked[k])
     }
 
@@ -280,6 +269,14 @@ impl World {
                 }
             });
         built.is_some()
+    }
+
+    /// How Embree holds this world's meshes, where it traces them.
+    pub fn embree_layout(&self) -> Option<EmbreeLayout> {
+        match self.embree.get() {
+            Some(Some(e)) => Some(e.frame.layout),
+            _ => None,
+        }
     }
 
     /// Whether [`World::use_embree`] has made rays go through Embree.

@@ -28,6 +28,9 @@ use std::sync::Arc;
 #[derive(Clone, Debug)]
 pub struct Instance {
     pub mesh: Arc<Mesh>,
+    /// The placement in world space, as the scene gives it (what does not
+    /// change with the camera).
+    pub world_from_obj: DAffine3,
     pub cam_from_obj: Affine3A,
     pub obj_from_cam: Affine3A,
     /// Maps object-space normals to camera space (inverse transpose).
@@ -101,6 +104,7 @@ impl Instance {
         let (rt_a, rt_b) = round_trip_bound(&cam_from_obj, &obj_from_cam);
         Self {
             mesh,
+            world_from_obj,
             cam_from_obj,
             obj_from_cam,
             normal_from_obj,

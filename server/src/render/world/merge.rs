@@ -18,16 +18,16 @@
 //! absence ((0, 0), a zero tangent, white).
 //!
 //! The merged mesh depends on the meshes and their placements only, not on
-//! the camera, so a camera move reuses it: the last few merges are cached,
-//! keyed by the meshes (weak references, so the key's addresses cannot be
-//! reused while it lives) and the placements' exact bits.
+//! the camera, so a camera move reuses it: the last few merges are cached
+//! (`world::reuse`).
 //!
 //! The image differs from the unmerged world's by rounding only (vertices
 //! are placed in f64 once and rounded, instead of rays being mapped in f32).
 
+use super::reuse::Reuse;
 use crate::render::math::{DAffine3, DVec3};
 use crate::render::shape::{Mesh, MeshData};
-use std::sync::{Arc, Mutex, Weak};
+use std::sync::Arc;
 
 /// Meshes of more triangles than this keep their own instance: their own
 /// traversal outweighs the instance's setup, and merging would copy them.
@@ -106,52 +106,18 @@ pub(super) fn merge(placements: &[Placement<'_>]) -> Vec<Merged> {
     groups
 }
 
-/// A cache key: each mesh and the bits of its placement.
-type Key = Vec<(Weak<Mesh>, [u64; 12])>;
-
-struct Entry {
-    key: Key,
-    mesh: Arc<Mesh>,
-    frame: DVec3,
-}
-
-static CACHE: Mutex<Vec<Entry>> = Mutex::new(Vec::new());
+/// Merges of the last scenes rendered.
+static CACHE: Reuse<(Arc<Mesh>, DVec3)> = Reuse::new(CACHED);
 
 fn cached_or_built(parts: &[&Placement<'_>]) -> Option<(Arc<Mesh>, DVec3)> {
-    let bits = |a: &DAffine3| a.to_cols_array().map(f64::to_bits);
-    let same = |key: &Key| {
-        key.len() == parts.len()
-            && key.iter().zip(parts).all(|((mesh, placed), p)| {
-                std::ptr::eq(mesh.as_ptr(), Arc::as_ptr(p.mesh))
-                    && *placed == bits(&p.world_from_object)
-            })
-    };
-    {
-        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-        // Merges of meshes no scene holds any more are let go at once.
-        cache.retain(|e| e.key.iter().all(|(m, _)| m.strong_count() > 0));
-        if let Some(i) = cache.iter().position(|e| same(&e.key)) {
-            let entry = cache.remove(i);
-            let found = (entry.mesh.clone(), entry.frame);
-            cache.push(entry);
-            return Some(found);
-        }
-    }
-    let (mesh, frame) = build(parts)?;
-    let mesh = Arc::new(mesh);
-    let key = (parts.iter())
-        .map(|p| (Arc::downgrade(p.mesh), bits(&p.world_from_object)))
+    let placed: Vec<_> = (parts.iter())
+        .map(|p| (0, p.mesh, &p.world_from_object))
         .collect();
-    let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-    if cache.len() >= CACHED {
-        cache.remove(0);
-    }
-    cache.push(Entry {
-        key,
-        mesh: mesh.clone(),
-        frame,
-    });
-    Some((mesh, frame))
+    CACHE
+        .get_or_build(&placed, || {
+            build(parts).map(|(m, f)| (Arc::new(m), f)).ok_or(())
+        })
+        .ok()
 }
 
 /// The parts' triangles in one mesh, relative to the centre of their

@@ -19,15 +19,18 @@
 mod build;
 pub mod cutout;
 mod embree_rays;
+mod embree_scene;
 mod emitters;
 mod instance;
 mod merge;
 mod packet;
+mod reuse;
 mod scan;
 mod textures;
 
 pub use build::{scan_cost, AccelChoice, SCAN_MAX_COST};
 pub use embree_rays::EMBREE_MIN_TRIANGLES;
+pub use embree_scene::{EmbreeLayout, FLAT_MAX_TRIANGLES};
 pub use instance::Instance;
 pub use packet::PACKET_MAX_TRIANGLES;
 
