@@ -26,6 +26,8 @@
 pub mod ffi;
 mod packet;
 
+pub use packet::Packet;
+
 use std::ffi::c_void;
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};

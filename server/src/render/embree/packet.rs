@@ -8,39 +8,82 @@
 use super::{ffi, hit_id, run_filter, Filtered, HitFilter, RawHit, WorldScene};
 use std::ffi::c_void;
 
-/// A packet of `W` rays (origins `org`, directions `dir`, each from 0 to
-/// its `tfar`), lane `k` live where `live[k]`, and its valid mask. A
-/// ray's `id` is its lane, for the filter.
-#[inline(always)]
-fn packet<const W: usize>(
-    org: &[[f32; 3]; W],
-    dir: &[[f32; 3]; W],
-    tfar: &[f32; W],
-    live: &[bool; W],
-) -> (Valid<W>, ffi::RayHitN<W>) {
-    let mut p = ffi::RayHitN {
-        org: [[0.0; W]; 3],
-        tnear: [0.0; W],
-        dir: [[0.0; W]; 3],
-        time: [0.0; W],
-        tfar: *tfar,
-        mask: [u32::MAX; W],
-        id: std::array::from_fn(|k| k as u32),
-        flags: [0; W],
-        ng: [[0.0; W]; 3],
-        u: [0.0; W],
-        v: [0.0; W],
-        prim_id: [ffi::INVALID_ID; W],
-        geom_id: [ffi::INVALID_ID; W],
-        inst_id: [ffi::INVALID_ID; W],
-    };
-    for k in 0..W {
-        for a in 0..3 {
-            p.org[a][k] = org[k][a];
-            p.dir[a][k] = dir[k][a];
+/// A packet of `W` rays as Embree reads them, lane by lane, and after a
+/// query its answers. A ray's `id` is its lane, for the filter.
+pub struct Packet<const W: usize> {
+    valid: Valid<W>,
+    rays: ffi::RayHitN<W>,
+}
+
+impl<const W: usize> Packet<W> {
+    /// A packet of no live lane.
+    #[inline(always)]
+    pub fn new() -> Self {
+        const { assert!(W == 4 || W == 8 || W == 16) };
+        Self {
+            valid: Valid([0; W]),
+            rays: ffi::RayHitN {
+                org: [[0.0; W]; 3],
+                tnear: [0.0; W],
+                // A dead lane's direction is read too: zero made the
+                // queries 4% slower (its reciprocals infinite).
+                dir: [[1.0; W]; 3],
+                time: [0.0; W],
+                tfar: [0.0; W],
+                mask: [u32::MAX; W],
+                id: std::array::from_fn(|k| k as u32),
+                flags: [0; W],
+                ng: [[0.0; W]; 3],
+                u: [0.0; W],
+                v: [0.0; W],
+                prim_id: [ffi::INVALID_ID; W],
+                geom_id: [ffi::INVALID_ID; W],
+                inst_id: [ffi::INVALID_ID; W],
+            },
         }
     }
-    (Valid(live.map(|l| if l { -1 } else { 0 })), p)
+
+    /// Makes lane `k` live with the ray `org + t dir`, 0 <= t <= `tfar`.
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, org: [f32; 3], dir: [f32; 3], tfar: f32) {
+        for a in 0..3 {
+            self.rays.org[a][k] = org[a];
+            self.rays.dir[a][k] = dir[a];
+        }
+        self.rays.tfar[k] = tfar;
+        self.valid.0[k] = -1;
+    }
+
+    /// Whether lane `k` is live.
+    #[inline(always)]
+    pub fn live(&self, k: usize) -> bool {
+        self.valid.0[k] != 0
+    }
+
+    /// After an intersection query: live lane `k`'s nearest hit, if any.
+    #[inline(always)]
+    pub fn hit(&self, k: usize) -> Option<RawHit> {
+        let p = &self.rays;
+        (self.live(k) && p.geom_id[k] != ffi::INVALID_ID).then(|| RawHit {
+            t: p.tfar[k],
+            id: hit_id(p.inst_id[k], p.geom_id[k]),
+            prim: p.prim_id[k],
+            u: p.u[k],
+            v: p.v[k],
+        })
+    }
+
+    /// After an occlusion query: whether live lane `k`'s ray is blocked.
+    #[inline(always)]
+    pub fn blocked(&self, k: usize) -> bool {
+        self.live(k) && self.rays.tfar[k] == f32::NEG_INFINITY
+    }
+}
+
+impl<const W: usize> Default for Packet<W> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// A packet's valid mask, aligned as Embree's vector loads want it.
@@ -88,45 +131,29 @@ impl WorldScene {
         }
     }
 
-    /// The nearest hit of each live lane's ray `org[k] + t dir[k]`, 0 <= t
-    /// <= `tfar[k]`, that `filter` (if any) accepts; `W` is 4, 8 or 16.
-    /// `coherent`: the rays start together and go alike (a pixel's camera
-    /// rays), which Embree's packet walk serves better told.
+    /// Answers each live lane of `packet` with its nearest hit that
+    /// `filter` (if any) accepts ([`Packet::hit`]). `coherent`: the rays
+    /// start together and go alike (a pixel's camera rays), which
+    /// Embree's packet walk serves better told.
     #[inline(always)]
     pub fn intersect_lanes<F: HitFilter, const W: usize>(
         &self,
-        (org, dir, tfar): (&[[f32; 3]; W], &[[f32; 3]; W], &[f32; W]),
-        live: &[bool; W],
+        packet: &mut Packet<W>,
         (filter, coherent): (Option<&F>, bool),
-    ) -> [Option<RawHit>; W] {
-        const { assert!(W == 4 || W == 8 || W == 16) };
-        let (valid, mut p) = packet(org, dir, tfar, live);
+    ) {
         let (query, _) = self.embree.lib.api.packet_queries(W);
-        self.run_packet(query, &valid, &mut p, (filter, coherent));
-        std::array::from_fn(|k| {
-            (live[k] && p.geom_id[k] != ffi::INVALID_ID).then_some(RawHit {
-                t: p.tfar[k],
-                id: hit_id(p.inst_id[k], p.geom_id[k]),
-                prim: p.prim_id[k],
-                u: p.u[k],
-                v: p.v[k],
-            })
-        })
+        self.run_packet(query, &packet.valid, &mut packet.rays, (filter, coherent));
     }
 
-    /// Whether something `filter` (if any) accepts blocks each live
-    /// lane's ray before its `tfar`; `W` is 4, 8 or 16.
+    /// Answers whether something `filter` (if any) accepts blocks each
+    /// live lane's ray of `packet` ([`Packet::blocked`]).
     #[inline(always)]
     pub fn occluded_lanes<F: HitFilter, const W: usize>(
         &self,
-        (org, dir, tfar): (&[[f32; 3]; W], &[[f32; 3]; W], &[f32; W]),
-        live: &[bool; W],
+        packet: &mut Packet<W>,
         filter: Option<&F>,
-    ) -> [bool; W] {
-        const { assert!(W == 4 || W == 8 || W == 16) };
-        let (valid, mut p) = packet(org, dir, tfar, live);
+    ) {
         let (_, query) = self.embree.lib.api.packet_queries(W);
-        self.run_packet(query, &valid, &mut p, (filter, false));
-        std::array::from_fn(|k| live[k] && p.tfar[k] == f32::NEG_INFINITY)
+        self.run_packet(query, &packet.valid, &mut packet.rays, (filter, false));
     }
 }

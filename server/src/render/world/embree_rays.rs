@@ -14,7 +14,7 @@
 use super::build::{scan_cost, SCAN_MAX_COST};
 use super::embree_scene::{EmbreeLayout, Frame};
 use super::{scan, Geometry, Hit, Origin, World, NO_PRIM};
-use crate::render::embree::{embree, HitFilter, RawHit};
+use crate::render::embree::{embree, HitFilter, Packet, RawHit};
 use crate::render::isa::Isa;
 use crate::render::math::Vec3A;
 use crate::render::ray::Ray;
@@ -160,20 +160,22 @@ impl EmbreeRays {
     ) -> [Hit; W] {
         let mut best = [Hit::NONE; W];
         self.scan_lanes(isa, rays, from, live, &mut best);
-        let (o, d) = (
-            rays.map(|r| (r.origin + self.shift).to_array()),
-            rays.map(|r| r.dir.to_array()),
-        );
-        let tfar = best.map(|h| h.t);
+        let mut packet = Packet::<W>::new();
+        for k in (0..W).filter(|&k| live[k]) {
+            let (o, d) = (
+                (rays[k].origin + self.shift).to_array(),
+                rays[k].dir.to_array(),
+            );
+            packet.set(k, o, d, best[k].t);
+        }
         // No filter but for alpha tests: the spawn's offset keeps nearly
         // every ray off the triangle it leaves, and the few lanes that
         // meet it again are asked once more, alone, with the filter.
         let filter = self.alpha.then_some(Refuse { world, from, rays });
         let camera = (from.iter().zip(live)).all(|(f, &l)| !l || *f == Origin::NONE);
-        let hits =
-            (self.frame.scene).intersect_lanes((&o, &d, &tfar), live, (filter.as_ref(), camera));
-        for (k, (b, h)) in best.iter_mut().zip(hits).enumerate() {
-            match h {
+        (self.frame.scene).intersect_lanes(&mut packet, (filter.as_ref(), camera));
+        for (k, b) in best.iter_mut().enumerate() {
+            match packet.hit(k) {
                 Some(h) if h.id == from[k].object && h.prim == from[k].prim => {
                     let again = self.nearest(world, isa, &rays[k], from[k]);
                     if again.t < b.t {
@@ -200,18 +202,24 @@ impl EmbreeRays {
         let mut best = [Hit::NONE; W];
         self.scan_lanes(isa, rays, from, live, &mut best);
         let scanned: [bool; W] = std::array::from_fn(|k| live[k] && best[k].t < tmax[k]);
-        let rest: [bool; W] = std::array::from_fn(|k| live[k] && !scanned[k]);
-        let (o, d) = (
-            rays.map(|r| (r.origin + self.shift).to_array()),
-            rays.map(|r| r.dir.to_array()),
-        );
+        let mut packet = Packet::<W>::new();
+        for k in (0..W).filter(|&k| live[k] && !scanned[k]) {
+            let (o, d) = (
+                (rays[k].origin + self.shift).to_array(),
+                rays[k].dir.to_array(),
+            );
+            packet.set(k, o, d, tmax[k]);
+        }
+        if !(0..W).any(|k| packet.live(k)) {
+            return scanned;
+        }
         // Without the filter but for alpha tests, as in `nearest_lanes`:
         // a ray spawned off a triangle does not meet it again
         // (`tests/lane_loop.rs` counts the answers against the filtered
         // query's).
         let filter = self.alpha.then_some(Refuse { world, from, rays });
-        let blocked = (self.frame.scene).occluded_lanes((&o, &d, tmax), &rest, filter.as_ref());
-        std::array::from_fn(|k| scanned[k] || blocked[k])
+        (self.frame.scene).occluded_lanes(&mut packet, filter.as_ref());
+        std::array::from_fn(|k| scanned[k] || packet.blocked(k))
     }
 
     /// The spheres' and quads' nearest hits of the live lanes, into `best`.
