@@ -12,7 +12,7 @@
 //!
 //! For each size (default 10k, 100k, 1M triangles) `bench::meshes` makes
 //! the bumpy sphere under a sky, 512x512 camera rays and one diffuse bounce
-//! per camera hit; then `cornell-mesh` (41k triangles in three instances).
+//! per camera hit; then `cornell-mesh` (41k triangles, merged).
 //! Each round measures own BVH and Embree one after the other (rays: one
 //! pass each; paths: `--seconds` of rendering each, 256x256, depth 4), so
 //! that load from elsewhere hits both alike; the table gives the median
