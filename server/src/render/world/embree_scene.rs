@@ -107,21 +107,23 @@ fn build(
             (flat[k], total) = (true, total + n);
         }
     }
-    let flat_parts = flat.iter().filter(|&&f| f).count();
     let mut parts = Vec::with_capacity(placed.len());
     for (&(id, mesh, at), flat) in placed.iter().zip(flat) {
         let here = DAffine3 {
             matrix3: at.matrix3,
             translation: at.translation - centre,
         };
-        if flat {
-            let positions = (mesh.positions.iter())
+        // Placed vertices beyond f32's range stay in object space.
+        let positions = flat.then(|| {
+            (mesh.positions.iter())
                 .map(|&p| {
                     here.transform_point3(DVec3::from(p.map(f64::from)))
                         .as_vec3()
                         .to_array()
                 })
-                .collect();
+                .collect::<Vec<_>>()
+        });
+        if let Some(positions) = positions.filter(|v| v.iter().flatten().all(|c| c.is_finite())) {
             let triangles = &mesh.triangles;
             parts.push(Part::Triangles {
                 id,
@@ -138,17 +140,24 @@ fn build(
             parts.push(Part::Placed { id, mesh, matrix });
         }
     }
+    let (mut own_triangles, mut instances) = (0, 0);
+    for part in &parts {
+        match part {
+            Part::Triangles { triangles, .. } => own_triangles += triangles.len(),
+            Part::Placed { .. } => instances += 1,
+        }
+    }
     let started = std::time::Instant::now();
     let scene = embree.scene(parts)?;
     tracing::debug!(
         placed = placed.len(),
-        flat_triangles = total,
+        own_triangles,
         ms = started.elapsed().as_secs_f64() * 1e3,
         "built the world's Embree scene"
     );
     let layout = EmbreeLayout {
-        own_triangles: total,
-        instances: placed.len() - flat_parts,
+        own_triangles,
+        instances,
         build: BUILDS.fetch_add(1, Ordering::Relaxed) + 1,
     };
     Ok(Frame {
