@@ -267,3 +267,17 @@ fn embrees_scene_holds_what_is_placed_once_and_outlives_a_camera_move() {
     let the_box = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(99.0, 81.6, 170.0));
     agree(&world, the_box, 1_500, 3, "a mesh placed twice");
 }
+
+/// A triangle naming a vertex the mesh does not have is refused before
+/// Embree reads it.
+#[test]
+fn embree_refuses_a_vertex_index_beyond_the_vertices() {
+    if !common::embree() {
+        return;
+    }
+    let embree = pathstream::render::embree::embree().expect("Embree loads");
+    let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    assert!(embree.mesh(&positions, &[[0, 1, 2]]).is_ok());
+    let refused = embree.mesh(&positions, &[[0, 1, 2], [0, 1, 3]]);
+    assert_eq!(refused.err().as_deref(), Some("vertex index 3 of 3"));
+}

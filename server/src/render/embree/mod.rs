@@ -7,10 +7,10 @@
 //!
 //! What this module holds: the library and one device (started once, on
 //! first use, never released), a mesh as an Embree scene of one triangle
-//! geometry, and the world's scene, which answers the queries: small
-//! meshes as triangles of its own in camera space (one tree for a ray to
-//! walk), large or shared ones as placed mesh scenes (instances, never
-//! rebuilt for a new camera). Both kinds of scene are built robust
+//! geometry, and the world's scene, which answers the queries: meshes
+//! placed once as triangles of its own (one tree for a ray to walk), large
+//! or shared ones as placed mesh scenes (instances). Both kinds of scene
+//! are built robust
 //! (`RTC_SCENE_FLAG_ROBUST`: watertight, as the CPU's own triangle test
 //! is). A query may carry a filter that refuses hits (the triangle a ray
 //! leaves, alpha-tested texels), called by Embree for each hit it finds.
@@ -160,22 +160,15 @@ impl Embree {
         Ok(scene)
     }
 
-    /// A mesh (object-space positions, triangles by vertex index; every
-    /// index checked by the caller) as a committed scene of its own, its
-    /// triangles numbered as given.
+    /// A mesh (object-space positions, triangles by vertex index) as a
+    /// committed scene of its own, its triangles numbered as given; an
+    /// index beyond the positions is refused before Embree reads it.
     pub fn mesh(
         &'static self,
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
     ) -> Result<MeshScene, String> {
         let api = &self.lib.api;
-        if let Some(t) = triangles
-            .iter()
-            .flatten()
-            .find(|&&i| i as usize >= positions.len())
-        {
-            return Err(format!("vertex index {t} of {}", positions.len()));
-        }
         let scene = MeshScene {
             scene: self.new_scene(ffi::BUILD_QUALITY_HIGH)?,
             embree: self,
@@ -187,8 +180,8 @@ impl Embree {
         Ok(scene)
     }
 
-    /// Triangles (positions, then index triples, every index checked by
-    /// the caller) as a geometry of `scene` with id `id`.
+    /// Triangles (positions, then index triples) as a geometry of `scene`
+    /// with id `id`, or why not (an index beyond the positions).
     fn attach_triangles(
         &self,
         scene: ffi::Handle,
@@ -198,6 +191,9 @@ impl Embree {
     ) -> Result<(), String> {
         let api = &self.lib.api;
         let n = positions.len();
+        if let Some(t) = triangles.iter().flatten().find(|&&i| i as usize >= n) {
+            return Err(format!("vertex index {t} of {n}"));
+        }
         // SAFETY: a live device and scene of ours, not yet committed; the
         // buffers Embree returns have room for the counts asked (16-byte
         // vertices, the padding Embree wants for its SIMD loads; 12-byte
@@ -241,8 +237,8 @@ impl Embree {
     }
 
     /// The world's meshes as one scene: each part either triangles of
-    /// their own, their vertices in camera space, or a mesh scene placed
-    /// by a matrix. A hit names the part by its id.
+    /// its own or a mesh scene placed by a matrix. A hit names the part by
+    /// its id.
     pub fn scene(&'static self, parts: Vec<Part<'_>>) -> Result<WorldScene, String> {
         let api = &self.lib.api;
         let flat = parts.iter().any(|p| matches!(p, Part::Triangles { .. }));
@@ -264,10 +260,6 @@ impl Embree {
                     positions,
                     triangles,
                 } => {
-                    let n = positions.len();
-                    if let Some(t) = triangles.iter().flatten().find(|&&i| i as usize >= n) {
-                        return Err(format!("vertex index {t} of {n}"));
-                    }
                     self.attach_triangles(scene.scene, id, positions.into_iter(), triangles)?;
                 }
                 Part::Placed { id, mesh, matrix } => {
@@ -306,8 +298,7 @@ impl Embree {
 
 /// A part of the world's scene ([`Embree::scene`]).
 pub enum Part<'a> {
-    /// A mesh's triangles, their vertices moved to camera space (a world
-    /// rebuilt for a new camera builds them again).
+    /// A mesh's triangles, their vertices placed in the scene's frame.
     Triangles {
         id: u32,
         positions: Vec<[f32; 3]>,

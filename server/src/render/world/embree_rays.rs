@@ -1,6 +1,7 @@
 //! Nearest hits through Embree (`render::embree`), where the CPU has the
 //! library and the world has meshes: the meshes are one Embree scene
-//! (`world::embree_scene`), each ray moved into its frame; the few spheres and quads beside them are scanned first, as the scan
+//! (`world::embree_scene`), each ray moved into its frame; the few
+//! spheres and quads beside them are scanned first, as the scan
 //! accelerator scans them, their nearest hit bounding Embree's search.
 //!
 //! What the world's own search does and Embree is told through a filter:
