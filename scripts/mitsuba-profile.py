@@ -117,19 +117,49 @@ def profile_mitsuba(args, scene):
     return samples / seconds / 1e6, data
 
 
+def ray_kind(chain):
+    """What a perf sample of pathstream's render was doing, from its call
+    chain (innermost frame first, inlined frames included): "path" or
+    "shadow" for a ray query (Embree's packets, reached through
+    `intersect_lanes` or `occluded_lanes`, or the own BVH's traversal and
+    scans, `World::intersect`/`World::nearest_*`), "rest" for the work
+    around the rays (the packets' setup in `intersect_lanes` included),
+    None outside the render (loading, BVH builds)."""
+    text = "\n".join(chain)
+    if "backend::cpu::" not in text or "libtbb" in text:
+        return None
+    query = "libembree" in chain[0] or re.search(
+        r"World>?::(intersect|nearest\w*|occluded) ", text)
+    if not query:
+        return "rest"
+    return "shadow" if ("trace_shadows" in text or "integrator::nee::" in text) else "path"
+
+
 def profile_pathstream(args, scene_file):
-    """pathstream's M samples/s and its path and shadow rays' shares
-    (profile-lines.py)."""
+    """pathstream's M samples/s and its path and shadow rays' shares of
+    the render (per cent), from the call chains of a `perf record`.
+
+    The chains go through Embree's frames (its packets' stacks are large:
+    perf copies 64 KiB of stack per sample) and name each ray query's
+    caller among the inlined frames: a shadow ray's query is made by
+    `trace_shadows` (the lane loop) or `integrator::nee` (pairs)."""
     data = os.path.join(args.out, "pathstream.perf")
     text = run(
-        ["perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-o", data]
+        ["perf", "record", "-q", "-e", "cpu-clock", "-F", "1000",
+         "--call-graph", "dwarf,65528", "-o", data]
         + render_args(args.profiling, scene_file, args, args.spp,
                       os.path.join(args.out, "p.pfm")))
     rate = float(re.search(r"([0-9.]+) M paths/s", text).group(1))
-    lines = run([sys.executable, os.path.join(HERE, "profile-lines.py"),
-                 args.profiling, data])
-    share = lambda what: float(re.search(what + r"[^|]*\| ([0-9.]+)% \|", lines).group(1))
-    return rate, share(r"\| rays: path"), share(r"\| rays: shadow")
+    script = subprocess.run(["perf", "script", "-i", data, "-F", "ip,sym,dso"],
+                            capture_output=True, text=True, check=True).stdout
+    counts = {"path": 0, "shadow": 0, "rest": 0}
+    for block in script.split("\n\n"):
+        chain = [line.strip() for line in block.strip().splitlines() if line.strip()]
+        kind = ray_kind(chain) if chain else None
+        if kind:
+            counts[kind] += 1
+    total = max(1, sum(counts.values()))
+    return rate, 100 * counts["path"] / total, 100 * counts["shadow"] / total
 
 
 def parts(args, scene, scene_file):

@@ -419,6 +419,23 @@ impl<R: Real> Vector for V3<R> {
     }
 }
 
+/// The lanes where `mask` is true, in increasing order. A loop over them
+/// branches once a lane taken; a loop that tests every lane branches on
+/// each test, and where lanes are paths the outcomes are as good as
+/// random: a mispredicted branch each, some fifteen cycles.
+#[inline(always)]
+pub fn lanes_where<const W: usize>(mask: &[bool; W]) -> impl Iterator<Item = usize> {
+    const { assert!(W <= 32) };
+    let mut bits = (0..W).fold(0u32, |b, k| b | (u32::from(mask[k]) << k));
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
 #[cfg(test)]
 #[path = "lanes_tests.rs"]
 mod tests;

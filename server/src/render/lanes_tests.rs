@@ -190,3 +190,20 @@ fn every_lane_of_the_basis_and_cosine_sampling_is_the_scalar_one() {
         }
     }
 }
+
+#[test]
+fn lanes_where_names_the_true_lanes_in_order() {
+    fn check<const W: usize>(key: u64) {
+        let mask: [bool; W] = lanes(key, |b| b & 1 == 1);
+        let got: Vec<usize> = lanes_where(&mask).collect();
+        let want: Vec<usize> = (0..W).filter(|&k| mask[k]).collect();
+        assert_eq!(got, want, "{mask:?}");
+    }
+    for key in 0..200 {
+        check::<4>(key);
+        check::<8>(key);
+        check::<16>(key);
+    }
+    assert_eq!(lanes_where(&[true; 16]).count(), 16);
+    assert_eq!(lanes_where(&[false; 16]).count(), 0);
+}

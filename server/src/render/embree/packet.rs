@@ -76,7 +76,8 @@ impl<const W: usize> Packet<W> {
     /// After an occlusion query: whether live lane `k`'s ray is blocked.
     #[inline(always)]
     pub fn blocked(&self, k: usize) -> bool {
-        self.live(k) && self.rays.tfar[k] == f32::NEG_INFINITY
+        // `&`, not `&&`: no branch on whether the lane is live.
+        self.live(k) & (self.rays.tfar[k] == f32::NEG_INFINITY)
     }
 }
 

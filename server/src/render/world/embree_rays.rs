@@ -17,6 +17,7 @@ use super::embree_scene::{EmbreeLayout, Frame};
 use super::{scan, Geometry, Hit, Origin, World, NO_PRIM};
 use crate::render::embree::{embree, HitFilter, Packet, RawHit};
 use crate::render::isa::Isa;
+use crate::render::lanes::lanes_where;
 use crate::render::math::Vec3A;
 use crate::render::ray::Ray;
 use crate::render::shape::{Quad, SphereBatch, SPHERE_BATCH_LANES};
@@ -162,7 +163,7 @@ impl EmbreeRays {
         let mut best = [Hit::NONE; W];
         self.scan_lanes(isa, rays, from, live, &mut best);
         let mut packet = Packet::<W>::new();
-        for k in (0..W).filter(|&k| live[k]) {
+        for k in lanes_where(live) {
             let (o, d) = (
                 (rays[k].origin + self.shift).to_array(),
                 rays[k].dir.to_array(),
@@ -202,9 +203,9 @@ impl EmbreeRays {
     ) -> [bool; W] {
         let mut best = [Hit::NONE; W];
         self.scan_lanes(isa, rays, from, live, &mut best);
-        let scanned: [bool; W] = std::array::from_fn(|k| live[k] && best[k].t < tmax[k]);
+        let scanned: [bool; W] = std::array::from_fn(|k| live[k] & (best[k].t < tmax[k]));
         let mut packet = Packet::<W>::new();
-        for k in (0..W).filter(|&k| live[k] && !scanned[k]) {
+        for k in lanes_where::<W>(&std::array::from_fn(|k| live[k] & !scanned[k])) {
             let (o, d) = (
                 (rays[k].origin + self.shift).to_array(),
                 rays[k].dir.to_array(),
@@ -220,7 +221,7 @@ impl EmbreeRays {
         // query's).
         let filter = self.alpha.then_some(Refuse { world, from, rays });
         (self.frame.scene).occluded_lanes(&mut packet, filter.as_ref());
-        std::array::from_fn(|k| scanned[k] || packet.blocked(k))
+        std::array::from_fn(|k| scanned[k] | packet.blocked(k))
     }
 
     /// The spheres' and quads' nearest hits of the live lanes, into `best`.

@@ -20,7 +20,7 @@ use super::{Hit, Surface};
 use crate::render::alpha::AlphaTest;
 use crate::render::bvh::{BoxRay, MAX_LEAF};
 use crate::render::isa::Isa;
-use crate::render::math::{gamma, Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
+use crate::render::math::{gamma, step_toward, Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::shape::{hit_point, Mesh, TriRay, TriVerts};
 use std::sync::Arc;
@@ -262,19 +262,11 @@ impl Instance {
     /// `dir` goes, each coordinate rounded away from the plane.
     #[inline(always)]
     pub(super) fn spawn_origin(&self, off: &Offset, ng: Vec3A, dir: Vec3A) -> Vec3A {
-        let shift = if dir.dot(ng) > 0.0 {
-            off.n_obj * off.dist
-        } else {
-            off.n_obj * -off.dist
-        };
-        let mut p = off.p_obj + shift;
-        for i in 0..3 {
-            if shift[i] > 0.0 {
-                p[i] = p[i].next_up();
-            } else if shift[i] < 0.0 {
-                p[i] = p[i].next_down();
-            }
-        }
+        // dist where dir.dot(ng) > 0, else -dist: the sign bit flipped
+        // without a branch (which side a ray leaves is as good as random).
+        let flip = u32::from(!(dir.dot(ng) > 0.0)) << 31;
+        let shift = off.n_obj * f32::from_bits(off.dist.to_bits() ^ flip);
+        let p = step_toward(off.p_obj + shift, shift);
         self.cam_from_obj.transform_point3a(p)
     }
 

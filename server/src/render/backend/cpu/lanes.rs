@@ -19,6 +19,7 @@ use super::{Pair, Span};
 use crate::render::integrator::{Path, PathSettings, Shadow};
 use crate::render::isa::Isa;
 use crate::render::job::RenderJob;
+use crate::render::lanes::lanes_where;
 use crate::render::math::Vec3A;
 use crate::render::world::{Origin, World};
 use std::ops::Range;
@@ -71,10 +72,8 @@ fn trace_lanes<I: Isa, const W: usize>(
             world.prefetch_surface(h);
         }
         let mut shadows = [None; W];
-        for k in 0..W {
-            if live[k] {
-                live[k] = paths[k].step::<true, I>(isa, world, settings, hits[k], &mut shadows[k]);
-            }
+        for k in lanes_where(&live) {
+            live[k] = paths[k].step::<true, I>(isa, world, settings, hits[k], &mut shadows[k]);
         }
         trace_shadows(isa, world, paths, &shadows);
         if !live.contains(&true) {
@@ -105,8 +104,8 @@ fn trace_shadows<I: Isa, const W: usize>(
     let (mut tested, mut named) = ([false; W], [false; W]);
     let (mut tmax, mut le) = ([0.0; W], [Vec3A::ZERO; W]);
     let (mut rays, mut from) = ([paths[0].ray; W], [Origin::NONE; W]);
-    for (k, s) in shadows.iter().enumerate() {
-        let Some(s) = s else {
+    for k in lanes_where(&shadows.each_ref().map(Option::is_some)) {
+        let Some(s) = &shadows[k] else {
             continue;
         };
         (rays[k], from[k]) = (s.ray, s.from);
@@ -117,7 +116,7 @@ fn trace_shadows<I: Isa, const W: usize>(
     }
     if tested.contains(&true) {
         if let Some(blocked) = world.occluded_lanes(isa, (&rays, &from, &tmax), &tested) {
-            for k in (0..W).filter(|&k| tested[k] && !blocked[k]) {
+            for k in lanes_where::<W>(&std::array::from_fn(|k| tested[k] & !blocked[k])) {
                 if let Some(s) = &shadows[k] {
                     paths[k].add_light(s.light(le[k]));
                 }
@@ -126,7 +125,7 @@ fn trace_shadows<I: Isa, const W: usize>(
     }
     if named.contains(&true) {
         let hits = world.intersect_lanes(isa, &rays, &from, &named);
-        for k in (0..W).filter(|&k| named[k]) {
+        for k in lanes_where(&named) {
             if let Some(s) = &shadows[k] {
                 if let Some(l) = s.arriving(world, hits[k]) {
                     paths[k].add_light(s.light(l));
