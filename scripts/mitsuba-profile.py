@@ -5,14 +5,14 @@
 spends its time on, per sample and thread: Mitsuba's rays (Embree's
 nearest-hit queries, `intersect`, and its shadow queries, `occluded`) and
 everything else (its JIT-compiled shading for the `llvm` variants, its
-plugins for `scalar_rgb`), and pathstream's path rays, shadow rays (its
-`World::intersect` queries from next-event estimation) and the rest, by
-`scripts/profile-lines.py`.
+plugins for `scalar_rgb`), and pathstream's path rays, shadow rays and
+the rest, from the call chain of each perf sample (`ray_kind`): Embree's
+packets as the lane loop calls them, or the own BVH's queries.
 
 Mitsuba renders the scene of `mitsuba-compare.py` (the same vertices,
 albedos, lamp, camera, depth and filter) once to compile its kernels, then
 `--renders` times while `perf record` samples the process; pathstream
-renders it under `perf record` too. Each time is divided by the samples
+renders it under `perf record --call-graph dwarf` too. Each time is divided by the samples
 traced, then split by the sampled shares. Not part of the test suite.
 Needs what `mitsuba-compare.py` needs, plus perf and binutils
 (`apt-get install linux-perf binutils`) and a pathstream built with line
