@@ -123,7 +123,7 @@ fn embrees_packets_answer_as_the_filtered_single_rays() {
     use common::meshes::{grazing, leaving, mixed_scene};
     use pathstream::render::isa::Portable;
     use pathstream::render::ray::Ray;
-    use pathstream::render::world::{Origin, World};
+    use pathstream::render::world::{Hit, Origin, World};
     if !common::embree() {
         return;
     }
@@ -141,7 +141,9 @@ fn embrees_packets_answer_as_the_filtered_single_rays() {
         let r: [Ray; 16] = std::array::from_fn(|k| group[k].0);
         let from: [Origin; 16] = std::array::from_fn(|k| group[k].1);
         let single: [_; 16] = std::array::from_fn(|k| world.intersect(Portable, &r[k], from[k]));
-        let lanes = world.intersect_lanes(Portable, &r, &from, &[true; 16]);
+        let lanes = world
+            .intersect_lanes(Portable, &r, &from, &[true; 16])
+            .map(Hit::some);
         for (a, b) in single.iter().zip(&lanes) {
             let same = match (a, b) {
                 (Some(a), Some(b)) => {

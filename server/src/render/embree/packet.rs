@@ -73,6 +73,24 @@ impl<const W: usize> Packet<W> {
         })
     }
 
+    /// After an intersection query: whether live lane `k` hit, and what
+    /// Embree wrote there (meaningless where it did not), without a
+    /// branch on either.
+    #[inline(always)]
+    pub fn answer(&self, k: usize) -> (bool, RawHit) {
+        let p = &self.rays;
+        (
+            self.live(k) & (p.geom_id[k] != ffi::INVALID_ID),
+            RawHit {
+                t: p.tfar[k],
+                id: hit_id(p.inst_id[k], p.geom_id[k]),
+                prim: p.prim_id[k],
+                u: p.u[k],
+                v: p.v[k],
+            },
+        )
+    }
+
     /// After an occlusion query: whether live lane `k`'s ray is blocked.
     #[inline(always)]
     pub fn blocked(&self, k: usize) -> bool {

@@ -289,7 +289,10 @@ impl Emitter {
     #[inline(always)]
     pub fn sample_direction(&self, r: &Receiver, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
         let (s, nl, ns) = (r, r.nl, r.ns);
-        let on_self = self.object == s.object && self.prim == s.prim;
+        // One comparison of the bits: `a == b && c == d` would branch on
+        // the object first, which goes either way where the receiver is
+        // on the emitter's mesh.
+        let on_self = ((self.object ^ s.object) | (self.prim ^ s.prim)) == 0;
         match &self.shape {
             EmitterShape::Sphere(sphere) => sample_sphere(sphere, s.p, nl, on_self, u1, u2),
             EmitterShape::Quad(q) => {

@@ -176,17 +176,21 @@ impl EmbreeRays {
         let filter = self.alpha.then_some(Refuse { world, from, rays });
         let camera = (from.iter().zip(live)).all(|(f, &l)| !l || *f == Origin::NONE);
         (self.frame.scene).intersect_lanes(&mut packet, (filter.as_ref(), camera));
-        for (k, b) in best.iter_mut().enumerate() {
-            match packet.hit(k) {
-                Some(h) if h.id == from[k].object && h.prim == from[k].prim => {
-                    let again = self.nearest(world, isa, &rays[k], from[k]);
-                    if again.t < b.t {
-                        *b = again;
-                    }
+        for k in lanes_where(live) {
+            let (found, h) = packet.answer(k);
+            // A lane that met the triangle it leaves (rare): asked again.
+            // One comparison of the bits, not three: LLVM splits `a & b`
+            // of comparisons back into branches, the first on `found`.
+            let other = (h.id ^ from[k].object) | (h.prim ^ from[k].prim) | u32::from(!found);
+            if other == 0 {
+                let again = self.nearest(world, isa, &rays[k], from[k]);
+                if again.t < best[k].t {
+                    best[k] = again;
                 }
-                Some(h) if h.t < b.t => *b = as_hit(h),
-                _ => {}
+                continue;
             }
+            // Whether a path's ray hit is as good as random: a select.
+            best[k] = Hit::select(found & (h.t < best[k].t), as_hit(h), best[k]);
         }
         best
     }
@@ -296,7 +300,9 @@ impl World {
 
     /// [`World::intersect`] for the live lanes of `W` rays (4, 8 or 16):
     /// through Embree's packets where it traces this world, else one ray
-    /// at a time.
+    /// at a time. A lane without a hit (or not live) answers an infinite
+    /// distance ([`Hit::found`], [`Hit::some`]): no `Option` a lane, whose
+    /// test would be one more branch as good as random.
     #[inline(always)]
     pub fn intersect_lanes<I: Isa, const W: usize>(
         &self,
@@ -304,14 +310,12 @@ impl World {
         rays: &[Ray; W],
         from: &[Origin; W],
         live: &[bool; W],
-    ) -> [Option<Hit>; W] {
+    ) -> [Hit; W] {
         match self.embree.get() {
-            Some(Some(e)) => e
-                .nearest_lanes(self, isa, (rays, from), live)
-                .map(|h| (h.t < f32::INFINITY).then_some(h)),
+            Some(Some(e)) => e.nearest_lanes(self, isa, (rays, from), live),
             _ => std::array::from_fn(|k| match live[k] {
-                true => self.intersect(isa, &rays[k], from[k]),
-                false => None,
+                true => self.intersect(isa, &rays[k], from[k]).unwrap_or(Hit::NONE),
+                false => Hit::NONE,
             }),
         }
     }

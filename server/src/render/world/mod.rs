@@ -101,6 +101,33 @@ pub struct Hit {
 }
 
 impl Hit {
+    /// `a` where `take`, else `b`, field by field: conditional moves, not
+    /// a branch (whether a path's ray hit is as good as random).
+    #[inline(always)]
+    pub fn select(take: bool, a: Hit, b: Hit) -> Hit {
+        let mask = u32::from(take).wrapping_neg();
+        let pick = |x: u32, y: u32| (x & mask) | (y & !mask);
+        let pick_f = |x: f32, y: f32| f32::from_bits(pick(x.to_bits(), y.to_bits()));
+        Hit {
+            t: pick_f(a.t, b.t),
+            object: pick(a.object, b.object),
+            prim: pick(a.prim, b.prim),
+            bary: std::array::from_fn(|i| pick_f(a.bary[i], b.bary[i])),
+        }
+    }
+
+    /// Whether this is a hit ([`Hit::NONE`]'s infinite distance is none).
+    #[inline(always)]
+    pub fn found(&self) -> bool {
+        self.t < f32::INFINITY
+    }
+
+    /// This hit, if it is one.
+    #[inline(always)]
+    pub fn some(self) -> Option<Hit> {
+        self.found().then_some(self)
+    }
+
     const NONE: Hit = Hit {
         t: f32::INFINITY,
         object: NO_OBJECT,

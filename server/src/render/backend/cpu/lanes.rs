@@ -21,7 +21,7 @@ use crate::render::isa::Isa;
 use crate::render::job::RenderJob;
 use crate::render::lanes::lanes_where;
 use crate::render::math::Vec3A;
-use crate::render::world::{Origin, World};
+use crate::render::world::{Hit, Origin, World};
 use std::ops::Range;
 
 /// Adds samples `samples` to the pixels of `span` (from pixel `first`),
@@ -68,12 +68,13 @@ fn trace_lanes<I: Isa, const W: usize>(
         let hits = world.intersect_lanes(isa, &rays, &from, &live);
         // Every lane's surface loads (a mesh's vertices, which miss the
         // cache) start before the first lane shades.
-        for h in hits.iter().flatten() {
-            world.prefetch_surface(h);
+        for k in lanes_where(&hits.each_ref().map(Hit::found)) {
+            world.prefetch_surface(&hits[k]);
         }
         let mut shadows = [None; W];
         for k in lanes_where(&live) {
-            live[k] = paths[k].step::<true, I>(isa, world, settings, hits[k], &mut shadows[k]);
+            let hit = hits[k].some();
+            live[k] = paths[k].step::<true, I>(isa, world, settings, hit, &mut shadows[k]);
         }
         trace_shadows(isa, world, paths, &shadows);
         if !live.contains(&true) {
@@ -127,7 +128,7 @@ fn trace_shadows<I: Isa, const W: usize>(
         let hits = world.intersect_lanes(isa, &rays, &from, &named);
         for k in lanes_where(&named) {
             if let Some(s) = &shadows[k] {
-                if let Some(l) = s.arriving(world, hits[k]) {
+                if let Some(l) = s.arriving(world, hits[k].some()) {
                     paths[k].add_light(s.light(l));
                 }
             }
