@@ -60,19 +60,6 @@ impl<const W: usize> Packet<W> {
         self.valid.0[k] != 0
     }
 
-    /// After an intersection query: live lane `k`'s nearest hit, if any.
-    #[inline(always)]
-    pub fn hit(&self, k: usize) -> Option<RawHit> {
-        let p = &self.rays;
-        (self.live(k) && p.geom_id[k] != ffi::INVALID_ID).then(|| RawHit {
-            t: p.tfar[k],
-            id: hit_id(p.inst_id[k], p.geom_id[k]),
-            prim: p.prim_id[k],
-            u: p.u[k],
-            v: p.v[k],
-        })
-    }
-
     /// After an intersection query: whether live lane `k` hit, and what
     /// Embree wrote there (meaningless where it did not), without a
     /// branch on either.
@@ -151,7 +138,7 @@ impl WorldScene {
     }
 
     /// Answers each live lane of `packet` with its nearest hit that
-    /// `filter` (if any) accepts ([`Packet::hit`]). `coherent`: the rays
+    /// `filter` (if any) accepts ([`Packet::answer`]). `coherent`: the rays
     /// start together and go alike (a pixel's camera rays), which
     /// Embree's packet walk serves better told.
     #[inline(always)]
