@@ -284,15 +284,22 @@ impl Emitter {
         }
     }
 
+    /// Whether `r` lies on this emitter's own surface (its object and,
+    /// for a triangle, its triangle): sampling and its density both ask.
+    /// One comparison of the bits: `a == b && c == d` would branch on the
+    /// object first, which goes either way where the receiver is on the
+    /// emitter's mesh.
+    #[inline(always)]
+    fn under(&self, r: &Receiver) -> bool {
+        ((self.object ^ r.object) | (self.prim ^ r.prim)) == 0
+    }
+
     /// A direction from `r` towards this emitter and 1/pdf (solid angle)
     /// of choosing it.
     #[inline(always)]
     pub fn sample_direction(&self, r: &Receiver, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
         let (s, nl, ns) = (r, r.nl, r.ns);
-        // One comparison of the bits: `a == b && c == d` would branch on
-        // the object first, which goes either way where the receiver is
-        // on the emitter's mesh.
-        let on_self = ((self.object ^ s.object) | (self.prim ^ s.prim)) == 0;
+        let on_self = self.under(r);
         match &self.shape {
             EmitterShape::Sphere(sphere) => sample_sphere(sphere, s.p, nl, on_self, u1, u2),
             EmitterShape::Quad(q) => {
@@ -329,7 +336,7 @@ impl Emitter {
     /// cannot give it.
     #[inline(always)]
     pub fn pdf_direction(&self, r: &Receiver, dir: Vec3A, q: Vec3A) -> f32 {
-        let on_self = self.object == r.object && self.prim == r.prim;
+        let on_self = self.under(r);
         let weight = match &self.shape {
             EmitterShape::Sphere(s) => {
                 let Some(v) = SphereView::new(s, r.p, r.nl, on_self) else {
