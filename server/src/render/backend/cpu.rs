@@ -13,6 +13,7 @@ use crate::render::film::{Film, PixelSums};
 use crate::render::integrator::{Path, PathSettings};
 use crate::render::isa::Isa;
 use crate::render::job::RenderJob;
+use crate::render::math::Vec3A;
 use crate::render::ray::Ray;
 use crate::render::world::{Hit, Origin, World, EMBREE_MIN_TRIANGLES};
 use rayon::prelude::*;
@@ -36,11 +37,13 @@ pub struct CpuBackend {
 /// How the CPU advances its paths.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PathLoop {
-    /// In lanes where Embree traces the world (its packets serve them),
-    /// in pairs elsewhere.
+    /// Where Embree traces the world (its packets serve lanes): in the
+    /// wide loop where it serves the world (`diffuse_lanes`), else in
+    /// lanes; in pairs elsewhere.
     #[default]
     Auto,
-    /// Always in lanes (to test the lane loop against the pair loop).
+    /// Always in lanes, shaded one by one (to test the lane loop against
+    /// the pair loop and the wide loop).
     Lanes,
     /// Always in pairs.
     Pairs,
@@ -102,12 +105,15 @@ impl CpuBackend {
         Self { paths, ..self }
     }
 
-    /// Whether `job`'s paths go in lanes.
-    fn lanes(&self, job: &RenderJob) -> bool {
+    /// Which loop advances `job`'s paths.
+    fn path_loop<'j>(&self, job: &'j RenderJob) -> Loop<'j> {
         match self.paths {
-            PathLoop::Auto => job.world.traced_by_embree(),
-            PathLoop::Lanes => true,
-            PathLoop::Pairs => false,
+            PathLoop::Auto if job.world.traced_by_embree() => match diffuse_lanes::serves(job) {
+                Some(flat) => Loop::Diffuse(flat),
+                None => Loop::Lanes,
+            },
+            PathLoop::Auto | PathLoop::Pairs => Loop::Pairs,
+            PathLoop::Lanes => Loop::Lanes,
         }
     }
 
@@ -165,7 +171,7 @@ impl CpuBackend {
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
         self.prepare(job);
-        let lanes = self.lanes(job);
+        let lanes = self.path_loop(job);
         let first = film.next_sample();
         let width = film.width() as usize;
         let wide = Wide::detect(self.cap);
@@ -208,7 +214,7 @@ impl CpuBackend {
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> bool {
         self.prepare(job);
-        let lanes = self.lanes(job);
+        let lanes = self.path_loop(job);
         let (start, sample) = (film.slice_start(), film.next_sample());
         let wide = Wide::detect(self.cap);
         let work = |film: &mut Film| -> Option<u64> {
@@ -253,7 +259,7 @@ impl CpuBackend {
             return true;
         };
         self.prepare(job);
-        let lanes = self.lanes(job);
+        let lanes = self.path_loop(job);
         let tiles = *film.tiles();
         let width = film.width() as usize;
         // Each entry with the sample its tile is at; entries by tile row.
@@ -320,6 +326,14 @@ impl<'a> Span<'a> {
             f[i].add(p.guide());
         }
         self.sums[i].add(sample, p.radiance(settings))
+    }
+
+    /// Adds sample `sample` of pixel `i`, radiance `l` (clamped already),
+    /// where no features are gathered; false where it was rejected.
+    #[inline(always)]
+    fn add_radiance(&mut self, i: usize, sample: u64, l: Vec3A) -> bool {
+        debug_assert!(self.features.is_none());
+        self.sums[i].add(sample, l)
     }
 }
 
@@ -481,10 +495,12 @@ fn span_with<I: Isa>(
     rejected
 }
 
+mod diffuse_lanes;
 mod lanes;
 mod packets;
 mod wide;
+use diffuse_lanes::span_diffuse;
 use lanes::span_lanes;
 use packets::span_packets;
 pub use wide::IsaCap;
-use wide::{hits_chunk, render_span, Wide};
+use wide::{hits_chunk, render_span, Loop, Wide};

@@ -98,6 +98,13 @@ impl Path {
         }
     }
 
+    /// A path about to start, taken apart: its camera ray and its
+    /// sampler (the wide loop keeps each in lanes of its own).
+    #[inline(always)]
+    pub fn into_parts(self) -> (Ray, Sampler) {
+        (self.ray, self.sampler)
+    }
+
     /// The denoiser's guide this path found (zero where it ended before a
     /// surface that is not specular, or when its settings ask for none).
     #[inline(always)]

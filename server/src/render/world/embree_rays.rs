@@ -14,10 +14,11 @@
 
 use super::build::{scan_cost, SCAN_MAX_COST};
 use super::embree_scene::{EmbreeLayout, Frame};
+use super::flat::Flat;
 use super::{scan, Geometry, Hit, Origin, World, NO_PRIM};
 use crate::render::embree::{embree, HitFilter, Packet, RawHit};
 use crate::render::isa::Isa;
-use crate::render::lanes::lanes_where;
+use crate::render::lanes::{lanes_where, F32s, V3};
 use crate::render::math::Vec3A;
 use crate::render::ray::Ray;
 use crate::render::shape::{Quad, SphereBatch, SPHERE_BATCH_LANES};
@@ -32,6 +33,9 @@ pub(super) struct EmbreeRays {
     quads: Vec<(u32, Quad)>,
     /// Whether some placed mesh has alpha-tested triangles.
     alpha: bool,
+    /// The triangles flat for the wide loop, built on first use; None
+    /// where it does not serve the world.
+    flat: std::sync::OnceLock<Option<Flat>>,
 }
 
 impl std::fmt::Debug for EmbreeRays {
@@ -122,6 +126,7 @@ impl EmbreeRays {
                 .collect(),
             quads,
             alpha: world.instances.iter().any(|i| i.alpha.is_some()),
+            flat: std::sync::OnceLock::new(),
         })
     }
 
@@ -335,5 +340,90 @@ impl World {
             Some(Some(e)) => Some(e.occluded_lanes(self, isa, (rays, from, tmax), live)),
             _ => None,
         }
+    }
+
+    /// The world's triangles flat for the wide loop, where it serves this
+    /// world (Embree traces it, every mesh is the scene's own, nothing
+    /// else beside them; `Flat::build` for the rest): built on the first
+    /// call, which logs why not where it does not serve.
+    pub fn flat(&self) -> Option<&Flat> {
+        let Some(Some(e)) = self.embree.get() else {
+            return None;
+        };
+        let flat = e.flat.get_or_init(|| {
+            let built = match e.sphere_batches.is_empty() && e.quads.is_empty() && !e.alpha {
+                true => Flat::build(self, &e.frame),
+                false => Err("spheres, quads or alpha tests beside the meshes"),
+            };
+            built
+                .map_err(|why| tracing::debug!("paths in lanes, shaded one by one: {why}"))
+                .ok()
+        });
+        flat.as_ref()
+    }
+
+    /// The nearest hits of `W` rays given in the Embree scene's frame
+    /// (`org`, `dir`), each never the triangle it leaves, for the live
+    /// lanes of a world [`World::flat`] serves (else no hits).
+    /// `coherent`: camera rays.
+    #[inline(always)]
+    pub fn framed_nearest<const W: usize>(
+        &self,
+        (org, dir): (&V3<F32s<W>>, &V3<F32s<W>>),
+        from: &[Origin; W],
+        live: &[bool; W],
+        coherent: bool,
+    ) -> [Hit; W] {
+        let mut best = [Hit::NONE; W];
+        let Some(Some(e)) = self.embree.get() else {
+            return best;
+        };
+        let mut packet = Packet::<W>::new();
+        for k in lanes_where(live) {
+            let o = [org.x.0[k], org.y.0[k], org.z.0[k]];
+            packet.set(k, o, [dir.x.0[k], dir.y.0[k], dir.z.0[k]], f32::INFINITY);
+        }
+        (e.frame.scene).intersect_lanes::<Refuse<'_>, W>(&mut packet, (None, coherent));
+        for k in lanes_where(live) {
+            let (found, h) = packet.answer(k);
+            let other = (h.id ^ from[k].object) | (h.prim ^ from[k].prim) | u32::from(!found);
+            if other == 0 {
+                // Met the triangle it leaves (rare): asked again, alone,
+                // with the filter that refuses it.
+                let o = [org.x.0[k], org.y.0[k], org.z.0[k]];
+                let d = [dir.x.0[k], dir.y.0[k], dir.z.0[k]];
+                let (from, ray) = ([from[k]], [Ray::new(o.into(), d.into())]);
+                let refuse = Refuse {
+                    world: self,
+                    from: &from,
+                    rays: &ray,
+                };
+                let again = e.frame.scene.intersect(o, d, f32::INFINITY, Some(&refuse));
+                best[k] = again.map_or(Hit::NONE, as_hit);
+                continue;
+            }
+            best[k] = Hit::select(found, as_hit(h), Hit::NONE);
+        }
+        best
+    }
+
+    /// Whether anything blocks each live lane's ray (in the frame, as for
+    /// [`World::framed_nearest`]) before `tmax[k]`.
+    #[inline(always)]
+    pub fn framed_occluded<const W: usize>(
+        &self,
+        (org, dir, tmax): (&V3<F32s<W>>, &V3<F32s<W>>, &[f32; W]),
+        live: &[bool; W],
+    ) -> [bool; W] {
+        let Some(Some(e)) = self.embree.get() else {
+            return [false; W];
+        };
+        let mut packet = Packet::<W>::new();
+        for k in lanes_where(live) {
+            let o = [org.x.0[k], org.y.0[k], org.z.0[k]];
+            packet.set(k, o, [dir.x.0[k], dir.y.0[k], dir.z.0[k]], tmax[k]);
+        }
+        (e.frame.scene).occluded_lanes::<Refuse<'_>, W>(&mut packet, None);
+        std::array::from_fn(|k| packet.blocked(k))
     }
 }

@@ -65,6 +65,24 @@ impl Frame {
     }
 }
 
+/// A placement `at` (world from object) moved into the frame centred at
+/// `centre`.
+pub(super) fn placed_in(at: &DAffine3, centre: DVec3) -> DAffine3 {
+    DAffine3 {
+        matrix3: at.matrix3,
+        translation: at.translation - centre,
+    }
+}
+
+/// Object-space point `p` placed by `here` (from [`placed_in`]): in f64,
+/// rounded once, as the scene holds its own triangles' vertices.
+#[inline]
+pub(super) fn frame_point(here: &DAffine3, p: [f32; 3]) -> [f32; 3] {
+    here.transform_point3(DVec3::from(p.map(f64::from)))
+        .as_vec3()
+        .to_array()
+}
+
 /// The scene for `world`'s placed meshes, from the cache or built.
 pub(super) fn frame(world: &World, embree: &'static Embree) -> Result<Arc<Frame>, String> {
     let placed: Vec<_> = (world.objects.iter().enumerate())
@@ -109,18 +127,11 @@ fn build(
     }
     let mut parts = Vec::with_capacity(placed.len());
     for (&(id, mesh, at), flat) in placed.iter().zip(flat) {
-        let here = DAffine3 {
-            matrix3: at.matrix3,
-            translation: at.translation - centre,
-        };
+        let here = placed_in(at, centre);
         // Placed vertices beyond f32's range stay in object space.
         let positions = flat.then(|| {
             (mesh.positions.iter())
-                .map(|&p| {
-                    here.transform_point3(DVec3::from(p.map(f64::from)))
-                        .as_vec3()
-                        .to_array()
-                })
+                .map(|&p| frame_point(&here, p))
                 .collect::<Vec<_>>()
         });
         if let Some(positions) = positions.filter(|v| v.iter().flatten().all(|c| c.is_finite())) {

@@ -21,6 +21,7 @@ pub mod cutout;
 mod embree_rays;
 mod embree_scene;
 mod emitters;
+pub mod flat;
 mod instance;
 mod merge;
 mod packet;

@@ -4,13 +4,14 @@
 //! same image, bit for bit (tested); the widest the CPU has is chosen at
 //! run time, within the backend's cap.
 
-use super::{span_lanes, span_packets, span_with, Span};
+use super::{span_diffuse, span_lanes, span_packets, span_with, Span};
 use crate::render::bvh::PACKET;
 #[cfg(target_arch = "x86_64")]
 use crate::render::isa::{Avx2, Avx512};
 use crate::render::isa::{Isa, Portable};
 use crate::render::job::RenderJob;
 use crate::render::ray::Ray;
+use crate::render::world::flat::Flat;
 use crate::render::world::{Hit, Origin, World};
 use std::ops::Range;
 
@@ -128,18 +129,29 @@ fn hits_with<I: Isa>(
     hits
 }
 
+/// The loop that advances a render's paths.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Loop<'a> {
+    /// Two at a time (`span_with`, or `span_packets` in a world of meshes).
+    Pairs,
+    /// In lanes, shaded one by one (`span_lanes`).
+    Lanes,
+    /// In lanes, shaded over lanes (`span_diffuse`), on these triangles.
+    Diffuse(&'a Flat),
+}
+
 /// Adds samples `samples` to the pixels `span`, which start at pixel
 /// number `first` (row-major); returns how many were rejected. Runs the
-/// copy of the loop `wide` names: the lane loop where `lanes` says, its
-/// packets as wide as the instruction set's float lanes (16, 8, or 4 for
-/// every CPU).
+/// copy of the loop `wide` names: `lanes` says which loop; the lane loops
+/// as wide as the instruction set's float lanes (16, 8, or 4 for every
+/// CPU).
 pub(super) fn render_span(
     wide: Wide,
     job: &RenderJob,
     first: usize,
     span: Span<'_>,
     samples: Range<u64>,
-    lanes: bool,
+    lanes: Loop<'_>,
 ) -> u64 {
     // Two functions per instruction set, not one with both loops: inlined
     // into one, the mesh scenes' loop lost its gain (code placement).
@@ -151,9 +163,10 @@ pub(super) fn render_span(
         #[allow(unsafe_code)]
         Wide::Avx512(isa) => unsafe {
             match (lanes, packets) {
-                (true, _) => lanes_avx512(isa, job, first, span, samples),
-                (false, true) => packets_avx512(isa, job, first, span, samples),
-                (false, false) => span_avx512(isa, job, first, span, samples),
+                (Loop::Diffuse(flat), _) => diffuse_avx512(job, flat, first, span, samples),
+                (Loop::Lanes, _) => lanes_avx512(isa, job, first, span, samples),
+                (Loop::Pairs, true) => packets_avx512(isa, job, first, span, samples),
+                (Loop::Pairs, false) => span_avx512(isa, job, first, span, samples),
             }
         },
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
@@ -161,15 +174,17 @@ pub(super) fn render_span(
         #[allow(unsafe_code)]
         Wide::Avx2(isa) => unsafe {
             match (lanes, packets) {
-                (true, _) => lanes_avx2(isa, job, first, span, samples),
-                (false, true) => packets_avx2(isa, job, first, span, samples),
-                (false, false) => span_avx2(isa, job, first, span, samples),
+                (Loop::Diffuse(flat), _) => diffuse_avx2(job, flat, first, span, samples),
+                (Loop::Lanes, _) => lanes_avx2(isa, job, first, span, samples),
+                (Loop::Pairs, true) => packets_avx2(isa, job, first, span, samples),
+                (Loop::Pairs, false) => span_avx2(isa, job, first, span, samples),
             }
         },
         Wide::Portable => match (lanes, packets) {
-            (true, _) => span_lanes::<_, 4>(Portable, job, first, span, samples),
-            (false, true) => span_packets(Portable, job, first, span, samples),
-            (false, false) => span_with(Portable, job, first, span, samples),
+            (Loop::Diffuse(flat), _) => span_diffuse::<4>(job, flat, first, span, samples),
+            (Loop::Lanes, _) => span_lanes::<_, 4>(Portable, job, first, span, samples),
+            (Loop::Pairs, true) => span_packets(Portable, job, first, span, samples),
+            (Loop::Pairs, false) => span_with(Portable, job, first, span, samples),
         },
     }
 }
@@ -213,3 +228,23 @@ compiled_for!(
     /// on `cornell-mesh` (docs/BENCHMARKS.md, "The traversal out of line").
     packets_avx512, span_packets, Avx512, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
 );
+
+/// The wide loop, eight paths wide, compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn diffuse_avx2(job: &RenderJob, flat: &Flat, first: usize, span: Span<'_>, r: Range<u64>) -> u64 {
+    span_diffuse::<8>(job, flat, first, span, r)
+}
+
+/// The wide loop, sixteen paths wide, compiled for AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
+fn diffuse_avx512(
+    job: &RenderJob,
+    flat: &Flat,
+    first: usize,
+    span: Span<'_>,
+    r: Range<u64>,
+) -> u64 {
+    span_diffuse::<16>(job, flat, first, span, r)
+}

@@ -1,0 +1,472 @@
+//! The wide loop (issue 32's second stage): `W` paths whose state and
+//! shading are in lanes from the camera to their ends, for the worlds
+//! [`World::flat`] serves (meshes of plain diffuse materials lit by
+//! emissive triangles, traced by Embree). Rays, surfaces, light samples,
+//! BSDF samples, throughputs and spawns are computed over the lanes at
+//! once; what stays one lane at a time is what cannot be computed there:
+//! each lane's random numbers (the sampler's, the same numbers the scalar
+//! loop draws, in the same order), the emitter pick, and the gathers of
+//! each lane's triangle and emitter.
+//!
+//! The paths are the lane loop's (`lanes`), operation for operation, but
+//! for where the surface is computed: here in the Embree scene's frame on
+//! the triangles Embree tests (`world::flat`), there in object space and
+//! mapped to camera space. The hit point, its error bound and the spawned
+//! origins therefore differ in their last bits, and so may a path's
+//! later decisions; the image is the same estimate (`tests/lane_loop.rs`
+//! holds the two together), bit for bit the same at every width.
+
+use super::{Pair, Span};
+use crate::render::integrator::nee::SHADOW_EPSILON;
+use crate::render::integrator::{LightSampling, PathSettings, MAX_SURVIVAL};
+use crate::render::job::RenderJob;
+use crate::render::lanes::{lanes_where, F32s, Real, Vector, V3};
+use crate::render::light::points::{toward_point, triangle_point};
+use crate::render::material::cosine_hemisphere;
+use crate::render::math::{gamma, Vec3A};
+use crate::render::ray::Ray;
+use crate::render::sampler::Sampler;
+use crate::render::world::flat::{Flat, FlatEmitter, FlatTri};
+use crate::render::world::{Hit, Origin, World};
+use std::f32::consts::FRAC_1_PI;
+use std::ops::Range;
+
+type R<const W: usize> = F32s<W>;
+type V<const W: usize> = V3<F32s<W>>;
+
+/// The flat triangles of `job`'s world where the wide loop serves it and
+/// its settings: next-event estimation on, one emitter picked by power,
+/// no denoiser's features (else None: the lane loop serves).
+pub(super) fn serves(job: &RenderJob) -> Option<&Flat> {
+    let s = &job.settings;
+    let plain = s.nee && !s.features && s.light_sampling == LightSampling::Power;
+    plain.then(|| job.world.flat()).flatten()
+}
+
+/// [`super::span_lanes`] for a world `flat` serves: adds samples
+/// `samples` to the pixels of `span` (from pixel `first`), `W` (pixel,
+/// sample) pairs at a time in the pair loop's order; returns how many were
+/// rejected.
+#[inline(always)]
+pub(super) fn span_diffuse<const W: usize>(
+    job: &RenderJob,
+    flat: &Flat,
+    first: usize,
+    mut span: Span<'_>,
+    samples: Range<u64>,
+) -> u64 {
+    let settings = &job.settings;
+    let n = span.sums.len();
+    let mut rejected = 0u64;
+    let mut at = Pair::first(&samples);
+    while at.i < n && at.s < samples.end {
+        let (pairs, count, next) = at.group::<W>(n, &samples);
+        at = next;
+        let l = trace::<W>(
+            &job.world,
+            flat,
+            settings,
+            |k| pairs[k.min(count - 1)].path(job, first).into_parts(),
+            count,
+        );
+        for (k, pair) in pairs.iter().enumerate().take(count) {
+            let radiance = clamped(settings, Vec3A::new(l.x.0[k], l.y.0[k], l.z.0[k]));
+            rejected += u64::from(!span.add_radiance(pair.i, pair.s, radiance));
+        }
+    }
+    rejected
+}
+
+/// `l` clamped as `settings` say (`Path::radiance`'s steps).
+#[inline(always)]
+fn clamped(settings: &PathSettings, mut l: Vec3A) -> Vec3A {
+    if settings.clamp > 0.0 {
+        let peak = l.max_element();
+        if peak > settings.clamp {
+            l *= settings.clamp / peak;
+        }
+    }
+    l
+}
+
+/// Lane `k` of `v`.
+#[inline(always)]
+fn lane<const W: usize>(v: &V<W>, k: usize) -> Vec3A {
+    Vec3A::new(v.x.0[k], v.y.0[k], v.z.0[k])
+}
+
+/// A vector per lane from `f`'s.
+#[inline(always)]
+fn gather<const W: usize>(f: impl Fn(usize) -> [f32; 3]) -> V<W> {
+    let a: [[f32; 3]; W] = std::array::from_fn(f);
+    V3 {
+        x: F32s(std::array::from_fn(|k| a[k][0])),
+        y: F32s(std::array::from_fn(|k| a[k][1])),
+        z: F32s(std::array::from_fn(|k| a[k][2])),
+    }
+}
+
+/// A number per lane from `f`'s.
+#[inline(always)]
+fn each<const W: usize>(f: impl Fn(usize) -> f32) -> R<W> {
+    F32s(std::array::from_fn(f))
+}
+
+/// `a` where `m`, else `b`, lane by lane.
+#[inline(always)]
+fn select<const W: usize>(m: &[bool; W], a: V<W>, b: V<W>) -> V<W> {
+    let s = |a: R<W>, b: R<W>| F32s(std::array::from_fn(|k| if m[k] { a.0[k] } else { b.0[k] }));
+    V3 {
+        x: s(a.x, b.x),
+        y: s(a.y, b.y),
+        z: s(a.z, b.z),
+    }
+}
+
+/// Component-wise product.
+#[inline(always)]
+fn mul<const W: usize>(a: V<W>, b: V<W>) -> V<W> {
+    V3 {
+        x: a.x * b.x,
+        y: a.y * b.y,
+        z: a.z * b.z,
+    }
+}
+
+/// A lane mask from a test of each lane.
+#[inline(always)]
+fn mask<const W: usize>(f: impl Fn(usize) -> bool) -> [bool; W] {
+    std::array::from_fn(f)
+}
+
+/// Where a ray leaving a surface starts (`world::spawn`'s rule in the
+/// frame): the hit point `p` moved `dist` along the unit normal `ng` to
+/// the side `dir` leaves by, each coordinate then one float further
+/// (`math::step_toward`).
+#[inline(always)]
+fn spawn<const W: usize>(p: V<W>, ng: V<W>, dist: R<W>, dir: V<W>) -> V<W> {
+    let side = dir.dot(ng);
+    let d = F32s(std::array::from_fn(|k| {
+        f32::from_bits(dist.0[k].to_bits() ^ (u32::from(!(side.0[k] > 0.0)) << 31))
+    }));
+    let shift = ng * d;
+    let q = p + shift;
+    V3 {
+        x: step(q.x, shift.x),
+        y: step(q.y, shift.y),
+        z: step(q.z, shift.z),
+    }
+}
+
+/// Each lane of `x` one float towards the sign of the same lane of `s`:
+/// `math::step_toward`'s rule (and bits), on each lane's bits as masks
+/// (all ones or zero), which the compiler keeps in vector registers.
+#[inline(always)]
+fn step<const W: usize>(x: R<W>, s: R<W>) -> R<W> {
+    let all = |c: bool| 0u32.wrapping_sub(u32::from(c));
+    F32s(std::array::from_fn(|k| {
+        let (b, s) = (x.0[k].to_bits(), s.0[k]);
+        let (up, down) = (all(s > 0.0), all(s < 0.0));
+        let magnitude = b & 0x7FFF_FFFF;
+        let negative = ((b as i32) >> 31) as u32;
+        let away = (up & !negative) | (down & negative);
+        // bits + 1 away from zero, bits - 1 towards it.
+        let stepped = b.wrapping_sub(1).wrapping_add(away & 2);
+        let tiny = 1 | (down & 0x8000_0000);
+        let zero = all(magnitude == 0);
+        let moved = (zero & tiny) | (!zero & stepped);
+        let keep =
+            !(up | down) | all(magnitude > 0x7F80_0000) | (all(magnitude == 0x7F80_0000) & away);
+        f32::from_bits((keep & b) | (!keep & moved))
+    }))
+}
+
+/// The surfaces that `W` rays met (in the live lanes), over lanes.
+struct Surfaces<const W: usize> {
+    /// The hit point (in the frame), its geometric normal and how far
+    /// off it a ray starts (the point's rounding bound along the normal).
+    p: V<W>,
+    ng: V<W>,
+    dist: R<W>,
+    /// The geometric and shading normals on the side the ray came from.
+    nl: V<W>,
+    ns: V<W>,
+    /// Whether the shading normal is interpolated (not `nl`).
+    smooth: [bool; W],
+    albedo: V<W>,
+    emission: V<W>,
+    /// Each lane's triangle, as `Origin` and the emitters name it.
+    at: [(u32, u32); W],
+}
+
+impl<const W: usize> Surfaces<W> {
+    /// The surfaces of `hits` (along directions `d`), gathered from the
+    /// flat triangles: `Instance::surface`'s steps, in the frame.
+    #[inline(always)]
+    fn of(flat: &Flat, hits: &[Hit; W], live: &[bool; W], d: &V<W>) -> Self {
+        let c = R::<W>::splat;
+        let tris: [&FlatTri; W] = std::array::from_fn(|k| {
+            let h = &hits[k];
+            match live[k] {
+                true => &flat.tris[(flat.first[h.object as usize] + h.prim) as usize],
+                false => &flat.tris[0],
+            }
+        });
+        let b = [0, 1, 2].map(|j| each::<W>(|k| hits[k].bary[j]));
+        let v = [0, 1, 2].map(|j| gather::<W>(|k| tris[k].v[j]));
+        let (t0, t1, t2) = (v[0] * b[0], v[1] * b[1], v[2] * b[2]);
+        let err = (abs(t0) + abs(t1) + abs(t2)) * c(gamma(7));
+        let ng = gather::<W>(|k| tris[k].ng);
+        let n = [0, 1, 2].map(|j| gather::<W>(|k| tris[k].normals[j]));
+        let interp = n[0] * b[0] + n[1] * b[1] + n[2] * b[2];
+        let len = interp.length_squared().sqrt();
+        let r = c(1.0) / len;
+        let smooth = mask(|k| tris[k].smooth & (r.0[k] < f32::INFINITY) & (r.0[k] > 0.0));
+        let ns = interp / len;
+        let dn = d.dot(ng);
+        let nl = select(&mask(|k| dn.0[k] < 0.0), ng, -ng);
+        let sn = ns.dot(nl);
+        let ns = select(&mask(|k| sn.0[k] < 0.0), -ns, ns);
+        Surfaces {
+            p: t0 + t1 + t2,
+            ng,
+            dist: abs(ng).dot(err),
+            nl,
+            ns: select(&smooth, ns, nl),
+            smooth,
+            albedo: gather::<W>(|k| tris[k].albedo),
+            emission: gather::<W>(|k| tris[k].emission),
+            at: std::array::from_fn(|k| (hits[k].object, hits[k].prim)),
+        }
+    }
+
+    /// Where rays leaving along `dir` start, and the surfaces they leave.
+    #[inline(always)]
+    fn leave(&self, dir: &V<W>) -> (V<W>, [Origin; W]) {
+        let side = dir.dot(self.ng);
+        let from = std::array::from_fn(|k| Origin {
+            object: self.at[k].0,
+            prim: self.at[k].1,
+            entering: side.0[k] < 0.0,
+        });
+        (spawn(self.p, self.ng, self.dist, *dir), from)
+    }
+}
+
+/// Component-wise magnitude.
+#[inline(always)]
+fn abs<const W: usize>(v: V<W>) -> V<W> {
+    V3 {
+        x: v.x.abs(),
+        y: v.y.abs(),
+        z: v.z.abs(),
+    }
+}
+
+/// Next-event estimation at the live lanes' surfaces `s` (vertex `bounce`
+/// of paths of throughput `beta`): an emitter and a point on it per lane
+/// (`nee::direct`'s draws), the shadow rays traced together; the light
+/// that reaches each lane, `Shadow::light`'s operations in its order.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn next_event<const W: usize>(
+    world: &World,
+    flat: &Flat,
+    samplers: &mut [Sampler; W],
+    bounce: u32,
+    s: &Surfaces<W>,
+    live: &[bool; W],
+    beta: V<W>,
+) -> V<W> {
+    let lights = &world.lights;
+    let (mut index, mut pmf) = ([0usize; W], [1.0f32; W]);
+    let (mut u1, mut u2) = ([0.0f32; W], [0.0f32; W]);
+    let table = lights.table.as_ref().filter(|_| lights.emitters.len() > 1);
+    for k in lanes_where(live) {
+        let sampler = &mut samplers[k];
+        sampler.at_vertex(bounce);
+        (u1[k], u2[k]) = match table {
+            Some(t) => {
+                let (x, u2) = sampler.light_pick_2d();
+                let (i, p, u1) = t.pick_point(x);
+                (index[k], pmf[k]) = (i, p);
+                (u1, u2)
+            }
+            None => sampler.light_2d(0),
+        };
+    }
+    let es: [&FlatEmitter; W] = std::array::from_fn(|k| &flat.emitters[index[k]]);
+    let p0 = gather::<W>(|k| es[k].p0);
+    let (e1, e2) = (gather::<W>(|k| es[k].e1), gather::<W>(|k| es[k].e2));
+    let q = triangle_point(p0, e1, e2, F32s(u1), F32s(u2));
+    let en = gather::<W>(|k| es[k].n);
+    let (dir, weight, sampled) = toward_point(s.p, q, en, each::<W>(|k| es[k].area));
+    let cos_s = s.ns.dot(dir);
+    let toward = s.nl.dot(dir);
+    let lit: [bool; W] = mask(|k| {
+        let (object, prim) = s.at[k];
+        let under = ((es[k].object ^ object) | (es[k].prim ^ prim)) == 0;
+        live[k] & (sampled.0[k] != 0) & !under & (cos_s.0[k] > 0.0) & (toward.0[k] > 0.0)
+    });
+    // pre * ((Le * fw) / pmf) * post: pre the throughput times the
+    // albedo, fw cos times 1/pdf, post 1/pi.
+    let fw = V3 {
+        x: cos_s * weight,
+        y: cos_s * weight,
+        z: cos_s * weight,
+    };
+    let le = gather::<W>(|k| es[k].emission);
+    let light = mul(mul(beta, s.albedo), mul(le, fw) / F32s(pmf)) * R::<W>::splat(FRAC_1_PI);
+    let (so, from) = s.leave(&dir);
+    // An occlusion test up to a thousandth short of the emitter's plane;
+    // a grazing ray, which reaches no plane, asks for its nearest hit.
+    let reach = (p0 - so).dot(en) / dir.dot(en);
+    let planar: [bool; W] = mask(|k| (reach.0[k] > 0.0) & (reach.0[k] < f32::INFINITY));
+    let tmax = reach.0.map(|t| t * (1.0 - SHADOW_EPSILON));
+    let tested = mask(|k| lit[k] & planar[k]);
+    let mut reached = [false; W];
+    if tested.contains(&true) {
+        let blocked = world.framed_occluded((&so, &dir, &tmax), &tested);
+        reached = mask(|k| tested[k] & !blocked[k]);
+    }
+    let named = mask(|k| lit[k] & !planar[k]);
+    if named.contains(&true) {
+        let seen = world.framed_nearest((&so, &dir), &from, &named, false);
+        for k in lanes_where(&named) {
+            reached[k] = (seen[k].object == es[k].object) & (seen[k].prim == es[k].prim);
+        }
+    }
+    select(&reached, light, V::<W>::splat_vec(Vec3A::ZERO))
+}
+
+/// Traces `W` paths, lane `k` starting with the camera ray and sampler
+/// `start(k)` (the first `count` lanes live), to their ends; their
+/// radiance.
+#[inline(always)]
+fn trace<const W: usize>(
+    world: &World,
+    flat: &Flat,
+    settings: &PathSettings,
+    start: impl Fn(usize) -> (Ray, Sampler),
+    count: usize,
+) -> V<W> {
+    let zero = V::<W>::splat_vec(Vec3A::ZERO);
+    let starts: [(Ray, Sampler); W] = std::array::from_fn(&start);
+    let mut samplers: [Sampler; W] = std::array::from_fn(|k| starts[k].1);
+    let shift = V::<W>::splat_vec(flat.shift);
+    let mut o = gather::<W>(|k| starts[k].0.origin.to_array()) + shift;
+    let mut d = gather::<W>(|k| starts[k].0.dir.to_array());
+    let mut from = [Origin::NONE; W];
+    let mut live: [bool; W] = mask(|k| k < count);
+    let mut beta = V::<W>::splat_vec(Vec3A::ONE);
+    let mut l = zero;
+    for bounce in 0u32.. {
+        let hits = world.framed_nearest((&o, &d), &from, &live, bounce == 0);
+        let found: [bool; W] = mask(|k| live[k] & hits[k].found());
+        // Left the scene: the environment, which camera rays alone count
+        // (after a diffuse bounce, NEE has gathered the emitters).
+        if bounce == 0 {
+            for k in lanes_where::<W>(&mask(|k| live[k] & !found[k])) {
+                let le = world.sky(lane(&d, k));
+                l.x.0[k] += le.x;
+                l.y.0[k] += le.y;
+                l.z.0[k] += le.z;
+            }
+        }
+        live = found;
+        if !live.contains(&true) {
+            break;
+        }
+        let s = Surfaces::of(flat, &hits, &live, &d);
+        if bounce == 0 {
+            l = l + select(&live, s.emission, zero);
+        }
+        if settings.max_depth != 0 && bounce >= settings.max_depth {
+            break;
+        }
+        l = l + next_event(world, flat, &mut samplers, bounce, &s, &live, beta);
+        if settings.max_depth != 0 && bounce + 1 >= settings.max_depth {
+            break;
+        }
+        // The bounce: a cosine-weighted direction about the shading normal.
+        let mut u = [(0.0f32, 0.0f32); W];
+        for k in lanes_where(&live) {
+            u[k] = samplers[k].bsdf_2d();
+        }
+        let nd = cosine_hemisphere(s.ns, each::<W>(|k| u[k].0), each::<W>(|k| u[k].1));
+        // A shading normal's direction below the surface carries nothing.
+        let below = nd.dot(s.nl);
+        live = mask(|k| live[k] & !(s.smooth[k] & !(below.0[k] > 0.0)));
+        beta = mul(beta, s.albedo);
+        // Russian roulette, `Path::step`'s.
+        let peak = beta.x.max(beta.y).max(beta.z);
+        let roulette = mask(|k| live[k] & (bounce + 1 > settings.rr_depth || !(peak.0[k] > 0.0)));
+        let mut survive = F32s([1.0; W]);
+        for k in lanes_where(&roulette) {
+            let q = peak.0[k].min(MAX_SURVIVAL);
+            if samplers[k].roulette() < q {
+                survive.0[k] = q;
+            } else {
+                live[k] = false;
+            }
+        }
+        if roulette.contains(&true) {
+            beta = select(&roulette, beta / survive, beta);
+        }
+        (o, from) = s.leave(&nd);
+        d = nd;
+    }
+    l
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::math::step_toward_scalar;
+
+    #[test]
+    fn the_spawns_step_is_the_scalar_steps_bit_for_bit() {
+        let special = [
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MIN_POSITIVE,
+            1.0,
+            -1.0,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1e-30,
+            -3e7,
+        ];
+        let mut xs: Vec<f32> = special.to_vec();
+        let mut state = 0x9E37_79B9u32;
+        for _ in 0..20_000 {
+            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            xs.push(f32::from_bits(state));
+        }
+        for (i, &x) in xs.iter().enumerate() {
+            let shifts: Vec<f32> = special
+                .iter()
+                .copied()
+                .chain([xs[(i * 7) % xs.len()]])
+                .collect();
+            for chunk in shifts.chunks(4) {
+                let s: [f32; 4] = std::array::from_fn(|k| chunk[k % chunk.len()]);
+                let got = step(F32s([x; 4]), F32s(s));
+                for (g, shift) in got.0.iter().zip(s) {
+                    let want = step_toward_scalar(Vec3A::splat(x), Vec3A::splat(shift)).x;
+                    assert_eq!(
+                        g.to_bits(),
+                        want.to_bits(),
+                        "{x:e} ({:#x}) toward {shift:e}",
+                        x.to_bits()
+                    );
+                }
+            }
+        }
+    }
+}
