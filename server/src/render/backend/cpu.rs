@@ -186,14 +186,8 @@ impl CpuBackend {
                         return None;
                     }
                     let span = Span::new(row, f);
-                    Some(render_span(
-                        wide,
-                        job,
-                        y * width,
-                        span,
-                        first..first + count,
-                        lanes,
-                    ))
+                    let segments = [(0..width, first..first + count)];
+                    Some(render_span(wide, job, y * width, span, &segments, lanes))
                 })
                 .sum()
         };
@@ -227,15 +221,9 @@ impl CpuBackend {
                         return None;
                     }
                     let first = start + k * SLICE_CHUNK;
+                    let segments = [(0..chunk.len(), sample..sample + 1)];
                     let span = Span::new(chunk, f);
-                    Some(render_span(
-                        wide,
-                        job,
-                        first,
-                        span,
-                        sample..sample + 1,
-                        lanes,
-                    ))
+                    Some(render_span(wide, job, first, span, &segments, lanes))
                 })
                 .sum()
         };
@@ -287,16 +275,17 @@ impl CpuBackend {
                     let tile_row = y as u32 / TILE_SIZE;
                     let from = entries.partition_point(|(w, _)| row_of(w) < tile_row);
                     let to = entries.partition_point(|(w, _)| row_of(w) <= tile_row);
-                    let mut rejected = 0;
-                    for (w, at) in &entries[from..to] {
-                        let (xs, _) = tiles.rect(w.tile as usize);
-                        let (a, b) = (xs.start as usize, xs.end as usize);
-                        let samples = *at..at + u64::from(w.count);
-                        let f = f.as_deref_mut().map(|f| &mut f[a..b]);
-                        let span = Span::new(&mut row[a..b], f);
-                        rejected += render_span(wide, job, y * width + a, span, samples, lanes);
-                    }
-                    Some(rejected)
+                    // The row's tiles as segments of one span, so that the
+                    // lane loops fill their lanes across tiles.
+                    let segments: Vec<Segment> = (entries[from..to].iter())
+                        .map(|(w, at)| {
+                            let (xs, _) = tiles.rect(w.tile as usize);
+                            let pixels = xs.start as usize..xs.end as usize;
+                            (pixels, *at..at + u64::from(w.count))
+                        })
+                        .collect();
+                    let span = Span::new(row, f.as_deref_mut());
+                    Some(render_span(wide, job, y * width, span, &segments, lanes))
                 })
                 .sum()
         };
@@ -316,6 +305,15 @@ impl<'a> Span<'a> {
     fn new(sums: &'a mut [PixelSums], features: Option<&'a mut [FeatureSums]>) -> Self {
         debug_assert!(features.as_ref().is_none_or(|f| f.len() == sums.len()));
         Self { sums, features }
+    }
+
+    /// The pixels `pixels` of this span, as a span of their own.
+    #[inline(always)]
+    fn sub(&mut self, pixels: Range<usize>) -> Span<'_> {
+        Span {
+            sums: &mut self.sums[pixels.clone()],
+            features: self.features.as_deref_mut().map(|f| &mut f[pixels]),
+        }
     }
 
     /// Adds sample `sample` of pixel `i` (the path `p` traced); false
@@ -399,62 +397,6 @@ macro_rules! trace_two {
     }};
 }
 
-/// A (pixel, sample) pair of a run of pixels: pixel `i` of the run,
-/// sample `s`. Pairs go pixel by pixel, each pixel's samples in index
-/// order: the order they reach the film.
-#[derive(Clone, Copy)]
-struct Pair {
-    i: usize,
-    s: u64,
-}
-
-impl Pair {
-    /// The pair after this one, with samples `samples` per pixel.
-    #[inline(always)]
-    fn next(self, samples: &Range<u64>) -> Pair {
-        match self.s + 1 < samples.end {
-            true => Pair {
-                s: self.s + 1,
-                ..self
-            },
-            false => Pair {
-                i: self.i + 1,
-                s: samples.start,
-            },
-        }
-    }
-
-    /// Up to `N` pairs from this one on, in a run of `n` pixels with
-    /// samples `samples` each: the pairs (the rest copies of this one), how
-    /// many, and the pair after them.
-    #[inline(always)]
-    fn group<const N: usize>(self, n: usize, samples: &Range<u64>) -> ([Pair; N], usize, Pair) {
-        let (mut pairs, mut count, mut at) = ([self; N], 0, self);
-        while count < N && at.i < n {
-            pairs[count] = at;
-            count += 1;
-            at = at.next(samples);
-        }
-        (pairs, count, at)
-    }
-
-    /// The first pair of a run with samples `samples`.
-    #[inline(always)]
-    fn first(samples: &Range<u64>) -> Pair {
-        Pair {
-            i: 0,
-            s: samples.start,
-        }
-    }
-
-    /// The pair's camera path, its run starting at pixel `first`.
-    #[inline(always)]
-    fn path(self, job: &RenderJob, first: usize) -> Path {
-        let (p, width) = (first + self.i, job.width() as usize);
-        job.camera_path((p % width) as u32, (p / width) as u32, self.s)
-    }
-}
-
 /// The samples of a run of pixels, with the whole path loop inlined here
 /// so that it is compiled for the caller's instruction set. Pairs go two
 /// at a time, side by side ([`trace_two`]): two samples of a pixel, or
@@ -498,9 +440,11 @@ fn span_with<I: Isa>(
 mod diffuse_lanes;
 mod lanes;
 mod packets;
+mod pairs;
 mod wide;
 use diffuse_lanes::span_diffuse;
 use lanes::span_lanes;
 use packets::span_packets;
+use pairs::{Pair, Pairs, Segment};
 pub use wide::IsaCap;
 use wide::{hits_chunk, render_span, Loop, Wide};

@@ -16,7 +16,7 @@
 //! later decisions; the image is the same estimate (`tests/lane_loop.rs`
 //! holds the two together), bit for bit the same at every width.
 
-use super::{Pair, Span};
+use super::{Pairs, Segment, Span};
 use crate::render::integrator::nee::SHADOW_EPSILON;
 use crate::render::integrator::{LightSampling, PathSettings, MAX_SURVIVAL};
 use crate::render::job::RenderJob;
@@ -29,7 +29,6 @@ use crate::render::sampler::Sampler;
 use crate::render::world::flat::{Flat, FlatEmitter, FlatTri};
 use crate::render::world::{Hit, Origin, World};
 use std::f32::consts::FRAC_1_PI;
-use std::ops::Range;
 
 type R<const W: usize> = F32s<W>;
 type V<const W: usize> = V3<F32s<W>>;
@@ -43,32 +42,24 @@ pub(super) fn serves(job: &RenderJob) -> Option<&Flat> {
     plain.then(|| job.world.flat()).flatten()
 }
 
-/// [`super::span_lanes`] for a world `flat` serves: adds samples
-/// `samples` to the pixels of `span` (from pixel `first`), `W` (pixel,
-/// sample) pairs at a time in the pair loop's order; returns how many were
-/// rejected.
+/// [`super::span_lanes`] for a world `flat` serves: adds the samples
+/// `segments` name to the pixels of `span` (from pixel `first`), `W`
+/// (pixel, sample) pairs at a time in the pair loop's order; returns how
+/// many were rejected.
 #[inline(always)]
 pub(super) fn span_diffuse<const W: usize>(
     job: &RenderJob,
     flat: &Flat,
     first: usize,
     mut span: Span<'_>,
-    samples: Range<u64>,
+    segments: &[Segment],
 ) -> u64 {
     let settings = &job.settings;
-    let n = span.sums.len();
     let mut rejected = 0u64;
-    let mut at = Pair::first(&samples);
-    while at.i < n && at.s < samples.end {
-        let (pairs, count, next) = at.group::<W>(n, &samples);
-        at = next;
-        let l = trace::<W>(
-            &job.world,
-            flat,
-            settings,
-            |k| pairs[k.min(count - 1)].path(job, first).into_parts(),
-            count,
-        );
+    let mut all = Pairs::new(segments);
+    while let Some((pairs, count)) = all.group::<W>() {
+        let start = |k: usize| pairs[k.min(count - 1)].path(job, first).into_parts();
+        let l = trace::<W>(&job.world, flat, settings, start, count);
         for (k, pair) in pairs.iter().enumerate().take(count) {
             let radiance = clamped(settings, Vec3A::new(l.x.0[k], l.y.0[k], l.z.0[k]));
             rejected += u64::from(!span.add_radiance(pair.i, pair.s, radiance));
@@ -95,27 +86,39 @@ fn lane<const W: usize>(v: &V<W>, k: usize) -> Vec3A {
     Vec3A::new(v.x.0[k], v.y.0[k], v.z.0[k])
 }
 
+/// `f` of every lane, in a plain counted loop, which the compiler turns
+/// into vector instructions (`array::from_fn`, with its drop guard, it
+/// left one lane at a time).
+#[inline(always)]
+fn per_lane<T: Copy + Default, const W: usize>(f: impl Fn(usize) -> T) -> [T; W] {
+    let mut out = [T::default(); W];
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = f(k);
+    }
+    out
+}
+
 /// A vector per lane from `f`'s.
 #[inline(always)]
 fn gather<const W: usize>(f: impl Fn(usize) -> [f32; 3]) -> V<W> {
-    let a: [[f32; 3]; W] = std::array::from_fn(f);
+    let a: [[f32; 3]; W] = per_lane(f);
     V3 {
-        x: F32s(std::array::from_fn(|k| a[k][0])),
-        y: F32s(std::array::from_fn(|k| a[k][1])),
-        z: F32s(std::array::from_fn(|k| a[k][2])),
+        x: F32s(per_lane(|k| a[k][0])),
+        y: F32s(per_lane(|k| a[k][1])),
+        z: F32s(per_lane(|k| a[k][2])),
     }
 }
 
 /// A number per lane from `f`'s.
 #[inline(always)]
 fn each<const W: usize>(f: impl Fn(usize) -> f32) -> R<W> {
-    F32s(std::array::from_fn(f))
+    F32s(per_lane(f))
 }
 
 /// `a` where `m`, else `b`, lane by lane.
 #[inline(always)]
 fn select<const W: usize>(m: &[bool; W], a: V<W>, b: V<W>) -> V<W> {
-    let s = |a: R<W>, b: R<W>| F32s(std::array::from_fn(|k| if m[k] { a.0[k] } else { b.0[k] }));
+    let s = |a: R<W>, b: R<W>| each(|k| if m[k] { a.0[k] } else { b.0[k] });
     V3 {
         x: s(a.x, b.x),
         y: s(a.y, b.y),
@@ -136,7 +139,7 @@ fn mul<const W: usize>(a: V<W>, b: V<W>) -> V<W> {
 /// A lane mask from a test of each lane.
 #[inline(always)]
 fn mask<const W: usize>(f: impl Fn(usize) -> bool) -> [bool; W] {
-    std::array::from_fn(f)
+    per_lane(f)
 }
 
 /// Where a ray leaving a surface starts (`world::spawn`'s rule in the
@@ -146,9 +149,7 @@ fn mask<const W: usize>(f: impl Fn(usize) -> bool) -> [bool; W] {
 #[inline(always)]
 fn spawn<const W: usize>(p: V<W>, ng: V<W>, dist: R<W>, dir: V<W>) -> V<W> {
     let side = dir.dot(ng);
-    let d = F32s(std::array::from_fn(|k| {
-        f32::from_bits(dist.0[k].to_bits() ^ (u32::from(!(side.0[k] > 0.0)) << 31))
-    }));
+    let d = each(|k| f32::from_bits(dist.0[k].to_bits() ^ (u32::from(!(side.0[k] > 0.0)) << 31)));
     let shift = ng * d;
     let q = p + shift;
     V3 {
@@ -164,7 +165,7 @@ fn spawn<const W: usize>(p: V<W>, ng: V<W>, dist: R<W>, dir: V<W>) -> V<W> {
 #[inline(always)]
 fn step<const W: usize>(x: R<W>, s: R<W>) -> R<W> {
     let all = |c: bool| 0u32.wrapping_sub(u32::from(c));
-    F32s(std::array::from_fn(|k| {
+    each(|k| {
         let (b, s) = (x.0[k].to_bits(), s.0[k]);
         let (up, down) = (all(s > 0.0), all(s < 0.0));
         let magnitude = b & 0x7FFF_FFFF;
@@ -178,7 +179,7 @@ fn step<const W: usize>(x: R<W>, s: R<W>) -> R<W> {
         let keep =
             !(up | down) | all(magnitude > 0x7F80_0000) | (all(magnitude == 0x7F80_0000) & away);
         f32::from_bits((keep & b) | (!keep & moved))
-    }))
+    })
 }
 
 /// The surfaces that `W` rays met (in the live lanes), over lanes.

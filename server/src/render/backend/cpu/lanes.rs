@@ -15,33 +15,29 @@
 //! surface lies within that thousandth or Embree breaks a tie the other
 //! way (measured in `tests/lane_loop.rs`).
 
-use super::{Pair, Span};
+use super::{Pairs, Segment, Span};
 use crate::render::integrator::{Path, PathSettings, Shadow};
 use crate::render::isa::Isa;
 use crate::render::job::RenderJob;
 use crate::render::lanes::lanes_where;
 use crate::render::math::Vec3A;
 use crate::render::world::{Hit, Origin, World};
-use std::ops::Range;
 
-/// Adds samples `samples` to the pixels of `span` (from pixel `first`),
-/// `W` (pixel, sample) pairs at a time, in the pair loop's order; returns
-/// how many were rejected.
+/// Adds the samples `segments` name to the pixels of `span` (from pixel
+/// `first`), `W` (pixel, sample) pairs at a time, in the pair loop's
+/// order; returns how many were rejected.
 #[inline(always)]
 pub(super) fn span_lanes<I: Isa, const W: usize>(
     isa: I,
     job: &RenderJob,
     first: usize,
     mut span: Span<'_>,
-    samples: Range<u64>,
+    segments: &[Segment],
 ) -> u64 {
     let settings = &job.settings;
-    let n = span.sums.len();
     let mut rejected = 0u64;
-    let mut at = Pair::first(&samples);
-    while at.i < n && at.s < samples.end {
-        let (pairs, count, next) = at.group::<W>(n, &samples);
-        at = next;
+    let mut all = Pairs::new(segments);
+    while let Some((pairs, count)) = all.group::<W>() {
         let mut paths: [Path; W] =
             std::array::from_fn(|k| pairs[k.min(count - 1)].path(job, first));
         trace_lanes(isa, &job.world, settings, &mut paths, count);

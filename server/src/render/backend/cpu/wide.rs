@@ -4,7 +4,7 @@
 //! same image, bit for bit (tested); the widest the CPU has is chosen at
 //! run time, within the backend's cap.
 
-use super::{span_diffuse, span_lanes, span_packets, span_with, Span};
+use super::{span_diffuse, span_lanes, span_packets, span_with, Segment, Span};
 use crate::render::bvh::PACKET;
 #[cfg(target_arch = "x86_64")]
 use crate::render::isa::{Avx2, Avx512};
@@ -140,63 +140,102 @@ pub(super) enum Loop<'a> {
     Diffuse(&'a Flat),
 }
 
-/// Adds samples `samples` to the pixels `span`, which start at pixel
-/// number `first` (row-major); returns how many were rejected. Runs the
-/// copy of the loop `wide` names: `lanes` says which loop; the lane loops
-/// as wide as the instruction set's float lanes (16, 8, or 4 for every
-/// CPU).
+/// Adds the samples `segments` name to the pixels of `span`, which start
+/// at pixel number `first` (row-major); returns how many were rejected.
+/// Runs the copy of the loop `wide` names: `lanes` says which loop; the
+/// lane loops as wide as the instruction set's float lanes (16, 8, or 4
+/// for every CPU), filled across segments; the pair loops a segment at a
+/// time.
 pub(super) fn render_span(
     wide: Wide,
     job: &RenderJob,
     first: usize,
-    span: Span<'_>,
-    samples: Range<u64>,
+    mut span: Span<'_>,
+    segments: &[Segment],
     lanes: Loop<'_>,
 ) -> u64 {
-    // Two functions per instruction set, not one with both loops: inlined
-    // into one, the mesh scenes' loop lost its gain (code placement).
-    let packets = job.world.packets_pay();
+    if let Loop::Pairs = lanes {
+        return (segments.iter())
+            .map(|(pixels, samples)| {
+                let sub = span.sub(pixels.clone());
+                pairs_span(wide, job, first + pixels.start, sub, samples.clone())
+            })
+            .sum();
+    }
     match wide {
         // SAFETY: an `Avx512` exists only where the CPU has AVX-512 F, VL,
         // BW and DQ, AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
         Wide::Avx512(isa) => unsafe {
-            match (lanes, packets) {
-                (Loop::Diffuse(flat), _) => diffuse_avx512(job, flat, first, span, samples),
-                (Loop::Lanes, _) => lanes_avx512(isa, job, first, span, samples),
-                (Loop::Pairs, true) => packets_avx512(isa, job, first, span, samples),
-                (Loop::Pairs, false) => span_avx512(isa, job, first, span, samples),
+            match lanes {
+                Loop::Diffuse(flat) => diffuse_avx512(job, flat, first, span, segments),
+                _ => lanes_avx512(isa, job, first, span, segments),
             }
         },
         // SAFETY: an `Avx2` exists only where the CPU has AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
         Wide::Avx2(isa) => unsafe {
-            match (lanes, packets) {
-                (Loop::Diffuse(flat), _) => diffuse_avx2(job, flat, first, span, samples),
-                (Loop::Lanes, _) => lanes_avx2(isa, job, first, span, samples),
-                (Loop::Pairs, true) => packets_avx2(isa, job, first, span, samples),
-                (Loop::Pairs, false) => span_avx2(isa, job, first, span, samples),
+            match lanes {
+                Loop::Diffuse(flat) => diffuse_avx2(job, flat, first, span, segments),
+                _ => lanes_avx2(isa, job, first, span, segments),
             }
         },
-        Wide::Portable => match (lanes, packets) {
-            (Loop::Diffuse(flat), _) => span_diffuse::<4>(job, flat, first, span, samples),
-            (Loop::Lanes, _) => span_lanes::<_, 4>(Portable, job, first, span, samples),
-            (Loop::Pairs, true) => span_packets(Portable, job, first, span, samples),
-            (Loop::Pairs, false) => span_with(Portable, job, first, span, samples),
+        Wide::Portable => match lanes {
+            Loop::Diffuse(flat) => span_diffuse::<4>(job, flat, first, span, segments),
+            _ => span_lanes::<_, 4>(Portable, job, first, span, segments),
+        },
+    }
+}
+
+/// [`render_span`]'s pair loops, for one segment: samples `samples` of
+/// every pixel of `span`.
+fn pairs_span(
+    wide: Wide,
+    job: &RenderJob,
+    first: usize,
+    span: Span<'_>,
+    samples: Range<u64>,
+) -> u64 {
+    // Two functions per instruction set, not one with both loops: inlined
+    // into one, the mesh scenes' loop lost its gain (code placement).
+    let packets = job.world.packets_pay();
+    match wide {
+        // SAFETY: as in `render_span`.
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        Wide::Avx512(isa) => unsafe {
+            match packets {
+                true => packets_avx512(isa, job, first, span, samples),
+                false => span_avx512(isa, job, first, span, samples),
+            }
+        },
+        // SAFETY: as in `render_span`.
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        Wide::Avx2(isa) => unsafe {
+            match packets {
+                true => packets_avx2(isa, job, first, span, samples),
+                false => span_avx2(isa, job, first, span, samples),
+            }
+        },
+        Wide::Portable => match packets {
+            true => span_packets(Portable, job, first, span, samples),
+            false => span_with(Portable, job, first, span, samples),
         },
     }
 }
 
 /// `$name`: the loop `$body` compiled with the target features `$features`
-/// for the token `$isa` (an unsafe call: the token is the caller's proof).
+/// for the token `$isa` (an unsafe call: the token is the caller's proof),
+/// its samples given as `$samples`.
 macro_rules! compiled_for {
-    ($(#[$doc:meta])* $name:ident, $body:expr, $isa:ty, $features:literal) => {
+    ($(#[$doc:meta])* $name:ident, $body:expr, $isa:ty, $samples:ty, $features:literal) => {
         $(#[$doc])*
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = $features)]
-        fn $name(isa: $isa, job: &RenderJob, first: usize, span: Span<'_>, samples: Range<u64>) -> u64 {
+        fn $name(isa: $isa, job: &RenderJob, first: usize, span: Span<'_>, samples: $samples) -> u64 {
             $body(isa, job, first, span, samples)
         }
     };
@@ -204,36 +243,38 @@ macro_rules! compiled_for {
 
 compiled_for!(
     /// `span_with` compiled for AVX2 and FMA.
-    span_avx2, span_with, Avx2, "avx2,fma"
+    span_avx2, span_with, Avx2, Range<u64>, "avx2,fma"
 );
 compiled_for!(
     /// `span_packets` compiled for AVX2 and FMA.
-    packets_avx2, span_packets, Avx2, "avx2,fma"
+    packets_avx2, span_packets, Avx2, Range<u64>, "avx2,fma"
 );
 compiled_for!(
     /// The lane loop, eight paths wide, compiled for AVX2 and FMA.
-    lanes_avx2, span_lanes::<Avx2, 8>, Avx2, "avx2,fma"
+    lanes_avx2, span_lanes::<Avx2, 8>, Avx2, &[Segment], "avx2,fma"
 );
 compiled_for!(
     /// The lane loop, sixteen paths wide, compiled for AVX-512.
-    lanes_avx512, span_lanes::<Avx512, 16>, Avx512, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
+    lanes_avx512, span_lanes::<Avx512, 16>, Avx512, &[Segment],
+    "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
 );
 compiled_for!(
     /// `span_with` compiled for AVX-512 (32 vector registers; the
     /// arithmetic is the AVX2 copy's, and so is the image).
-    span_avx512, span_with, Avx512, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
+    span_avx512, span_with, Avx512, Range<u64>, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
 );
 compiled_for!(
     /// `span_packets` compiled for AVX-512: 4-6% faster than the AVX2 copy
     /// on `cornell-mesh` (docs/BENCHMARKS.md, "The traversal out of line").
-    packets_avx512, span_packets, Avx512, "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
+    packets_avx512, span_packets, Avx512, Range<u64>,
+    "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq"
 );
 
 /// The wide loop, eight paths wide, compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn diffuse_avx2(job: &RenderJob, flat: &Flat, first: usize, span: Span<'_>, r: Range<u64>) -> u64 {
-    span_diffuse::<8>(job, flat, first, span, r)
+fn diffuse_avx2(job: &RenderJob, flat: &Flat, first: usize, span: Span<'_>, s: &[Segment]) -> u64 {
+    span_diffuse::<8>(job, flat, first, span, s)
 }
 
 /// The wide loop, sixteen paths wide, compiled for AVX-512.
@@ -244,7 +285,7 @@ fn diffuse_avx512(
     flat: &Flat,
     first: usize,
     span: Span<'_>,
-    r: Range<u64>,
+    s: &[Segment],
 ) -> u64 {
-    span_diffuse::<16>(job, flat, first, span, r)
+    span_diffuse::<16>(job, flat, first, span, s)
 }
