@@ -26,7 +26,7 @@
 pub mod ffi;
 mod packet;
 
-pub use packet::Packet;
+pub use packet::{Answers, Packet};
 
 use std::ffi::c_void;
 use std::path::PathBuf;

@@ -54,6 +54,55 @@ impl<const W: usize> Packet<W> {
         self.valid.0[k] = -1;
     }
 
+    /// Every lane's ray at once (`org[a]`, `dir[a]`: axis `a` of each
+    /// lane's origin and direction), 0 <= t <= `tfar[k]`, the lanes `live`
+    /// names made live: whole arrays copied, not a lane at a time. A dead
+    /// lane is not traced; its direction is set to ones (Embree reads its
+    /// reciprocal).
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lane `k` of several arrays
+    pub fn set_lanes(
+        &mut self,
+        (org, dir): ([[f32; W]; 3], [[f32; W]; 3]),
+        tfar: [f32; W],
+        live: &[bool; W],
+    ) {
+        (self.rays.org, self.rays.tfar) = (org, tfar);
+        for a in 0..3 {
+            for k in 0..W {
+                self.rays.dir[a][k] = if live[k] { dir[a][k] } else { 1.0 };
+            }
+        }
+        for (v, &l) in self.valid.0.iter_mut().zip(live) {
+            *v = -i32::from(l);
+        }
+    }
+
+    /// After an intersection query, every lane's answer as arrays: the
+    /// distance (infinite where a lane is dead or hit nothing), the
+    /// object, the triangle and the barycentrics u, v.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lane `k` of several arrays
+    pub fn answers(&self) -> Answers<W> {
+        let p = &self.rays;
+        let mut t = [f32::INFINITY; W];
+        for k in 0..W {
+            let hit = (self.valid.0[k] != 0) & (p.geom_id[k] != ffi::INVALID_ID);
+            t[k] = if hit { p.tfar[k] } else { f32::INFINITY };
+        }
+        let mut id = [0; W];
+        for k in 0..W {
+            id[k] = hit_id(p.inst_id[k], p.geom_id[k]);
+        }
+        Answers {
+            t,
+            id,
+            prim: p.prim_id,
+            u: p.u,
+            v: p.v,
+        }
+    }
+
     /// Whether lane `k` is live.
     #[inline(always)]
     pub fn live(&self, k: usize) -> bool {
@@ -90,6 +139,16 @@ impl<const W: usize> Default for Packet<W> {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// A packet's answers, lane by lane ([`Packet::answers`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Answers<const W: usize> {
+    pub t: [f32; W],
+    pub id: [u32; W],
+    pub prim: [u32; W],
+    pub u: [f32; W],
+    pub v: [f32; W],
 }
 
 /// A packet's valid mask, aligned as Embree's vector loads want it.

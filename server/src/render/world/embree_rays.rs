@@ -16,7 +16,7 @@ use super::build::{scan_cost, SCAN_MAX_COST};
 use super::embree_scene::{EmbreeLayout, Frame};
 use super::flat::Flat;
 use super::{scan, Geometry, Hit, Origin, World, NO_PRIM};
-use crate::render::embree::{embree, HitFilter, Packet, RawHit};
+use crate::render::embree::{embree, Answers, HitFilter, Packet, RawHit};
 use crate::render::isa::Isa;
 use crate::render::lanes::{lanes_where, F32s, V3};
 use crate::render::math::Vec3A;
@@ -364,8 +364,8 @@ impl World {
 
     /// The nearest hits of `W` rays given in the Embree scene's frame
     /// (`org`, `dir`), each never the triangle it leaves, for the live
-    /// lanes of a world [`World::flat`] serves (else no hits).
-    /// `coherent`: camera rays.
+    /// lanes of a world [`World::flat`] serves (else none): a lane's
+    /// distance is infinite where it hit nothing. `coherent`: camera rays.
     #[inline(always)]
     pub fn framed_nearest<const W: usize>(
         &self,
@@ -373,38 +373,37 @@ impl World {
         from: &[Origin; W],
         live: &[bool; W],
         coherent: bool,
-    ) -> [Hit; W] {
-        let mut best = [Hit::NONE; W];
-        let Some(Some(e)) = self.embree.get() else {
-            return best;
-        };
+    ) -> Answers<W> {
         let mut packet = Packet::<W>::new();
-        for k in lanes_where(live) {
-            let o = [org.x.0[k], org.y.0[k], org.z.0[k]];
-            packet.set(k, o, [dir.x.0[k], dir.y.0[k], dir.z.0[k]], f32::INFINITY);
-        }
+        let Some(Some(e)) = self.embree.get() else {
+            return packet.answers();
+        };
+        let lanes = ([org.x.0, org.y.0, org.z.0], [dir.x.0, dir.y.0, dir.z.0]);
+        packet.set_lanes(lanes, [f32::INFINITY; W], live);
         (e.frame.scene).intersect_lanes::<Refuse<'_>, W>(&mut packet, (None, coherent));
-        for k in lanes_where(live) {
-            let (found, h) = packet.answer(k);
-            let other = (h.id ^ from[k].object) | (h.prim ^ from[k].prim) | u32::from(!found);
-            if other == 0 {
-                // Met the triangle it leaves (rare): asked again, alone,
-                // with the filter that refuses it.
-                let o = [org.x.0[k], org.y.0[k], org.z.0[k]];
-                let d = [dir.x.0[k], dir.y.0[k], dir.z.0[k]];
-                let (from, ray) = ([from[k]], [Ray::new(o.into(), d.into())]);
-                let refuse = Refuse {
-                    world: self,
-                    from: &from,
-                    rays: &ray,
-                };
-                let again = e.frame.scene.intersect(o, d, f32::INFINITY, Some(&refuse));
-                best[k] = again.map_or(Hit::NONE, as_hit);
-                continue;
+        let mut found = packet.answers();
+        // A lane that met the triangle it leaves (rare) is asked again,
+        // alone, with the filter that refuses it.
+        let again: [bool; W] = std::array::from_fn(|k| {
+            let other = (found.id[k] ^ from[k].object) | (found.prim[k] ^ from[k].prim);
+            (found.t[k] < f32::INFINITY) & (other == 0)
+        });
+        for k in lanes_where(&again) {
+            let o = [org.x.0[k], org.y.0[k], org.z.0[k]];
+            let d = [dir.x.0[k], dir.y.0[k], dir.z.0[k]];
+            let (from, ray) = ([from[k]], [Ray::new(o.into(), d.into())]);
+            let refuse = Refuse {
+                world: self,
+                from: &from,
+                rays: &ray,
+            };
+            let h = e.frame.scene.intersect(o, d, f32::INFINITY, Some(&refuse));
+            found.t[k] = h.map_or(f32::INFINITY, |h| h.t);
+            if let Some(h) = h {
+                (found.id[k], found.prim[k], found.u[k], found.v[k]) = (h.id, h.prim, h.u, h.v);
             }
-            best[k] = Hit::select(found, as_hit(h), Hit::NONE);
         }
-        best
+        found
     }
 
     /// Whether anything blocks each live lane's ray (in the frame, as for
@@ -419,10 +418,8 @@ impl World {
             return [false; W];
         };
         let mut packet = Packet::<W>::new();
-        for k in lanes_where(live) {
-            let o = [org.x.0[k], org.y.0[k], org.z.0[k]];
-            packet.set(k, o, [dir.x.0[k], dir.y.0[k], dir.z.0[k]], tmax[k]);
-        }
+        let lanes = ([org.x.0, org.y.0, org.z.0], [dir.x.0, dir.y.0, dir.z.0]);
+        packet.set_lanes(lanes, *tmax, live);
         (e.frame.scene).occluded_lanes::<Refuse<'_>, W>(&mut packet, None);
         std::array::from_fn(|k| packet.blocked(k))
     }

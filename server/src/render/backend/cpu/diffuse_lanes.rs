@@ -17,6 +17,7 @@
 //! holds the two together), bit for bit the same at every width.
 
 use super::{Pairs, Segment, Span};
+use crate::render::embree::Answers;
 use crate::render::integrator::nee::SHADOW_EPSILON;
 use crate::render::integrator::{LightSampling, PathSettings, MAX_SURVIVAL};
 use crate::render::job::RenderJob;
@@ -27,7 +28,7 @@ use crate::render::math::{gamma, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::Sampler;
 use crate::render::world::flat::{Flat, FlatEmitter, FlatTri};
-use crate::render::world::{Hit, Origin, World};
+use crate::render::world::{Origin, World};
 use std::f32::consts::FRAC_1_PI;
 
 type R<const W: usize> = F32s<W>;
@@ -204,16 +205,15 @@ impl<const W: usize> Surfaces<W> {
     /// The surfaces of `hits` (along directions `d`), gathered from the
     /// flat triangles: `Instance::surface`'s steps, in the frame.
     #[inline(always)]
-    fn of(flat: &Flat, hits: &[Hit; W], live: &[bool; W], d: &V<W>) -> Self {
+    fn of(flat: &Flat, hits: &Answers<W>, live: &[bool; W], d: &V<W>) -> Self {
         let c = R::<W>::splat;
-        let tris: [&FlatTri; W] = std::array::from_fn(|k| {
-            let h = &hits[k];
-            match live[k] {
-                true => &flat.tris[(flat.first[h.object as usize] + h.prim) as usize],
-                false => &flat.tris[0],
-            }
+        let tris: [&FlatTri; W] = std::array::from_fn(|k| match live[k] {
+            true => &flat.tris[(flat.first[hits.id[k] as usize] + hits.prim[k]) as usize],
+            false => &flat.tris[0],
         });
-        let b = [0, 1, 2].map(|j| each::<W>(|k| hits[k].bary[j]));
+        // Embree's barycentrics as the world's (`as_hit`).
+        let (u, v) = (F32s(hits.u), F32s(hits.v));
+        let b = [c(1.0) - u - v, u, v];
         let v = [0, 1, 2].map(|j| gather::<W>(|k| tris[k].v[j]));
         let (t0, t1, t2) = (v[0] * b[0], v[1] * b[1], v[2] * b[2]);
         let err = (abs(t0) + abs(t1) + abs(t2)) * c(gamma(7));
@@ -237,7 +237,7 @@ impl<const W: usize> Surfaces<W> {
             smooth,
             albedo: gather::<W>(|k| tris[k].albedo),
             emission: gather::<W>(|k| tris[k].emission),
-            at: std::array::from_fn(|k| (hits[k].object, hits[k].prim)),
+            at: std::array::from_fn(|k| (hits.id[k], hits.prim[k])),
         }
     }
 
@@ -334,7 +334,9 @@ fn next_event<const W: usize>(
     if named.contains(&true) {
         let seen = world.framed_nearest((&so, &dir), &from, &named, false);
         for k in lanes_where(&named) {
-            reached[k] = (seen[k].object == es[k].object) & (seen[k].prim == es[k].prim);
+            let (object, prim) = (seen.id[k], seen.prim[k]);
+            let hit = seen.t[k] < f32::INFINITY;
+            reached[k] = hit & (object == es[k].object) & (prim == es[k].prim);
         }
     }
     select(&reached, light, V::<W>::splat_vec(Vec3A::ZERO))
@@ -363,7 +365,7 @@ fn trace<const W: usize>(
     let mut l = zero;
     for bounce in 0u32.. {
         let hits = world.framed_nearest((&o, &d), &from, &live, bounce == 0);
-        let found: [bool; W] = mask(|k| live[k] & hits[k].found());
+        let found: [bool; W] = mask(|k| live[k] & (hits.t[k] < f32::INFINITY));
         // Left the scene: the environment, which camera rays alone count
         // (after a diffuse bounce, NEE has gathered the emitters).
         if bounce == 0 {
