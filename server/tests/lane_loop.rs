@@ -9,6 +9,8 @@
 
 mod common;
 
+use common::films::apart;
+
 use pathstream::bench::scenes::load;
 use pathstream::render::backend::{CpuBackend, EmbreeUse, IsaCap, PathLoop};
 use pathstream::render::{Film, Quality, RenderJob, Scene};
@@ -52,18 +54,6 @@ fn with_the_own_bvh_the_lanes_give_the_pair_loops_image_bit_for_bit() {
             );
         }
     }
-}
-
-/// How far two films are apart: pixels whose green sums differ by more
-/// than 1% (a sample that went elsewhere: rounding alone moves a sum in
-/// its last bits), and the relative difference of the images' sums.
-fn apart(a: &Film, b: &Film) -> (usize, f64) {
-    let green = |p: &pathstream::render::film::PixelSums| p.even[1] + p.odd[1];
-    let sum = |f: &Film| -> f64 { f.pixels().iter().map(green).sum() };
-    let differ = (a.pixels().iter().zip(b.pixels()))
-        .filter(|(x, y)| (green(x) - green(y)).abs() > 0.01 * green(y).abs().max(1e-3))
-        .count();
-    (differ, (sum(a) - sum(b)).abs() / sum(b))
 }
 
 #[test]

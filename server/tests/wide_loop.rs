@@ -9,6 +9,7 @@
 
 mod common;
 
+use common::films::apart;
 use common::{assert_clean, assert_mean, mesh_object};
 use pathstream::bench::scenes::load;
 use pathstream::model::generate::icosphere;
@@ -46,17 +47,6 @@ fn furnace(scale: f64, smooth: bool) -> Scene {
 fn served(scene: &Scene) -> bool {
     let job = RenderJob::new(scene, 8, 8, &Quality::default());
     job.world.use_embree(0) && job.world.flat().is_some()
-}
-
-/// Pixels whose green sums differ by more than 1% (a sample that rounding
-/// sent elsewhere), and how far the images' sums are apart.
-fn apart(a: &Film, b: &Film) -> (usize, f64) {
-    let green = |p: &pathstream::render::film::PixelSums| p.even[1] + p.odd[1];
-    let sum = |f: &Film| -> f64 { f.pixels().iter().map(green).sum() };
-    let differ = (a.pixels().iter().zip(b.pixels()))
-        .filter(|(x, y)| (green(x) - green(y)).abs() > 0.01 * green(y).abs().max(1e-3))
-        .count();
-    (differ, (sum(a) - sum(b)).abs() / sum(b))
 }
 
 #[test]

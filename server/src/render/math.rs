@@ -6,7 +6,7 @@
 
 pub use glam::{Affine3A, BVec4A, DAffine3, DMat3, DVec3, Mat3A, Vec3, Vec3A, Vec4};
 
-use crate::render::lanes::{Bits, Real, Vector};
+use crate::render::lanes::{Bits, F32s, Real, Vector};
 
 /// The largest f32 below 1: where a number stretched from a part of
 /// [0, 1) back to all of it rounds up to 1, it becomes this.
@@ -201,6 +201,32 @@ fn step_toward_sse2(p: Vec3A, shift: Vec3A) -> Vec3A {
     }
 }
 
+/// [`step_toward`] for `W` lanes (each lane of `x` towards the sign of the
+/// same lane of `s`), on each lane's bits as masks (all ones or zero) in a
+/// counted loop, which the compiler keeps in vector registers: the same
+/// bits as the scalar steps (tested).
+#[inline(always)]
+pub fn step_toward_lanes<const W: usize>(x: F32s<W>, s: F32s<W>) -> F32s<W> {
+    let all = |c: bool| 0u32.wrapping_sub(u32::from(c));
+    let mut out = [0.0; W];
+    for (k, o) in out.iter_mut().enumerate() {
+        let (b, s) = (x.0[k].to_bits(), s.0[k]);
+        let (up, down) = (all(s > 0.0), all(s < 0.0));
+        let magnitude = b & 0x7FFF_FFFF;
+        let negative = ((b as i32) >> 31) as u32;
+        let away = (up & !negative) | (down & negative);
+        // bits + 1 away from zero, bits - 1 towards it.
+        let stepped = b.wrapping_sub(1).wrapping_add(away & 2);
+        let tiny = 1 | (down & 0x8000_0000);
+        let zero = all(magnitude == 0);
+        let moved = (zero & tiny) | (!zero & stepped);
+        let infinite = all(magnitude == 0x7F80_0000);
+        let keep = !(up | down) | all(magnitude > 0x7F80_0000) | (infinite & away);
+        *o = f32::from_bits((keep & b) | (!keep & moved));
+    }
+    F32s(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -281,6 +307,14 @@ mod tests {
         let same = |a: Vec3A, b: Vec3A| {
             (0..3).all(|i| a[i].to_bits() == b[i].to_bits() || (a[i].is_nan() && b[i].is_nan()))
         };
+        // The lanes' form gives the scalar steps' very bits, NaNs too.
+        let lanes = |p: Vec3A, s: Vec3A| {
+            let got = step_toward_lanes(F32s([p.x, p.y, p.z, -p.x]), F32s([s.x, s.y, s.z, -s.x]));
+            let want = step_toward_scalar(p, s);
+            let last = step_toward_scalar(-p, -s).x;
+            (0..3).all(|i| got.0[i].to_bits() == want[i].to_bits())
+                && got.0[3].to_bits() == last.to_bits()
+        };
         let mut n = 0;
         for &x in &specials {
             for &sx in &shifts {
@@ -288,6 +322,7 @@ mod tests {
                     let (p, s) = (Vec3A::new(x, -x, x * 0.5), Vec3A::new(sx, sy, -sx));
                     let (got, want) = (step_toward(p, s), step_toward_scalar(p, s));
                     assert!(same(got, want), "{p:?} {s:?}: {got:?} against {want:?}");
+                    assert!(lanes(p, s), "lanes: {p:?} {s:?}");
                     n += 1;
                 }
             }
@@ -307,6 +342,7 @@ mod tests {
                 same(step_toward(p, s), step_toward_scalar(p, s)),
                 "{p:?} {s:?}"
             );
+            assert!(lanes(p, s), "lanes: {p:?} {s:?}");
             n += 1;
         }
         assert!(n > 100_000);

@@ -2,6 +2,7 @@
 //! reduce films to region means with their standard errors, and compare.
 #![allow(dead_code)]
 
+pub mod films;
 pub mod meshes;
 
 use pathstream::render::scene::{MaterialJson, SurfaceJson};

@@ -24,7 +24,7 @@ use crate::render::job::RenderJob;
 use crate::render::lanes::{lanes_where, F32s, Real, Vector, V3};
 use crate::render::light::points::{toward_point, triangle_point};
 use crate::render::material::cosine_hemisphere;
-use crate::render::math::{gamma, Vec3A};
+use crate::render::math::{gamma, step_toward_lanes, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::Sampler;
 use crate::render::world::flat::{Flat, FlatEmitter, FlatTri};
@@ -154,33 +154,10 @@ fn spawn<const W: usize>(p: V<W>, ng: V<W>, dist: R<W>, dir: V<W>) -> V<W> {
     let shift = ng * d;
     let q = p + shift;
     V3 {
-        x: step(q.x, shift.x),
-        y: step(q.y, shift.y),
-        z: step(q.z, shift.z),
+        x: step_toward_lanes(q.x, shift.x),
+        y: step_toward_lanes(q.y, shift.y),
+        z: step_toward_lanes(q.z, shift.z),
     }
-}
-
-/// Each lane of `x` one float towards the sign of the same lane of `s`:
-/// `math::step_toward`'s rule (and bits), on each lane's bits as masks
-/// (all ones or zero), which the compiler keeps in vector registers.
-#[inline(always)]
-fn step<const W: usize>(x: R<W>, s: R<W>) -> R<W> {
-    let all = |c: bool| 0u32.wrapping_sub(u32::from(c));
-    each(|k| {
-        let (b, s) = (x.0[k].to_bits(), s.0[k]);
-        let (up, down) = (all(s > 0.0), all(s < 0.0));
-        let magnitude = b & 0x7FFF_FFFF;
-        let negative = ((b as i32) >> 31) as u32;
-        let away = (up & !negative) | (down & negative);
-        // bits + 1 away from zero, bits - 1 towards it.
-        let stepped = b.wrapping_sub(1).wrapping_add(away & 2);
-        let tiny = 1 | (down & 0x8000_0000);
-        let zero = all(magnitude == 0);
-        let moved = (zero & tiny) | (!zero & stepped);
-        let keep =
-            !(up | down) | all(magnitude > 0x7F80_0000) | (all(magnitude == 0x7F80_0000) & away);
-        f32::from_bits((keep & b) | (!keep & moved))
-    })
 }
 
 /// The surfaces that `W` rays met (in the live lanes), over lanes.
@@ -420,56 +397,4 @@ fn trace<const W: usize>(
         d = nd;
     }
     l
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::render::math::step_toward_scalar;
-
-    #[test]
-    fn the_spawns_step_is_the_scalar_steps_bit_for_bit() {
-        let special = [
-            0.0,
-            -0.0,
-            f32::from_bits(1),
-            -f32::from_bits(1),
-            f32::MIN_POSITIVE,
-            1.0,
-            -1.0,
-            f32::MAX,
-            f32::MIN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
-            1e-30,
-            -3e7,
-        ];
-        let mut xs: Vec<f32> = special.to_vec();
-        let mut state = 0x9E37_79B9u32;
-        for _ in 0..20_000 {
-            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-            xs.push(f32::from_bits(state));
-        }
-        for (i, &x) in xs.iter().enumerate() {
-            let shifts: Vec<f32> = special
-                .iter()
-                .copied()
-                .chain([xs[(i * 7) % xs.len()]])
-                .collect();
-            for chunk in shifts.chunks(4) {
-                let s: [f32; 4] = std::array::from_fn(|k| chunk[k % chunk.len()]);
-                let got = step(F32s([x; 4]), F32s(s));
-                for (g, shift) in got.0.iter().zip(s) {
-                    let want = step_toward_scalar(Vec3A::splat(x), Vec3A::splat(shift)).x;
-                    assert_eq!(
-                        g.to_bits(),
-                        want.to_bits(),
-                        "{x:e} ({:#x}) toward {shift:e}",
-                        x.to_bits()
-                    );
-                }
-            }
-        }
-    }
 }
