@@ -377,15 +377,21 @@ impl Path {
     /// The radiance the path has gathered, clamped as `settings` say.
     #[inline(always)]
     pub fn radiance(&self, settings: &PathSettings) -> Vec3A {
-        let mut l = self.l;
-        if settings.clamp > 0.0 {
-            let peak = max_component(l);
-            if peak > settings.clamp {
-                l *= settings.clamp / peak;
-            }
-        }
-        l
+        clamped(settings, self.l)
     }
+}
+
+/// A path's radiance `l` clamped as `settings` say: scaled down to the
+/// clamp where its largest component is above it.
+#[inline(always)]
+pub fn clamped(settings: &PathSettings, mut l: Vec3A) -> Vec3A {
+    if settings.clamp > 0.0 {
+        let peak = max_component(l);
+        if peak > settings.clamp {
+            l *= settings.clamp / peak;
+        }
+    }
+    l
 }
 
 /// Sample `sample` of pixel (x, y): its camera ray, as a path about to start.

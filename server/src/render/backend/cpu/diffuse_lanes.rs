@@ -19,7 +19,7 @@
 use super::{Pairs, Segment, Span};
 use crate::render::embree::Answers;
 use crate::render::integrator::nee::SHADOW_EPSILON;
-use crate::render::integrator::{LightSampling, PathSettings, MAX_SURVIVAL};
+use crate::render::integrator::{clamped, LightSampling, PathSettings, MAX_SURVIVAL};
 use crate::render::job::RenderJob;
 use crate::render::lanes::{lanes_where, F32s, Real, Vector, V3};
 use crate::render::light::points::{toward_point, triangle_point};
@@ -67,18 +67,6 @@ pub(super) fn span_diffuse<const W: usize>(
         }
     }
     rejected
-}
-
-/// `l` clamped as `settings` say (`Path::radiance`'s steps).
-#[inline(always)]
-fn clamped(settings: &PathSettings, mut l: Vec3A) -> Vec3A {
-    if settings.clamp > 0.0 {
-        let peak = l.max_element();
-        if peak > settings.clamp {
-            l *= settings.clamp / peak;
-        }
-    }
-    l
 }
 
 /// Lane `k` of `v`.
@@ -161,7 +149,7 @@ fn spawn<const W: usize>(p: V<W>, ng: V<W>, dist: R<W>, dir: V<W>) -> V<W> {
 }
 
 /// The surfaces that `W` rays met (in the live lanes), over lanes.
-struct Surfaces<const W: usize> {
+struct Surfaces<'a, const W: usize> {
     /// The hit point (in the frame), its geometric normal and how far
     /// off it a ray starts (the point's rounding bound along the normal).
     p: V<W>,
@@ -173,18 +161,19 @@ struct Surfaces<const W: usize> {
     /// Whether the shading normal is interpolated (not `nl`).
     smooth: [bool; W],
     albedo: V<W>,
-    emission: V<W>,
-    /// Each lane's triangle, as `Origin` and the emitters name it.
+    /// Each lane's triangle, as `Origin` and the emitters name it, and
+    /// its record.
     at: [(u32, u32); W],
+    tris: [&'a FlatTri; W],
 }
 
-impl<const W: usize> Surfaces<W> {
+impl<'a, const W: usize> Surfaces<'a, W> {
     /// The surfaces of `hits` (along directions `d`), gathered from the
     /// flat triangles: `Instance::surface`'s steps, in the frame.
     #[inline(always)]
-    fn of(flat: &Flat, hits: &Answers<W>, live: &[bool; W], d: &V<W>) -> Self {
+    fn of(flat: &'a Flat, hits: &Answers<W>, live: &[bool; W], d: &V<W>) -> Self {
         let c = R::<W>::splat;
-        let tris: [&FlatTri; W] = std::array::from_fn(|k| match live[k] {
+        let tris: [&'a FlatTri; W] = std::array::from_fn(|k| match live[k] {
             true => &flat.tris[(flat.first[hits.id[k] as usize] + hits.prim[k]) as usize],
             false => &flat.tris[0],
         });
@@ -213,21 +202,34 @@ impl<const W: usize> Surfaces<W> {
             ns: select(&smooth, ns, nl),
             smooth,
             albedo: gather::<W>(|k| tris[k].albedo),
-            emission: gather::<W>(|k| tris[k].emission),
             at: std::array::from_fn(|k| (hits.id[k], hits.prim[k])),
+            tris,
         }
     }
 
-    /// Where rays leaving along `dir` start, and the surfaces they leave.
+    /// The emission of each lane's triangle (the camera's hits alone
+    /// count it: NEE gathers the light a diffuse bounce would meet).
     #[inline(always)]
-    fn leave(&self, dir: &V<W>) -> (V<W>, [Origin; W]) {
+    fn emission(&self) -> V<W> {
+        gather::<W>(|k| self.tris[k].emission)
+    }
+
+    /// Where rays leaving along `dir` start.
+    #[inline(always)]
+    fn origin(&self, dir: &V<W>) -> V<W> {
+        spawn(self.p, self.ng, self.dist, *dir)
+    }
+
+    /// The surfaces rays leaving along `dir` leave, for a query that must
+    /// not meet them again.
+    #[inline(always)]
+    fn from(&self, dir: &V<W>) -> [Origin; W] {
         let side = dir.dot(self.ng);
-        let from = std::array::from_fn(|k| Origin {
+        std::array::from_fn(|k| Origin {
             object: self.at[k].0,
             prim: self.at[k].1,
             entering: side.0[k] < 0.0,
-        });
-        (spawn(self.p, self.ng, self.dist, *dir), from)
+        })
     }
 }
 
@@ -252,7 +254,7 @@ fn next_event<const W: usize>(
     flat: &Flat,
     samplers: &mut [Sampler; W],
     bounce: u32,
-    s: &Surfaces<W>,
+    s: &Surfaces<'_, W>,
     live: &[bool; W],
     beta: V<W>,
 ) -> V<W> {
@@ -295,7 +297,7 @@ fn next_event<const W: usize>(
     };
     let le = gather::<W>(|k| es[k].emission);
     let light = mul(mul(beta, s.albedo), mul(le, fw) / F32s(pmf)) * R::<W>::splat(FRAC_1_PI);
-    let (so, from) = s.leave(&dir);
+    let so = s.origin(&dir);
     // An occlusion test up to a thousandth short of the emitter's plane;
     // a grazing ray, which reaches no plane, asks for its nearest hit.
     let reach = (p0 - so).dot(en) / dir.dot(en);
@@ -309,7 +311,7 @@ fn next_event<const W: usize>(
     }
     let named = mask(|k| lit[k] & !planar[k]);
     if named.contains(&true) {
-        let seen = world.framed_nearest((&so, &dir), &from, &named, false);
+        let seen = world.framed_nearest((&so, &dir), &s.from(&dir), &named, false);
         for k in lanes_where(&named) {
             let (object, prim) = (seen.id[k], seen.prim[k]);
             let hit = seen.t[k] < f32::INFINITY;
@@ -359,7 +361,7 @@ fn trace<const W: usize>(
         }
         let s = Surfaces::of(flat, &hits, &live, &d);
         if bounce == 0 {
-            l = l + select(&live, s.emission, zero);
+            l = l + select(&live, s.emission(), zero);
         }
         if settings.max_depth != 0 && bounce >= settings.max_depth {
             break;
@@ -393,7 +395,7 @@ fn trace<const W: usize>(
         if roulette.contains(&true) {
             beta = select(&roulette, beta / survive, beta);
         }
-        (o, from) = s.leave(&nd);
+        (o, from) = (s.origin(&nd), s.from(&nd));
         d = nd;
     }
     l
