@@ -4,8 +4,9 @@
 //! shades the same paths one at a time: the same random numbers in the
 //! same order, the surfaces computed in Embree's frame instead of object
 //! space, so the image is the lane loop's up to rounding; bit for bit the
-//! same at every width; a closed form where one holds; and every world or
-//! setting it does not serve left to the lane loop.
+//! same at every width, however its lanes are refilled; a closed form
+//! where one holds; and every world or setting it does not serve left to
+//! the lane loop.
 
 mod common;
 
@@ -79,10 +80,19 @@ fn the_wide_loop_gives_the_lane_loops_image_up_to_rounding() {
         return;
     }
     let q = Quality::default();
-    for (name, scene) in [
-        ("cornell-mesh", load("cornell-mesh").expect("scene")),
-        ("furnace 1e3, shading normals", furnace(1e3, true)),
-        ("furnace 1e-3", furnace(1e-3, false)),
+    // Roulette from the first bounce: paths of every length, whose lanes
+    // are refilled as they end.
+    let early = Quality {
+        max_depth: 16,
+        rr_depth: 1,
+        ..Quality::default()
+    };
+    let cornell = load("cornell-mesh").expect("scene");
+    for (name, scene, q) in [
+        ("cornell-mesh", cornell.clone(), q),
+        ("cornell-mesh, early roulette", cornell, early),
+        ("furnace 1e3, shading normals", furnace(1e3, true), q),
+        ("furnace 1e-3", furnace(1e-3, false), q),
     ] {
         assert!(served(&scene), "{name}: the wide loop serves it");
         let size = (48, 36);

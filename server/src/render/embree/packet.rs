@@ -151,6 +151,21 @@ pub struct Answers<const W: usize> {
     pub v: [f32; W],
 }
 
+impl<const W: usize> Answers<W> {
+    /// `self`'s answer in the lanes where `take`, else `other`'s.
+    #[inline(always)]
+    pub fn select(self, take: &[bool; W], other: &Answers<W>) -> Answers<W> {
+        let pick = |k: usize| take[k];
+        Answers {
+            t: std::array::from_fn(|k| if pick(k) { self.t[k] } else { other.t[k] }),
+            id: std::array::from_fn(|k| if pick(k) { self.id[k] } else { other.id[k] }),
+            prim: std::array::from_fn(|k| if pick(k) { self.prim[k] } else { other.prim[k] }),
+            u: std::array::from_fn(|k| if pick(k) { self.u[k] } else { other.u[k] }),
+            v: std::array::from_fn(|k| if pick(k) { self.v[k] } else { other.v[k] }),
+        }
+    }
+}
+
 /// A packet's valid mask, aligned as Embree's vector loads want it.
 #[repr(C, align(64))]
 struct Valid<const W: usize>([i32; W]);

@@ -4,6 +4,8 @@
 
 use crate::render::integrator::Path;
 use crate::render::job::RenderJob;
+use crate::render::math::Vec3A;
+use std::collections::VecDeque;
 use std::ops::Range;
 
 /// A (pixel, sample) pair of a run of pixels: pixel `i` of the run,
@@ -107,26 +109,70 @@ impl<'a> Pairs<'a> {
         }
     }
 
+    /// The next pair; None once every segment is done.
+    #[inline(always)]
+    pub fn next(&mut self) -> Option<Pair> {
+        let (pixels, samples) = self.segs.get(self.seg)?;
+        let pair = self.at;
+        self.at = pair.next(samples);
+        if self.at.i >= pixels.end {
+            self.enter(self.seg + 1);
+        }
+        Some(pair)
+    }
+
     /// Up to `N` pairs from here on (the rest copies of the first) and how
     /// many; None once every segment is done.
     #[inline(always)]
     pub fn group<const N: usize>(&mut self) -> Option<([Pair; N], usize)> {
-        let (_, samples) = self.segs.get(self.seg)?;
-        let mut samples = samples.clone();
-        let (mut pairs, mut count) = ([self.at; N], 0);
+        let first = self.next()?;
+        let (mut pairs, mut count) = ([first; N], 1);
         while count < N {
-            pairs[count] = self.at;
+            let Some(pair) = self.next() else { break };
+            pairs[count] = pair;
             count += 1;
-            self.at = self.at.next(&samples);
-            if self.at.i >= self.segs[self.seg].0.end {
-                self.enter(self.seg + 1);
-                match self.segs.get(self.seg) {
-                    Some((_, s)) => samples = s.clone(),
-                    None => break,
-                }
-            }
         }
         Some((pairs, count))
+    }
+}
+
+/// The radiance of paths that end out of order (the wide loop refills its
+/// lanes as their paths end), handed on in the order the paths started:
+/// the film's order, so that each pixel's sums are added as the other
+/// loops add them. (The sums are f64, which add f32 radiance exactly
+/// unless a pixel's samples span some nine orders of magnitude; in this
+/// order they are the same bits always.)
+#[derive(Default)]
+pub(super) struct InOrder {
+    /// The number of the oldest path not handed on.
+    next: u64,
+    /// The paths from `next` on: each pair, and its radiance once ended.
+    waiting: VecDeque<(Pair, Option<Vec3A>)>,
+}
+
+impl InOrder {
+    /// Takes a path about to start on `pair`; its number.
+    #[inline(always)]
+    pub fn push(&mut self, pair: Pair) -> u64 {
+        self.waiting.push_back((pair, None));
+        self.next + self.waiting.len() as u64 - 1
+    }
+
+    /// Path `number` ended with radiance `l`.
+    #[inline(always)]
+    pub fn finish(&mut self, number: u64, l: Vec3A) {
+        self.waiting[(number - self.next) as usize].1 = Some(l);
+    }
+
+    /// Hands `add` every ended path older than the oldest one running, in
+    /// the order they started.
+    #[inline(always)]
+    pub fn flush(&mut self, mut add: impl FnMut(Pair, Vec3A)) {
+        while let Some(&(pair, Some(l))) = self.waiting.front() {
+            self.waiting.pop_front();
+            self.next += 1;
+            add(pair, l);
+        }
     }
 }
 
@@ -173,5 +219,34 @@ mod tests {
             assert_eq!(grouped::<4>(segments), want, "{segments:?}");
             assert_eq!(grouped::<16>(segments), want, "{segments:?}");
         }
+    }
+
+    #[test]
+    fn paths_that_end_out_of_order_are_handed_on_in_order() {
+        let segments = [(0..6, 0..3)];
+        let mut pairs = Pairs::new(&segments);
+        let mut order = InOrder::default();
+        let mut handed = Vec::new();
+        let mut running: Vec<(u64, Pair)> = Vec::new();
+        // Start four, end them in a shuffled order, refill as they end.
+        for _ in 0..4 {
+            let pair = pairs.next().expect("a pair");
+            running.push((order.push(pair), pair));
+        }
+        let mut turn = 0usize;
+        while !running.is_empty() {
+            turn = (turn * 7 + 3) % running.len().max(1);
+            let (number, _) = running.swap_remove(turn);
+            order.finish(number, Vec3A::splat(number as f32));
+            order.flush(|p, l| handed.push((p.i, p.s, l.x as u64)));
+            if let Some(pair) = pairs.next() {
+                running.push((order.push(pair), pair));
+            }
+        }
+        let want: Vec<(usize, u64, u64)> = (one_by_one(&segments).into_iter())
+            .enumerate()
+            .map(|(n, (i, s))| (i, s, n as u64))
+            .collect();
+        assert_eq!(handed, want);
     }
 }
