@@ -1,7 +1,8 @@
-//! The CPU's wide loop (`backend/cpu/diffuse_lanes.rs`: paths whose state
-//! and shading are in lanes, for worlds of plain diffuse meshes lit by
-//! emissive triangles that Embree traces) against the lane loop, which
-//! shades the same paths one at a time: the same random numbers in the
+//! The CPU's wide loop (`backend/cpu/wide_loop.rs`: paths whose state is
+//! in lanes, diffuse surfaces shaded over them and every other material a
+//! lane at a time, for worlds of meshes without maps lit by emissive
+//! triangles that Embree traces) against the lane loop, which shades the
+//! same paths one at a time: the same random numbers in the
 //! same order, the surfaces computed in Embree's frame instead of object
 //! space, so the image is the lane loop's up to rounding; bit for bit the
 //! same at every width, however its lanes are refilled; a closed form
@@ -12,6 +13,7 @@ mod common;
 
 use common::films::apart;
 use common::{assert_clean, assert_mean, mesh_object};
+use pathstream::bench::cornell_box::box_json;
 use pathstream::bench::scenes::load;
 use pathstream::model::generate::icosphere;
 use pathstream::render::backend::{CpuBackend, EmbreeUse, IsaCap, PathLoop};
@@ -44,6 +46,16 @@ fn furnace(scale: f64, smooth: bool) -> Scene {
     .expect("valid furnace")
 }
 
+/// The triangle Cornell box with a mirror ball and a smooth glass ball
+/// (the second scene, in triangles).
+fn mirror_and_glass() -> Scene {
+    Scene::from_json_value(box_json(
+        json!({"type": "mirror", "albedo": [0.95, 0.95, 0.95]}),
+        json!({"type": "glass", "ior": 1.5}),
+    ))
+    .expect("valid box")
+}
+
 /// Whether the wide loop serves `scene`'s world.
 fn served(scene: &Scene) -> bool {
     let job = RenderJob::new(scene, 8, 8, &Quality::default());
@@ -51,7 +63,7 @@ fn served(scene: &Scene) -> bool {
 }
 
 #[test]
-fn the_wide_loop_serves_diffuse_meshes_lit_by_triangles_only() {
+fn the_wide_loop_serves_meshes_without_maps_lit_by_triangles_only() {
     if !common::embree() {
         return;
     }
@@ -61,6 +73,17 @@ fn the_wide_loop_serves_diffuse_meshes_lit_by_triangles_only() {
         (
             "cornell-mesh-pbr",
             load("cornell-mesh-pbr").expect("scene"),
+            true,
+        ),
+        (
+            "cornell-mesh-coated",
+            load("cornell-mesh-coated").expect("scene"),
+            true,
+        ),
+        ("mirror and glass", mirror_and_glass(), true),
+        (
+            "cornell-mesh-textured",
+            load("cornell-mesh-textured").expect("scene"),
             false,
         ),
         (
@@ -91,6 +114,19 @@ fn the_wide_loop_gives_the_lane_loops_image_up_to_rounding() {
     for (name, scene, q) in [
         ("cornell-mesh", cornell.clone(), q),
         ("cornell-mesh, early roulette", cornell, early),
+        // Metal and coated plastic (`pbr`, MIS); a clear coat over paint and
+        // an absorbing rough glass; a mirror and a smooth glass.
+        (
+            "cornell-mesh-pbr",
+            load("cornell-mesh-pbr").expect("scene"),
+            q,
+        ),
+        (
+            "cornell-mesh-coated",
+            load("cornell-mesh-coated").expect("scene"),
+            early,
+        ),
+        ("mirror and glass", mirror_and_glass(), q),
         ("furnace 1e3, shading normals", furnace(1e3, true), q),
         ("furnace 1e-3", furnace(1e-3, false), q),
     ] {

@@ -38,7 +38,7 @@ pub struct CpuBackend {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PathLoop {
     /// Where Embree traces the world (its packets serve lanes): in the
-    /// wide loop where it serves the world (`diffuse_lanes`), else in
+    /// wide loop where it serves the world (`wide_loop`), else in
     /// lanes; in pairs elsewhere.
     #[default]
     Auto,
@@ -108,8 +108,8 @@ impl CpuBackend {
     /// Which loop advances `job`'s paths.
     fn path_loop<'j>(&self, job: &'j RenderJob) -> Loop<'j> {
         match self.paths {
-            PathLoop::Auto if job.world.traced_by_embree() => match diffuse_lanes::serves(job) {
-                Some(flat) => Loop::Diffuse(flat),
+            PathLoop::Auto if job.world.traced_by_embree() => match wide_loop::serves(job) {
+                Some(flat) => Loop::Wide(flat),
                 None => Loop::Lanes,
             },
             PathLoop::Auto | PathLoop::Pairs => Loop::Pairs,
@@ -437,14 +437,15 @@ fn span_with<I: Isa>(
     rejected
 }
 
-mod diffuse_lanes;
 mod lanes;
 mod packets;
 mod pairs;
 mod wide;
-use diffuse_lanes::span_diffuse;
+mod wide_loop;
+mod wide_surfaces;
 use lanes::span_lanes;
 use packets::span_packets;
 use pairs::{Pair, Pairs, Segment};
 pub use wide::IsaCap;
 use wide::{hits_chunk, render_span, Loop, Wide};
+use wide_loop::span_wide;

@@ -13,17 +13,18 @@
 
 pub mod mis;
 pub mod nee;
+pub mod pbr_vertex;
 
 pub use mis::Combine;
 pub use nee::{Direct, LightSampling, Shadow};
+pub use pbr_vertex::PbrVertex;
 
 use crate::render::camera::CameraRays;
 use crate::render::features::{self, Guide};
 use crate::render::filter::Filter;
-use crate::render::ggx;
 use crate::render::isa::Isa;
 use crate::render::material::{scatter_with, Bsdf, Lobes, SurfaceMaterial, NO_MAPS};
-use crate::render::math::{basis, max_component, Vec3A};
+use crate::render::math::{max_component, Vec3A};
 use crate::render::ray::Ray;
 use crate::render::sampler::{Sampler, SamplerKind};
 use crate::render::world::{Hit, Origin, World};
@@ -269,22 +270,12 @@ impl Path {
             let sampling = settings.light_sampling;
             // What NEE found, and the path's factors before and after it.
             let (direct, pre, post) = if let Bsdf::Pbr(p) = &m.bsdf {
-                let (t, b) = basis(ns);
-                let local = |v: Vec3A| Vec3A::new(v.dot(t), v.dot(b), v.dot(ns));
-                let wo = -local(ray.dir);
-                let tables = ggx::tables();
-                let frame = nc.map(|n| ggx::coat::Frame::new(local(n)));
-                lobes_built = ggx::Lobes::framed(tables, p, m.albedo, (wo, entering), frame);
+                lobes_built = PbrVertex::new(p, m.albedo, ray.dir, (ns, entering), nc);
                 let built = &lobes_built;
-                let f = |dir: Vec3A, light_pdf: f32| {
-                    let wi = local(dir);
-                    let bsdf_pdf = ggx::pdf(p, built, wo, wi);
-                    let w = mis::light_weight(settings.combine, light_pdf, bsdf_pdf);
-                    ggx::eval_cos(tables, p, m.albedo, built, wo, wi) * w
-                };
+                let f = |dir: Vec3A, light_pdf: f32| built.light(settings.combine, dir, light_pdf);
                 let direct =
                     nee::direct::<LATER, I>(isa, world, &s, nl, ns, sampling, &mut self.sampler, f);
-                lobes = Lobes::Built(built);
+                lobes = Lobes::Built(&built.lobes);
                 (direct, self.beta, 1.0)
             } else if world.diffuse_mis() {
                 let f = |dir: Vec3A, light_pdf: f32| {

@@ -1,5 +1,5 @@
 //! The world's placed triangles laid out flat for the wide loop
-//! (`backend::cpu::diffuse_lanes`), which computes sixteen surfaces at
+//! (`backend::cpu::wide_loop`), which computes sixteen surfaces at
 //! once: each triangle's vertices as the Embree scene holds them (in its
 //! frame, the same floats Embree tests), its geometric and shading
 //! normals and its material, one record a triangle, so that a lane's
@@ -8,8 +8,8 @@
 //!
 //! Only for the worlds that loop serves ([`Flat::build`] says why not
 //! otherwise): every mesh one of the Embree scene's own (no instance of a
-//! mesh scene), nothing scanned beside them, diffuse materials without
-//! maps, triangle emitters, no environment map or sun.
+//! mesh scene), nothing scanned beside them, materials without maps,
+//! triangle emitters, no environment map or sun.
 
 use super::embree_scene::{frame_point, placed_in, Frame};
 use super::{Geometry, World};
@@ -25,7 +25,11 @@ pub struct FlatTri {
     /// The unit geometric normal (world orientation): the scalar surface's
     /// own (`Instance::surface`), bit for bit.
     pub ng: [f32; 3],
-    /// Its material's albedo, and its emission (zero where it emits none).
+    /// Its material (a `World::material` index) and whether that is plain
+    /// diffuse (shaded over lanes; any other is shaded a lane at a time),
+    /// its albedo, and its emission (zero where it emits none).
+    pub material: u32,
+    pub plain: bool,
     pub albedo: [f32; 3],
     pub emission: [f32; 3],
     /// Its vertices' shading normals (world orientation, not normalised),
@@ -62,6 +66,8 @@ pub struct Flat {
     pub emitters: Vec<FlatEmitter>,
     /// What moves a camera-space point into the frame.
     pub shift: Vec3A,
+    /// Whether every triangle's material is plain diffuse.
+    pub plain: bool,
 }
 
 /// How `world` fails the wide loop's conditions on its materials and
@@ -82,13 +88,11 @@ fn unserved(world: &World) -> Option<&'static str> {
     if !flat_emitters {
         return Some("emitters other than plain triangles");
     }
-    let plain = |m: u32| {
-        let m = world.material(m);
-        matches!(m.bsdf, Bsdf::Diffuse) && m.maps == NO_MAPS && m.absorb == Vec3A::ZERO
-    };
-    let diffuse = (world.instances.iter())
-        .all(|inst| (inst.mesh.materials.iter()).all(|&slot| plain(inst.materials[slot as usize])));
-    (!diffuse).then_some("materials other than plain diffuse")
+    let unmapped = (world.instances.iter()).all(|inst| {
+        (inst.mesh.materials.iter())
+            .all(|&slot| world.material(inst.materials[slot as usize]).maps == NO_MAPS)
+    });
+    (!unmapped).then_some("texture maps")
 }
 
 impl Flat {
@@ -124,8 +128,11 @@ impl Flat {
                     Some(vn) => t.map(|v| (n * Vec3A::from(vn[v as usize])).to_array()),
                     None => [[0.0; 3]; 3],
                 };
-                let m = world.material(inst.materials[mesh.materials[prim] as usize]);
+                let material = inst.materials[mesh.materials[prim] as usize];
+                let m = world.material(material);
                 tris.push(FlatTri {
+                    material,
+                    plain: matches!(m.bsdf, Bsdf::Diffuse) && m.absorb == Vec3A::ZERO,
                     v: t.map(|v| placed[v as usize]),
                     ng: ng.to_array(),
                     albedo: m.albedo.to_array(),
@@ -161,6 +168,7 @@ impl Flat {
         }
         Ok(Flat {
             first,
+            plain: tris.iter().all(|t| t.plain),
             tris,
             emitters,
             shift: frame.shift(world),

@@ -4,7 +4,7 @@
 //! same image, bit for bit (tested); the widest the CPU has is chosen at
 //! run time, within the backend's cap.
 
-use super::{span_diffuse, span_lanes, span_packets, span_with, Segment, Span};
+use super::{span_lanes, span_packets, span_wide, span_with, Segment, Span};
 use crate::render::bvh::PACKET;
 #[cfg(target_arch = "x86_64")]
 use crate::render::isa::{Avx2, Avx512};
@@ -136,8 +136,8 @@ pub(super) enum Loop<'a> {
     Pairs,
     /// In lanes, shaded one by one (`span_lanes`).
     Lanes,
-    /// In lanes, shaded over lanes (`span_diffuse`), on these triangles.
-    Diffuse(&'a Flat),
+    /// In lanes, shaded over lanes (`span_wide`), on these triangles.
+    Wide(&'a Flat),
 }
 
 /// Adds the samples `segments` name to the pixels of `span`, which start
@@ -169,7 +169,7 @@ pub(super) fn render_span(
         #[allow(unsafe_code)]
         Wide::Avx512(isa) => unsafe {
             match lanes {
-                Loop::Diffuse(flat) => diffuse_avx512(job, flat, first, span, segments),
+                Loop::Wide(flat) => wide_avx512(job, flat, first, span, segments),
                 _ => lanes_avx512(isa, job, first, span, segments),
             }
         },
@@ -178,12 +178,12 @@ pub(super) fn render_span(
         #[allow(unsafe_code)]
         Wide::Avx2(isa) => unsafe {
             match lanes {
-                Loop::Diffuse(flat) => diffuse_avx2(job, flat, first, span, segments),
+                Loop::Wide(flat) => wide_avx2(job, flat, first, span, segments),
                 _ => lanes_avx2(isa, job, first, span, segments),
             }
         },
         Wide::Portable => match lanes {
-            Loop::Diffuse(flat) => span_diffuse::<4>(job, flat, first, span, segments),
+            Loop::Wide(flat) => span_wide::<4>(job, flat, first, span, segments),
             _ => span_lanes::<_, 4>(Portable, job, first, span, segments),
         },
     }
@@ -273,19 +273,13 @@ compiled_for!(
 /// The wide loop, eight paths wide, compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn diffuse_avx2(job: &RenderJob, flat: &Flat, first: usize, span: Span<'_>, s: &[Segment]) -> u64 {
-    span_diffuse::<8>(job, flat, first, span, s)
+fn wide_avx2(job: &RenderJob, flat: &Flat, first: usize, span: Span<'_>, s: &[Segment]) -> u64 {
+    span_wide::<8>(job, flat, first, span, s)
 }
 
 /// The wide loop, sixteen paths wide, compiled for AVX-512.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
-fn diffuse_avx512(
-    job: &RenderJob,
-    flat: &Flat,
-    first: usize,
-    span: Span<'_>,
-    s: &[Segment],
-) -> u64 {
-    span_diffuse::<16>(job, flat, first, span, s)
+fn wide_avx512(job: &RenderJob, flat: &Flat, first: usize, span: Span<'_>, s: &[Segment]) -> u64 {
+    span_wide::<16>(job, flat, first, span, s)
 }
