@@ -103,16 +103,17 @@ def scene_and_reference(args):
     return scene_file, scene, reference
 
 
-def diffuse_meshes(scene):
+def diffuse_meshes(scene, kinds=("diffuse",)):
     """The scene's objects as (index, object, material), after checking that
-    every one is a mesh with a diffuse material (what the scripts compare)."""
+    every one is a mesh whose material is of one of `kinds` (what a script
+    compares: diffuse, or for Mitsuba also mirror and smooth glass)."""
     out = []
     for i, obj in enumerate(scene["objects"]):
         if obj["type"] != "mesh":
             sys.exit(f"object {i}: only meshes are compared (this is {obj['type']})")
         mat = scene["materials"][obj["material"]]
-        if mat["type"] != "diffuse":
-            sys.exit(f"object {i}: only diffuse materials are compared")
+        if mat["type"] not in kinds:
+            sys.exit(f"object {i}: only {', '.join(kinds)} materials are compared")
         t = obj.get("transform")
         if t and set(t) - {"translate", "scale"}:
             sys.exit(f"object {i}: only translate and scale transforms are compared")

@@ -1,5 +1,7 @@
 #!/usr/bin/env python3
-"""pathstream's CPU backend side by side with Mitsuba 3 on one triangle scene.
+"""pathstream's CPU backend side by side with Mitsuba 3 on one triangle scene
+(`cornell-mesh` by default; `--scene cornell-mesh-specular` for its mirror
+and glass balls).
 
 Both render the same scene (pathstream's own `scenes --json` output, turned
 into a Mitsuba scene here: the same f32 vertices, normals, albedos, lamp and
@@ -39,6 +41,7 @@ Mitsuba's `independent`, its `sobol` (Owen-scrambled) against Mitsuba's
 
 import argparse
 import os
+import sys
 import time
 
 import numpy as np
@@ -47,6 +50,31 @@ from compare_common import (
     RR_DEPTH, add_arguments, diffuse_meshes, measure, own_reference, pathstream_runs,
     scene_and_reference,
 )
+
+
+def mitsuba_bsdf(mat):
+    """pathstream's material as Mitsuba's BSDF: diffuse; a mirror as a
+    conductor with no Fresnel falloff (`material: none`) tinted by the
+    albedo; smooth glass as a dielectric of the same index, its exact
+    Fresnel split, both lobes tinted by the albedo."""
+    albedo = {"type": "rgb", "value": mat.get("albedo", [1.0, 1.0, 1.0])}
+    if mat["type"] == "glass":
+        if mat.get("fresnel", "exact") != "exact":
+            sys.exit("only glass with exact Fresnel is compared")
+        return {
+            "type": "dielectric",
+            "int_ior": mat.get("ior", 1.5),
+            "ext_ior": 1.0,
+            "specular_reflectance": albedo,
+            "specular_transmittance": albedo,
+        }
+    # pathstream's opaque surfaces reflect on both sides, Mitsuba's on
+    # their front only.
+    if mat["type"] == "mirror":
+        inner = {"type": "conductor", "material": "none", "specular_reflectance": albedo}
+    else:
+        inner = {"type": "diffuse", "reflectance": albedo}
+    return {"type": "twosided", "bsdf": inner}
 
 
 def mitsuba_scene(mi, scene, args, out_dir):
@@ -82,7 +110,7 @@ def mitsuba_scene(mi, scene, args, out_dir):
         },
         "sampler": {"type": "independent"},
     }
-    for i, obj, mat in diffuse_meshes(scene):
+    for i, obj, mat in diffuse_meshes(scene, ("diffuse", "mirror", "glass")):
         data = obj["data"]
         pos = np.array(data["positions"], dtype=np.float32)
         tri = np.array(data["triangles"], dtype=np.uint32)
@@ -116,15 +144,7 @@ def mitsuba_scene(mi, scene, args, out_dir):
             "type": "ply",
             "filename": ply,
             "face_normals": normals is None,
-            # pathstream's surfaces reflect on both sides, Mitsuba's
-            # diffuse BSDF on its front only.
-            "bsdf": {
-                "type": "twosided",
-                "bsdf": {
-                    "type": "diffuse",
-                    "reflectance": {"type": "rgb", "value": mat["albedo"]},
-                },
-            },
+            "bsdf": mitsuba_bsdf(mat),
         }
         t = obj.get("transform")
         if t:

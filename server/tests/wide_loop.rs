@@ -13,7 +13,6 @@ mod common;
 
 use common::films::apart;
 use common::{assert_clean, assert_mean, mesh_object};
-use pathstream::bench::cornell_box::box_json;
 use pathstream::bench::scenes::load;
 use pathstream::model::generate::icosphere;
 use pathstream::render::backend::{CpuBackend, EmbreeUse, IsaCap, PathLoop};
@@ -46,16 +45,6 @@ fn furnace(scale: f64, smooth: bool) -> Scene {
     .expect("valid furnace")
 }
 
-/// The triangle Cornell box with a mirror ball and a smooth glass ball
-/// (the second scene, in triangles).
-fn mirror_and_glass() -> Scene {
-    Scene::from_json_value(box_json(
-        json!({"type": "mirror", "albedo": [0.95, 0.95, 0.95]}),
-        json!({"type": "glass", "ior": 1.5}),
-    ))
-    .expect("valid box")
-}
-
 /// Whether the wide loop serves `scene`'s world.
 fn served(scene: &Scene) -> bool {
     let job = RenderJob::new(scene, 8, 8, &Quality::default());
@@ -80,7 +69,11 @@ fn the_wide_loop_serves_meshes_without_maps_lit_by_triangles_only() {
             load("cornell-mesh-coated").expect("scene"),
             true,
         ),
-        ("mirror and glass", mirror_and_glass(), true),
+        (
+            "cornell-mesh-specular",
+            load("cornell-mesh-specular").expect("scene"),
+            true,
+        ),
         (
             "cornell-mesh-textured",
             load("cornell-mesh-textured").expect("scene"),
@@ -126,7 +119,11 @@ fn the_wide_loop_gives_the_lane_loops_image_up_to_rounding() {
             load("cornell-mesh-coated").expect("scene"),
             early,
         ),
-        ("mirror and glass", mirror_and_glass(), q),
+        (
+            "cornell-mesh-specular",
+            load("cornell-mesh-specular").expect("scene"),
+            q,
+        ),
         ("furnace 1e3, shading normals", furnace(1e3, true), q),
         ("furnace 1e-3", furnace(1e-3, false), q),
     ] {

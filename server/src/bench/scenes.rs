@@ -9,6 +9,9 @@
 //!   triangles filling a hole in the ceiling (the scene renderers are
 //!   compared on; emitters are two-sided, so a lamp under a closed ceiling
 //!   would light the ceiling above it from a hair's breadth);
+//! - `cornell-mesh-specular`: `cornell-mesh` with a mirror ball and a
+//!   smooth glass ball (smallpt's pair, in triangles: the second scene the
+//!   CPU is compared with Mitsuba on);
 //! - `cornell-mesh-pbr`: `cornell-mesh` with glTF metallic-roughness balls,
 //!   a rough gold metal and a coated blue plastic (what the GGX lobes
 //!   cost against the diffuse ones);
@@ -47,6 +50,8 @@ use std::sync::Arc;
 pub const GLASS_MESH: &str = "cornell-glass-mesh";
 /// `cornell-mesh`.
 pub const CORNELL_MESH: &str = "cornell-mesh";
+/// `cornell-mesh-specular`.
+pub const CORNELL_MESH_SPECULAR: &str = "cornell-mesh-specular";
 /// `cornell-mesh-pbr`.
 pub const CORNELL_MESH_PBR: &str = "cornell-mesh-pbr";
 /// `cornell-mesh-frosted`.
@@ -66,7 +71,7 @@ pub const SKY_ROOM: &str = "sky-room";
 pub const SKY_WINDOW: &str = "sky-window";
 
 /// This module's scenes by name, with what each is for.
-pub const NAMES: [(&str, &str); 10] = [
+pub const NAMES: [(&str, &str); 11] = [
     (
         GLASS_MESH,
         "cornell-glass with a glass bumpy sphere of 20,000 triangles",
@@ -74,6 +79,10 @@ pub const NAMES: [(&str, &str); 10] = [
     (
         CORNELL_MESH,
         "a diffuse Cornell box of triangles, two 20,480-triangle balls, an area light",
+    ),
+    (
+        CORNELL_MESH_SPECULAR,
+        "cornell-mesh with a mirror ball and a smooth glass ball",
     ),
     (
         CORNELL_MESH_PBR,
@@ -115,6 +124,7 @@ pub fn load(name: &str) -> Result<Scene, SceneError> {
     match name {
         GLASS_MESH => glass_mesh(),
         CORNELL_MESH => cornell_mesh(),
+        CORNELL_MESH_SPECULAR => cornell_mesh_specular(),
         CORNELL_MESH_PBR => cornell_mesh_pbr(),
         CORNELL_MESH_FROSTED => cornell_mesh_frosted(),
         CORNELL_MESH_COATED => cornell_mesh_coated(),
@@ -157,6 +167,14 @@ pub fn glass_mesh() -> Result<Scene, SceneError> {
 pub fn cornell_mesh() -> Result<Scene, SceneError> {
     let diffuse = json!({"type": "diffuse", "albedo": [0.75, 0.75, 0.75]});
     box_with_balls(diffuse.clone(), diffuse)
+}
+
+/// `cornell-mesh-specular`: the same box, a mirror ball and a glass one.
+pub fn cornell_mesh_specular() -> Result<Scene, SceneError> {
+    box_with_balls(
+        json!({"type": "mirror", "albedo": [0.95, 0.95, 0.95]}),
+        json!({"type": "glass", "ior": 1.5, "albedo": [1.0, 1.0, 1.0]}),
+    )
 }
 
 /// `cornell-mesh-pbr`: the same box, metallic-roughness balls.

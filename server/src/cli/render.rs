@@ -69,9 +69,9 @@ pub enum EmbreeArg {
 /// `--cpu-paths`: how the CPU advances its paths.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum PathsArg {
-    /// In lanes where Embree traces the scene (shaded over lanes too where
-    /// every material is plain diffuse and every emitter a triangle), else
-    /// in pairs.
+    /// In lanes where Embree traces the scene (the wide loop, with diffuse
+    /// surfaces shaded over the lanes, where no material has texture maps
+    /// and every emitter is a triangle), else in pairs.
     Auto,
     /// 4-16 at a time in lanes, their rays traced together, each shaded
     /// on its own.

@@ -221,7 +221,12 @@ impl<const W: usize> Paths<W> {
         let mut live: [bool; W] = mask(|k| started[k] & (hits.t[k] < f32::INFINITY));
         // Left the scene: the environment, counted as an emitter's hit
         // where the last bounce counts emission.
-        for k in lanes_where::<W>(&mask(|k| started[k] & !live[k] & self.counts[k])) {
+        // (Where every material is plain diffuse, camera rays alone.)
+        let counts = match PLAIN {
+            true => camera,
+            false => self.counts,
+        };
+        for k in lanes_where::<W>(&mask(|k| started[k] & !live[k] & counts[k])) {
             let mut c = lane(&self.beta, k) * world.sky(lane(&self.d, k));
             if self.last[k].pdf > 0.0 {
                 let sky = || world.lights.environment();
@@ -231,7 +236,7 @@ impl<const W: usize> Paths<W> {
             set(&mut self.l, k, sum);
         }
         if live.contains(&true) {
-            self.scatter::<PLAIN>(world, flat, settings, &hits, &mut live);
+            self.scatter::<PLAIN>(world, flat, settings, &hits, (&mut live, &counts));
         }
         self.live = live;
         mask(|k| started[k] & !live[k])
@@ -246,7 +251,7 @@ impl<const W: usize> Paths<W> {
         flat: &Flat,
         settings: &PathSettings,
         hits: &Answers<W>,
-        live: &mut [bool; W],
+        (live, counts): (&mut [bool; W], &[bool; W]),
     ) {
         let zero = V::<W>::splat_vec(Vec3A::ZERO);
         let s = Surfaces::of(flat, hits, live, &self.d);
@@ -259,7 +264,7 @@ impl<const W: usize> Paths<W> {
         if let Some(o) = &others {
             o.absorb(&mut self.beta, &s, hits);
         }
-        let counted = mask::<W>(|k| live[k] & self.counts[k]);
+        let counted = mask::<W>(|k| live[k] & counts[k]);
         if counted.contains(&true) {
             // (Where every material is diffuse, only camera rays count
             // it, their throughput one.)
@@ -345,7 +350,9 @@ impl<const W: usize> Paths<W> {
         // gathered it: the density of `last` is then never read); after a
         // `pbr` reflection its MIS share; after a mirror, glass or a `pbr`
         // transmission all of it.
-        self.counts = mask(|k| !diffuse[k]);
+        if !PLAIN {
+            self.counts = mask(|k| !diffuse[k]);
+        }
         if let Some(o) = &others {
             o.leave(&mut self.last, &s, live, &sampled);
         }
