@@ -264,16 +264,21 @@ impl<const W: usize> Paths<W> {
         if let Some(o) = &others {
             o.absorb(&mut self.beta, &s, hits);
         }
-        let counted = mask::<W>(|k| live[k] & counts[k]);
+        // Only emitters count: a zero emission times a throughput that
+        // overflowed would be NaN, where the scalar path adds nothing. (Where
+        // every material is diffuse, camera rays alone count, their
+        // throughput one.)
+        let counted = match PLAIN {
+            true => mask::<W>(|k| live[k] & counts[k]),
+            false => mask::<W>(|k| live[k] & counts[k] & (s.tris[k].emission != [0.0; 3])),
+        };
         if counted.contains(&true) {
-            // (Where every material is diffuse, only camera rays count
-            // it, their throughput one.)
             let mut c = match PLAIN {
                 true => s.emission(),
                 false => mul(self.beta, s.emission()),
             };
             let weighed = mask::<W>(|k| !PLAIN & counted[k] & (self.last[k].pdf > 0.0));
-            for k in lanes_where(&weighed).filter(|&k| s.tris[k].emission != [0.0; 3]) {
+            for k in lanes_where(&weighed) {
                 let (object, prim) = s.at[k];
                 let emitter = || world.lights.index_of(object, prim);
                 let ck = self.weighed(k, world, settings, lane(&c, k), (emitter, lane(&s.p, k)));
