@@ -85,11 +85,12 @@ fn span_paths<const W: usize, const PLAIN: bool>(
     let mut order = InOrder::default();
     loop {
         let idle = mask::<W>(|k| !paths.live[k]);
-        let refill = refills(&idle);
-        for k in lanes_where(&idle).filter(|_| refill) {
-            let Some(pair) = all.next() else { break };
-            let (ray, sampler) = pair.path(job, first).into_parts();
-            paths.start(k, (ray, sampler), flat.shift, order.push(pair));
+        if refills(&idle) {
+            for k in lanes_where(&idle) {
+                let Some(pair) = all.next() else { break };
+                let (ray, sampler) = pair.path(job, first).into_parts();
+                paths.start(k, (ray, sampler), flat.shift, order.push(pair));
+            }
         }
         if !paths.live.contains(&true) {
             break;
